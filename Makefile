@@ -1,0 +1,49 @@
+# carom: `make demo` runs the main job, `make test` runs every check.
+# Both create .venv on first use and are quick when nothing changed.
+
+# The first Python >= 3.11 on PATH (override with `make PYTHON=/path/to/python3.12 ...`).
+PYTHON ?= $(shell for p in python3 python3.13 python3.12 python3.11 python; do \
+	command -v $$p >/dev/null 2>&1 && $$p -c 'import sys; sys.exit(sys.version_info < (3, 11))' 2>/dev/null \
+	&& { echo $$p; break; }; done)
+VENV   := .venv
+BIN    := $(VENV)/bin
+OUT    := out
+
+.PHONY: demo test lint typecheck unit clean help
+
+help:
+	@echo "make demo   set up .venv and run the showcase (results under $(OUT)/)"
+	@echo "make test   set up .venv with the dev tools and run lint, type checks and all tests"
+	@echo "make clean  remove .venv and $(OUT)/"
+
+$(BIN)/python:
+	@test -n "$(PYTHON)" || { echo "carom needs Python >= 3.11 on PATH (or make PYTHON=...)" >&2; exit 2; }
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+
+# One stamp per set of extras: reinstall only when pyproject.toml changes.
+$(VENV)/.stamp-demo: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[viz]'
+	@touch $@
+
+$(VENV)/.stamp-dev: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[viz,dev]'
+	@touch $@ $(VENV)/.stamp-demo
+
+demo: $(VENV)/.stamp-demo
+	$(BIN)/carom cases --out $(OUT)/cases --force
+	@echo
+	@echo "Results: $(OUT)/cases/ (cases.csv, cases.json, one PNG per case)"
+
+lint: $(VENV)/.stamp-dev
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy
+
+unit: $(VENV)/.stamp-dev
+	$(BIN)/python -m pytest
+
+test: lint unit
+
+clean:
+	rm -rf $(VENV) $(OUT)

@@ -1,0 +1,191 @@
+"""The ``carom`` command.
+
+Exit codes: 0 success, 2 bad input or usage (one message, no traceback; ``--debug`` shows it),
+130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+import traceback
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from carom import __version__
+from carom.errors import CaromError
+
+__all__ = ["main"]
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="carom",
+        description=(
+            "carom: exact, impulse-based collision response of rigid spheres. "
+            "Run 'carom COMMAND --help' for the options of each command."
+        ),
+    )
+    parser.add_argument("--version", action="version", version=f"carom {__version__}")
+    parser.add_argument(
+        "--debug", action="store_true", help="show the full traceback when something fails"
+    )
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    cases = commands.add_parser(
+        "cases",
+        help="the seven-case two-sphere study: carom against Hecker's impulse formula",
+        description=(
+            "Compute seven two-sphere collision cases (head-on and oblique; equal and unequal "
+            "masses; towards each other and the same way; elastic to perfectly plastic) with "
+            "carom's law and with Hecker's impulse formula, both with the contact normal and in "
+            "its one-dimensional head-on reading. Every answer is compared with the exact "
+            "one (rational arithmetic); the conclusion printed is derived from these numbers. "
+            "With --out DIR, writes DIR/cases.csv, DIR/cases.json and one PNG per case."
+        ),
+    )
+    cases.add_argument(
+        "--out", type=Path, metavar="DIR", help="write cases.csv, cases.json and case-N.png here"
+    )
+    cases.add_argument(
+        "--json", action="store_true", help="print the results as JSON instead of the table"
+    )
+    cases.add_argument(
+        "--force", action="store_true", help="replace DIR if it exists and is not empty"
+    )
+    cases.add_argument(
+        "--no-figures",
+        action="store_true",
+        help="skip the PNG figures (they need the viz extra: matplotlib)",
+    )
+    cases.set_defaults(handler=_cmd_cases)
+    return parser
+
+
+def _cmd_cases(args: argparse.Namespace) -> int:
+    from carom.cases import MODELS, ROUND_OFF, conclusions, format_table, run_study
+    from carom.io.outdir import check_output, staged_output
+
+    if args.out is not None:
+        check_output(args.out, force=args.force)
+    records = run_study()
+    findings = conclusions(records)
+    document: dict[str, Any] = {
+        "carom_version": __version__,
+        "models": MODELS,
+        "round_off": ROUND_OFF,
+        "records": [r.to_dict() for r in records],
+        "conclusions": findings,
+    }
+    if args.json:
+        print(json.dumps(document, indent=2))
+    else:
+        print(format_table(records))
+        print()
+        print("Conclusions (derived from the numbers above):")
+        for line in findings:
+            print(f"  {line}")
+    if args.out is None:
+        return 0
+
+    figures = not args.no_figures
+    if figures:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            figures = False
+            print(
+                "note: figures skipped, matplotlib is not installed "
+                "(pip install 'carom[viz]', or pass --no-figures)",
+                file=sys.stderr,
+            )
+
+    with staged_output(args.out, force=args.force) as staging:
+        (staging / "cases.json").write_text(json.dumps(document, indent=2) + "\n")
+        _write_cases_csv(staging / "cases.csv", document["records"])
+        if figures:
+            from carom.viz.cases import plot_case
+
+            for number in sorted({r.case for r in records}):
+                plot_case([r for r in records if r.case == number], staging / f"case-{number}.png")
+    written = "cases.csv, cases.json" + (", case-1.png ... case-7.png" if figures else "")
+    print(f"\nwrote {written} to {args.out}/", file=sys.stderr if args.json else sys.stdout)
+    return 0
+
+
+def _write_cases_csv(path: Path, records: list[dict[str, Any]]) -> None:
+    """One row per case, restitution and model (the exact answer is the model 'exact')."""
+    columns = [
+        "case",
+        "title",
+        "e",
+        "model",
+        "m1",
+        "m2",
+        "x1_x",
+        "x1_y",
+        "x2_x",
+        "x2_y",
+        "v1_x",
+        "v1_y",
+        "v2_x",
+        "v2_y",
+        "v1_after_x",
+        "v1_after_y",
+        "v2_after_x",
+        "v2_after_y",
+        "error",
+        "momentum_error",
+        "ke_before",
+        "ke_after",
+        "ke_lost",
+        "energy_error",
+        "separation_speed",
+        "relative_speed_after",
+        "angle_deg",
+        "gap_after_1s",
+    ]
+    with path.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(columns)
+        for rec in records:
+            outcomes = {"exact": rec["exact"], **rec["models"]}
+            for model, out in outcomes.items():
+                row = [
+                    rec["case"],
+                    rec["title"],
+                    rec["e"],
+                    model,
+                    rec["m1"],
+                    rec["m2"],
+                    *rec["x1"],
+                    *rec["x2"],
+                    *rec["v1"],
+                    *rec["v2"],
+                    *out["v1_after"],
+                    *out["v2_after"],
+                ]
+                row += [out[c] for c in columns[len(row) :]]
+                writer.writerow(
+                    ["" if v is None else repr(v) if isinstance(v, float) else v for v in row]
+                )
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the carom command; return the exit code."""
+    parser = _build_parser()
+    args = parser.parse_args(argv)
+    try:
+        code: int = args.handler(args)
+        return code
+    except CaromError as exc:
+        if args.debug:
+            traceback.print_exc()
+        print(f"carom: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("carom: interrupted; nothing was written", file=sys.stderr)
+        return 130

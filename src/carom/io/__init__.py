@@ -1,0 +1,1 @@
+"""Reading and writing results: output directories, tables, trajectories."""

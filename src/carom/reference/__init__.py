@@ -1,0 +1,1 @@
+"""Slow, obvious reference versions of carom's laws and kernels, for tests and studies."""
