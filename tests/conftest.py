@@ -1,4 +1,8 @@
-"""Test configuration: reproducible hypothesis runs (same examples on every machine)."""
+"""Test configuration: reproducible hypothesis runs (same examples on every machine).
+
+``CAROM_HYPOTHESIS=deep`` runs 3000 fresh random examples per property instead: a search for
+new counter-examples, not part of CI.
+"""
 
 from __future__ import annotations
 
@@ -14,4 +18,11 @@ settings.register_profile(
     database=None,
     suppress_health_check=[HealthCheck.too_slow],
 )
-settings.load_profile("carom")
+settings.register_profile(
+    "deep",
+    max_examples=3000,
+    deadline=None,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+settings.load_profile("deep" if os.environ.get("CAROM_HYPOTHESIS") == "deep" else "carom")

@@ -404,17 +404,25 @@ def _collide_batch(
         g_t_norm = np.sqrt(dot(g_t, g_t))
         inv_mu_t = inv_m1 * (1.0 + 1.0 / q1) + inv_m2 * (1.0 + 1.0 / q2)
         mu_t = 1.0 / inv_mu_t
+        # Work with 1 + beta, never beta itself: in a sliding contact with |g_t| >> |g_n| the
+        # Coulomb cap puts beta within a hair of -1, and forming -1 + x then 1 + beta would
+        # cancel away most of x's digits (seen: 2.6e-12 relative excess over mu_f |J_n|).
         if walton:
-            beta0 = a["beta0"]
+            one_plus_beta0 = 1.0 + a["beta0"]
             # Coulomb: |J_t| = (1 + beta) mu_t |g_t| <= mu_f |J_n| = mu_f (1 + e) mu |g_n|
             with np.errstate(divide="ignore", invalid="ignore"):
-                cap = -1.0 + a["friction"] * (1.0 + e) * (mu / mu_t) * (-u_in) / g_t_norm
-            beta_used = np.where(g_t_norm > 0.0, np.minimum(beta0, cap), beta0)
+                cap = a["friction"] * (1.0 + e) * (mu / mu_t) * (-u_in) / g_t_norm
+            one_plus_beta = np.where(
+                g_t_norm > 0.0, np.minimum(one_plus_beta0, cap), one_plus_beta0
+            )
+            beta_used = np.where(one_plus_beta < one_plus_beta0, one_plus_beta - 1.0, a["beta0"])
         else:
             beta_used = a["beta"]
-        beta_in = np.where(applied, beta_used, -1.0)
-        J = J - ((1.0 + beta_in) * mu_t)[:, None] * g_t
-        ke_lost = ke_lost + 0.5 * mu_t * (1.0 - beta_in * beta_in) * dot(g_t, g_t)
+            one_plus_beta = 1.0 + beta_used
+        one_plus_beta = np.where(applied, one_plus_beta, 0.0)
+        J = J - (one_plus_beta * mu_t)[:, None] * g_t
+        # 1 - beta^2 = (1 + beta)(1 - beta)
+        ke_lost = ke_lost + 0.5 * mu_t * one_plus_beta * (2.0 - one_plus_beta) * dot(g_t, g_t)
 
     v1_after = v1 + J * inv_m1[:, None]
     v2_after = v2 - J * inv_m2[:, None]
