@@ -32,6 +32,7 @@ __all__ = [
     "ModelOutcome",
     "Record",
     "conclusions",
+    "format_details",
     "format_table",
     "run_study",
 ]
@@ -352,8 +353,49 @@ def _fmt(value: float, spec: str = ".3f") -> str:
     return text[1:] if text.startswith("-") and float(text) == 0.0 else text
 
 
+def _vec(v: tuple[float, ...]) -> str:
+    return "(" + ", ".join(_fmt(c, "6.3f") for c in v) + ")"
+
+
+def format_details(records: list[Record]) -> str:
+    """Every case: its inputs, then per restitution the exact answer and each model's.
+
+    Columns: post-impact velocities [m/s]; error (as in :func:`format_table`); dp, the
+    momentum balance |p' - p| / sum m|v|; KE lost [J]; sep., the normal opening speed
+    (v1' - v2') . n [m/s] (negative: still approaching); angle between v1' and v2' [deg].
+    """
+    lines: list[str] = []
+    head = (
+        f"    {'e':>4}  {'':<24}{'v1 after [m/s]':<18}{'v2 after [m/s]':<18}{'error':>7}"
+        f"{'dp':>8}{'KE lost [J]':>13}{'sep. [m/s]':>12}{'angle':>7}"
+    )
+    for number in sorted({r.case for r in records}):
+        rows = [r for r in records if r.case == number]
+        first = rows[0]
+        lines.append(f"Case {number}: {first.title}")
+        lines.append(
+            f"  m1 = {first.m1:g} kg, m2 = {first.m2:g} kg, radii {first.radius:g} m; "
+            f"x1 = {_vec(first.x1)} m, x2 = {_vec(first.x2)} m; "
+            f"v1 = {_vec(first.v1)} m/s, v2 = {_vec(first.v2)} m/s"
+        )
+        lines.append(head)
+        for r in rows:
+            outcomes = [("exact", r.exact)] + [(MODELS[k], m) for k, m in r.models.items()]
+            for i, (label, m) in enumerate(outcomes):
+                e_col = f"{r.e:>4.1f}" if i == 0 else " " * 4
+                error = "" if label == "exact" else _fmt_error(m.error)
+                lost = m.ke_lost if abs(m.ke_lost) > ROUND_OFF * m.ke_before else 0.0
+                lines.append(
+                    f"    {e_col}  {label:<24}{_vec(m.v1_after):<18}{_vec(m.v2_after):<18}"
+                    f"{error:>7}{_fmt_error(m.momentum_error):>8}{_fmt(lost):>13}"
+                    f"{_fmt(m.separation_speed):>12}{_fmt(m.angle_deg, '.1f'):>7}"
+                )
+        lines.append("")
+    return "\n".join(lines)
+
+
 def format_table(records: list[Record]) -> str:
-    """The study as a fixed-width table: errors of each model, then the exact rebound."""
+    """The study in one fixed-width table: errors of each model, then the exact rebound."""
     head = (
         f"{'#':>2}  {'case':<53} {'e':>4}  {'carom':>8} {'Hecker n':>9} {'head-on':>8}"
         f"  {'KE lost':>8} {'sep.':>6} {'angle':>6}  {'head-on':>7}"

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import os
 import sys
 import traceback
 from collections.abc import Sequence
@@ -54,6 +55,11 @@ def _build_parser() -> argparse.ArgumentParser:
         "--json", action="store_true", help="print the results as JSON instead of the table"
     )
     cases.add_argument(
+        "--brief",
+        action="store_true",
+        help="print only the summary table, not every case's inputs and velocities",
+    )
+    cases.add_argument(
         "--force", action="store_true", help="replace DIR if it exists and is not empty"
     )
     cases.add_argument(
@@ -66,7 +72,14 @@ def _build_parser() -> argparse.ArgumentParser:
 
 
 def _cmd_cases(args: argparse.Namespace) -> int:
-    from carom.cases import MODELS, ROUND_OFF, conclusions, format_table, run_study
+    from carom.cases import (
+        MODELS,
+        ROUND_OFF,
+        conclusions,
+        format_details,
+        format_table,
+        run_study,
+    )
     from carom.io.outdir import check_output, staged_output
 
     if args.out is not None:
@@ -80,40 +93,48 @@ def _cmd_cases(args: argparse.Namespace) -> int:
         "records": [r.to_dict() for r in records],
         "conclusions": findings,
     }
+    if args.out is not None:
+        figures = not args.no_figures and _have_matplotlib()
+        with staged_output(args.out, force=args.force) as staging:
+            (staging / "cases.json").write_text(json.dumps(document, indent=2) + "\n")
+            _write_cases_csv(staging / "cases.csv", document["records"])
+            if figures:
+                from carom.viz.cases import plot_case
+
+                for number in sorted({r.case for r in records}):
+                    plot_case(
+                        [r for r in records if r.case == number], staging / f"case-{number}.png"
+                    )
+
     if args.json:
         print(json.dumps(document, indent=2))
     else:
+        if not args.brief:
+            print(format_details(records))
+            print("Summary")
         print(format_table(records))
         print()
         print("Conclusions (derived from the numbers above):")
         for line in findings:
             print(f"  {line}")
-    if args.out is None:
-        return 0
-
-    figures = not args.no_figures
-    if figures:
-        try:
-            import matplotlib  # noqa: F401
-        except ImportError:
-            figures = False
-            print(
-                "note: figures skipped, matplotlib is not installed "
-                "(pip install 'carom[viz]', or pass --no-figures)",
-                file=sys.stderr,
-            )
-
-    with staged_output(args.out, force=args.force) as staging:
-        (staging / "cases.json").write_text(json.dumps(document, indent=2) + "\n")
-        _write_cases_csv(staging / "cases.csv", document["records"])
-        if figures:
-            from carom.viz.cases import plot_case
-
-            for number in sorted({r.case for r in records}):
-                plot_case([r for r in records if r.case == number], staging / f"case-{number}.png")
-    written = "cases.csv, cases.json" + (", case-1.png ... case-7.png" if figures else "")
-    print(f"\nwrote {written} to {args.out}/", file=sys.stderr if args.json else sys.stdout)
+    if args.out is not None:
+        written = "cases.csv, cases.json" + (", case-1.png ... case-7.png" if figures else "")
+        print(f"\nwrote {written} to {args.out}/", file=sys.stderr if args.json else sys.stdout)
     return 0
+
+
+def _have_matplotlib() -> bool:
+    """Whether figures can be drawn; says how to get them when not."""
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        print(
+            "note: figures skipped, matplotlib is not installed "
+            "(pip install 'carom[viz]', or pass --no-figures)",
+            file=sys.stderr,
+        )
+        return False
+    return True
 
 
 def _write_cases_csv(path: Path, records: list[dict[str, Any]]) -> None:
@@ -189,3 +210,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("carom: interrupted; nothing was written", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader went away (carom cases | head): stop quietly, as other tools do
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0

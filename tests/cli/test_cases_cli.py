@@ -170,3 +170,37 @@ def test_interrupted_write_leaves_nothing(tmp_path: Path, monkeypatch: pytest.Mo
     code = cli.main(["cases", "--out", str(tmp_path / "run")])
     assert code == 130
     assert list(tmp_path.iterdir()) == []
+
+
+def test_terminal_output_shows_inputs_and_every_models_velocities() -> None:
+    proc = carom("cases")
+    assert proc.returncode == 0, proc.stderr
+    text = proc.stdout
+    # case 1 block: inputs, then e = 1: equal masses exchange velocities in every model
+    assert "Case 1: head-on, equal masses, opposite directions" in text
+    assert "v1 = ( 1.000,  0.000) m/s, v2 = (-1.000,  0.000) m/s" in text
+    for label in ("exact", "carom", "Hecker, contact normal", "Hecker, head-on reading"):
+        assert f"{label:<24}(-1.000,  0.000)  ( 1.000,  0.000)" in text
+    assert "Summary" in text
+    assert "Conclusions (derived from the numbers above):" in text
+    brief = carom("cases", "--brief")
+    assert brief.returncode == 0
+    assert "Case 1:" not in brief.stdout
+    assert "Conclusions" in brief.stdout
+
+
+def test_a_reader_that_goes_away_is_not_an_error() -> None:
+    # `carom cases | head -1`: the pipe closes early; carom stops quietly
+    with subprocess.Popen(
+        [sys.executable, "-m", "carom", "cases"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        stdin=subprocess.DEVNULL,
+    ) as proc:
+        assert proc.stdout is not None
+        assert proc.stderr is not None
+        proc.stdout.readline()
+        proc.stdout.close()
+        stderr = proc.stderr.read().decode()
+        assert proc.wait(timeout=120) == 0
+    assert "Traceback" not in stderr
