@@ -404,25 +404,26 @@ def _collide_batch(
         g_t_norm = np.sqrt(dot(g_t, g_t))
         inv_mu_t = inv_m1 * (1.0 + 1.0 / q1) + inv_m2 * (1.0 + 1.0 / q2)
         mu_t = 1.0 / inv_mu_t
-        # Work with 1 + beta, never beta itself: in a sliding contact with |g_t| >> |g_n| the
-        # Coulomb cap puts beta within a hair of -1, and forming -1 + x then 1 + beta would
-        # cancel away most of x's digits (seen: 2.6e-12 relative excess over mu_f |J_n|).
+        # Work with 1 + beta and 1 - beta, never beta itself: in a sliding contact with
+        # |g_t| >> |g_n| the Coulomb cap puts beta within a hair of -1, and forming -1 + x
+        # then 1 + beta would cancel most of x's digits (seen: 2.6e-12 relative excess over
+        # mu_f |J_n|); near beta = +1, 1 + beta rounds to 2 and 1 - beta^2 would vanish.
         if walton:
-            one_plus_beta0 = 1.0 + a["beta0"]
+            beta0 = a["beta0"]
             # Coulomb: |J_t| = (1 + beta) mu_t |g_t| <= mu_f |J_n| = mu_f (1 + e) mu |g_n|
             with np.errstate(divide="ignore", invalid="ignore"):
                 cap = a["friction"] * (1.0 + e) * (mu / mu_t) * (-u_in) / g_t_norm
-            one_plus_beta = np.where(
-                g_t_norm > 0.0, np.minimum(one_plus_beta0, cap), one_plus_beta0
-            )
-            beta_used = np.where(one_plus_beta < one_plus_beta0, one_plus_beta - 1.0, a["beta0"])
+            capped = (g_t_norm > 0.0) & (cap < 1.0 + beta0)
+            one_plus_beta = np.where(capped, cap, 1.0 + beta0)
+            one_minus_beta = np.where(capped, 2.0 - cap, 1.0 - beta0)
+            beta_used = np.where(capped, cap - 1.0, beta0)
         else:
             beta_used = a["beta"]
             one_plus_beta = 1.0 + beta_used
+            one_minus_beta = 1.0 - beta_used
         one_plus_beta = np.where(applied, one_plus_beta, 0.0)
         J = J - (one_plus_beta * mu_t)[:, None] * g_t
-        # 1 - beta^2 = (1 + beta)(1 - beta)
-        ke_lost = ke_lost + 0.5 * mu_t * one_plus_beta * (2.0 - one_plus_beta) * dot(g_t, g_t)
+        ke_lost = ke_lost + 0.5 * mu_t * one_plus_beta * one_minus_beta * dot(g_t, g_t)
 
     v1_after = v1 + J * inv_m1[:, None]
     v2_after = v2 - J * inv_m2[:, None]

@@ -187,7 +187,9 @@ def test_rough_restitution_laws_and_energy(
         mu = pair.m1 * pair.m2 / (pair.m1 + pair.m2)
         mu_t = 1.0 / ((1 + 1 / q) / pair.m1 + (1 + 1 / q) / pair.m2)  # = mu q / (1 + q)
         expected = 0.5 * mu * (1 - e * e) * gn * gn + 0.5 * mu_t * (1 - beta**2) * (gt @ gt)
-        assert r.ke_lost == pytest.approx(expected, rel=TOL, abs=1e-300)
+        # 1 - beta**2 here is itself off by up to 2 eps, i.e. by 2 eps * (KE of g_t) absolute
+        ke = float(r.ke_before)
+        assert r.ke_lost == pytest.approx(expected, rel=TOL, abs=8 * EPS * ke + 1e-300)
     ke = float(r.ke_before)
     assert float(r.ke_before - r.ke_after) == pytest.approx(float(r.ke_lost), abs=TOL * ke)
     assert float(r.ke_after) <= ke * (1 + TOL)
@@ -271,7 +273,7 @@ def test_walton_limits(dim: int, data: st.DataObject, e: float, beta0: float) ->
     assume(_approach(pair) < -1e-6 * scale)  # a real normal impulse, so a finite friction can stick
     huge = carom.collide(*pair.args, e=e, friction=1e12, beta0=beta0, **kw)
     constant = carom.collide(*pair.args, e=e, beta=beta0, **kw)
-    assert huge.beta == pytest.approx(beta0)
+    assert huge.beta == beta0  # the cap mu_f ~ 1e12 is never reached: beta0 itself
     assert np.allclose(huge.v1, constant.v1, rtol=0, atol=TOL * scale)
     assert np.allclose(huge.w2, constant.w2, rtol=0, atol=TOL * scale / min(pair.a1, pair.a2))
 
@@ -294,10 +296,10 @@ def test_rough_static_wall_rolls_a_sliding_ball() -> None:
         radius1=a,
         radius2=1.0,
     )
-    assert r.v1[0] == pytest.approx(5.0, rel=TOL)  # 5/7 of 7 m/s
+    assert r.v1[0] == pytest.approx(5.0, rel=TOL, abs=0)  # 5/7 of 7 m/s
     # rolling: contact point v + w x (-a z) = 0  =>  w_y = v_x / a (right-hand rule)
     assert r.w1 is not None
-    assert r.w1[1] == pytest.approx(5.0 / a, rel=TOL)
+    assert r.w1[1] == pytest.approx(5.0 / a, rel=TOL, abs=0)
     assert r.v1[2] == pytest.approx(0.0, abs=TOL)
     assert r.w2 is not None
     assert r.w2.tolist() == [0.0, 0.0, 0.0]  # a static body does not turn
