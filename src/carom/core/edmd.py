@@ -1,0 +1,843 @@
+"""Event-driven dynamics of spheres and disks: the exact engine's main loop.
+
+Bodies fly freely (straight lines, or parabolas under gravity) between events, and each
+carries its own clock: it is advanced only when an event involves it (lazy clocks, Lubachevsky
+1991). Every moving body has exactly one scheduled event, its earliest of: a collision with a
+neighbour, with a wall or plane, or leaving its neighbour shell (Smallenburg 2022). The events
+sit in an indexed binary heap (Marin, Risso & Cordero 1993). A predicted collision with ``j``
+stores ``j``'s collision counter; if ``j`` has collided since, the event is stale and the body
+is simply re-predicted (Rapaport 1980).
+
+Dissipation and round-off:
+
+* TC model (Luding & McNamara 1998): a collision within ``t_c`` of the previous collision of
+  either body is elastic, which stops inelastic collapse.
+* Rest: a body pulled by gravity onto a wall or plane that would leave it again for less than
+  ``t_c`` (or that the TC model would bounce elastically) comes to rest on it: its normal
+  velocity and normal acceleration are set to zero and it slides until a collision lifts it.
+  This ends the Zeno sequence of a settling ball in a finite number of events.
+* Overlap by round-off: an approaching pair that already touches collides now; a separating
+  one never does (Bannerman et al. 2014). Overlaps therefore cannot grow.
+
+The model ``m`` and state ``s`` are the named tuples of :mod:`carom.model` and
+:mod:`carom.state`. :func:`run` unpacks them once: the functions of the hot loop take the
+arrays they need one by one, because Numba passes a named tuple of arrays into a call by
+reference-counting every array in it (measured: 95 ns a call, against under 1 ns for a few
+plain arrays, which LLVM inlines). Nothing is allocated per event.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from carom.core.heap import heap_build, heap_update
+from carom.core.laws import LAW_SMOOTH, impulse_spheres
+from carom.core.neighbors import build_all, rebuild_shell
+from carom.core.toi import (
+    INF,
+    first_root_quartic,
+    shell_exit_time,
+    toi_gap,
+    toi_sphere_sphere,
+)
+
+EV_NONE = 0
+EV_PAIR = 1
+EV_WALL = 2  # other = face: 2k lower, 2k + 1 upper wall of axis k; 2 dim + p plane p
+EV_SHELL = 3
+
+DONE = 0
+LOG_FULL = 1
+MAX_EVENTS = 2
+OVERFLOW = 3
+
+# counts[]
+C_EVENTS = 0
+C_PAIR = 1
+C_WALL = 2
+C_SHELL = 3
+C_STALE = 4
+C_TC = 5  # collisions made elastic by the TC model
+C_REST = 6  # bodies brought to rest on a wall or plane
+# sums[]
+S_VIRIAL = 0  # sum over collisions of J . r  [J s] (pairs: r = x1 - x2; walls: r = x)
+S_WALL_IMPULSE = 1  # sum of |J| on walls and planes [N s]
+S_KE_LOST = 2  # kinetic energy dissipated [J]
+
+
+@njit(cache=True, inline="always")
+def face_normal(plane_normal: np.ndarray, dim: int, face: int, k: int) -> float:
+    """Component ``k`` of the inward unit normal of wall face or plane ``face``."""
+    if face < 2 * dim:
+        if k != face // 2:
+            return 0.0
+        return 1.0 if face % 2 == 0 else -1.0
+    return float(plane_normal[face - 2 * dim, k])
+
+
+@njit(cache=True)
+def set_support(
+    gravity: np.ndarray,
+    plane_normal: np.ndarray,
+    support: np.ndarray,
+    acc: np.ndarray,
+    i: int,
+    face: int,
+) -> None:
+    """Rest body ``i`` on ``face`` (or lift it off, ``face = -1``) and update its acceleration."""
+    dim = gravity.shape[0]
+    support[i] = face
+    g_n = 0.0
+    if face >= 0:
+        for k in range(dim):
+            g_n += gravity[k] * face_normal(plane_normal, dim, face, k)
+    for k in range(dim):
+        nk = face_normal(plane_normal, dim, face, k) if face >= 0 else 0.0
+        acc[i, k] = gravity[k] - g_n * nk
+
+
+@njit(cache=True)
+def advance(x: np.ndarray, v: np.ndarray, acc: np.ndarray, t: np.ndarray, i: int, T: float) -> None:
+    """Move body ``i`` along its free flight to time ``T`` and set its clock."""
+    dt = T - t[i]
+    if dt != 0.0:
+        for k in range(x.shape[1]):
+            a = acc[i, k]
+            x[i, k] += (v[i, k] + 0.5 * a * dt) * dt
+            v[i, k] += a * dt
+    t[i] = T
+
+
+@njit(cache=True)
+def predict(
+    i: int,
+    T: float,
+    x: np.ndarray,
+    v: np.ndarray,
+    acc: np.ndarray,
+    t: np.ndarray,
+    origin: np.ndarray,
+    support: np.ndarray,
+    nbr: np.ndarray,
+    nbr_count: np.ndarray,
+    counter: np.ndarray,
+    radius: np.ndarray,
+    mobile: np.ndarray,
+    box: np.ndarray,
+    periodic: bool,
+    delta: float,
+    plane_point: np.ndarray,
+    plane_normal: np.ndarray,
+    ev_time: np.ndarray,
+    ev_kind: np.ndarray,
+    ev_other: np.ndarray,
+    ev_stamp: np.ndarray,
+) -> None:
+    """Schedule body ``i``'s next event; ``i`` must be at time ``T``."""
+    dim = x.shape[1]
+    if not mobile[i]:
+        ev_time[i] = INF
+        ev_kind[i] = EV_NONE
+        return
+    rad = radius[i]
+    off2 = 0.0
+    speed2 = 0.0
+    acc2 = 0.0
+    for k in range(dim):
+        d = x[i, k] - origin[i, k]
+        off2 += d * d
+        speed2 += v[i, k] * v[i, k]
+        acc2 += acc[i, k] * acc[i, k]
+    best = shell_exit_time(math.sqrt(off2), math.sqrt(speed2), math.sqrt(acc2), delta)
+    kind = EV_SHELL
+    other = -1
+
+    # walls (faces 0 .. 2 dim - 1, none when periodic) and planes (faces 2 dim + p): the gap
+    # d(t) = d0 + u t + acc t^2 / 2 along each inward normal
+    first_face = 2 * dim if periodic else 0
+    for face in range(first_face, 2 * dim + plane_normal.shape[0]):
+        if face == support[i]:
+            continue
+        if face < 2 * dim:
+            k = face // 2
+            if face % 2 == 0:
+                d0 = x[i, k] - rad
+                u = v[i, k]
+                a_n = acc[i, k]
+            else:
+                d0 = box[k] - x[i, k] - rad
+                u = -v[i, k]
+                a_n = -acc[i, k]
+        else:
+            p = face - 2 * dim
+            d0 = -rad
+            u = 0.0
+            a_n = 0.0
+            for q in range(dim):
+                nq = plane_normal[p, q]
+                d0 += nq * (x[i, q] - plane_point[p, q])
+                u += nq * v[i, q]
+                a_n += nq * acc[i, q]
+        tf = toi_gap(d0, u, a_n)
+        if tf < best:
+            best = tf
+            kind = EV_WALL
+            other = face
+
+    # neighbours: relative motion r + v t + da t^2 / 2, j extrapolated to T on the fly
+    for slot in range(nbr_count[i]):
+        j = nbr[i, slot]
+        dtj = T - t[j]
+        rr = 0.0
+        rv = 0.0
+        vv = 0.0
+        rda = 0.0
+        vda = 0.0
+        dada = 0.0
+        for k in range(dim):
+            aj = acc[j, k]
+            r = x[i, k] - (x[j, k] + (v[j, k] + 0.5 * aj * dtj) * dtj)
+            if periodic:
+                r -= box[k] * math.floor(r / box[k] + 0.5)
+            dv = v[i, k] - (v[j, k] + aj * dtj)
+            da = acc[i, k] - aj
+            rr += r * r
+            rv += r * dv
+            vv += dv * dv
+            rda += r * da
+            vda += dv * da
+            dada += da * da
+        reach = rad + radius[j]
+        if dada == 0.0:
+            tp = toi_sphere_sphere(rr - reach * reach, rv, vv)
+        else:
+            tp = first_root_quartic(0.25 * dada, vda, vv + rda, 2.0 * rv, rr - reach * reach, best)
+        if tp < best:
+            best = tp
+            kind = EV_PAIR
+            other = j
+
+    ev_time[i] = T + best
+    ev_kind[i] = kind
+    ev_other[i] = other
+    if kind == EV_PAIR:
+        ev_stamp[i] = counter[other]
+
+
+@njit(cache=True)
+def _log(
+    log_time: np.ndarray,
+    log_a: np.ndarray,
+    log_b: np.ndarray,
+    log_impulse: np.ndarray,
+    log_un: np.ndarray,
+    log_n: np.ndarray,
+    T: float,
+    a: int,
+    b: int,
+    j0: float,
+    j1: float,
+    j2: float,
+    un_before: float,
+    un_after: float,
+) -> None:
+    n = log_n[0]
+    log_time[n] = T
+    log_a[n] = a
+    log_b[n] = b
+    log_impulse[n, 0] = j0
+    log_impulse[n, 1] = j1
+    log_impulse[n, 2] = j2
+    log_un[n, 0] = un_before
+    log_un[n, 1] = un_after
+    log_n[0] = n + 1
+
+
+@njit(cache=True)
+def _kinetic(
+    v: np.ndarray,
+    w: np.ndarray,
+    mass: np.ndarray,
+    q: np.ndarray,
+    radius: np.ndarray,
+    mobile: np.ndarray,
+    i: int,
+) -> float:
+    """Kinetic energy of body ``i`` (translation and rotation) [J]; zero if static."""
+    if not mobile[i]:
+        return 0.0
+    ke = 0.0
+    for k in range(v.shape[1]):
+        ke += v[i, k] * v[i, k]
+    spin = w[i, 0] * w[i, 0] + w[i, 1] * w[i, 1] + w[i, 2] * w[i, 2]
+    return float(0.5 * mass[i] * (ke + q[i] * radius[i] * radius[i] * spin))
+
+
+@njit(cache=True)
+def collide_pair(m, s, i: int, j: int, T: float, log_on: bool) -> None:  # type: ignore[no-untyped-def]
+    """Apply the impulse law to bodies ``i`` and ``j``, both at time ``T`` (see run)."""
+    _collide_pair(
+        i,
+        j,
+        T,
+        log_on,
+        s.x,
+        s.v,
+        s.acc,
+        s.w,
+        s.counter,
+        s.last_coll,
+        s.support,
+        m.radius,
+        m.mass,
+        m.inv_mass,
+        m.q,
+        m.mobile,
+        m.material,
+        m.pair_law,
+        m.pair_e,
+        m.pair_beta,
+        m.pair_friction,
+        m.face_e,
+        m.gravity,
+        m.plane_normal,
+        m.box,
+        m.periodic,
+        m.t_c,
+        s.counts,
+        s.sums,
+        s.log_time,
+        s.log_a,
+        s.log_b,
+        s.log_impulse,
+        s.log_un,
+        s.log_n,
+    )
+
+
+@njit(cache=True)
+def _collide_pair(
+    i: int,
+    j: int,
+    T: float,
+    log_on: bool,
+    x: np.ndarray,
+    v: np.ndarray,
+    acc: np.ndarray,
+    w: np.ndarray,
+    counter: np.ndarray,
+    last_coll: np.ndarray,
+    support: np.ndarray,
+    radius: np.ndarray,
+    mass: np.ndarray,
+    inv_mass: np.ndarray,
+    q: np.ndarray,
+    mobile: np.ndarray,
+    material: np.ndarray,
+    pair_law: np.ndarray,
+    pair_e: np.ndarray,
+    pair_beta: np.ndarray,
+    pair_friction: np.ndarray,
+    face_e: np.ndarray,
+    gravity: np.ndarray,
+    plane_normal: np.ndarray,
+    box: np.ndarray,
+    periodic: bool,
+    t_c: float,
+    counts: np.ndarray,
+    sums: np.ndarray,
+    log_time: np.ndarray,
+    log_a: np.ndarray,
+    log_b: np.ndarray,
+    log_impulse: np.ndarray,
+    log_un: np.ndarray,
+    log_n: np.ndarray,
+) -> None:
+    dim = x.shape[1]
+    # separation r = x_i - x_j (nearest image) and relative velocity, as three components
+    r0 = r1 = r2 = 0.0
+    w0 = w1 = w2 = 0.0
+    for k in range(dim):
+        d = x[i, k] - x[j, k]
+        if periodic:
+            d -= box[k] * math.floor(d / box[k] + 0.5)
+        dv = v[i, k] - v[j, k]
+        if k == 0:
+            r0, w0 = d, dv
+        elif k == 1:
+            r1, w1 = d, dv
+        else:
+            r2, w2 = d, dv
+    dist = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    n0, n1, n2 = r0 / dist, r1 / dist, r2 / dist
+    mat_i = material[i]
+    mat_j = material[j]
+    law = pair_law[mat_i, mat_j]
+    e = pair_e[mat_i, mat_j]
+    if T - last_coll[i] < t_c or T - last_coll[j] < t_c:
+        if e < 1.0:
+            counts[C_TC] += 1
+        e = 1.0
+    g0, g1, g2 = w0, w1, w2
+    a_i = radius[i]
+    a_j = radius[j]
+    if law != LAW_SMOOTH:
+        # g = v1 - v2 - (a1 w1 + a2 w2) x n
+        s0 = a_i * w[i, 0] + a_j * w[j, 0]
+        s1 = a_i * w[i, 1] + a_j * w[j, 1]
+        s2 = a_i * w[i, 2] + a_j * w[j, 2]
+        g0 -= s1 * n2 - s2 * n1
+        g1 -= s2 * n0 - s0 * n2
+        g2 -= s0 * n1 - s1 * n0
+    inv_i = inv_mass[i]
+    inv_j = inv_mass[j]
+    j0, j1, j2 = impulse_spheres(
+        n0,
+        n1,
+        n2,
+        g0,
+        g1,
+        g2,
+        inv_i,
+        inv_j,
+        e,
+        law,
+        pair_beta[mat_i, mat_j],
+        pair_friction[mat_i, mat_j],
+        1.0 / q[i],
+        1.0 / q[j],
+    )
+    if j0 == 0.0 and j1 == 0.0 and j2 == 0.0:
+        return  # not approaching after all (round-off): nothing to do
+    un_before = w0 * n0 + w1 * n1 + w2 * n2
+    ke_before = _kinetic(v, w, mass, q, radius, mobile, i) + _kinetic(
+        v, w, mass, q, radius, mobile, j
+    )
+    for k in range(dim):
+        jk = j0 if k == 0 else (j1 if k == 1 else j2)
+        v[i, k] += jk * inv_i
+        v[j, k] -= jk * inv_j
+    if law != LAW_SMOOTH:
+        # w_i' = w_i - (n x J) / (q_i m_i a_i), the same sign for both bodies
+        c0 = n1 * j2 - n2 * j1
+        c1 = n2 * j0 - n0 * j2
+        c2 = n0 * j1 - n1 * j0
+        f_i = inv_i / (q[i] * a_i)
+        f_j = inv_j / (q[j] * a_j)
+        w[i, 0] -= c0 * f_i
+        w[i, 1] -= c1 * f_i
+        w[i, 2] -= c2 * f_i
+        w[j, 0] -= c0 * f_j
+        w[j, 1] -= c1 * f_j
+        w[j, 2] -= c2 * f_j
+    un_after = 0.0
+    for k in range(dim):
+        nk = n0 if k == 0 else (n1 if k == 1 else n2)
+        un_after += (v[i, k] - v[j, k]) * nk
+    counter[i] += 1
+    counter[j] += 1
+    last_coll[i] = T
+    last_coll[j] = T
+    counts[C_PAIR] += 1
+    sums[S_VIRIAL] += j0 * r0 + j1 * r1 + j2 * r2
+    # a body resting on a support: lifted off, or pushed into it (the support pushes back)
+    for b in (i, j):
+        face = support[b]
+        if face < 0:
+            continue
+        un = 0.0
+        for k in range(dim):
+            un += v[b, k] * face_normal(plane_normal, dim, face, k)
+        if un < 0.0:
+            e_w = face_e[face]
+            for k in range(dim):
+                v[b, k] -= (1.0 + e_w) * un * face_normal(plane_normal, dim, face, k)
+            sums[S_WALL_IMPULSE] += (1.0 + e_w) * (-un) * mass[b]
+        if un != 0.0:
+            set_support(gravity, plane_normal, support, acc, b, -1)
+    sums[S_KE_LOST] += ke_before - (
+        _kinetic(v, w, mass, q, radius, mobile, i) + _kinetic(v, w, mass, q, radius, mobile, j)
+    )
+    if log_on:
+        _log(
+            log_time,
+            log_a,
+            log_b,
+            log_impulse,
+            log_un,
+            log_n,
+            T,
+            i,
+            j,
+            j0,
+            j1,
+            j2,
+            un_before,
+            un_after,
+        )
+
+
+@njit(cache=True)
+def _collide_face(
+    i: int,
+    face: int,
+    T: float,
+    log_on: bool,
+    x: np.ndarray,
+    v: np.ndarray,
+    acc: np.ndarray,
+    w: np.ndarray,
+    counter: np.ndarray,
+    last_coll: np.ndarray,
+    support: np.ndarray,
+    radius: np.ndarray,
+    mass: np.ndarray,
+    q: np.ndarray,
+    mobile: np.ndarray,
+    face_e: np.ndarray,
+    gravity: np.ndarray,
+    plane_normal: np.ndarray,
+    t_c: float,
+    counts: np.ndarray,
+    sums: np.ndarray,
+    log_time: np.ndarray,
+    log_a: np.ndarray,
+    log_b: np.ndarray,
+    log_impulse: np.ndarray,
+    log_un: np.ndarray,
+    log_n: np.ndarray,
+) -> None:
+    """Body ``i`` (at time ``T``) meets wall or plane ``face``."""
+    dim = x.shape[1]
+    un = 0.0
+    acc_n = 0.0
+    for k in range(dim):
+        nk = face_normal(plane_normal, dim, face, k)
+        un += v[i, k] * nk
+        acc_n += acc[i, k] * nk
+    if not (un < 0.0 or (un == 0.0 and acc_n < 0.0)):
+        return
+    e = face_e[face]
+    tc = T - last_coll[i] < t_c
+    if tc and acc_n >= 0.0:
+        if e < 1.0:
+            counts[C_TC] += 1
+        e = 1.0
+    u_out = -e * un
+    ke_before = _kinetic(v, w, mass, q, radius, mobile, i)
+    # rest: pulled onto the face, and would leave it for less than t_c (or TC applies)
+    rest = acc_n < 0.0 and (tc or 2.0 * u_out < -acc_n * t_c)
+    if rest:
+        e = 0.0
+        u_out = 0.0
+        counts[C_REST] += 1
+    jn = -(1.0 + e) * un * mass[i]
+    x_dot_j = 0.0
+    for k in range(dim):
+        nk = face_normal(plane_normal, dim, face, k)
+        v[i, k] -= (1.0 + e) * un * nk
+        x_dot_j += x[i, k] * jn * nk
+    if rest:
+        set_support(gravity, plane_normal, support, acc, i, face)
+    counter[i] += 1
+    last_coll[i] = T
+    counts[C_WALL] += 1
+    sums[S_WALL_IMPULSE] += jn
+    sums[S_VIRIAL] += x_dot_j
+    sums[S_KE_LOST] += ke_before - _kinetic(v, w, mass, q, radius, mobile, i)
+    if log_on:
+        _log(
+            log_time,
+            log_a,
+            log_b,
+            log_impulse,
+            log_un,
+            log_n,
+            T,
+            i,
+            -1 - face,
+            jn * face_normal(plane_normal, dim, face, 0),
+            jn * face_normal(plane_normal, dim, face, 1),
+            jn * face_normal(plane_normal, dim, face, 2) if dim == 3 else 0.0,
+            un,
+            u_out,
+        )
+
+
+@njit(cache=True)
+def initialise(m, s) -> bool:  # type: ignore[no-untyped-def]
+    """Build every shell and neighbour list and schedule every body; False on overflow."""
+    for i in range(s.x.shape[0]):
+        for k in range(m.box.shape[0]):
+            s.origin[i, k] = s.x[i, k]
+    ok = build_all(
+        s.origin,
+        m.radius,
+        m.mobile,
+        s.nbr,
+        s.nbr_count,
+        s.cell_head,
+        s.cell_next,
+        s.cell_prev,
+        s.cell,
+        m.box,
+        m.periodic,
+        m.delta,
+        m.cell_size,
+        m.ncell,
+    )
+    if not ok:
+        return False
+    T = s.clock[0]
+    for i in range(s.x.shape[0]):
+        advance(s.x, s.v, s.acc, s.t, i, T)
+        predict(
+            i,
+            T,
+            s.x,
+            s.v,
+            s.acc,
+            s.t,
+            s.origin,
+            s.support,
+            s.nbr,
+            s.nbr_count,
+            s.counter,
+            m.radius,
+            m.mobile,
+            m.box,
+            m.periodic,
+            m.delta,
+            m.plane_point,
+            m.plane_normal,
+            s.ev_time,
+            s.ev_kind,
+            s.ev_other,
+            s.ev_stamp,
+        )
+    heap_build(s.ev_time, s.heap, s.heap_where)
+    return True
+
+
+@njit(cache=True)
+def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ignore[no-untyped-def]
+    """Process events in time order up to ``t_stop``; return why it stopped.
+
+    ``DONE``: the next event is after ``t_stop`` (the clock is set to ``t_stop``);
+    ``LOG_FULL``: the event log needs emptying; ``MAX_EVENTS``: ``max_events`` processed;
+    ``OVERFLOW``: a neighbour list is full (grow the lists and rebuild them).
+    """
+    # unpack once: the hot functions take plain arrays (see the module docstring)
+    x, v, acc, w, t = s.x, s.v, s.acc, s.w, s.t
+    origin, support, counter, last_coll = s.origin, s.support, s.counter, s.last_coll
+    nbr, nbr_count = s.nbr, s.nbr_count
+    ev_time, ev_kind, ev_other, ev_stamp = s.ev_time, s.ev_kind, s.ev_other, s.ev_stamp
+    heap, where = s.heap, s.heap_where
+    counts, sums = s.counts, s.sums
+    log_time, log_a, log_b, log_impulse, log_un, log_n = (
+        s.log_time,
+        s.log_a,
+        s.log_b,
+        s.log_impulse,
+        s.log_un,
+        s.log_n,
+    )
+    cell, head, nxt, prv = s.cell, s.cell_head, s.cell_next, s.cell_prev
+    radius, mass, inv_mass, q, mobile = m.radius, m.mass, m.inv_mass, m.q, m.mobile
+    material, pair_law, pair_e = m.material, m.pair_law, m.pair_e
+    pair_beta, pair_friction, face_e = m.pair_beta, m.pair_friction, m.face_e
+    gravity, box, periodic, delta, t_c = m.gravity, m.box, m.periodic, m.delta, m.t_c
+    plane_point, plane_normal = m.plane_point, m.plane_normal
+    cell_size, ncell = m.cell_size, m.ncell
+
+    dim = x.shape[1]
+    scratch = np.empty(dim)
+    processed = 0
+    log_cap = log_time.shape[0]
+    while True:
+        i = heap[0]
+        T = ev_time[i]
+        if t_stop < T or math.isinf(T):
+            if t_stop < INF:
+                s.clock[0] = t_stop
+            return DONE
+        if processed >= max_events:
+            return MAX_EVENTS
+        if log_on and log_n[0] + 1 > log_cap:
+            return LOG_FULL
+        processed += 1
+        s.clock[0] = T
+        counts[C_EVENTS] += 1
+        kind = ev_kind[i]
+        j = -1
+        if kind == EV_PAIR:
+            j = ev_other[i]
+            if counter[j] != ev_stamp[i]:
+                counts[C_STALE] += 1
+                j = -1
+                advance(x, v, acc, t, i, T)
+            else:
+                advance(x, v, acc, t, i, T)
+                advance(x, v, acc, t, j, T)
+                _collide_pair(
+                    i,
+                    j,
+                    T,
+                    log_on,
+                    x,
+                    v,
+                    acc,
+                    w,
+                    counter,
+                    last_coll,
+                    support,
+                    radius,
+                    mass,
+                    inv_mass,
+                    q,
+                    mobile,
+                    material,
+                    pair_law,
+                    pair_e,
+                    pair_beta,
+                    pair_friction,
+                    face_e,
+                    gravity,
+                    plane_normal,
+                    box,
+                    periodic,
+                    t_c,
+                    counts,
+                    sums,
+                    log_time,
+                    log_a,
+                    log_b,
+                    log_impulse,
+                    log_un,
+                    log_n,
+                )
+        elif kind == EV_WALL:
+            advance(x, v, acc, t, i, T)
+            _collide_face(
+                i,
+                ev_other[i],
+                T,
+                log_on,
+                x,
+                v,
+                acc,
+                w,
+                counter,
+                last_coll,
+                support,
+                radius,
+                mass,
+                q,
+                mobile,
+                face_e,
+                gravity,
+                plane_normal,
+                t_c,
+                counts,
+                sums,
+                log_time,
+                log_a,
+                log_b,
+                log_impulse,
+                log_un,
+                log_n,
+            )
+        else:  # EV_SHELL
+            counts[C_SHELL] += 1
+            advance(x, v, acc, t, i, T)
+            for k in range(dim):
+                if periodic:
+                    x[i, k] -= box[k] * math.floor(x[i, k] / box[k])
+                origin[i, k] = x[i, k]
+            if not rebuild_shell(
+                i,
+                origin,
+                radius,
+                mobile,
+                nbr,
+                nbr_count,
+                head,
+                nxt,
+                prv,
+                cell,
+                box,
+                periodic,
+                delta,
+                cell_size,
+                ncell,
+                scratch,
+            ):
+                return OVERFLOW
+        predict(
+            i,
+            T,
+            x,
+            v,
+            acc,
+            t,
+            origin,
+            support,
+            nbr,
+            nbr_count,
+            counter,
+            radius,
+            mobile,
+            box,
+            periodic,
+            delta,
+            plane_point,
+            plane_normal,
+            ev_time,
+            ev_kind,
+            ev_other,
+            ev_stamp,
+        )
+        heap_update(ev_time, heap, where, i)
+        if j >= 0:
+            predict(
+                j,
+                T,
+                x,
+                v,
+                acc,
+                t,
+                origin,
+                support,
+                nbr,
+                nbr_count,
+                counter,
+                radius,
+                mobile,
+                box,
+                periodic,
+                delta,
+                plane_point,
+                plane_normal,
+                ev_time,
+                ev_kind,
+                ev_other,
+                ev_stamp,
+            )
+            heap_update(ev_time, heap, where, j)
+
+
+@njit(cache=True)
+def positions_at(m, s, T: float, x_out: np.ndarray, v_out: np.ndarray) -> None:  # type: ignore[no-untyped-def]
+    """Every body's position and velocity at time ``T`` (periodic: wrapped into the box)."""
+    dim = m.box.shape[0]
+    for i in range(s.x.shape[0]):
+        dt = T - s.t[i]
+        for k in range(dim):
+            a = s.acc[i, k]
+            x_out[i, k] = s.x[i, k] + (s.v[i, k] + 0.5 * a * dt) * dt
+            v_out[i, k] = s.v[i, k] + a * dt
+            if m.periodic:
+                x_out[i, k] -= m.box[k] * math.floor(x_out[i, k] / m.box[k])

@@ -1,0 +1,133 @@
+"""State: everything that changes during a simulation, as plain arrays.
+
+Positions and velocities are stored at each body's own clock ``t`` (lazy clocks); the event
+schedule, neighbour lists and cell grid are part of the state too, so a checkpoint of these
+arrays resumes a run bit for bit.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["State", "allocate_state"]
+
+N_COUNTS = 8
+N_SUMS = 4
+
+
+class State(NamedTuple):
+    """The changing part of a simulation of ``N`` bodies (see :mod:`carom.core.edmd`).
+
+    Attributes
+    ----------
+    x, v : (N, d) float64
+        Position [m] and velocity [m/s] of each body at its own clock ``t``.
+    acc : (N, d) float64
+        Acceleration [m/s^2]: gravity, less the normal part a support bears; zero if static.
+    w : (N, 3) float64
+        Spin [rad/s] (2D: about z, in column 2).
+    t : (N,) float64
+        Each body's clock [s].
+    counter : (N,) int64
+        Collisions of each body so far (invalidates stale predictions).
+    last_coll : (N,) float64
+        Time of each body's last collision [s] (TC model).
+    support : (N,) int64
+        Wall face or plane a body rests on, -1 when flying.
+    origin : (N, d) float64
+        Centre of each body's neighbour shell [m].
+    nbr : (N, K) int32; nbr_count : (N,) int64
+        Neighbour lists.
+    cell, cell_next, cell_prev : (N,) int64; cell_head : (C,) int64
+        The cell grid of shell origins (doubly linked lists).
+    ev_time : (N,) float64; ev_kind, ev_other, ev_stamp : (N,) int64
+        Each body's next event: time [s], kind, partner, partner's counter when predicted.
+    heap, heap_where : (N,) int64
+        The event heap and each body's node in it.
+    clock : (1,) float64
+        Simulation time [s].
+    counts : (8,) int64; sums : (4,) float64
+        Running statistics (:mod:`carom.core.edmd` names the slots).
+    log_time, log_a, log_b, log_impulse, log_un, log_n
+        The event log buffer, emptied by :class:`carom.World` as it fills.
+    """
+
+    x: NDArray[np.float64]
+    v: NDArray[np.float64]
+    acc: NDArray[np.float64]
+    w: NDArray[np.float64]
+    t: NDArray[np.float64]
+    counter: NDArray[np.int64]
+    last_coll: NDArray[np.float64]
+    support: NDArray[np.int64]
+    origin: NDArray[np.float64]
+    nbr: NDArray[np.int32]
+    nbr_count: NDArray[np.int64]
+    cell: NDArray[np.int64]
+    cell_head: NDArray[np.int64]
+    cell_next: NDArray[np.int64]
+    cell_prev: NDArray[np.int64]
+    ev_time: NDArray[np.float64]
+    ev_kind: NDArray[np.int64]
+    ev_other: NDArray[np.int64]
+    ev_stamp: NDArray[np.int64]
+    heap: NDArray[np.int64]
+    heap_where: NDArray[np.int64]
+    clock: NDArray[np.float64]
+    counts: NDArray[np.int64]
+    sums: NDArray[np.float64]
+    log_time: NDArray[np.float64]
+    log_a: NDArray[np.int64]
+    log_b: NDArray[np.int64]
+    log_impulse: NDArray[np.float64]
+    log_un: NDArray[np.float64]
+    log_n: NDArray[np.int64]
+
+
+def allocate_state(
+    x: NDArray[np.float64],
+    v: NDArray[np.float64],
+    acc: NDArray[np.float64],
+    w: NDArray[np.float64],
+    time: float,
+    n_cells: int,
+    capacity: int,
+    log_capacity: int,
+) -> State:
+    """A fresh state at time ``time`` (schedule still empty: call ``edmd.initialise``)."""
+    n = x.shape[0]
+    return State(
+        x=np.array(x, dtype=np.float64),
+        v=np.array(v, dtype=np.float64),
+        acc=np.array(acc, dtype=np.float64),
+        w=np.array(w, dtype=np.float64),
+        t=np.full(n, time),
+        counter=np.zeros(n, np.int64),
+        last_coll=np.full(n, -np.inf),
+        support=np.full(n, -1, np.int64),
+        origin=np.array(x, dtype=np.float64),
+        nbr=np.zeros((n, capacity), np.int32),
+        nbr_count=np.zeros(n, np.int64),
+        cell=np.zeros(n, np.int64),
+        cell_head=np.full(n_cells, -1, np.int64),
+        cell_next=np.full(n, -1, np.int64),
+        cell_prev=np.full(n, -1, np.int64),
+        ev_time=np.full(n, np.inf),
+        ev_kind=np.zeros(n, np.int64),
+        ev_other=np.full(n, -1, np.int64),
+        ev_stamp=np.zeros(n, np.int64),
+        heap=np.zeros(n, np.int64),
+        heap_where=np.zeros(n, np.int64),
+        clock=np.array([time]),
+        counts=np.zeros(N_COUNTS, np.int64),
+        sums=np.zeros(N_SUMS),
+        log_time=np.zeros(log_capacity),
+        log_a=np.zeros(log_capacity, np.int64),
+        log_b=np.zeros(log_capacity, np.int64),
+        log_impulse=np.zeros((log_capacity, 3)),
+        log_un=np.zeros((log_capacity, 2)),
+        log_n=np.zeros(1, np.int64),
+    )

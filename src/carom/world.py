@@ -1,0 +1,932 @@
+"""The World: a friendly front to the exact event-driven engine.
+
+>>> import carom
+>>> world = carom.World(2, box=[1.0, 1.0])
+>>> _ = world.add_spheres([[0.3, 0.5], [0.7, 0.5]], [[1.0, 0.0], [-1.0, 0.0]], radius=0.05)
+>>> world.run(until=0.15)
+>>> world.velocities.round(12).tolist()    # they met at t = 0.15 - 0.0 ... and exchanged
+[[-1.0, 0.0], [1.0, 0.0]]
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from carom.core import edmd
+from carom.core.laws import LAW_ROUGH, LAW_SMOOTH, LAW_WALTON
+from carom.errors import CaromError
+from carom.model import Model
+from carom.state import State, allocate_state
+
+__all__ = ["Frame", "Material", "Stats", "World"]
+
+FloatArray = NDArray[np.float64]
+Combine = Literal["mean", "min", "max", "geometric", "product"]
+COMBINE_RULES: tuple[str, ...] = ("mean", "min", "max", "geometric", "product")
+LOG_CAPACITY = 1 << 16
+SHELL_DEFAULT = 0.35
+#: Overlaps and box excursions smaller than this fraction of the radii are round-off, not errors
+OVERLAP_TOLERANCE = 1e-12
+
+
+@dataclass(frozen=True)
+class Material:
+    """How a body's surface responds to impacts.
+
+    Parameters
+    ----------
+    restitution : float
+        Normal coefficient of restitution ``e`` in [0, 1] [-].
+    beta : float, optional
+        Constant tangential restitution in [-1, 1] [-] (rough spheres; spins change).
+    friction : float, optional
+        Coulomb coefficient ``mu_f >= 0`` [-] for Walton's model (not with ``beta``).
+    beta0 : float, optional
+        Walton's sticking restitution in [-1, 1] [-], default 0.
+    """
+
+    restitution: float = 1.0
+    beta: float | None = None
+    friction: float | None = None
+    beta0: float | None = None
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.restitution <= 1.0:
+            raise CaromError(f"restitution must lie in [0, 1]; got {self.restitution!r}")
+        if self.beta is not None and self.friction is not None:
+            raise CaromError("a material takes beta (constant) or friction (Walton), not both")
+        if self.beta is not None and not -1.0 <= self.beta <= 1.0:
+            raise CaromError(f"beta must lie in [-1, 1]; got {self.beta!r}")
+        if self.friction is not None and not self.friction >= 0.0:
+            raise CaromError(f"friction must be >= 0; got {self.friction!r}")
+        if self.beta0 is not None and not -1.0 <= self.beta0 <= 1.0:
+            raise CaromError(f"beta0 must lie in [-1, 1]; got {self.beta0!r}")
+
+    @property
+    def law(self) -> int:
+        if self.friction is not None:
+            return LAW_WALTON
+        return LAW_ROUGH if self.beta is not None else LAW_SMOOTH
+
+
+@dataclass(frozen=True)
+class Frame:
+    """The state of every body at one output time.
+
+    Attributes
+    ----------
+    time : float
+        [s].
+    positions, velocities : (N, d) float64
+        [m], [m/s]; periodic boxes wrap positions into the box.
+    spins : (N, 3) float64
+        [rad/s] (2D: column 2 is the spin about z).
+    """
+
+    time: float
+    positions: FloatArray
+    velocities: FloatArray
+    spins: FloatArray
+
+
+class Stats:
+    """Observables of a :class:`World`; averages run since the last :meth:`reset`."""
+
+    def __init__(self, world: World) -> None:
+        self._world = world
+        self._t0 = 0.0
+        self._counts0 = np.zeros(8, np.int64)
+        self._sums0 = np.zeros(4)
+
+    def reset(self) -> None:
+        """Start a new averaging window now."""
+        w = self._world
+        w._ensure_built()
+        assert w._state is not None
+        self._t0 = w.time
+        self._counts0 = w._state.counts.copy()
+        self._sums0 = w._state.sums.copy()
+
+    def _delta_counts(self, slot: int) -> int:
+        state = self._world._state
+        return 0 if state is None else int(state.counts[slot] - self._counts0[slot])
+
+    def _delta_sums(self, slot: int) -> float:
+        state = self._world._state
+        return 0.0 if state is None else float(state.sums[slot] - self._sums0[slot])
+
+    @property
+    def collisions(self) -> int:
+        """Collisions between two bodies since the last reset."""
+        return self._delta_counts(edmd.C_PAIR)
+
+    @property
+    def wall_collisions(self) -> int:
+        """Collisions with walls and planes since the last reset."""
+        return self._delta_counts(edmd.C_WALL)
+
+    @property
+    def events(self) -> int:
+        """Events processed since the last reset (collisions, shell rebuilds, stale ones)."""
+        return self._delta_counts(edmd.C_EVENTS)
+
+    @property
+    def tc_collisions(self) -> int:
+        """Collisions the TC model made elastic since the last reset."""
+        return self._delta_counts(edmd.C_TC)
+
+    @property
+    def kinetic_energy(self) -> float:
+        """Total kinetic energy now, translation and rotation [J]."""
+        w = self._world
+        m = w._mobile_mask()
+        v = w.velocities[m]
+        mass = w._mass[m]
+        spin = w.spins[m]
+        ke = 0.5 * np.sum(mass * np.sum(v * v, axis=1))
+        ke += 0.5 * np.sum(w._q[m] * mass * w._radius[m] ** 2 * np.sum(spin * spin, axis=1))
+        return float(ke)
+
+    @property
+    def momentum(self) -> FloatArray:
+        """Total momentum of the moving bodies now, (d,) [kg m/s]."""
+        w = self._world
+        m = w._mobile_mask()
+        result: FloatArray = np.sum(w._mass[m, None] * w.velocities[m], axis=0)
+        return result
+
+    @property
+    def temperature(self) -> float:
+        """Granular temperature ``T = m <|v - <v>|^2> / d`` with ``k_B = 1`` [J]."""
+        w = self._world
+        m = w._mobile_mask()
+        v = w.velocities[m]
+        mass = w._mass[m]
+        v_cm = np.sum(mass[:, None] * v, axis=0) / np.sum(mass)
+        dv = v - v_cm
+        return float(np.sum(mass * np.sum(dv * dv, axis=1)) / (w.dim * np.count_nonzero(m)))
+
+    @property
+    def pressure(self) -> float:
+        """Pressure from the collision virial over the window [Pa] (2D: [N/m]).
+
+        ``P = (2 <KE> + sum J . r / dt) / (d V)``, with the kinetic energy now (exact for
+        elastic systems, where it is constant); NaN under gravity or before any time passed.
+        """
+        w = self._world
+        dt = w.time - self._t0
+        if dt <= 0.0 or np.any(w._gravity != 0.0):
+            return math.nan
+        volume = float(np.prod(w.box))
+        virial = self._delta_sums(edmd.S_VIRIAL)
+        return (2.0 * self.kinetic_energy + virial / dt) / (w.dim * volume)
+
+    @property
+    def mean_free_time(self) -> float:
+        """Mean time between collisions of a body with another [s]: ``N dt / (2 C)``."""
+        w = self._world
+        n = int(np.count_nonzero(w._mobile_mask()))
+        coll = self.collisions
+        dt = w.time - self._t0
+        return math.inf if coll == 0 else n * dt / (2.0 * coll)
+
+    @property
+    def energy_lost(self) -> float:
+        """Kinetic energy dissipated by collisions since the last reset [J]."""
+        return self._delta_sums(edmd.S_KE_LOST)
+
+
+class World:
+    """Spheres (3D) or disks (2D) in a box, simulated exactly, event by event.
+
+    Parameters
+    ----------
+    dim : {2, 3}
+        Dimension.
+    box : (d,) array_like
+        Box side lengths [m]; the box spans ``[0, box[k]]``.
+    boundary : {"walls", "periodic"}, default "walls"
+        Reflecting walls, or periodic boundaries.
+    gravity : (d,) array_like, optional
+        Uniform acceleration [m/s^2], e.g. ``[0, -9.81]``.
+    wall_restitution : float or (2 d,) array_like, default 1.0
+        Restitution of the walls [-]: one value, or (lower, upper) per axis.
+    t_c : float, default 1e-6
+        TC-model time [s]: a collision within ``t_c`` of a body's previous collision is
+        elastic, and a body that would bounce off a floor for less than ``t_c`` rests on it.
+        Keep it well below the time between collisions of interest.
+    combine : {"mean", "min", "max", "geometric", "product"}, default "mean"
+        How two materials' restitutions combine; :meth:`set_pair` overrides a pair.
+    shell : float, optional
+        Neighbour-shell thickness [m]: how far a body moves before its neighbour list is
+        rebuilt. Default 0.35 of the mean diameter (fastest in benchmarks/edmd.py sweeps at
+        packing fractions 0.05 to 0.45).
+    """
+
+    def __init__(
+        self,
+        dim: int,
+        box: ArrayLike,
+        boundary: Literal["walls", "periodic"] = "walls",
+        gravity: ArrayLike | None = None,
+        *,
+        wall_restitution: ArrayLike = 1.0,
+        t_c: float = 1e-6,
+        combine: Combine = "mean",
+        shell: float | None = None,
+    ) -> None:
+        if dim not in (2, 3):
+            raise CaromError(f"dim must be 2 or 3; got {dim!r}")
+        self.dim = dim
+        box_arr = np.asarray(box, dtype=np.float64).reshape(-1)
+        if box_arr.shape != (dim,) or not np.all(np.isfinite(box_arr)) or np.any(box_arr <= 0):
+            raise CaromError(f"box must be {dim} positive lengths [m]; got {box!r}")
+        self.box = box_arr
+        if boundary not in ("walls", "periodic"):
+            raise CaromError(f"boundary must be 'walls' or 'periodic'; got {boundary!r}")
+        self.boundary = boundary
+        g = np.zeros(dim) if gravity is None else np.asarray(gravity, dtype=np.float64)
+        if g.shape != (dim,) or not np.all(np.isfinite(g)):
+            raise CaromError(f"gravity must be {dim} finite components [m/s^2]; got {gravity!r}")
+        self._gravity = g
+        wall_e = np.broadcast_to(np.asarray(wall_restitution, dtype=np.float64), (2 * dim,))
+        if np.any(~(wall_e >= 0.0) | (wall_e > 1.0)):
+            raise CaromError(f"wall_restitution must lie in [0, 1]; got {wall_restitution!r}")
+        self._wall_e = np.array(wall_e)
+        if not t_c >= 0.0:
+            raise CaromError(f"t_c must be >= 0 [s]; got {t_c!r}")
+        self.t_c = float(t_c)
+        if combine not in COMBINE_RULES:
+            raise CaromError(f"combine must be one of {COMBINE_RULES}; got {combine!r}")
+        self.combine = combine
+        if shell is not None and not shell > 0.0:
+            raise CaromError(f"shell must be > 0 [m]; got {shell!r}")
+        self._shell = shell
+        self.materials: list[Material] = []
+        self._pair_overrides: dict[tuple[int, int], float] = {}
+        self._x = np.zeros((0, dim))
+        self._v = np.zeros((0, dim))
+        self._w = np.zeros((0, 3))
+        self._radius = np.zeros(0)
+        self._mass = np.zeros(0)
+        self._q = np.zeros(0)
+        self._material = np.zeros(0, np.int64)
+        self._planes: list[tuple[FloatArray, FloatArray, float]] = []
+        self._model: Model | None = None
+        self._state: State | None = None
+        self._capacity = 32 if dim == 2 else 64
+        self._time = 0.0
+        self._events: list[NDArray[Any]] = []
+        self.stats = Stats(self)
+
+    # -- building ---------------------------------------------------------------------------
+
+    def add_material(self, material: Material) -> int:
+        """Register a material; return its index (identical materials share one)."""
+        if material in self.materials:
+            return self.materials.index(material)
+        self.materials.append(material)
+        self._invalidate()
+        return len(self.materials) - 1
+
+    def set_pair(self, material_a: int, material_b: int, restitution: float) -> None:
+        """Override the combined restitution of one material pair [-]."""
+        if not 0.0 <= restitution <= 1.0:
+            raise CaromError(f"restitution must lie in [0, 1]; got {restitution!r}")
+        for index in (material_a, material_b):
+            if not 0 <= index < len(self.materials):
+                raise CaromError(f"no material {index}; add it with add_material first")
+        self._pair_overrides[(material_a, material_b)] = restitution
+        self._pair_overrides[(material_b, material_a)] = restitution
+        self._invalidate()
+
+    def add_spheres(
+        self,
+        positions: ArrayLike,
+        velocities: ArrayLike | None = None,
+        *,
+        radius: ArrayLike,
+        mass: ArrayLike = 1.0,
+        restitution: float | None = None,
+        material: Material | int | None = None,
+        spins: ArrayLike | None = None,
+        inertia_factor: float | None = None,
+    ) -> NDArray[np.int64]:
+        """Add moving spheres (disks in 2D); return their indices.
+
+        Parameters
+        ----------
+        positions : (n, d) or (d,) array_like
+            Centres [m].
+        velocities : (n, d) or (d,) array_like, optional
+            [m/s]; default at rest.
+        radius, mass : float or (n,) array_like
+            [m] and [kg], positive.
+        restitution : float, optional
+            Shorthand for ``material=Material(restitution)``; default 1 (elastic).
+        material : Material or int, optional
+            A material or the index of one added with :meth:`add_material`.
+        spins : (n, 3) array_like or (n,) in 2D, optional
+            [rad/s].
+        inertia_factor : float, optional
+            ``q`` in ``I = q m a^2``; default 2/5 (solid sphere), 1/2 in 2D (disk).
+        """
+        x = self._rows("positions", positions)
+        n = x.shape[0]
+        v = np.zeros_like(x) if velocities is None else self._rows("velocities", velocities, n)
+        mat = self._material_index(restitution, material)
+        w = np.zeros((n, 3))
+        if spins is not None:
+            s = np.asarray(spins, dtype=np.float64)
+            if self.dim == 2:
+                w[:, 2] = np.broadcast_to(s.reshape(-1) if s.ndim else s, (n,))
+            else:
+                w[:] = np.broadcast_to(s, (n, 3))
+        q = inertia_factor if inertia_factor is not None else (0.4 if self.dim == 3 else 0.5)
+        return self._append(
+            x,
+            v,
+            w,
+            self._per_body("radius", radius, n, "m"),
+            self._per_body("mass", mass, n, "kg"),
+            q,
+            mat,
+        )
+
+    def add_static_spheres(
+        self,
+        positions: ArrayLike,
+        *,
+        radius: ArrayLike,
+        restitution: float | None = None,
+        material: Material | int | None = None,
+    ) -> NDArray[np.int64]:
+        """Add spheres that never move (pegs, obstacles); return their indices."""
+        x = self._rows("positions", positions)
+        n = x.shape[0]
+        mat = self._material_index(restitution, material)
+        return self._append(
+            x,
+            np.zeros_like(x),
+            np.zeros((n, 3)),
+            self._per_body("radius", radius, n, "m"),
+            np.full(n, np.inf),
+            0.4,
+            mat,
+        )
+
+    def add_plane(self, point: ArrayLike, normal: ArrayLike, *, restitution: float = 1.0) -> int:
+        """Add a static plane; bodies stay on the side ``normal`` points to. Returns its index."""
+        p = np.asarray(point, dtype=np.float64)
+        nrm = np.asarray(normal, dtype=np.float64)
+        if p.shape != (self.dim,) or nrm.shape != (self.dim,) or not np.all(np.isfinite(p)):
+            raise CaromError(f"a plane needs a point and a normal of {self.dim} components")
+        length = float(np.sqrt(nrm @ nrm))
+        if not length > 0.0 or not math.isfinite(length):
+            raise CaromError(f"the plane normal must be a non-zero vector; got {normal!r}")
+        if not 0.0 <= restitution <= 1.0:
+            raise CaromError(f"restitution must lie in [0, 1]; got {restitution!r}")
+        self._planes.append((p, nrm / length, float(restitution)))
+        self._invalidate()
+        return len(self._planes) - 1
+
+    def _rows(self, name: str, value: ArrayLike, n: int | None = None) -> FloatArray:
+        arr = np.asarray(value, dtype=np.float64)
+        if arr.ndim == 1:
+            arr = arr[None, :] if n is None or n == 1 or arr.shape[0] == self.dim else arr
+        if arr.ndim == 1 or arr.shape[-1] != self.dim:
+            raise CaromError(f"{name} must have shape (n, {self.dim}); got {np.shape(value)}")
+        if n is not None:
+            if arr.shape[0] == 1 and n > 1:
+                arr = np.repeat(arr, n, axis=0)
+            if arr.shape[0] != n:
+                raise CaromError(f"{name} has {arr.shape[0]} rows; expected {n}")
+        if not np.all(np.isfinite(arr)):
+            bad = int(np.argmax(~np.all(np.isfinite(arr), axis=1)))
+            raise CaromError(f"{name}[{bad}] = {arr[bad].tolist()} is not finite")
+        return np.array(arr)
+
+    def _per_body(self, name: str, value: ArrayLike, n: int, unit: str) -> FloatArray:
+        arr = np.asarray(value, dtype=np.float64)
+        try:
+            arr = np.broadcast_to(arr, (n,))
+        except ValueError:
+            raise CaromError(
+                f"{name} must be a scalar or have {n} values; got shape {arr.shape}"
+            ) from None
+        bad = ~(arr > 0.0) | ~np.isfinite(arr)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise CaromError(
+                f"{name} must be positive and finite [{unit}]; got {name}[{i}] = {arr[i]!r}"
+            )
+        return np.array(arr)
+
+    def _material_index(self, restitution: float | None, material: Material | int | None) -> int:
+        if material is not None and restitution is not None:
+            raise CaromError("give restitution= or material=, not both")
+        if isinstance(material, int):
+            if not 0 <= material < len(self.materials):
+                raise CaromError(f"no material {material}; add it with add_material first")
+            return material
+        if isinstance(material, Material):
+            return self.add_material(material)
+        return self.add_material(Material(1.0 if restitution is None else restitution))
+
+    def _append(
+        self,
+        x: FloatArray,
+        v: FloatArray,
+        w: FloatArray,
+        radius: FloatArray,
+        mass: FloatArray,
+        q: float,
+        mat: int,
+    ) -> NDArray[np.int64]:
+        self._sync_from_state()
+        start = self._x.shape[0]
+        self._x = np.concatenate([self._x, x])
+        self._v = np.concatenate([self._v, v])
+        self._w = np.concatenate([self._w, w])
+        self._radius = np.concatenate([self._radius, radius])
+        self._mass = np.concatenate([self._mass, mass])
+        self._q = np.concatenate([self._q, np.full(x.shape[0], q)])
+        self._material = np.concatenate([self._material, np.full(x.shape[0], mat, np.int64)])
+        self._invalidate()
+        return np.arange(start, self._x.shape[0])
+
+    def _invalidate(self) -> None:
+        self._sync_from_state()
+        self._model = None
+        self._state = None
+
+    def _sync_from_state(self) -> None:
+        """Copy positions and velocities at the current time out of the engine state."""
+        if self._state is None or self._model is None:
+            return
+        x = np.empty_like(self._x)
+        v = np.empty_like(self._v)
+        edmd.positions_at(self._model, self._state, self._time, x, v)
+        self._x, self._v, self._w = x, v, self._state.w.copy()
+
+    # -- model and state --------------------------------------------------------------------
+
+    def _pair_tables(self) -> tuple[NDArray[np.int64], FloatArray, FloatArray, FloatArray]:
+        mats = self.materials or [Material()]
+        n = len(mats)
+        law = np.zeros((n, n), np.int64)
+        e = np.zeros((n, n))
+        beta = np.full((n, n), -1.0)
+        friction = np.zeros((n, n))
+        rules: dict[str, Callable[[float, float], float]] = {
+            "mean": lambda a, b: 0.5 * (a + b),
+            "min": min,
+            "max": max,
+            "geometric": lambda a, b: math.sqrt(a * b),
+            "product": lambda a, b: a * b,
+        }
+        combine = rules[self.combine]
+        for i, a in enumerate(mats):
+            for j, b in enumerate(mats):
+                e[i, j] = self._pair_overrides.get((i, j), combine(a.restitution, b.restitution))
+                law[i, j] = max(a.law, b.law)
+                if law[i, j] == LAW_WALTON:
+                    mu_a = a.friction if a.friction is not None else 0.0
+                    mu_b = b.friction if b.friction is not None else 0.0
+                    friction[i, j] = combine(mu_a, mu_b)
+                    beta[i, j] = combine(a.beta0 or 0.0, b.beta0 or 0.0)
+                elif law[i, j] == LAW_ROUGH:
+                    beta[i, j] = combine(
+                        a.beta if a.beta is not None else -1.0,
+                        b.beta if b.beta is not None else -1.0,
+                    )
+        return law, e, beta, friction
+
+    def _build_model(self) -> Model:
+        n = self._x.shape[0]
+        mobile = np.isfinite(self._mass)
+        radius = self._radius
+        mean_diameter = 2.0 * float(np.mean(radius[mobile])) if mobile.any() else 1.0
+        delta = self._shell if self._shell is not None else SHELL_DEFAULT * mean_diameter
+        largest = float(radius.max()) if n else 0.0
+        shell_diameter = 2.0 * (largest + delta)
+        if self.boundary == "periodic" and np.any(self.box < 2.0 * shell_diameter):
+            raise CaromError(
+                f"the box is too small for periodic boundaries with spheres of radius "
+                f"{largest:g} m: each side must exceed 4 (radius + shell) = "
+                f"{2.0 * shell_diameter:g} m"
+            )
+        ncell = np.maximum(1, np.floor(self.box / shell_diameter)).astype(np.int64)
+        law, e, beta, friction = self._pair_tables()
+        planes_p = np.array([p for p, _, _ in self._planes]).reshape(-1, self.dim)
+        planes_n = np.array([q for _, q, _ in self._planes]).reshape(-1, self.dim)
+        planes_e = np.array([r for _, _, r in self._planes], dtype=np.float64)
+        with np.errstate(divide="ignore"):
+            inv_mass = np.where(mobile, 1.0 / self._mass, 0.0)
+        return Model(
+            box=self.box.copy(),
+            periodic=self.boundary == "periodic",
+            gravity=self._gravity.copy(),
+            mobile=mobile,
+            radius=radius.copy(),
+            mass=self._mass.copy(),
+            inv_mass=inv_mass,
+            q=self._q.copy(),
+            material=self._material.copy(),
+            pair_law=law,
+            pair_e=e,
+            pair_beta=beta,
+            pair_friction=friction,
+            face_e=np.concatenate([self._wall_e, planes_e]),
+            plane_point=planes_p,
+            plane_normal=planes_n,
+            t_c=self.t_c,
+            delta=delta,
+            cell_size=self.box / ncell,
+            ncell=ncell,
+        )
+
+    def _check_placement(self) -> None:
+        """Refuse bodies outside the box or the planes' free side (overlaps: later)."""
+        tol = OVERLAP_TOLERANCE
+        x, a = self._x, self._radius
+        if self.boundary == "walls":
+            low = x - a[:, None]
+            high = x + a[:, None] - self.box
+            bad = (low < -tol * a[:, None]) | (high > tol * a[:, None])
+            if bad.any():
+                i = int(np.argmax(bad.any(axis=1)))
+                raise CaromError(
+                    f"sphere {i} at {x[i].tolist()} with radius {a[i]:g} m reaches outside the "
+                    f"box [0, {self.box.tolist()}]; move it inside or enlarge the box"
+                )
+        for p_index, (p, nrm, _) in enumerate(self._planes):
+            dist = (x - p) @ nrm - a
+            bad = dist < -tol * a
+            if bad.any():
+                i = int(np.argmax(bad))
+                raise CaromError(
+                    f"sphere {i} at {x[i].tolist()} is {-dist[i]:g} m on the wrong side of plane "
+                    f"{p_index} (point {p.tolist()}, normal {nrm.tolist()}); move it to the side "
+                    f"the normal points to"
+                )
+
+    def _check_overlaps(self, model: Model, state: State) -> None:
+        """Refuse overlapping spheres: every overlapping pair shares a neighbour list."""
+        x = self._x
+        for i in range(x.shape[0]):
+            if not model.mobile[i]:
+                continue
+            js = state.nbr[i, : state.nbr_count[i]]
+            if js.size == 0:
+                continue
+            d = x[i] - x[js]
+            if model.periodic:
+                d -= self.box * np.floor(d / self.box + 0.5)
+            dist = np.sqrt(np.sum(d * d, axis=1))
+            reach = self._radius[i] + self._radius[js]
+            overlap = reach - dist
+            bad = overlap > OVERLAP_TOLERANCE * reach
+            if bad.any():
+                j = int(js[int(np.argmax(bad))])
+                k = int(np.argmax(bad))
+                raise CaromError(
+                    f"spheres {i} and {j} overlap by {overlap[k]:.3g} m at the start (centres "
+                    f"{x[i].tolist()} and {x[j].tolist()}, radii {self._radius[i]:g} and "
+                    f"{self._radius[j]:g}); place them at least the sum of their radii apart"
+                )
+
+    def _ensure_built(self) -> None:
+        if self._state is not None:
+            return
+        if self._x.shape[0] == 0:
+            raise CaromError("the world has no spheres; add some with add_spheres")
+        self._check_placement()
+        x = self._x.copy()
+        if self.boundary == "periodic":
+            x -= self.box * np.floor(x / self.box)
+        while True:
+            model = self._build_model()
+            acc = np.where(model.mobile[:, None], model.gravity[None, :], 0.0)
+            state = allocate_state(
+                x,
+                self._v,
+                acc,
+                self._w,
+                self._time,
+                int(np.prod(model.ncell)),
+                self._capacity,
+                LOG_CAPACITY,
+            )
+            if edmd.initialise(model, state):
+                break
+            self._capacity *= 2
+        self._check_overlaps(model, state)
+        self._model, self._state = model, state
+
+    def _mobile_mask(self) -> NDArray[np.bool_]:
+        return np.isfinite(self._mass)
+
+    # -- running ------------------------------------------------------------------------------
+
+    @property
+    def time(self) -> float:
+        """Simulation time [s]."""
+        return self._time
+
+    def run(
+        self,
+        until: float,
+        *,
+        frame_dt: float | None = None,
+        log: bool = True,
+        callback: Callable[[Frame], object] | None = None,
+    ) -> list[Frame] | None:
+        """Advance to time ``until`` [s], exactly.
+
+        With ``frame_dt`` [s], frames at ``time + k frame_dt`` (and at ``until``) are
+        collected and returned, and ``callback`` is called with each; without it, nothing
+        is kept. ``log`` records every collision in :attr:`events`.
+        """
+        if frame_dt is None:
+            if callback is not None:
+                raise CaromError("callback needs frame_dt: the interval between frames [s]")
+            for _ in self.frames(until, None, log=log):
+                pass
+            return None
+        frames = []
+        for frame in self.frames(until, frame_dt, log=log):
+            if callback is not None:
+                callback(frame)
+            frames.append(frame)
+        return frames
+
+    def step(self, events: int = 1, *, log: bool = True) -> None:
+        """Process the next ``events`` events (collisions and neighbour-list rebuilds).
+
+        The clock moves to the time of the last one; nothing else is skipped over.
+        """
+        if events < 1:
+            raise CaromError(f"events must be at least 1; got {events!r}")
+        self._ensure_built()
+        model, state = self._model, self._state
+        assert model is not None and state is not None
+        remaining = events
+        while remaining > 0:
+            before = int(state.counts[edmd.C_EVENTS])
+            status = edmd.run(model, state, math.inf, remaining, log)
+            self._drain_log()
+            remaining -= int(state.counts[edmd.C_EVENTS]) - before
+            if status == edmd.OVERFLOW:
+                self._grow_lists()
+                model, state = self._model, self._state
+                assert model is not None and state is not None
+            elif status == edmd.DONE:
+                break  # no event will ever come (an empty or frozen world)
+        self._time = float(state.clock[0])
+
+    def frames(self, until: float, frame_dt: float | None, *, log: bool = True) -> Iterator[Frame]:
+        """Advance to ``until``, yielding a :class:`Frame` every ``frame_dt`` (lazily)."""
+        if not math.isfinite(until) or until < self._time:
+            raise CaromError(
+                f"until must be a finite time >= the current time {self._time} s; got {until!r}"
+            )
+        if frame_dt is not None and not (frame_dt > 0.0 and math.isfinite(frame_dt)):
+            raise CaromError(f"frame_dt must be a positive time [s]; got {frame_dt!r}")
+        self._ensure_built()
+        start = self._time
+        k = 1
+        while True:
+            target = until if frame_dt is None else min(until, start + k * frame_dt)
+            self._advance_to(target, log)
+            if frame_dt is not None:
+                yield self.frame()
+            if target >= until:
+                return
+            k += 1
+
+    def _advance_to(self, target: float, log: bool) -> None:
+        model, state = self._model, self._state
+        assert model is not None and state is not None
+        while True:
+            status = edmd.run(model, state, target, np.iinfo(np.int64).max, log)
+            self._drain_log()
+            if status == edmd.DONE:
+                break
+            if status == edmd.OVERFLOW:
+                self._grow_lists()
+                model, state = self._model, self._state
+                assert model is not None and state is not None
+        self._time = target
+
+    def _grow_lists(self) -> None:
+        """Double the neighbour-list capacity and rebuild every list, keeping the schedule."""
+        model, state = self._model, self._state
+        assert model is not None and state is not None
+        self._capacity *= 2
+        nbr = np.zeros((state.x.shape[0], self._capacity), np.int32)
+        state = state._replace(nbr=nbr)
+        from carom.core.neighbors import build_all
+
+        if not build_all(
+            state.origin,
+            model.radius,
+            model.mobile,
+            state.nbr,
+            state.nbr_count,
+            state.cell_head,
+            state.cell_next,
+            state.cell_prev,
+            state.cell,
+            model.box,
+            model.periodic,
+            model.delta,
+            model.cell_size,
+            model.ncell,
+        ):
+            self._grow_lists()
+            return
+        self._state = state
+
+    def _drain_log(self) -> None:
+        state = self._state
+        assert state is not None
+        n = int(state.log_n[0])
+        if n == 0:
+            return
+        record = np.empty(n, dtype=EVENT_DTYPE)
+        record["time"] = state.log_time[:n]
+        record["a"] = state.log_a[:n]
+        record["b"] = state.log_b[:n]
+        record["impulse"] = state.log_impulse[:n]
+        record["un_before"] = state.log_un[:n, 0]
+        record["un_after"] = state.log_un[:n, 1]
+        self._events.append(record)
+        state.log_n[0] = 0
+
+    def frame(self) -> Frame:
+        """The current state as a :class:`Frame`."""
+        return Frame(self._time, self.positions, self.velocities, self.spins)
+
+    # -- reading ------------------------------------------------------------------------------
+
+    @property
+    def n_bodies(self) -> int:
+        return int(self._x.shape[0])
+
+    @property
+    def positions(self) -> FloatArray:
+        """Centres now, (N, d) [m] (periodic: wrapped into the box)."""
+        if self._state is None or self._model is None:
+            return self._x.copy()
+        x = np.empty_like(self._x)
+        v = np.empty_like(self._v)
+        edmd.positions_at(self._model, self._state, self._time, x, v)
+        return x
+
+    @property
+    def velocities(self) -> FloatArray:
+        """Velocities now, (N, d) [m/s]."""
+        if self._state is None or self._model is None:
+            return self._v.copy()
+        x = np.empty_like(self._x)
+        v = np.empty_like(self._v)
+        edmd.positions_at(self._model, self._state, self._time, x, v)
+        return v
+
+    @property
+    def spins(self) -> FloatArray:
+        """Spins now, (N, 3) [rad/s] (2D: column 2)."""
+        return self._w.copy() if self._state is None else self._state.w.copy()
+
+    @property
+    def radii(self) -> FloatArray:
+        return self._radius.copy()
+
+    @property
+    def masses(self) -> FloatArray:
+        return self._mass.copy()
+
+    @property
+    def events(self) -> NDArray[Any]:
+        """Every logged collision so far, a structured array (see ``EVENT_DTYPE``).
+
+        Fields: ``time`` [s]; ``a``, ``b`` the bodies (``b < 0``: wall face or plane
+        ``-1 - b``, see :meth:`describe_partner`); ``impulse`` on ``a`` [N s], always 3
+        components; ``un_before``, ``un_after`` the normal relative speeds [m/s].
+        """
+        if not self._events:
+            return np.empty(0, dtype=EVENT_DTYPE)
+        if len(self._events) > 1:
+            self._events = [np.concatenate(self._events)]
+        return self._events[0]
+
+    def describe_partner(self, b: int) -> str:
+        """A readable name for an event's ``b``: a body, a wall face or a plane."""
+        if b >= 0:
+            return f"body {b}"
+        face = -1 - b
+        if face < 2 * self.dim:
+            return f"wall {'xyz'[face // 2]}{'-' if face % 2 == 0 else '+'}"
+        return f"plane {face - 2 * self.dim}"
+
+    # -- checkpoints --------------------------------------------------------------------------
+
+    def save(self, path: str | Path) -> None:
+        """Write a checkpoint of the whole world (model, state and schedule) to ``path``.
+
+        A world loaded from it continues exactly, bit for bit, as this one would.
+        """
+        self._ensure_built()
+        model, state = self._model, self._state
+        assert model is not None and state is not None
+        self._drain_log()
+        arrays: dict[str, Any] = {}
+        for name, value in state._asdict().items():
+            arrays[f"state.{name}"] = value
+        meta = {
+            "format": "carom-world",
+            "version": 1,
+            "dim": self.dim,
+            "box": self.box.tolist(),
+            "boundary": self.boundary,
+            "gravity": self._gravity.tolist(),
+            "wall_restitution": self._wall_e.tolist(),
+            "t_c": self.t_c,
+            "combine": self.combine,
+            "shell": model.delta,
+            "time": self._time,
+            "capacity": self._capacity,
+            "materials": [m.__dict__ for m in self.materials],
+            "pair_overrides": [[a, b, e] for (a, b), e in self._pair_overrides.items()],
+            "planes": [[p.tolist(), q.tolist(), r] for p, q, r in self._planes],
+        }
+        arrays["meta"] = np.array(json.dumps(meta))
+        for name in ("radius", "mass", "q", "material"):
+            arrays[f"body.{name}"] = getattr(self, f"_{name}")
+        path = Path(path)
+        tmp = path.with_name(path.name + ".partial")
+        with tmp.open("wb") as handle:
+            np.savez(handle, **arrays)
+        tmp.replace(path)
+
+    @classmethod
+    def load(cls, path: str | Path) -> World:
+        """Read a checkpoint written by :meth:`save`."""
+        try:
+            data = np.load(Path(path), allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise CaromError(f"cannot read checkpoint {path}: {exc}") from None
+        with data:
+            meta = json.loads(str(data["meta"]))
+            if meta.get("format") != "carom-world":
+                raise CaromError(f"{path} is not a carom checkpoint")
+            world = cls(
+                meta["dim"],
+                meta["box"],
+                meta["boundary"],
+                meta["gravity"],
+                wall_restitution=meta["wall_restitution"],
+                t_c=meta["t_c"],
+                combine=meta["combine"],
+                shell=meta["shell"],
+            )
+            world.materials = [Material(**m) for m in meta["materials"]]
+            world._pair_overrides = {(a, b): e for a, b, e in meta["pair_overrides"]}
+            world._planes = [(np.array(p), np.array(q), r) for p, q, r in meta["planes"]]
+            for name in ("radius", "mass", "q", "material"):
+                setattr(world, f"_{name}", data[f"body.{name}"])
+            fields = {name: data[f"state.{name}"] for name in State._fields}
+            state = State(**fields)
+            world._capacity = meta["capacity"]
+            world._x = state.x.copy()
+            world._v = state.v.copy()
+            world._w = state.w.copy()
+            world._time = meta["time"]
+            world._model = world._build_model()
+            world._state = state
+        return world
+
+
+EVENT_DTYPE = np.dtype(
+    [
+        ("time", np.float64),
+        ("a", np.int64),
+        ("b", np.int64),
+        ("impulse", np.float64, (3,)),
+        ("un_before", np.float64),
+        ("un_after", np.float64),
+    ]
+)
+
+
+def _sequence(value: Sequence[float]) -> list[float]:
+    return [float(c) for c in value]
