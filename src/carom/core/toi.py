@@ -169,4 +169,5 @@ def shell_exit_time(offset: float, speed: float, acc: float, delta: float) -> fl
     if room <= 0.0:
         return 0.0
     # positive root of acc/2 t^2 + speed t - room = 0, cancellation-free
-    return 2.0 * room / (speed + math.sqrt(speed * speed + 2.0 * acc * room))
+    rate = speed + math.sqrt(speed * speed + 2.0 * acc * room)
+    return 2.0 * room / rate if rate > 0.0 else INF  # at rest and unaccelerated: never
