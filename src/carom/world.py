@@ -533,6 +533,7 @@ class World:
             inv_mass = np.where(mobile, 1.0 / self._mass, 0.0)
         return Model(
             box=self.box.copy(),
+            inv_box=1.0 / self.box,
             periodic=self.boundary == "periodic",
             gravity=self._gravity.copy(),
             mobile=mobile,

@@ -68,7 +68,7 @@ S_WALL_IMPULSE = 1  # sum of |J| on walls and planes [N s]
 S_KE_LOST = 2  # kinetic energy dissipated [J]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def face_normal(plane_normal: np.ndarray, dim: int, face: int, k: int) -> float:
     """Component ``k`` of the inward unit normal of wall face or plane ``face``."""
     if face < 2 * dim:
@@ -78,7 +78,7 @@ def face_normal(plane_normal: np.ndarray, dim: int, face: int, k: int) -> float:
     return float(plane_normal[face - 2 * dim, k])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def set_support(
     gravity: np.ndarray,
     plane_normal: np.ndarray,
@@ -99,7 +99,7 @@ def set_support(
         acc[i, k] = gravity[k] - g_n * nk
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def advance(x: np.ndarray, v: np.ndarray, acc: np.ndarray, t: np.ndarray, i: int, T: float) -> None:
     """Move body ``i`` along its free flight to time ``T`` and set its clock."""
     dt = T - t[i]
@@ -111,7 +111,7 @@ def advance(x: np.ndarray, v: np.ndarray, acc: np.ndarray, t: np.ndarray, i: int
     t[i] = T
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def predict(
     i: int,
     T: float,
@@ -127,6 +127,7 @@ def predict(
     radius: np.ndarray,
     mobile: np.ndarray,
     box: np.ndarray,
+    inv_box: np.ndarray,
     periodic: bool,
     delta: float,
     plane_point: np.ndarray,
@@ -201,7 +202,7 @@ def predict(
             aj = acc[j, k]
             r = x[i, k] - (x[j, k] + (v[j, k] + 0.5 * aj * dtj) * dtj)
             if periodic:
-                r -= box[k] * math.floor(r / box[k] + 0.5)
+                r -= box[k] * math.floor(r * inv_box[k] + 0.5)
             dv = v[i, k] - (v[j, k] + aj * dtj)
             da = acc[i, k] - aj
             rr += r * r
@@ -212,7 +213,12 @@ def predict(
             dada += da * da
         reach = rad + radius[j]
         if dada == 0.0:
-            tp = toi_sphere_sphere(rr - reach * reach, rv, vv)
+            c = rr - reach * reach
+            # cheap rejection: t = c / (-b + sqrt(b^2 - a c)) >= c / (-2 b) for c > 0 > b, so a
+            # pair whose bound is already later than the best event needs no square root
+            if rv >= 0.0 or (c > 0.0 and c > -2.0 * rv * best):
+                continue
+            tp = toi_sphere_sphere(c, rv, vv)
         else:
             tp = first_root_quartic(0.25 * dada, vda, vv + rda, 2.0 * rv, rr - reach * reach, best)
         if tp < best:
@@ -227,7 +233,7 @@ def predict(
         ev_stamp[i] = counter[other]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _log(
     log_time: np.ndarray,
     log_a: np.ndarray,
@@ -256,7 +262,7 @@ def _log(
     log_n[0] = n + 1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _kinetic(
     v: np.ndarray,
     w: np.ndarray,
@@ -276,7 +282,7 @@ def _kinetic(
     return float(0.5 * mass[i] * (ke + q[i] * radius[i] * radius[i] * spin))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def collide_pair(m, s, i: int, j: int, T: float, log_on: bool) -> None:  # type: ignore[no-untyped-def]
     """Apply the impulse law to bodies ``i`` and ``j``, both at time ``T`` (see run)."""
     _collide_pair(
@@ -318,7 +324,7 @@ def collide_pair(m, s, i: int, j: int, T: float, log_on: bool) -> None:  # type:
     )
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _collide_pair(
     i: int,
     j: int,
@@ -480,7 +486,7 @@ def _collide_pair(
         )
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _collide_face(
     i: int,
     face: int,
@@ -567,7 +573,7 @@ def _collide_face(
         )
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def initialise(m, s) -> bool:  # type: ignore[no-untyped-def]
     """Build every shell and neighbour list and schedule every body; False on overflow."""
     for i in range(s.x.shape[0]):
@@ -609,6 +615,7 @@ def initialise(m, s) -> bool:  # type: ignore[no-untyped-def]
             m.radius,
             m.mobile,
             m.box,
+            m.inv_box,
             m.periodic,
             m.delta,
             m.plane_point,
@@ -622,7 +629,7 @@ def initialise(m, s) -> bool:  # type: ignore[no-untyped-def]
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ignore[no-untyped-def]
     """Process events in time order up to ``t_stop``; return why it stopped.
 
@@ -650,6 +657,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     material, pair_law, pair_e = m.material, m.pair_law, m.pair_e
     pair_beta, pair_friction, face_e = m.pair_beta, m.pair_friction, m.face_e
     gravity, box, periodic, delta, t_c = m.gravity, m.box, m.periodic, m.delta, m.t_c
+    inv_box = m.inv_box
     plane_point, plane_normal = m.plane_point, m.plane_normal
     cell_size, ncell = m.cell_size, m.ncell
 
@@ -791,6 +799,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
             radius,
             mobile,
             box,
+            inv_box,
             periodic,
             delta,
             plane_point,
@@ -817,6 +826,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                 radius,
                 mobile,
                 box,
+                inv_box,
                 periodic,
                 delta,
                 plane_point,
@@ -829,7 +839,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
             heap_update(ev_time, heap, where, j)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def positions_at(m, s, T: float, x_out: np.ndarray, v_out: np.ndarray) -> None:  # type: ignore[no-untyped-def]
     """Every body's position and velocity at time ``T`` (periodic: wrapped into the box)."""
     dim = m.box.shape[0]

@@ -12,14 +12,14 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _less(keys: np.ndarray, i: int, j: int) -> bool:
     ki = keys[i]
     kj = keys[j]
     return ki < kj or (ki == kj and i < j)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _sift_up(keys: np.ndarray, heap: np.ndarray, where: np.ndarray, k: int) -> None:
     body = heap[k]
     while k > 0:
@@ -34,7 +34,7 @@ def _sift_up(keys: np.ndarray, heap: np.ndarray, where: np.ndarray, k: int) -> N
     where[body] = k
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _sift_down(keys: np.ndarray, heap: np.ndarray, where: np.ndarray, k: int) -> None:
     n = heap.shape[0]
     body = heap[k]
@@ -55,7 +55,7 @@ def _sift_down(keys: np.ndarray, heap: np.ndarray, where: np.ndarray, k: int) ->
     where[body] = k
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def heap_build(keys: np.ndarray, heap: np.ndarray, where: np.ndarray) -> None:
     """Fill ``heap`` and ``where`` with every body, ordered by ``keys`` (O(N))."""
     n = keys.shape[0]
@@ -66,7 +66,7 @@ def heap_build(keys: np.ndarray, heap: np.ndarray, where: np.ndarray) -> None:
         _sift_down(keys, heap, where, k)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def heap_update(keys: np.ndarray, heap: np.ndarray, where: np.ndarray, body: int) -> None:
     """Restore the heap after ``keys[body]`` changed."""
     k = where[body]

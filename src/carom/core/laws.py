@@ -17,7 +17,7 @@ LAW_ROUGH = 1  # constant tangential restitution beta
 LAW_WALTON = 2  # Coulomb friction mu_f with sticking restitution beta0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def impulse_spheres(
     n0: float,
     n1: float,

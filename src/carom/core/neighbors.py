@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def cell_of(p: np.ndarray, cell_size: np.ndarray, ncell: np.ndarray) -> int:
     """Linear index of the cell holding point ``p`` (clamped to the grid)."""
     index = 0
@@ -34,7 +34,7 @@ def cell_of(p: np.ndarray, cell_size: np.ndarray, ncell: np.ndarray) -> int:
     return index
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def cell_insert(
     i: int, c: int, head: np.ndarray, nxt: np.ndarray, prv: np.ndarray, cell: np.ndarray
 ) -> None:
@@ -47,7 +47,7 @@ def cell_insert(
     cell[i] = c
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def cell_remove(
     i: int, head: np.ndarray, nxt: np.ndarray, prv: np.ndarray, cell: np.ndarray
 ) -> None:
@@ -62,7 +62,7 @@ def cell_remove(
     prv[i] = -1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def separation(
     a: np.ndarray, b: np.ndarray, box: np.ndarray, periodic: bool, out: np.ndarray
 ) -> float:
@@ -77,7 +77,7 @@ def separation(
     return total
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _list_remove(nbr: np.ndarray, count: np.ndarray, owner: int, body: int) -> None:
     n = count[owner]
     for s in range(n):
@@ -87,14 +87,14 @@ def _list_remove(nbr: np.ndarray, count: np.ndarray, owner: int, body: int) -> N
             return
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _scan_range(c: int, n: int, periodic: bool) -> tuple[int, int]:
     if periodic and n < 3:
         return -c, n - 1 - c
     return -1, 1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _link_overlapping(
     i: int,
     origin: np.ndarray,
@@ -129,6 +129,9 @@ def _link_overlapping(
     lo1, hi1 = _scan_range(c1, ncell[1], periodic)
     lo2, hi2 = _scan_range(c2, ncell[2], periodic) if dim == 3 else (0, 0)
     reach_i = radius[i] + 2.0 * delta
+    inv0 = 1.0 / box[0]
+    inv1 = 1.0 / box[1]
+    inv2 = 1.0 / box[2] if dim == 3 else 0.0
     for o0 in range(lo0, hi0 + 1):
         for o1 in range(lo1, hi1 + 1):
             for o2 in range(lo2, hi2 + 1):
@@ -150,7 +153,13 @@ def _link_overlapping(
                 while j >= 0:
                     if j != i:
                         reach = reach_i + radius[j]
-                        d2 = separation(origin[i], origin[j], box, periodic, scratch)
+                        d2 = 0.0
+                        for k in range(dim):
+                            d = origin[i, k] - origin[j, k]
+                            if periodic:
+                                inv = inv0 if k == 0 else (inv1 if k == 1 else inv2)
+                                d -= box[k] * math.floor(d * inv + 0.5)
+                            d2 += d * d
                         if d2 < reach * reach:
                             if (mobile[i] and count[i] >= capacity) or (
                                 mobile[j] and count[j] >= capacity
@@ -166,7 +175,7 @@ def _link_overlapping(
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def build_all(
     origin: np.ndarray,
     radius: np.ndarray,
@@ -210,7 +219,7 @@ def build_all(
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rebuild_shell(
     i: int,
     origin: np.ndarray,

@@ -18,7 +18,7 @@ from numba import njit
 INF = math.inf
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def toi_sphere_sphere(c: float, b: float, a: float) -> float:
     """First contact of two spheres in linear relative motion.
 
@@ -39,7 +39,7 @@ def toi_sphere_sphere(c: float, b: float, a: float) -> float:
     return c / (-b + math.sqrt(disc))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def toi_gap(d0: float, u: float, acc: float) -> float:
     """First time a gap ``d(t) = d0 + u t + acc t^2 / 2`` closes while closing.
 
@@ -80,12 +80,12 @@ def toi_gap(d0: float, u: float, acc: float) -> float:
     return INF
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _horner(c4: float, c3: float, c2: float, c1: float, c0: float, t: float) -> float:
     return (((c4 * t + c3) * t + c2) * t + c1) * t + c0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _bisect(c4: float, c3: float, c2: float, c1: float, c0: float, lo: float, hi: float) -> float:
     """A root of the polynomial in [lo, hi] given a sign change, to the last bit."""
     f_lo = _horner(c4, c3, c2, c1, c0, lo)
@@ -101,7 +101,7 @@ def _bisect(c4: float, c3: float, c2: float, c1: float, c0: float, lo: float, hi
     return hi
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _quadratic_roots(a: float, b: float, c: float) -> tuple[float, float]:
     """Real roots of a t^2 + b t + c (NaN when absent), smaller first."""
     nan = math.nan
@@ -117,7 +117,7 @@ def _quadratic_roots(a: float, b: float, c: float) -> tuple[float, float]:
     return (r1, r2) if r1 <= r2 else (r2, r1)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def first_root_quartic(
     c4: float, c3: float, c2: float, c1: float, c0: float, t_max: float
 ) -> float:
@@ -158,7 +158,7 @@ def first_root_quartic(
     return INF
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def shell_exit_time(offset: float, speed: float, acc: float, delta: float) -> float:
     """Earliest time a body may have moved ``delta`` from its shell centre [s].
 
