@@ -282,7 +282,7 @@ class World:
         self._planes: list[tuple[FloatArray, FloatArray, float]] = []
         self._model: Model | None = None
         self._state: State | None = None
-        self._capacity = 32 if dim == 2 else 64
+        self._capacity = 16 if dim == 2 else 32  # grows on overflow (_grow_lists)
         self._time = 0.0
         self._events: list[NDArray[Any]] = []
         self.stats = Stats(self)
@@ -729,32 +729,39 @@ class World:
         self._time = target
 
     def _grow_lists(self) -> None:
-        """Double the neighbour-list capacity and rebuild every list, keeping the schedule."""
-        model, state = self._model, self._state
-        assert model is not None and state is not None
-        self._capacity *= 2
-        nbr = np.zeros((state.x.shape[0], self._capacity), np.int32)
-        state = state._replace(nbr=nbr)
+        """Double the neighbour-list capacity (a list overflowed); the schedule is kept."""
+        self._resize_lists(self._capacity * 2)
+
+    def _resize_lists(self, capacity: int) -> None:
+        """Rebuild every neighbour list with room for ``capacity`` entries (more if needed).
+
+        Lists only say which pairs to examine; every scheduled event stays valid.
+        """
         from carom.core.neighbors import build_all
 
-        if not build_all(
-            state.origin,
-            model.radius,
-            model.mobile,
-            state.nbr,
-            state.nbr_count,
-            state.cell_head,
-            state.cell_next,
-            state.cell_prev,
-            state.cell,
-            model.box,
-            model.periodic,
-            model.delta,
-            model.cell_size,
-            model.ncell,
-        ):
-            self._grow_lists()
-            return
+        model, state = self._model, self._state
+        assert model is not None and state is not None
+        while True:
+            state = state._replace(nbr=np.zeros((state.x.shape[0], capacity), np.int32))
+            if build_all(
+                state.origin,
+                model.radius,
+                model.mobile,
+                state.nbr,
+                state.nbr_count,
+                state.cell_head,
+                state.cell_next,
+                state.cell_prev,
+                state.cell,
+                model.box,
+                model.periodic,
+                model.delta,
+                model.cell_size,
+                model.ncell,
+            ):
+                break
+            capacity *= 2
+        self._capacity = capacity
         self._state = state
 
     def _drain_log(self) -> None:

@@ -232,3 +232,20 @@ def test_frames_are_at_exact_output_times() -> None:
     assert [f.time for f in frames] == [0.25, 0.5, 0.75, 1.0]
     assert seen == [0.25, 0.5, 0.75, 1.0]
     assert frames[-1].positions.shape == (25, 2)
+
+
+def test_neighbour_lists_grow_without_changing_the_physics() -> None:
+    # Lists that start far too small overflow at once and again during the run; growing them
+    # rebuilds every list but keeps the schedule, so the events are exactly those of a world
+    # whose lists were large enough from the start.
+    roomy = _gas(3, 7, 0.45, seed=8, e=0.9)
+    roomy.run(until=5.0)
+    cramped = _gas(3, 7, 0.45, seed=8, e=0.9)
+    cramped._ensure_built()
+    assert cramped._state is not None
+    tight = int(cramped._state.nbr_count.max())
+    cramped._resize_lists(tight)  # full to the brim: the first denser neighbourhood overflows
+    cramped.run(until=5.0)
+    assert cramped._capacity > tight  # it did overflow during the run, and grew
+    assert cramped.events.tobytes() == roomy.events.tobytes()
+    np.testing.assert_array_equal(cramped.positions, roomy.positions)
