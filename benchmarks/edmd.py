@@ -52,9 +52,10 @@ def lattice_gas(dim: int, n: int, packing: float, seed: int = 1) -> carom.World:
 
 def memory_per_particle(world: carom.World) -> float:
     """Bytes of every model and state array, per particle (the event log excluded)."""
-    assert world._model is not None and world._state is not None
+    assert world._model is not None
+    assert world._state is not None
     total = 0
-    for name, value in world._model._asdict().items():
+    for value in world._model._asdict().values():
         total += getattr(value, "nbytes", 0)
     for name, value in world._state._asdict().items():
         if not name.startswith("log_"):
@@ -200,7 +201,7 @@ def main() -> None:
     if args.no_record:
         return
     command = "python benchmarks/edmd.py " + " ".join(sys.argv[1:])
-    stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     with RESULTS.open("a") as handle:
         handle.write(f"\n## edmd: event-driven engine, {stamp}\n\n")
         handle.write(f"- machine: {machine()}\n- commit: {commit()}\n- command: `{command}`\n")
