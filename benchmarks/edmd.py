@@ -65,8 +65,8 @@ def memory_per_particle(world: carom.World) -> float:
 
 def measure(dim: int, n: int, packing: float, repeats: int) -> dict[str, float]:
     world = lattice_gas(dim, n, packing)
-    # melt: each particle collides a few times; the rate per unit time is ~10 at these densities
-    world.run(until=2.0, log=False)
+    # melt: about 3 collisions per particle (rate ~10 per unit time at these densities)
+    world.run(until=0.3, log=False)
     count = world.n_bodies
     target = max(300_000, 2 * count)
     # time per collision is what we report; pick the run length from a short probe

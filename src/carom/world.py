@@ -426,7 +426,7 @@ class World:
         if bad.any():
             i = int(np.argmax(bad))
             raise CaromError(
-                f"{name} must be positive and finite [{unit}]; got {name}[{i}] = {arr[i]!r}"
+                f"{name} must be positive and finite [{unit}]; got {name}[{i}] = {float(arr[i])!r}"
             )
         return np.array(arr)
 
@@ -581,28 +581,36 @@ class World:
                 )
 
     def _check_overlaps(self, model: Model, state: State) -> None:
-        """Refuse overlapping spheres: every overlapping pair shares a neighbour list."""
+        """Refuse overlapping spheres: every overlapping pair shares a neighbour list.
+
+        Vectorised over the lists, a block of bodies at a time (bounded memory at 1e6 bodies).
+        """
         x = self._x
-        for i in range(x.shape[0]):
-            if not model.mobile[i]:
-                continue
-            js = state.nbr[i, : state.nbr_count[i]]
-            if js.size == 0:
-                continue
-            d = x[i] - x[js]
+        n, capacity = state.nbr.shape
+        slots = np.arange(capacity)
+        block = max(1, 2_000_000 // max(capacity, 1))
+        for start in range(0, n, block):
+            stop = min(n, start + block)
+            used = (slots[None, :] < state.nbr_count[start:stop, None]) & model.mobile[
+                start:stop, None
+            ]
+            rows, cols = np.nonzero(used)
+            i = rows + start
+            j = state.nbr[i, cols].astype(np.int64)
+            d = x[i] - x[j]
             if model.periodic:
                 d -= self.box * np.floor(d / self.box + 0.5)
             dist = np.sqrt(np.sum(d * d, axis=1))
-            reach = self._radius[i] + self._radius[js]
+            reach = self._radius[i] + self._radius[j]
             overlap = reach - dist
             bad = overlap > OVERLAP_TOLERANCE * reach
             if bad.any():
-                j = int(js[int(np.argmax(bad))])
                 k = int(np.argmax(bad))
+                a, b = sorted((int(i[k]), int(j[k])))
                 raise CaromError(
-                    f"spheres {i} and {j} overlap by {overlap[k]:.3g} m at the start (centres "
-                    f"{x[i].tolist()} and {x[j].tolist()}, radii {self._radius[i]:g} and "
-                    f"{self._radius[j]:g}); place them at least the sum of their radii apart"
+                    f"spheres {a} and {b} overlap by {overlap[k]:.3g} m at the start (centres "
+                    f"{x[a].tolist()} and {x[b].tolist()}, radii {self._radius[a]:g} and "
+                    f"{self._radius[b]:g}); place them at least the sum of their radii apart"
                 )
 
     def _ensure_built(self) -> None:
@@ -648,14 +656,15 @@ class World:
         until: float,
         *,
         frame_dt: float | None = None,
-        log: bool = True,
+        log: bool | ArrayLike = True,
         callback: Callable[[Frame], object] | None = None,
     ) -> list[Frame] | None:
         """Advance to time ``until`` [s], exactly.
 
         With ``frame_dt`` [s], frames at ``time + k frame_dt`` (and at ``until``) are
         collected and returned, and ``callback`` is called with each; without it, nothing
-        is kept. ``log`` records every collision in :attr:`events`.
+        is kept. ``log``: True records every collision in :attr:`events`, False none, and a
+        list of body indices only the collisions involving one of them.
         """
         if frame_dt is None:
             if callback is not None:
@@ -694,8 +703,13 @@ class World:
                 break  # no event will ever come (an empty or frozen world)
         self._time = float(state.clock[0])
 
-    def frames(self, until: float, frame_dt: float | None, *, log: bool = True) -> Iterator[Frame]:
-        """Advance to ``until``, yielding a :class:`Frame` every ``frame_dt`` (lazily)."""
+    def frames(
+        self, until: float, frame_dt: float | None, *, log: bool | ArrayLike = True
+    ) -> Iterator[Frame]:
+        """Advance to ``until``, yielding a :class:`Frame` every ``frame_dt`` (lazily).
+
+        ``log`` as for :meth:`run`.
+        """
         if not math.isfinite(until) or until < self._time:
             raise CaromError(
                 f"until must be a finite time >= the current time {self._time} s; got {until!r}"
@@ -703,23 +717,39 @@ class World:
         if frame_dt is not None and not (frame_dt > 0.0 and math.isfinite(frame_dt)):
             raise CaromError(f"frame_dt must be a positive time [s]; got {frame_dt!r}")
         self._ensure_built()
+        log_on, keep = self._log_filter(log)
         start = self._time
         k = 1
         while True:
             target = until if frame_dt is None else min(until, start + k * frame_dt)
-            self._advance_to(target, log)
+            self._advance_to(target, log_on, keep)
             if frame_dt is not None:
                 yield self.frame()
             if target >= until:
                 return
             k += 1
 
-    def _advance_to(self, target: float, log: bool) -> None:
+    def _log_filter(self, log: bool | ArrayLike) -> tuple[bool, NDArray[np.int64] | None]:
+        """(record at all, bodies to keep or None for all) from a ``log`` argument."""
+        if isinstance(log, bool | np.bool_):
+            return bool(log), None
+        bodies = np.asarray(log).reshape(-1)
+        if bodies.size == 0:
+            return False, None
+        if not np.issubdtype(bodies.dtype, np.integer) or np.any(
+            (bodies < 0) | (bodies >= self.n_bodies)
+        ):
+            raise CaromError(
+                f"log must be True, False or body indices in [0, {self.n_bodies}); got {log!r}"
+            )
+        return True, bodies.astype(np.int64)
+
+    def _advance_to(self, target: float, log: bool, keep: NDArray[np.int64] | None = None) -> None:
         model, state = self._model, self._state
         assert model is not None and state is not None
         while True:
             status = edmd.run(model, state, target, np.iinfo(np.int64).max, log)
-            self._drain_log()
+            self._drain_log(keep)
             if status == edmd.DONE:
                 break
             if status == edmd.OVERFLOW:
@@ -764,7 +794,8 @@ class World:
         self._capacity = capacity
         self._state = state
 
-    def _drain_log(self) -> None:
+    def _drain_log(self, keep: NDArray[np.int64] | None = None) -> None:
+        """Move the engine's log buffer into :attr:`events` (only ``keep``'s events if given)."""
         state = self._state
         assert state is not None
         n = int(state.log_n[0])
@@ -777,6 +808,8 @@ class World:
         record["impulse"] = state.log_impulse[:n]
         record["un_before"] = state.log_un[:n, 0]
         record["un_after"] = state.log_un[:n, 1]
+        if keep is not None:
+            record = record[np.isin(record["a"], keep) | np.isin(record["b"], keep)]
         self._events.append(record)
         state.log_n[0] = 0
 

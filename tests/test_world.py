@@ -1,0 +1,212 @@
+"""The World's API: input errors, materials and laws inside the engine, logs, stepping."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import carom
+from carom import CaromError
+
+EPS = float(np.finfo(np.float64).eps)
+
+
+@pytest.mark.parametrize(
+    ("build", "pattern"),
+    [
+        (lambda: carom.World(4, [1, 1, 1, 1]), r"dim must be 2 or 3"),
+        (lambda: carom.World(2, [1.0, -1.0]), r"box must be 2 positive lengths"),
+        (lambda: carom.World(2, [1, 1], "open"), r"boundary must be 'walls' or 'periodic'"),
+        (lambda: carom.World(2, [1, 1], gravity=[0, 0, -9.8]), r"gravity must be 2 finite"),
+        (lambda: carom.World(2, [1, 1], wall_restitution=1.5), r"wall_restitution must lie"),
+        (lambda: carom.World(2, [1, 1], t_c=-1.0), r"t_c must be >= 0"),
+        (lambda: carom.World(2, [1, 1], combine="sum"), r"combine must be one of"),  # type: ignore[arg-type]
+        (lambda: carom.Material(restitution=2.0), r"restitution must lie in \[0, 1\]"),
+        (lambda: carom.Material(beta=0.2, friction=0.1), r"beta .* or friction"),
+    ],
+)
+def test_bad_settings_are_refused(build, pattern: str) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(CaromError, match=pattern):
+        build()
+
+
+def test_bad_spheres_are_refused_and_named() -> None:
+    world = carom.World(2, [1.0, 1.0])
+    with pytest.raises(CaromError, match=r"radius must be positive .* radius\[1\] = -0.1"):
+        world.add_spheres([[0.2, 0.2], [0.5, 0.5]], radius=[0.1, -0.1])
+    with pytest.raises(CaromError, match=r"positions\[0\] = \[nan, 0.5\] is not finite"):
+        world.add_spheres([[math.nan, 0.5]], radius=0.1)
+    with pytest.raises(CaromError, match=r"velocities has 3 rows; expected 2"):
+        world.add_spheres([[0.2, 0.2], [0.5, 0.5]], [[1.0, 0.0]] * 3, radius=0.1)
+    with pytest.raises(CaromError, match=r"mass must be positive"):
+        world.add_spheres([[0.5, 0.5]], radius=0.1, mass=0.0)
+
+
+def test_overlapping_spheres_at_the_start_are_refused() -> None:
+    world = carom.World(3, [1.0, 1.0, 1.0])
+    world.add_spheres([[0.3, 0.5, 0.5], [0.45, 0.5, 0.5]], radius=0.1)
+    with pytest.raises(CaromError, match=r"spheres 0 and 1 overlap by 0.05 m"):
+        world.run(until=1.0)
+
+
+def test_touching_spheres_are_accepted() -> None:
+    # exactly touching (Newton's cradle) is legal; round-off overlaps of 1e-17 m are not errors
+    world = carom.World(3, [1.0, 1.0, 1.0])
+    world.add_spheres([[0.1 * k + 0.2, 0.5, 0.5] for k in range(5)], radius=0.05)
+    world.run(until=0.1)
+
+
+def test_spheres_outside_the_box_or_behind_a_plane_are_refused() -> None:
+    world = carom.World(2, [1.0, 1.0])
+    world.add_spheres([[0.95, 0.5]], radius=0.1)
+    with pytest.raises(CaromError, match=r"sphere 0 at \[0.95, 0.5\] .* reaches outside the box"):
+        world.run(until=1.0)
+    tilted = carom.World(2, [2.0, 2.0])
+    tilted.add_plane([1.0, 1.0], [0.0, 1.0])
+    tilted.add_spheres([[0.5, 0.5]], radius=0.1)
+    with pytest.raises(CaromError, match=r"on the wrong side of plane 0"):
+        tilted.run(until=1.0)
+
+
+def test_periodic_box_too_small_and_bad_run_arguments() -> None:
+    tiny = carom.World(2, [1.0, 1.0], "periodic")
+    tiny.add_spheres([[0.5, 0.5]], radius=0.3)
+    with pytest.raises(CaromError, match=r"box is too small for periodic boundaries"):
+        tiny.run(until=1.0)
+    world = carom.World(2, [1.0, 1.0])
+    with pytest.raises(CaromError, match=r"no spheres"):
+        world.run(until=1.0)
+    world.add_spheres([[0.5, 0.5]], [[1.0, 0.0]], radius=0.1)
+    world.run(until=1.0)
+    with pytest.raises(CaromError, match=r"until must be a finite time >= the current time"):
+        world.run(until=0.5)
+    with pytest.raises(CaromError, match=r"frame_dt must be a positive time"):
+        world.run(until=2.0, frame_dt=0.0)
+    with pytest.raises(CaromError, match=r"callback needs frame_dt"):
+        world.run(until=2.0, callback=print)
+    with pytest.raises(CaromError, match=r"log must be True, False or body indices"):
+        world.run(until=2.0, log=[5])
+
+
+def test_checkpoint_that_is_not_one(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    bad = tmp_path / "notes.npz"
+    bad.write_text("hello")
+    with pytest.raises(CaromError, match=r"cannot read checkpoint"):
+        carom.World.load(bad)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize(
+    "material", [carom.Material(0.7, beta=0.4), carom.Material(0.8, friction=0.2, beta0=0.1)]
+)
+def test_rough_laws_in_the_engine_match_collide(dim: int, material: carom.Material) -> None:
+    # Two spinning spheres meet once; the engine's impulse kernel (core/laws.py) must give what
+    # carom.collide gives for the same contact, to round-off.
+    a = 0.1
+    rng = np.random.default_rng(dim)
+    spins = rng.normal(size=(2, 3)) * 5
+    if dim == 2:
+        spins[:, :2] = 0.0
+    world = carom.World(dim, [2.0] * dim)
+    x1 = np.array([0.5, 0.95, 0.97][:dim])
+    x2 = np.array([0.9, 1.0, 1.02][:dim])
+    world.add_spheres(
+        [x1, x2],
+        [[1.0, 0.1, -0.1][:dim], [-0.5, 0.0, 0.2][:dim]],
+        radius=a,
+        mass=[1.0, 2.0],
+        material=material,
+        spins=spins if dim == 3 else spins[:, 2],
+    )
+    while len(world.events) == 0:  # shell rebuilds may come first; then their collision
+        world.step()
+    event = world.events[0]
+    assert (event["a"], event["b"]) in ((0, 1), (1, 0))
+    t = event["time"]
+    y1 = x1 + np.array([1.0, 0.1, -0.1][:dim]) * t
+    y2 = x2 + np.array([-0.5, 0.0, 0.2][:dim]) * t
+    kwargs = (
+        {"beta": material.beta}
+        if material.beta is not None
+        else {"friction": material.friction, "beta0": material.beta0}
+    )
+    w1, w2 = (spins[0], spins[1]) if dim == 3 else (spins[0, 2], spins[1, 2])
+    expected = carom.collide(
+        y1,
+        [1.0, 0.1, -0.1][:dim],
+        1.0,
+        y2,
+        [-0.5, 0.0, 0.2][:dim],
+        2.0,
+        e=material.restitution,
+        w1=w1,
+        w2=w2,
+        radius1=a,
+        radius2=a,
+        **kwargs,
+    )  # type: ignore[arg-type]
+    tol = 64 * EPS * 10
+    np.testing.assert_allclose(world.velocities, [expected.v1, expected.v2], atol=tol, rtol=0)
+    got_spins = world.spins if dim == 3 else world.spins[:, 2]
+    np.testing.assert_allclose(got_spins, [expected.w1, expected.w2], atol=tol * 50, rtol=0)
+
+
+def test_pair_restitution_combines_and_can_be_overridden() -> None:
+    # head-on, equal masses: v' = (1 - e)/2 v1 for the first sphere, e from the pair rule
+    def first_velocity(world: carom.World) -> float:
+        world.run(until=0.2)
+        return float(world.velocities[0, 0])
+
+    for combine, expected_e in (
+        ("mean", 0.6),
+        ("min", 0.4),
+        ("max", 0.8),
+        ("geometric", math.sqrt(0.32)),
+        ("product", 0.32),
+    ):
+        world = carom.World(2, [2.0, 1.0], combine=combine)  # type: ignore[arg-type]
+        world.add_spheres([[0.5, 0.5]], [[1.0, 0.0]], radius=0.1, restitution=0.8)
+        world.add_spheres([[0.8, 0.5]], radius=0.1, restitution=0.4)
+        assert first_velocity(world) == pytest.approx((1 - expected_e) / 2, abs=1e-15)
+    world = carom.World(2, [2.0, 1.0])
+    steel = world.add_material(carom.Material(0.8))
+    rubber = world.add_material(carom.Material(0.4))
+    world.set_pair(steel, rubber, 0.1)
+    world.add_spheres([[0.5, 0.5]], [[1.0, 0.0]], radius=0.1, material=steel)
+    world.add_spheres([[0.8, 0.5]], radius=0.1, material=rubber)
+    assert first_velocity(world) == pytest.approx(0.45, abs=1e-15)
+
+
+def test_log_can_be_filtered_and_switched_off() -> None:
+    def world() -> carom.World:
+        w = carom.World(2, [1.0, 1.0])
+        w.add_spheres([[0.2, 0.5], [0.5, 0.5], [0.8, 0.2]], [[1, 0], [0, 0], [0, 1]], radius=0.05)
+        return w
+
+    everything = world()
+    everything.run(until=1.0)
+    only_two = world()
+    only_two.run(until=1.0, log=[2])
+    silent = world()
+    silent.run(until=1.0, log=False)
+    involves_two = (everything.events["a"] == 2) | (everything.events["b"] == 2)
+    assert only_two.events.tobytes() == everything.events[involves_two].tobytes()
+    assert len(silent.events) == 0
+    assert silent.stats.collisions == everything.stats.collisions  # it still ran
+    assert everything.describe_partner(-1) == "wall x-"
+    assert everything.describe_partner(-4) == "wall y+"
+
+
+def test_step_moves_to_the_next_event() -> None:
+    world = carom.World(2, [1.0, 1.0])
+    world.add_spheres([[0.5, 0.5]], [[1.0, 0.0]], radius=0.1)
+    world.step()
+    events = world.events
+    assert len(events) <= 1  # a shell rebuild may come first
+    while len(world.events) == 0:
+        world.step()
+    # the wall x+ at 1 - 0.1: reached after 0.4 s
+    assert world.time == pytest.approx(0.4, abs=1e-15)
+    assert world.events[0]["b"] == -2
