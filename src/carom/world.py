@@ -3,8 +3,10 @@
 >>> import carom
 >>> world = carom.World(2, box=[1.0, 1.0])
 >>> _ = world.add_spheres([[0.3, 0.5], [0.7, 0.5]], [[1.0, 0.0], [-1.0, 0.0]], radius=0.05)
->>> world.run(until=0.15)
->>> world.velocities.round(12).tolist()    # they met at t = 0.15 - 0.0 ... and exchanged
+>>> world.run(until=0.2)            # the gap of 0.3 m closes at 2 m/s: impact at 0.15 s
+>>> round(float(world.events[0]["time"]), 12)
+0.15
+>>> world.velocities.tolist()        # equal masses, elastic: velocities exchanged
 [[-1.0, 0.0], [1.0, 0.0]]
 """
 
@@ -12,7 +14,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -22,6 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from carom.core import edmd
 from carom.core.laws import LAW_ROUGH, LAW_SMOOTH, LAW_WALTON
+from carom.core.neighbors import build_all
 from carom.errors import CaromError
 from carom.model import Model
 from carom.state import State, allocate_state
@@ -32,6 +35,19 @@ FloatArray = NDArray[np.float64]
 Combine = Literal["mean", "min", "max", "geometric", "product"]
 COMBINE_RULES: tuple[str, ...] = ("mean", "min", "max", "geometric", "product")
 LOG_CAPACITY = 1 << 16
+#: One logged collision: time [s]; bodies a, b (b < 0: wall face or plane -1 - b); impulse on
+#: a [N s] (3 components, 2D: z = 0); normal relative speeds before and after [m/s]
+EVENT_DTYPE = np.dtype(
+    [
+        ("time", np.float64),
+        ("a", np.int64),
+        ("b", np.int64),
+        ("impulse", np.float64, (3,)),
+        ("un_before", np.float64),
+        ("un_after", np.float64),
+    ]
+)
+
 SHELL_DEFAULT = 0.35
 #: Overlaps and box excursions smaller than this fraction of the radii are round-off, not errors
 OVERLAP_TOLERANCE = 1e-12
@@ -767,8 +783,6 @@ class World:
 
         Lists only say which pairs to examine; every scheduled event stays valid.
         """
-        from carom.core.neighbors import build_all
-
         model, state = self._model, self._state
         assert model is not None and state is not None
         while True:
@@ -955,19 +969,3 @@ class World:
             world._model = world._build_model()
             world._state = state
         return world
-
-
-EVENT_DTYPE = np.dtype(
-    [
-        ("time", np.float64),
-        ("a", np.int64),
-        ("b", np.int64),
-        ("impulse", np.float64, (3,)),
-        ("un_before", np.float64),
-        ("un_after", np.float64),
-    ]
-)
-
-
-def _sequence(value: Sequence[float]) -> list[float]:
-    return [float(c) for c in value]
