@@ -9,7 +9,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 OUT    := out
 
-.PHONY: demo test lint typecheck unit clean help
+.PHONY: demo test lint unit unit-nojit clean help
 
 help:
 	@echo "make demo   set up .venv and run the showcase (results under $(OUT)/)"
@@ -43,7 +43,12 @@ lint: $(VENV)/.stamp-dev
 unit: $(VENV)/.stamp-dev
 	$(BIN)/python -m pytest
 
-test: lint unit
+# The kernels once more as plain Python, so their code is exercised without the JIT
+# (DESIGN.md); runs of millions of collisions are skipped there (marker needs_jit).
+unit-nojit: $(VENV)/.stamp-dev
+	NUMBA_DISABLE_JIT=1 $(BIN)/python -m pytest -q tests
+
+test: lint unit unit-nojit
 
 clean:
 	rm -rf $(VENV) $(OUT)

@@ -8,7 +8,22 @@ from __future__ import annotations
 
 import os
 
+import pytest
 from hypothesis import HealthCheck, settings
+
+JIT_DISABLED = os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Under NUMBA_DISABLE_JIT=1 (the kernels run as plain Python, for coverage) skip the runs
+    of millions of collisions: they would take hours. The JIT run executes them."""
+    if not JIT_DISABLED:
+        return
+    skip = pytest.mark.skip(reason="needs the JIT: millions of collisions in plain Python")
+    for item in items:
+        if "needs_jit" in item.keywords:
+            item.add_marker(skip)
+
 
 settings.register_profile(
     "carom",

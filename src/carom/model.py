@@ -28,6 +28,8 @@ class Model(NamedTuple):
         Periodic boundaries (no walls) when true.
     gravity : (d,) float64
         Uniform acceleration [m/s^2].
+    accelerated : bool
+        Whether any gravity acts (bodies fly on parabolas); false selects straight-line paths.
     mobile : (N,) bool
         False for static bodies (pegs, obstacles): infinite mass, never move.
     radius, mass, inv_mass, q : (N,) float64
@@ -58,6 +60,7 @@ class Model(NamedTuple):
     inv_box: NDArray[np.float64]
     periodic: bool
     gravity: NDArray[np.float64]
+    accelerated: bool
     mobile: NDArray[np.bool_]
     radius: NDArray[np.float64]
     mass: NDArray[np.float64]

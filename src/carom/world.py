@@ -220,6 +220,48 @@ class Stats:
         return self._delta_sums(edmd.S_KE_LOST)
 
 
+def _spread_bits(c: NDArray[np.uint64], dim: int) -> NDArray[np.uint64]:
+    """Insert ``dim - 1`` zero bits between the low bits of ``c`` (Morton encoding)."""
+    c = c.copy()
+    if dim == 2:
+        for shift, mask in (
+            (16, 0x0000FFFF0000FFFF),
+            (8, 0x00FF00FF00FF00FF),
+            (4, 0x0F0F0F0F0F0F0F0F),
+            (2, 0x3333333333333333),
+            (1, 0x5555555555555555),
+        ):
+            c = (c | (c << np.uint64(shift))) & np.uint64(mask)
+        return c
+    c &= np.uint64(0x1FFFFF)
+    for shift, mask in (
+        (32, 0x1F00000000FFFF),
+        (16, 0x1F0000FF0000FF),
+        (8, 0x100F00F00F00F00F),
+        (4, 0x10C30C30C30C30C3),
+        (2, 0x1249249249249249),
+    ):
+        c = (c | (c << np.uint64(shift))) & np.uint64(mask)
+    return c
+
+
+def spatial_order(
+    x: FloatArray, cell_size: FloatArray, ncell: NDArray[np.int64]
+) -> NDArray[np.int64]:
+    """Bodies sorted along a Morton (Z-order) curve through the cells of the grid.
+
+    Neighbours in space get nearby indices, so the engine's random accesses to neighbours
+    mostly hit cache lines it has just used.
+    """
+    dim = x.shape[1]
+    cells = np.clip(np.floor(x / cell_size).astype(np.int64), 0, ncell - 1).astype(np.uint64)
+    key = np.zeros(x.shape[0], np.uint64)
+    for k in range(dim):
+        key |= _spread_bits(cells[:, k], dim) << np.uint64(k)
+    order: NDArray[np.int64] = np.argsort(key, kind="stable").astype(np.int64)
+    return order
+
+
 class World:
     """Spheres (3D) or disks (2D) in a box, simulated exactly, event by event.
 
@@ -298,6 +340,9 @@ class World:
         self._planes: list[tuple[FloatArray, FloatArray, float]] = []
         self._model: Model | None = None
         self._state: State | None = None
+        # the engine numbers bodies along a space-filling curve: engine index e is body
+        # _order[e]; everything the World shows is in the caller's numbering
+        self._order: NDArray[np.int64] = np.zeros(0, np.int64)
         self._capacity = 16 if dim == 2 else 32  # grows on overflow (_grow_lists)
         self._time = 0.0
         self._events: list[NDArray[Any]] = []
@@ -491,7 +536,13 @@ class World:
         x = np.empty_like(self._x)
         v = np.empty_like(self._v)
         edmd.positions_at(self._model, self._state, self._time, x, v)
-        self._x, self._v, self._w = x, v, self._state.w.copy()
+        self._x, self._v, self._w = self._to_user(x), self._to_user(v), self._to_user(self._state.w)
+
+    def _to_user(self, rows: NDArray[Any]) -> NDArray[Any]:
+        """Engine-ordered rows in the caller's numbering."""
+        out = np.empty_like(rows)
+        out[self._order] = rows
+        return out
 
     # -- model and state --------------------------------------------------------------------
 
@@ -526,10 +577,13 @@ class World:
                     )
         return law, e, beta, friction
 
-    def _build_model(self) -> Model:
+    def _build_model(self, order: NDArray[np.int64] | None = None) -> Model:
+        """The Model with bodies in engine order ``order`` (the caller's order if None)."""
+        order = np.arange(self._x.shape[0]) if order is None else order
         n = self._x.shape[0]
-        mobile = np.isfinite(self._mass)
-        radius = self._radius
+        mass = self._mass[order]
+        mobile = np.isfinite(mass)
+        radius = self._radius[order]
         mean_diameter = 2.0 * float(np.mean(radius[mobile])) if mobile.any() else 1.0
         delta = self._shell if self._shell is not None else SHELL_DEFAULT * mean_diameter
         largest = float(radius.max()) if n else 0.0
@@ -546,18 +600,19 @@ class World:
         planes_n = np.array([q for _, q, _ in self._planes]).reshape(-1, self.dim)
         planes_e = np.array([r for _, _, r in self._planes], dtype=np.float64)
         with np.errstate(divide="ignore"):
-            inv_mass = np.where(mobile, 1.0 / self._mass, 0.0)
+            inv_mass = np.where(mobile, 1.0 / mass, 0.0)
         return Model(
             box=self.box.copy(),
             inv_box=1.0 / self.box,
             periodic=self.boundary == "periodic",
             gravity=self._gravity.copy(),
+            accelerated=bool(np.any(self._gravity != 0.0)),
             mobile=mobile,
-            radius=radius.copy(),
-            mass=self._mass.copy(),
+            radius=radius,
+            mass=mass,
             inv_mass=inv_mass,
-            q=self._q.copy(),
-            material=self._material.copy(),
+            q=self._q[order],
+            material=self._material[order],
             pair_law=law,
             pair_e=e,
             pair_beta=beta,
@@ -601,7 +656,7 @@ class World:
 
         Vectorised over the lists, a block of bodies at a time (bounded memory at 1e6 bodies).
         """
-        x = self._x
+        x = state.x  # engine order, at the start time
         n, capacity = state.nbr.shape
         slots = np.arange(capacity)
         block = max(1, 2_000_000 // max(capacity, 1))
@@ -617,16 +672,17 @@ class World:
             if model.periodic:
                 d -= self.box * np.floor(d / self.box + 0.5)
             dist = np.sqrt(np.sum(d * d, axis=1))
-            reach = self._radius[i] + self._radius[j]
+            reach = model.radius[i] + model.radius[j]
             overlap = reach - dist
             bad = overlap > OVERLAP_TOLERANCE * reach
             if bad.any():
                 k = int(np.argmax(bad))
-                a, b = sorted((int(i[k]), int(j[k])))
+                a, b = sorted((int(self._order[i[k]]), int(self._order[j[k]])))
                 raise CaromError(
                     f"spheres {a} and {b} overlap by {overlap[k]:.3g} m at the start (centres "
-                    f"{x[a].tolist()} and {x[b].tolist()}, radii {self._radius[a]:g} and "
-                    f"{self._radius[b]:g}); place them at least the sum of their radii apart"
+                    f"{self._x[a].tolist()} and {self._x[b].tolist()}, radii "
+                    f"{self._radius[a]:g} and {self._radius[b]:g}); place them at least the "
+                    f"sum of their radii apart"
                 )
 
     def _ensure_built(self) -> None:
@@ -638,14 +694,16 @@ class World:
         x = self._x.copy()
         if self.boundary == "periodic":
             x -= self.box * np.floor(x / self.box)
+        grid = self._build_model()
+        order = spatial_order(x, grid.cell_size, grid.ncell)
+        model = self._build_model(order)
+        acc = np.where(model.mobile[:, None], model.gravity[None, :], 0.0)
         while True:
-            model = self._build_model()
-            acc = np.where(model.mobile[:, None], model.gravity[None, :], 0.0)
             state = allocate_state(
-                x,
-                self._v,
+                x[order],
+                self._v[order],
                 acc,
-                self._w,
+                self._w[order],
                 self._time,
                 int(np.prod(model.ncell)),
                 self._capacity,
@@ -654,6 +712,7 @@ class World:
             if edmd.initialise(model, state):
                 break
             self._capacity *= 2
+        self._order = order
         self._check_overlaps(model, state)
         self._model, self._state = model, state
 
@@ -817,8 +876,9 @@ class World:
             return
         record = np.empty(n, dtype=EVENT_DTYPE)
         record["time"] = state.log_time[:n]
-        record["a"] = state.log_a[:n]
-        record["b"] = state.log_b[:n]
+        record["a"] = self._order[state.log_a[:n]]
+        b = state.log_b[:n]
+        record["b"] = np.where(b >= 0, self._order[np.maximum(b, 0)], b)
         record["impulse"] = state.log_impulse[:n]
         record["un_before"] = state.log_un[:n, 0]
         record["un_after"] = state.log_un[:n, 1]
@@ -845,7 +905,7 @@ class World:
         x = np.empty_like(self._x)
         v = np.empty_like(self._v)
         edmd.positions_at(self._model, self._state, self._time, x, v)
-        return x
+        return self._to_user(x)
 
     @property
     def velocities(self) -> FloatArray:
@@ -855,12 +915,19 @@ class World:
         x = np.empty_like(self._x)
         v = np.empty_like(self._v)
         edmd.positions_at(self._model, self._state, self._time, x, v)
-        return v
+        return self._to_user(v)
 
     @property
     def spins(self) -> FloatArray:
         """Spins now, (N, 3) [rad/s] (2D: column 2)."""
-        return self._w.copy() if self._state is None else self._state.w.copy()
+        return self._w.copy() if self._state is None else self._to_user(self._state.w)
+
+    @property
+    def resting(self) -> NDArray[np.int64]:
+        """The wall face or plane each body rests on (-1: none), (N,) int."""
+        if self._state is None:
+            return np.full(self.n_bodies, -1, np.int64)
+        return self._to_user(self._state.support)
 
     @property
     def radii(self) -> FloatArray:
@@ -927,6 +994,7 @@ class World:
         arrays["meta"] = np.array(json.dumps(meta))
         for name in ("radius", "mass", "q", "material"):
             arrays[f"body.{name}"] = getattr(self, f"_{name}")
+        arrays["engine_order"] = self._order
         path = Path(path)
         tmp = path.with_name(path.name + ".partial")
         with tmp.open("wb") as handle:
@@ -962,10 +1030,11 @@ class World:
             fields = {name: data[f"state.{name}"] for name in State._fields}
             state = State(**fields)
             world._capacity = meta["capacity"]
-            world._x = state.x.copy()
-            world._v = state.v.copy()
-            world._w = state.w.copy()
+            world._order = data["engine_order"]
+            world._x = world._to_user(state.x)
+            world._v = world._to_user(state.v)
+            world._w = world._to_user(state.w)
             world._time = meta["time"]
-            world._model = world._build_model()
+            world._model = world._build_model(world._order)
             world._state = state
         return world

@@ -34,8 +34,7 @@ def test_dropped_ball_rebounds_to_e_squared_k_h0() -> None:
     # first impact at sqrt(2 h0 / g)
     assert floor["time"][0] == pytest.approx(math.sqrt(2 * h0 / G), rel=8 * EPS, abs=0)
     # the run ended: the ball came to rest on the floor in finitely many events
-    assert world._state is not None
-    assert world._state.support[0] == 4
+    assert world.resting[0] == 4  # on the floor (face 4: z-)
     np.testing.assert_allclose(world.velocities[0], 0.0, atol=1e-9)
     assert world.positions[0, 2] == pytest.approx(a, abs=1e-12)
     # total time to rest is finite: t_rest = sqrt(2 h0/g) (1 + e)/(1 - e) (geometric series).
@@ -149,6 +148,7 @@ def _gas(
     return world
 
 
+@pytest.mark.needs_jit
 @pytest.mark.parametrize(("dim", "boundary"), [(3, "periodic"), (2, "walls")])
 def test_elastic_gas_keeps_energy_and_never_overlaps(dim: int, boundary: str) -> None:
     # Elastic collisions conserve kinetic energy exactly; each collision rounds it by a few eps,

@@ -92,7 +92,7 @@ def test_every_prediction_shadowed(dim: int, periodic: bool, gravity: bool, e: f
         # synchronise: every body at the engine's time, exactly as the engine sees it
         now = world.time
         xs, vs = world.positions, world.velocities
-        resting = world._state.support.copy() if world._state is not None else None
+        resting = world.resting
         ref = reference_events(
             xs,
             vs,

@@ -15,7 +15,7 @@ import pytest
 import carom
 from tests.physics.test_edmd_closed_forms import _gas
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.needs_jit]
 
 
 def kolafa(phi: float) -> float:

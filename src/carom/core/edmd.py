@@ -118,6 +118,7 @@ def predict(
     x: np.ndarray,
     v: np.ndarray,
     acc: np.ndarray,
+    accelerated: bool,
     t: np.ndarray,
     origin: np.ndarray,
     support: np.ndarray,
@@ -199,18 +200,22 @@ def predict(
         vda = 0.0
         dada = 0.0
         for k in range(dim):
-            aj = acc[j, k]
-            r = x[i, k] - (x[j, k] + (v[j, k] + 0.5 * aj * dtj) * dtj)
+            if accelerated:
+                aj = acc[j, k]
+                r = x[i, k] - (x[j, k] + (v[j, k] + 0.5 * aj * dtj) * dtj)
+                dv = v[i, k] - (v[j, k] + aj * dtj)
+                da = acc[i, k] - aj
+                rda += r * da
+                vda += dv * da
+                dada += da * da
+            else:  # no gravity anywhere: straight lines (the common case, kept lean)
+                r = x[i, k] - (x[j, k] + v[j, k] * dtj)
+                dv = v[i, k] - v[j, k]
             if periodic:
                 r -= box[k] * math.floor(r * inv_box[k] + 0.5)
-            dv = v[i, k] - (v[j, k] + aj * dtj)
-            da = acc[i, k] - aj
             rr += r * r
             rv += r * dv
             vv += dv * dv
-            rda += r * da
-            vda += dv * da
-            dada += da * da
         reach = rad + radius[j]
         if dada == 0.0:
             c = rr - reach * reach
@@ -606,6 +611,7 @@ def initialise(m, s) -> bool:  # type: ignore[no-untyped-def]
             s.x,
             s.v,
             s.acc,
+            m.accelerated,
             s.t,
             s.origin,
             s.support,
@@ -657,6 +663,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     material, pair_law, pair_e = m.material, m.pair_law, m.pair_e
     pair_beta, pair_friction, face_e = m.pair_beta, m.pair_friction, m.face_e
     gravity, box, periodic, delta, t_c = m.gravity, m.box, m.periodic, m.delta, m.t_c
+    accelerated = m.accelerated
     inv_box = m.inv_box
     plane_point, plane_normal = m.plane_point, m.plane_normal
     cell_size, ncell = m.cell_size, m.ncell
@@ -790,6 +797,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
             x,
             v,
             acc,
+            accelerated,
             t,
             origin,
             support,
@@ -817,6 +825,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                 x,
                 v,
                 acc,
+                accelerated,
                 t,
                 origin,
                 support,
