@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 import carom
+from carom import generators
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "RESULTS.md"
@@ -35,19 +36,8 @@ TARGET = 7e5  # collisions/s per core at N = 1e4 in 3D (issue: exact engine)
 
 
 def lattice_gas(dim: int, n: int, packing: float, seed: int = 1) -> carom.World:
-    """About ``n`` spheres (the next lattice size) of unit diameter at ``packing``."""
-    side_count = round(n ** (1 / dim))
-    count = side_count**dim
-    unit = math.pi / 6 if dim == 3 else math.pi / 4
-    side = (count * unit / packing) ** (1 / dim)
-    grid = (np.arange(side_count) + 0.5) * side / side_count
-    x = np.stack(np.meshgrid(*([grid] * dim), indexing="ij"), -1).reshape(-1, dim)
-    rng = np.random.default_rng(seed)
-    v = rng.normal(size=(count, dim))
-    v -= v.mean(axis=0)
-    world = carom.World(dim, [side] * dim, "periodic")
-    world.add_spheres(x, v, radius=0.5)
-    return world
+    """About ``n`` spheres (the nearest lattice size) of unit diameter at ``packing``."""
+    return generators.lattice_gas(dim, round(n ** (1 / dim)), packing, seed=seed)
 
 
 def memory_per_particle(world: carom.World) -> float:

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import carom
+from carom.generators import lattice_gas
 
 EPS = float(np.finfo(np.float64).eps)
 G = 9.81
@@ -135,17 +136,14 @@ def _gas(
     dim: int, n_side: int, phi: float, seed: int, boundary: str = "periodic", e: float = 1.0
 ) -> carom.World:
     """Spheres of unit diameter on a lattice with Gaussian velocities (zero momentum)."""
-    n = n_side**dim
-    unit = math.pi / 6 if dim == 3 else math.pi / 4
-    side = (n * unit / phi) ** (1 / dim)
-    grid = (np.arange(n_side) + 0.5) * side / n_side
-    x = np.stack(np.meshgrid(*([grid] * dim), indexing="ij"), -1).reshape(-1, dim)
-    rng = np.random.default_rng(seed)
-    v = rng.normal(size=(n, dim))
-    v -= v.mean(axis=0)
-    world = carom.World(dim, [side] * dim, boundary)  # type: ignore[arg-type]
-    world.add_spheres(x, v, radius=0.5, restitution=e)
-    return world
+    return lattice_gas(
+        dim,
+        n_side,
+        phi,
+        seed=seed,
+        boundary=boundary,  # type: ignore[arg-type]
+        restitution=e,
+    )
 
 
 @pytest.mark.needs_jit

@@ -791,61 +791,16 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                 scratch,
             ):
                 return OVERFLOW
-        predict(
-            i,
-            T,
-            x,
-            v,
-            acc,
-            accelerated,
-            t,
-            origin,
-            support,
-            nbr,
-            nbr_count,
-            counter,
-            radius,
-            mobile,
-            box,
-            inv_box,
-            periodic,
-            delta,
-            plane_point,
-            plane_normal,
-            ev_time,
-            ev_kind,
-            ev_other,
-            ev_stamp,
-        )
-        heap_update(ev_time, heap, where, i)
-        if j >= 0:
+        # re-schedule the bodies whose motion changed: i, and its partner j if it had one
+        for body in (i, j):
+            if body < 0:
+                continue
             predict(
-                j,
-                T,
-                x,
-                v,
-                acc,
-                accelerated,
-                t,
-                origin,
-                support,
-                nbr,
-                nbr_count,
-                counter,
-                radius,
-                mobile,
-                box,
-                inv_box,
-                periodic,
-                delta,
-                plane_point,
-                plane_normal,
-                ev_time,
-                ev_kind,
-                ev_other,
-                ev_stamp,
-            )
-            heap_update(ev_time, heap, where, j)
+                body, T, x, v, acc, accelerated, t, origin, support, nbr, nbr_count, counter,
+                radius, mobile, box, inv_box, periodic, delta, plane_point, plane_normal,
+                ev_time, ev_kind, ev_other, ev_stamp,
+            )  # fmt: skip
+            heap_update(ev_time, heap, where, body)
 
 
 @njit(cache=True, error_model="numpy")
