@@ -49,7 +49,7 @@ def lattice_gas(
     --------
     >>> world = lattice_gas(3, 4, 0.3, seed=1)
     >>> world.n_bodies, round(float(world.box[0]), 4)
-    (64, 4.8245)
+    (64, 4.816)
     """
     unit = math.pi / 6 if dim == 3 else math.pi / 4
     if dim not in (2, 3) or n_side < 1:
