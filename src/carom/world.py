@@ -194,8 +194,12 @@ class Stats:
     def pressure(self) -> float:
         """Pressure from the collision virial over the window [Pa] (2D: [N/m]).
 
-        ``P = (2 <KE> + sum J . r / dt) / (d V)``, with the kinetic energy now (exact for
-        elastic systems, where it is constant); NaN under gravity or before any time passed.
+        ``P = (2 KE + sum J . r / dt) / (d V)``: pairs contribute ``J . (x1 - x2)``, walls
+        and planes ``J . x`` with ``x`` the sphere's centre, and ``KE`` is the kinetic energy
+        now (constant in elastic systems; in dissipative ones the pressure is not stationary).
+        In a periodic box this is the bulk pressure (PHYSICS.md section 6); in a box with walls
+        it is the pressure of the fluid whose centres fill the box. NaN under gravity or
+        before any time has passed.
         """
         w = self._world
         dt = w.time - self._t0
