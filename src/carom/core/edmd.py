@@ -99,7 +99,7 @@ def set_support(
         acc[i, k] = gravity[k] - g_n * nk
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def advance(x: np.ndarray, v: np.ndarray, acc: np.ndarray, t: np.ndarray, i: int, T: float) -> None:
     """Move body ``i`` along its free flight to time ``T`` and set its clock."""
     dt = T - t[i]
@@ -111,7 +111,7 @@ def advance(x: np.ndarray, v: np.ndarray, acc: np.ndarray, t: np.ndarray, i: int
     t[i] = T
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def predict(
     i: int,
     T: float,
@@ -455,20 +455,10 @@ def _collide_pair(
     counts[C_PAIR] += 1
     sums[S_VIRIAL] += j0 * r0 + j1 * r1 + j2 * r2
     # a body resting on a support: lifted off, or pushed into it (the support pushes back)
-    for b in (i, j):
-        face = support[b]
-        if face < 0:
-            continue
-        un = 0.0
-        for k in range(dim):
-            un += v[b, k] * face_normal(plane_normal, dim, face, k)
-        if un < 0.0:
-            e_w = face_e[face]
-            for k in range(dim):
-                v[b, k] -= (1.0 + e_w) * un * face_normal(plane_normal, dim, face, k)
-            sums[S_WALL_IMPULSE] += (1.0 + e_w) * (-un) * mass[b]
-        if un != 0.0:
-            set_support(gravity, plane_normal, support, acc, b, -1)
+    if support[i] >= 0:
+        _support_reaction(i, v, acc, support, mass, face_e, gravity, plane_normal, sums)
+    if support[j] >= 0:
+        _support_reaction(j, v, acc, support, mass, face_e, gravity, plane_normal, sums)
     sums[S_KE_LOST] += ke_before - (
         _kinetic(v, w, mass, q, radius, mobile, i) + _kinetic(v, w, mass, q, radius, mobile, j)
     )
@@ -489,6 +479,34 @@ def _collide_pair(
             un_before,
             un_after,
         )
+
+
+@njit(cache=True, error_model="numpy")
+def _support_reaction(
+    b: int,
+    v: np.ndarray,
+    acc: np.ndarray,
+    support: np.ndarray,
+    mass: np.ndarray,
+    face_e: np.ndarray,
+    gravity: np.ndarray,
+    plane_normal: np.ndarray,
+    sums: np.ndarray,
+) -> None:
+    """Body ``b`` rests on a support and was just hit: it lifts off, or the support pushes
+    back (an impact with the support's restitution) and then it flies."""
+    dim = v.shape[1]
+    face = support[b]
+    un = 0.0
+    for k in range(dim):
+        un += v[b, k] * face_normal(plane_normal, dim, face, k)
+    if un < 0.0:
+        e_w = face_e[face]
+        for k in range(dim):
+            v[b, k] -= (1.0 + e_w) * un * face_normal(plane_normal, dim, face, k)
+        sums[S_WALL_IMPULSE] += (1.0 + e_w) * (-un) * mass[b]
+    if un != 0.0:
+        set_support(gravity, plane_normal, support, acc, b, -1)
 
 
 @njit(cache=True, error_model="numpy")

@@ -66,7 +66,7 @@ def heap_build(keys: np.ndarray, heap: np.ndarray, where: np.ndarray) -> None:
         _sift_down(keys, heap, where, k)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def heap_update(keys: np.ndarray, heap: np.ndarray, where: np.ndarray, body: int) -> None:
     """Restore the heap after ``keys[body]`` changed."""
     k = where[body]

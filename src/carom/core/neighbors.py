@@ -219,7 +219,7 @@ def build_all(
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def rebuild_shell(
     i: int,
     origin: np.ndarray,
