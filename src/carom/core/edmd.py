@@ -288,48 +288,6 @@ def _kinetic(
 
 
 @njit(cache=True, error_model="numpy")
-def collide_pair(m, s, i: int, j: int, T: float, log_on: bool) -> None:  # type: ignore[no-untyped-def]
-    """Apply the impulse law to bodies ``i`` and ``j``, both at time ``T`` (see run)."""
-    _collide_pair(
-        i,
-        j,
-        T,
-        log_on,
-        s.x,
-        s.v,
-        s.acc,
-        s.w,
-        s.counter,
-        s.last_coll,
-        s.support,
-        m.radius,
-        m.mass,
-        m.inv_mass,
-        m.q,
-        m.mobile,
-        m.material,
-        m.pair_law,
-        m.pair_e,
-        m.pair_beta,
-        m.pair_friction,
-        m.face_e,
-        m.gravity,
-        m.plane_normal,
-        m.box,
-        m.periodic,
-        m.t_c,
-        s.counts,
-        s.sums,
-        s.log_time,
-        s.log_a,
-        s.log_b,
-        s.log_impulse,
-        s.log_un,
-        s.log_n,
-    )
-
-
-@njit(cache=True, error_model="numpy")
 def _collide_pair(
     i: int,
     j: int,
