@@ -517,7 +517,7 @@ class World:
         q: float,
         mat: int,
     ) -> NDArray[np.int64]:
-        self._sync_from_state()
+        self._invalidate()  # the bodies' state now, out of the engine; it is rebuilt on run
         start = self._x.shape[0]
         self._x = np.concatenate([self._x, x])
         self._v = np.concatenate([self._v, v])
@@ -526,7 +526,6 @@ class World:
         self._mass = np.concatenate([self._mass, mass])
         self._q = np.concatenate([self._q, np.full(x.shape[0], q)])
         self._material = np.concatenate([self._material, np.full(x.shape[0], mat, np.int64)])
-        self._invalidate()
         return np.arange(start, self._x.shape[0])
 
     def _invalidate(self) -> None:
