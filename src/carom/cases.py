@@ -206,6 +206,12 @@ class ModelOutcome:
     gap_after_1s: float
     """distance between the surfaces after one second of free flight [m]"""
 
+    @property
+    def ke_lost_shown(self) -> float:
+        """``ke_lost`` for display [J]: below round-off of the kinetic energy a loss is noise,
+        not a number to show, and reads 0."""
+        return self.ke_lost if abs(self.ke_lost) > ROUND_OFF * self.ke_before else 0.0
+
 
 @dataclass(frozen=True)
 class Record:
@@ -384,10 +390,9 @@ def format_details(records: list[Record]) -> str:
             for i, (label, m) in enumerate(outcomes):
                 e_col = f"{r.e:>4.1f}" if i == 0 else " " * 4
                 error = "" if label == "exact" else _fmt_error(m.error)
-                lost = m.ke_lost if abs(m.ke_lost) > ROUND_OFF * m.ke_before else 0.0
                 lines.append(
                     f"    {e_col}  {label:<24}{_vec(m.v1_after):<18}{_vec(m.v2_after):<18}"
-                    f"{error:>7}{_fmt_error(m.momentum_error):>8}{_fmt(lost):>13}"
+                    f"{error:>7}{_fmt_error(m.momentum_error):>8}{_fmt(m.ke_lost_shown):>13}"
                     f"{_fmt(m.separation_speed):>12}{_fmt(m.angle_deg, '.1f'):>7}"
                 )
         lines.append("")

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 __all__ = ["State", "allocate_state"]
 
 N_COUNTS = 8
-N_SUMS = 4
+N_SUMS = 2
 
 
 class State(NamedTuple):
@@ -49,7 +49,7 @@ class State(NamedTuple):
         The event heap and each body's node in it.
     clock : (1,) float64
         Simulation time [s].
-    counts : (8,) int64; sums : (4,) float64
+    counts : (8,) int64; sums : (2,) float64
         Running statistics (:mod:`carom.core.edmd` names the slots).
     log_time, log_a, log_b, log_impulse, log_un, log_n
         The event log buffer, emptied by :class:`carom.World` as it fills.

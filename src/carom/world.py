@@ -27,7 +27,8 @@ from carom.core.laws import LAW_ROUGH, LAW_SMOOTH, LAW_WALTON
 from carom.core.neighbors import build_all
 from carom.errors import CaromError
 from carom.model import Model
-from carom.state import State, allocate_state
+from carom.response import default_inertia_factor
+from carom.state import N_COUNTS, N_SUMS, State, allocate_state
 
 __all__ = ["Frame", "Material", "Stats", "World"]
 
@@ -119,8 +120,8 @@ class Stats:
     def __init__(self, world: World) -> None:
         self._world = world
         self._t0 = 0.0
-        self._counts0 = np.zeros(8, np.int64)
-        self._sums0 = np.zeros(4)
+        self._counts0 = np.zeros(N_COUNTS, np.int64)
+        self._sums0 = np.zeros(N_SUMS)
 
     def reset(self) -> None:
         """Start a new averaging window now."""
@@ -416,7 +417,7 @@ class World:
                 w[:, 2] = np.broadcast_to(s.reshape(-1) if s.ndim else s, (n,))
             else:
                 w[:] = np.broadcast_to(s, (n, 3))
-        q = inertia_factor if inertia_factor is not None else (0.4 if self.dim == 3 else 0.5)
+        q = inertia_factor if inertia_factor is not None else default_inertia_factor(self.dim)
         return self._append(
             x,
             v,
@@ -537,10 +538,17 @@ class World:
         """Copy positions and velocities at the current time out of the engine state."""
         if self._state is None or self._model is None:
             return
+        self._x, self._v = self._now()
+        self._w = self._to_user(self._state.w)
+
+    def _now(self) -> tuple[FloatArray, FloatArray]:
+        """Positions and velocities at the current time, in the caller's numbering."""
+        if self._state is None or self._model is None:
+            return self._x.copy(), self._v.copy()
         x = np.empty_like(self._x)
         v = np.empty_like(self._v)
         edmd.positions_at(self._model, self._state, self._time, x, v)
-        self._x, self._v, self._w = self._to_user(x), self._to_user(v), self._to_user(self._state.w)
+        return self._to_user(x), self._to_user(v)
 
     def _to_user(self, rows: NDArray[Any]) -> NDArray[Any]:
         """Engine-ordered rows in the caller's numbering."""
@@ -766,21 +774,9 @@ class World:
         if events < 1:
             raise CaromError(f"events must be at least 1; got {events!r}")
         self._ensure_built()
-        model, state = self._model, self._state
-        assert model is not None and state is not None
-        remaining = events
-        while remaining > 0:
-            before = int(state.counts[edmd.C_EVENTS])
-            status = edmd.run(model, state, math.inf, remaining, log)
-            self._drain_log()
-            remaining -= int(state.counts[edmd.C_EVENTS]) - before
-            if status == edmd.OVERFLOW:
-                self._grow_lists()
-                model, state = self._model, self._state
-                assert model is not None and state is not None
-            elif status == edmd.DONE:
-                break  # no event will ever come (an empty or frozen world)
-        self._time = float(state.clock[0])
+        self._run_engine(math.inf, events, log)
+        assert self._state is not None
+        self._time = float(self._state.clock[0])
 
     def frames(
         self, until: float, frame_dt: float | None, *, log: bool | ArrayLike = True
@@ -824,18 +820,26 @@ class World:
         return True, bodies.astype(np.int64)
 
     def _advance_to(self, target: float, log: bool, keep: NDArray[np.int64] | None = None) -> None:
-        model, state = self._model, self._state
-        assert model is not None and state is not None
+        self._run_engine(target, np.iinfo(np.int64).max, log, keep)
+        self._time = target
+
+    def _run_engine(
+        self, t_stop: float, max_events: int, log: bool, keep: NDArray[np.int64] | None = None
+    ) -> None:
+        """Run the kernel until ``t_stop`` or ``max_events`` events, or until no event is left:
+        the log is emptied whenever it fills, and the lists grown whenever one overflows."""
+        remaining = max_events
         while True:
-            status = edmd.run(model, state, target, np.iinfo(np.int64).max, log)
+            model, state = self._model, self._state
+            assert model is not None and state is not None
+            before = int(state.counts[edmd.C_EVENTS])
+            status = edmd.run(model, state, t_stop, remaining, log)
             self._drain_log(keep)
-            if status == edmd.DONE:
-                break
+            remaining -= int(state.counts[edmd.C_EVENTS]) - before
+            if status in (edmd.DONE, edmd.MAX_EVENTS):
+                return
             if status == edmd.OVERFLOW:
                 self._grow_lists()
-                model, state = self._model, self._state
-                assert model is not None and state is not None
-        self._time = target
 
     def _grow_lists(self) -> None:
         """Double the neighbour-list capacity (a list overflowed); the schedule is kept."""
@@ -893,7 +897,8 @@ class World:
 
     def frame(self) -> Frame:
         """The current state as a :class:`Frame`."""
-        return Frame(self._time, self.positions, self.velocities, self.spins)
+        positions, velocities = self._now()
+        return Frame(self._time, positions, velocities, self.spins)
 
     # -- reading ------------------------------------------------------------------------------
 
@@ -904,22 +909,12 @@ class World:
     @property
     def positions(self) -> FloatArray:
         """Centres now, (N, d) [m] (periodic: wrapped into the box)."""
-        if self._state is None or self._model is None:
-            return self._x.copy()
-        x = np.empty_like(self._x)
-        v = np.empty_like(self._v)
-        edmd.positions_at(self._model, self._state, self._time, x, v)
-        return self._to_user(x)
+        return self._now()[0]
 
     @property
     def velocities(self) -> FloatArray:
         """Velocities now, (N, d) [m/s]."""
-        if self._state is None or self._model is None:
-            return self._v.copy()
-        x = np.empty_like(self._x)
-        v = np.empty_like(self._v)
-        edmd.positions_at(self._model, self._state, self._time, x, v)
-        return self._to_user(v)
+        return self._now()[1]
 
     @property
     def spins(self) -> FloatArray:

@@ -64,8 +64,7 @@ C_TC = 5  # collisions made elastic by the TC model
 C_REST = 6  # bodies brought to rest on a wall or plane
 # sums[]
 S_VIRIAL = 0  # sum over collisions of J . r  [J s] (pairs: r = x1 - x2; walls: r = x)
-S_WALL_IMPULSE = 1  # sum of |J| on walls and planes [N s]
-S_KE_LOST = 2  # kinetic energy dissipated [J]
+S_KE_LOST = 1  # kinetic energy dissipated [J]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -328,18 +327,18 @@ def _collide_pair(
     dim = x.shape[1]
     # separation r = x_i - x_j (nearest image) and relative velocity, as three components
     r0 = r1 = r2 = 0.0
-    w0 = w1 = w2 = 0.0
+    dv0 = dv1 = dv2 = 0.0
     for k in range(dim):
         d = x[i, k] - x[j, k]
         if periodic:
             d -= box[k] * math.floor(d / box[k] + 0.5)
         dv = v[i, k] - v[j, k]
         if k == 0:
-            r0, w0 = d, dv
+            r0, dv0 = d, dv
         elif k == 1:
-            r1, w1 = d, dv
+            r1, dv1 = d, dv
         else:
-            r2, w2 = d, dv
+            r2, dv2 = d, dv
     dist = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
     n0, n1, n2 = r0 / dist, r1 / dist, r2 / dist
     mat_i = material[i]
@@ -350,7 +349,7 @@ def _collide_pair(
         if e < 1.0:
             counts[C_TC] += 1
         e = 1.0
-    g0, g1, g2 = w0, w1, w2
+    g0, g1, g2 = dv0, dv1, dv2
     a_i = radius[i]
     a_j = radius[j]
     if law != LAW_SMOOTH:
@@ -381,7 +380,7 @@ def _collide_pair(
     )
     if j0 == 0.0 and j1 == 0.0 and j2 == 0.0:
         return  # not approaching after all (round-off): nothing to do
-    un_before = w0 * n0 + w1 * n1 + w2 * n2
+    un_before = dv0 * n0 + dv1 * n1 + dv2 * n2
     ke_before = _kinetic(v, w, mass, q, radius, mobile, i) + _kinetic(
         v, w, mass, q, radius, mobile, j
     )
@@ -414,9 +413,9 @@ def _collide_pair(
     sums[S_VIRIAL] += j0 * r0 + j1 * r1 + j2 * r2
     # a body resting on a support: lifted off, or pushed into it (the support pushes back)
     if support[i] >= 0:
-        _support_reaction(i, v, acc, support, mass, face_e, gravity, plane_normal, sums)
+        _support_reaction(i, v, acc, support, face_e, gravity, plane_normal)
     if support[j] >= 0:
-        _support_reaction(j, v, acc, support, mass, face_e, gravity, plane_normal, sums)
+        _support_reaction(j, v, acc, support, face_e, gravity, plane_normal)
     sums[S_KE_LOST] += ke_before - (
         _kinetic(v, w, mass, q, radius, mobile, i) + _kinetic(v, w, mass, q, radius, mobile, j)
     )
@@ -445,11 +444,9 @@ def _support_reaction(
     v: np.ndarray,
     acc: np.ndarray,
     support: np.ndarray,
-    mass: np.ndarray,
     face_e: np.ndarray,
     gravity: np.ndarray,
     plane_normal: np.ndarray,
-    sums: np.ndarray,
 ) -> None:
     """Body ``b`` rests on a support and was just hit: it lifts off, or the support pushes
     back (an impact with the support's restitution) and then it flies."""
@@ -462,7 +459,6 @@ def _support_reaction(
         e_w = face_e[face]
         for k in range(dim):
             v[b, k] -= (1.0 + e_w) * un * face_normal(plane_normal, dim, face, k)
-        sums[S_WALL_IMPULSE] += (1.0 + e_w) * (-un) * mass[b]
     if un != 0.0:
         set_support(gravity, plane_normal, support, acc, b, -1)
 
@@ -532,7 +528,6 @@ def _collide_face(
     counter[i] += 1
     last_coll[i] = T
     counts[C_WALL] += 1
-    sums[S_WALL_IMPULSE] += jn
     sums[S_VIRIAL] += x_dot_j
     sums[S_KE_LOST] += ke_before - _kinetic(v, w, mass, q, radius, mobile, i)
     if log_on:
@@ -645,7 +640,6 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     cell_size, ncell = m.cell_size, m.ncell
 
     dim = x.shape[1]
-    scratch = np.empty(dim)
     processed = 0
     log_cap = log_time.shape[0]
     while True:
@@ -664,14 +658,13 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
         counts[C_EVENTS] += 1
         kind = ev_kind[i]
         j = -1
+        advance(x, v, acc, t, i, T)  # every event moves its own body to now
         if kind == EV_PAIR:
             j = ev_other[i]
             if counter[j] != ev_stamp[i]:
                 counts[C_STALE] += 1
-                j = -1
-                advance(x, v, acc, t, i, T)
+                j = -1  # stale: the partner collided since; just re-predict
             else:
-                advance(x, v, acc, t, i, T)
                 advance(x, v, acc, t, j, T)
                 _collide_pair(
                     i,
@@ -711,7 +704,6 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                     log_n,
                 )
         elif kind == EV_WALL:
-            advance(x, v, acc, t, i, T)
             _collide_face(
                 i,
                 ev_other[i],
@@ -743,7 +735,6 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
             )
         else:  # EV_SHELL
             counts[C_SHELL] += 1
-            advance(x, v, acc, t, i, T)
             for k in range(dim):
                 if periodic:
                     x[i, k] -= box[k] * math.floor(x[i, k] / box[k])
@@ -764,7 +755,6 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                 delta,
                 cell_size,
                 ncell,
-                scratch,
             ):
                 return OVERFLOW
         # re-schedule the bodies whose motion changed: i, and its partner j if it had one

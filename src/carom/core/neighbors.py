@@ -63,21 +63,6 @@ def cell_remove(
 
 
 @njit(cache=True, error_model="numpy")
-def separation(
-    a: np.ndarray, b: np.ndarray, box: np.ndarray, periodic: bool, out: np.ndarray
-) -> float:
-    """``out = a - b`` (nearest periodic image when ``periodic``); returns ``|out|^2``."""
-    total = 0.0
-    for k in range(a.shape[0]):
-        d = a[k] - b[k]
-        if periodic:
-            d -= box[k] * math.floor(d / box[k] + 0.5)
-        out[k] = d
-        total += d * d
-    return total
-
-
-@njit(cache=True, error_model="numpy")
 def _list_remove(nbr: np.ndarray, count: np.ndarray, owner: int, body: int) -> None:
     n = count[owner]
     for s in range(n):
@@ -109,7 +94,6 @@ def _link_overlapping(
     periodic: bool,
     delta: float,
     ncell: np.ndarray,
-    scratch: np.ndarray,
 ) -> bool:
     """Link ``i`` with every body in the grid whose shell overlaps its shell.
 
@@ -120,7 +104,7 @@ def _link_overlapping(
     # cell coordinates of i's cell, and the offsets to scan on each axis: -1..1, or every
     # cell when a periodic axis has fewer than 3 (no cell may be visited twice)
     rest = cell[i]
-    c2 = rest % ncell[dim - 1] if dim == 3 else 0
+    c2 = rest % ncell[2] if dim == 3 else 0
     if dim == 3:
         rest //= ncell[2]
     c1 = rest % ncell[1]
@@ -193,7 +177,6 @@ def build_all(
     ncell: np.ndarray,
 ) -> bool:
     """Insert every body into an empty grid, linking each overlapping pair once."""
-    scratch = np.empty(origin.shape[1])
     head[:] = -1
     count[:] = 0
     for i in range(origin.shape[0]):
@@ -213,7 +196,6 @@ def build_all(
             periodic,
             delta,
             ncell,
-            scratch,
         ):
             return False
     return True
@@ -236,7 +218,6 @@ def rebuild_shell(
     delta: float,
     cell_size: np.ndarray,
     ncell: np.ndarray,
-    scratch: np.ndarray,
 ) -> bool:
     """Re-centre moving body ``i``'s shell on ``origin[i]`` and rebuild its neighbour list.
 
@@ -250,5 +231,5 @@ def rebuild_shell(
     cell_remove(i, head, nxt, prv, cell)
     cell_insert(i, cell_of(origin[i], cell_size, ncell), head, nxt, prv, cell)
     return _link_overlapping(
-        i, origin, radius, mobile, nbr, count, head, nxt, cell, box, periodic, delta, ncell, scratch
+        i, origin, radius, mobile, nbr, count, head, nxt, cell, box, periodic, delta, ncell
     )

@@ -40,6 +40,22 @@ def toi_sphere_sphere(c: float, b: float, a: float) -> float:
 
 
 @njit(cache=True, error_model="numpy")
+def _quadratic_roots(a: float, b: float, c: float) -> tuple[float, float]:
+    """Real roots of a t^2 + b t + c (NaN when absent), smaller first."""
+    nan = math.nan
+    if a == 0.0:
+        return (-c / b, nan) if b != 0.0 else (nan, nan)
+    disc = b * b - 4.0 * a * c
+    if disc < 0.0:
+        return nan, nan
+    sq = math.sqrt(disc)
+    q = -0.5 * (b + sq) if b >= 0.0 else -0.5 * (b - sq)
+    r1 = q / a
+    r2 = c / q if q != 0.0 else r1
+    return (r1, r2) if r1 <= r2 else (r2, r1)
+
+
+@njit(cache=True, error_model="numpy")
 def toi_gap(d0: float, u: float, acc: float) -> float:
     """First time a gap ``d(t) = d0 + u t + acc t^2 / 2`` closes while closing.
 
@@ -60,16 +76,7 @@ def toi_gap(d0: float, u: float, acc: float) -> float:
     half = 0.5 * acc
     if half == 0.0:
         return -d0 / u if u < 0.0 else INF
-    disc = u * u - 4.0 * half * d0
-    if disc < 0.0:
-        return INF
-    # roots of half t^2 + u t + d0 = 0 without cancellation: q = -(u + sign(u) sqrt(disc))/2,
-    # t1 = q / half, t2 = d0 / q
-    sq = math.sqrt(disc)
-    q = -0.5 * (u + sq) if u >= 0.0 else -0.5 * (u - sq)
-    t1 = q / half
-    t2 = d0 / q if q != 0.0 else INF
-    lo, hi = (t1, t2) if t1 <= t2 else (t2, t1)
+    lo, hi = _quadratic_roots(half, u, d0)  # NaN when there is no real root: never > 0
     if touching:
         return hi if hi > 0.0 else INF
     # d0 > 0: the gap first closes at the smallest positive root
@@ -99,22 +106,6 @@ def _bisect(c4: float, c3: float, c2: float, c1: float, c0: float, lo: float, hi
         else:
             hi = mid
     return hi
-
-
-@njit(cache=True, error_model="numpy")
-def _quadratic_roots(a: float, b: float, c: float) -> tuple[float, float]:
-    """Real roots of a t^2 + b t + c (NaN when absent), smaller first."""
-    nan = math.nan
-    if a == 0.0:
-        return (-c / b, nan) if b != 0.0 else (nan, nan)
-    disc = b * b - 4.0 * a * c
-    if disc < 0.0:
-        return nan, nan
-    sq = math.sqrt(disc)
-    q = -0.5 * (b + sq) if b >= 0.0 else -0.5 * (b - sq)
-    r1 = q / a
-    r2 = c / q if q != 0.0 else r1
-    return (r1, r2) if r1 <= r2 else (r2, r1)
 
 
 @njit(cache=True, error_model="numpy")

@@ -114,8 +114,6 @@ def plot_case(records: list[Record], path: Path) -> Path:
         for ax, (name, label) in zip(row[1:], MODELS.items(), strict=True):
             m = record.models[name]
             verdict = "exact" if m.error <= ROUND_OFF else f"error {100 * m.error:.0f}%"
-            # below round-off of the kinetic energy a loss is noise, not a number to show
-            lost = m.ke_lost if abs(m.ke_lost) > ROUND_OFF * m.ke_before else 0.0
             angle = "" if math.isnan(m.angle_deg) else f", angle {m.angle_deg:.1f}°"
             _panel(
                 ax,
@@ -123,7 +121,7 @@ def plot_case(records: list[Record], path: Path) -> Path:
                 m.v1_after,
                 m.v2_after,
                 f"after: {label}",
-                f"{verdict}; KE lost {lost:.3g} J{angle}",
+                f"{verdict}; KE lost {m.ke_lost_shown:.3g} J{angle}",
                 scale,
             )
         for ax in row:
