@@ -44,6 +44,8 @@ from carom.core.toi import (
     toi_sphere_sphere,
 )
 
+SHELL_MARGIN = 1.0 - 1e-9  # the fraction of the shell a body may use
+
 EV_NONE = 0
 EV_PAIR = 1
 EV_WALL = 2  # other = face: 2k lower, 2k + 1 upper wall of axis k; 2 dim + p plane p
@@ -77,7 +79,7 @@ def face_normal(plane_normal: np.ndarray, dim: int, face: int, k: int) -> float:
     return float(plane_normal[face - 2 * dim, k])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def set_support(
     gravity: np.ndarray,
     plane_normal: np.ndarray,
@@ -108,6 +110,68 @@ def advance(x: np.ndarray, v: np.ndarray, acc: np.ndarray, t: np.ndarray, i: int
             x[i, k] += (v[i, k] + 0.5 * a * dt) * dt
             v[i, k] += a * dt
     t[i] = T
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _first_pair_straight(
+    i: int,
+    T: float,
+    best: float,
+    x: np.ndarray,
+    v: np.ndarray,
+    t: np.ndarray,
+    radius: np.ndarray,
+    nbr: np.ndarray,
+    nbr_count: np.ndarray,
+    box: np.ndarray,
+    periodic: bool,
+) -> tuple[float, int]:
+    """Body ``i``'s first collision with a neighbour before ``best`` when nothing accelerates.
+
+    Returns ``(time from T, neighbour)``, or ``(best, -1)``. The same arithmetic as
+    :func:`carom.core.toi.toi_sphere_sphere`, written out per component and without branches
+    on the neighbour (the hot loop of the engine: a mispredicted branch costs more than the
+    square root and division it would skip).
+    """
+    three = x.shape[1] == 3
+    xi0, xi1 = x[i, 0], x[i, 1]
+    vi0, vi1 = v[i, 0], v[i, 1]
+    xi2 = x[i, 2] if three else 0.0
+    vi2 = v[i, 2] if three else 0.0
+    L0, L1 = box[0], box[1]
+    L2 = box[2] if three else 1.0
+    inv0, inv1, inv2 = 1.0 / L0, 1.0 / L1, 1.0 / L2
+    rad = radius[i]
+    other = -1
+    for slot in range(nbr_count[i]):
+        j = nbr[i, slot]
+        dtj = T - t[j]
+        vj0, vj1 = v[j, 0], v[j, 1]
+        vj2 = v[j, 2] if three else 0.0
+        r0 = xi0 - (x[j, 0] + vj0 * dtj)
+        r1 = xi1 - (x[j, 1] + vj1 * dtj)
+        r2 = xi2 - (x[j, 2] + vj2 * dtj) if three else 0.0
+        if periodic:
+            r0 -= L0 * math.floor(r0 * inv0 + 0.5)
+            r1 -= L1 * math.floor(r1 * inv1 + 0.5)
+            r2 -= L2 * math.floor(r2 * inv2 + 0.5)
+        dv0 = vi0 - vj0
+        dv1 = vi1 - vj1
+        dv2 = vi2 - vj2
+        rr = r0 * r0 + r1 * r1 + r2 * r2
+        rv = r0 * dv0 + r1 * dv1 + r2 * dv2
+        vv = dv0 * dv0 + dv1 * dv1 + dv2 * dv2
+        reach = rad + radius[j]
+        c = rr - reach * reach
+        disc = rv * rv - vv * c
+        # the smaller root of vv t^2 + 2 rv t + c, cancellation-free (rv < 0); 0 when already
+        # touching and approaching; none when separating or passing by
+        tp = max(c / (math.sqrt(max(disc, 0.0)) - rv), 0.0)
+        tp = tp if (rv < 0.0 and disc >= 0.0) else INF
+        if tp < best:
+            best = tp
+            other = j
+    return best, other
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -145,14 +209,18 @@ def predict(
         return
     rad = radius[i]
     off2 = 0.0
+    off_v = 0.0
     speed2 = 0.0
     acc2 = 0.0
     for k in range(dim):
         d = x[i, k] - origin[i, k]
         off2 += d * d
+        off_v += d * v[i, k]
         speed2 += v[i, k] * v[i, k]
         acc2 += acc[i, k] * acc[i, k]
-    best = shell_exit_time(math.sqrt(off2), math.sqrt(speed2), math.sqrt(acc2), delta)
+    # leave the shell a hair early, so that round-off in the exit time never lets a body
+    # stray beyond delta from its centre
+    best = shell_exit_time(off2, off_v, speed2, math.sqrt(acc2), delta * SHELL_MARGIN)
     kind = EV_SHELL
     other = -1
 
@@ -189,7 +257,13 @@ def predict(
             other = face
 
     # neighbours: relative motion r + v t + da t^2 / 2, j extrapolated to T on the fly
-    for slot in range(nbr_count[i]):
+    if not accelerated:
+        tp, j = _first_pair_straight(i, T, best, x, v, t, radius, nbr, nbr_count, box, periodic)
+        if j >= 0:
+            best = tp
+            kind = EV_PAIR
+            other = j
+    for slot in range(nbr_count[i] if accelerated else 0):
         j = nbr[i, slot]
         dtj = T - t[j]
         rr = 0.0
@@ -199,30 +273,21 @@ def predict(
         vda = 0.0
         dada = 0.0
         for k in range(dim):
-            if accelerated:
-                aj = acc[j, k]
-                r = x[i, k] - (x[j, k] + (v[j, k] + 0.5 * aj * dtj) * dtj)
-                dv = v[i, k] - (v[j, k] + aj * dtj)
-                da = acc[i, k] - aj
-                rda += r * da
-                vda += dv * da
-                dada += da * da
-            else:  # no gravity anywhere: straight lines (the common case, kept lean)
-                r = x[i, k] - (x[j, k] + v[j, k] * dtj)
-                dv = v[i, k] - v[j, k]
+            aj = acc[j, k]
+            r = x[i, k] - (x[j, k] + (v[j, k] + 0.5 * aj * dtj) * dtj)
+            dv = v[i, k] - (v[j, k] + aj * dtj)
+            da = acc[i, k] - aj
             if periodic:
                 r -= box[k] * math.floor(r * inv_box[k] + 0.5)
             rr += r * r
             rv += r * dv
             vv += dv * dv
+            rda += r * da
+            vda += dv * da
+            dada += da * da
         reach = rad + radius[j]
         if dada == 0.0:
-            c = rr - reach * reach
-            # cheap rejection: t = c / (-b + sqrt(b^2 - a c)) >= c / (-2 b) for c > 0 > b, so a
-            # pair whose bound is already later than the best event needs no square root
-            if rv >= 0.0 or (c > 0.0 and c > -2.0 * rv * best):
-                continue
-            tp = toi_sphere_sphere(c, rv, vv)
+            tp = toi_sphere_sphere(rr - reach * reach, rv, vv)
         else:
             tp = first_root_quartic(0.25 * dada, vda, vv + rda, 2.0 * rv, rr - reach * reach, best)
         if tp < best:
@@ -237,14 +302,9 @@ def predict(
         ev_stamp[i] = counter[other]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _log(
-    log_time: np.ndarray,
-    log_a: np.ndarray,
-    log_b: np.ndarray,
-    log_impulse: np.ndarray,
-    log_un: np.ndarray,
-    log_n: np.ndarray,
+    logbuf: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     T: float,
     a: int,
     b: int,
@@ -254,6 +314,7 @@ def _log(
     un_before: float,
     un_after: float,
 ) -> None:
+    log_time, log_a, log_b, log_impulse, log_un, log_n = logbuf
     n = log_n[0]
     log_time[n] = T
     log_a[n] = a
@@ -266,7 +327,7 @@ def _log(
     log_n[0] = n + 1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _kinetic(
     v: np.ndarray,
     w: np.ndarray,
@@ -286,7 +347,7 @@ def _kinetic(
     return float(0.5 * mass[i] * (ke + q[i] * radius[i] * radius[i] * spin))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _collide_pair(
     i: int,
     j: int,
@@ -305,10 +366,7 @@ def _collide_pair(
     q: np.ndarray,
     mobile: np.ndarray,
     material: np.ndarray,
-    pair_law: np.ndarray,
-    pair_e: np.ndarray,
-    pair_beta: np.ndarray,
-    pair_friction: np.ndarray,
+    pair_table: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     face_e: np.ndarray,
     gravity: np.ndarray,
     plane_normal: np.ndarray,
@@ -317,12 +375,7 @@ def _collide_pair(
     t_c: float,
     counts: np.ndarray,
     sums: np.ndarray,
-    log_time: np.ndarray,
-    log_a: np.ndarray,
-    log_b: np.ndarray,
-    log_impulse: np.ndarray,
-    log_un: np.ndarray,
-    log_n: np.ndarray,
+    logbuf: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
 ) -> None:
     dim = x.shape[1]
     # separation r = x_i - x_j (nearest image) and relative velocity, as three components
@@ -341,6 +394,7 @@ def _collide_pair(
             r2, dv2 = d, dv
     dist = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
     n0, n1, n2 = r0 / dist, r1 / dist, r2 / dist
+    pair_law, pair_e, pair_beta, pair_friction = pair_table
     mat_i = material[i]
     mat_j = material[j]
     law = pair_law[mat_i, mat_j]
@@ -421,12 +475,7 @@ def _collide_pair(
     )
     if log_on:
         _log(
-            log_time,
-            log_a,
-            log_b,
-            log_impulse,
-            log_un,
-            log_n,
+            logbuf,
             T,
             i,
             j,
@@ -438,7 +487,7 @@ def _collide_pair(
         )
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _support_reaction(
     b: int,
     v: np.ndarray,
@@ -463,7 +512,7 @@ def _support_reaction(
         set_support(gravity, plane_normal, support, acc, b, -1)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _collide_face(
     i: int,
     face: int,
@@ -486,12 +535,7 @@ def _collide_face(
     t_c: float,
     counts: np.ndarray,
     sums: np.ndarray,
-    log_time: np.ndarray,
-    log_a: np.ndarray,
-    log_b: np.ndarray,
-    log_impulse: np.ndarray,
-    log_un: np.ndarray,
-    log_n: np.ndarray,
+    logbuf: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
 ) -> None:
     """Body ``i`` (at time ``T``) meets wall or plane ``face``."""
     dim = x.shape[1]
@@ -532,12 +576,7 @@ def _collide_face(
     sums[S_KE_LOST] += ke_before - _kinetic(v, w, mass, q, radius, mobile, i)
     if log_on:
         _log(
-            log_time,
-            log_a,
-            log_b,
-            log_impulse,
-            log_un,
-            log_n,
+            logbuf,
             T,
             i,
             -1 - face,
@@ -621,18 +660,13 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     ev_time, ev_kind, ev_other, ev_stamp = s.ev_time, s.ev_kind, s.ev_other, s.ev_stamp
     heap, where = s.heap, s.heap_where
     counts, sums = s.counts, s.sums
-    log_time, log_a, log_b, log_impulse, log_un, log_n = (
-        s.log_time,
-        s.log_a,
-        s.log_b,
-        s.log_impulse,
-        s.log_un,
-        s.log_n,
-    )
+    # grouped as tuples for the inlined callees (a call takes at most 30 arguments there)
+    logbuf = (s.log_time, s.log_a, s.log_b, s.log_impulse, s.log_un, s.log_n)
+    log_time, log_n = s.log_time, s.log_n
     cell, head, nxt, prv = s.cell, s.cell_head, s.cell_next, s.cell_prev
     radius, mass, inv_mass, q, mobile = m.radius, m.mass, m.inv_mass, m.q, m.mobile
-    material, pair_law, pair_e = m.material, m.pair_law, m.pair_e
-    pair_beta, pair_friction, face_e = m.pair_beta, m.pair_friction, m.face_e
+    material, face_e = m.material, m.face_e
+    pair_table = (m.pair_law, m.pair_e, m.pair_beta, m.pair_friction)
     gravity, box, periodic, delta, t_c = m.gravity, m.box, m.periodic, m.delta, m.t_c
     accelerated = m.accelerated
     inv_box = m.inv_box
@@ -684,10 +718,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                     q,
                     mobile,
                     material,
-                    pair_law,
-                    pair_e,
-                    pair_beta,
-                    pair_friction,
+                    pair_table,
                     face_e,
                     gravity,
                     plane_normal,
@@ -696,12 +727,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                     t_c,
                     counts,
                     sums,
-                    log_time,
-                    log_a,
-                    log_b,
-                    log_impulse,
-                    log_un,
-                    log_n,
+                    logbuf,
                 )
         elif kind == EV_WALL:
             _collide_face(
@@ -726,12 +752,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                 t_c,
                 counts,
                 sums,
-                log_time,
-                log_a,
-                log_b,
-                log_impulse,
-                log_un,
-                log_n,
+                logbuf,
             )
         else:  # EV_SHELL
             counts[C_SHELL] += 1

@@ -19,7 +19,7 @@ def _less(keys: np.ndarray, i: int, j: int) -> bool:
     return ki < kj or (ki == kj and i < j)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _sift_up(keys: np.ndarray, heap: np.ndarray, where: np.ndarray, k: int) -> None:
     body = heap[k]
     while k > 0:
@@ -34,7 +34,7 @@ def _sift_up(keys: np.ndarray, heap: np.ndarray, where: np.ndarray, k: int) -> N
     where[body] = k
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _sift_down(keys: np.ndarray, heap: np.ndarray, where: np.ndarray, k: int) -> None:
     n = heap.shape[0]
     body = heap[k]

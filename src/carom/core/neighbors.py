@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def cell_of(p: np.ndarray, cell_size: np.ndarray, ncell: np.ndarray) -> int:
     """Linear index of the cell holding point ``p`` (clamped to the grid)."""
     index = 0
@@ -34,7 +34,7 @@ def cell_of(p: np.ndarray, cell_size: np.ndarray, ncell: np.ndarray) -> int:
     return index
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def cell_insert(
     i: int, c: int, head: np.ndarray, nxt: np.ndarray, prv: np.ndarray, cell: np.ndarray
 ) -> None:
@@ -47,7 +47,7 @@ def cell_insert(
     cell[i] = c
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def cell_remove(
     i: int, head: np.ndarray, nxt: np.ndarray, prv: np.ndarray, cell: np.ndarray
 ) -> None:
@@ -62,7 +62,7 @@ def cell_remove(
     prv[i] = -1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _list_remove(nbr: np.ndarray, count: np.ndarray, owner: int, body: int) -> None:
     n = count[owner]
     for s in range(n):
@@ -79,7 +79,7 @@ def _scan_range(c: int, n: int, periodic: bool) -> tuple[int, int]:
     return -1, 1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _link_overlapping(
     i: int,
     origin: np.ndarray,

@@ -150,15 +150,29 @@ def first_root_quartic(
 
 
 @njit(cache=True, error_model="numpy")
-def shell_exit_time(offset: float, speed: float, acc: float, delta: float) -> float:
-    """Earliest time a body may have moved ``delta`` from its shell centre [s].
+def shell_exit_time(off2: float, off_v: float, speed2: float, acc: float, delta: float) -> float:
+    """When a body may first be ``delta`` from its shell centre [s] (a lower bound).
 
-    A safe lower bound: ``offset + speed t + acc t^2 / 2 = delta`` with the current distance
-    from the centre ``offset``, the speed ``|v|`` and ``|acceleration|``.
+    ``off2`` is the squared distance from the centre [m^2], ``off_v`` the offset's rate
+    ``d . v`` [m^2/s], ``speed2 = |v|^2`` [m^2/s^2] and ``acc = |acceleration|`` [m/s^2].
+    In straight-line motion the time is exact: the positive root of
+    ``|d + v t|^2 = delta^2``. Under acceleration it is the safe bound
+    ``|d| + |v| t + acc t^2 / 2 = delta``.
+
+    >>> shell_exit_time(0.0, 0.0, 4.0, 0.0, 1.0)   # from the centre at 2 m/s, 1 m to go
+    0.5
     """
-    room = delta - offset
-    if room <= 0.0:
+    c = off2 - delta * delta
+    if c >= 0.0:
         return 0.0
+    if acc == 0.0:
+        if speed2 == 0.0:
+            return INF
+        # speed2 t^2 + 2 off_v t + c = 0 with c < 0: one positive root, cancellation-free
+        sq = math.sqrt(off_v * off_v - speed2 * c)
+        return -c / (off_v + sq) if off_v > 0.0 else (sq - off_v) / speed2
+    room = delta - math.sqrt(off2)
+    speed = math.sqrt(speed2)
     # positive root of acc/2 t^2 + speed t - room = 0, cancellation-free
     rate = speed + math.sqrt(speed * speed + 2.0 * acc * room)
-    return 2.0 * room / rate if rate > 0.0 else INF  # at rest and unaccelerated: never
+    return 2.0 * room / rate if rate > 0.0 else INF
