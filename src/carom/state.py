@@ -12,10 +12,18 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["State", "allocate_state"]
+__all__ = ["KIN_R", "KIN_T", "KIN_V", "KIN_WIDTH", "State", "aligned_records", "allocate_state"]
 
 N_COUNTS = 8
 N_SUMS = 2
+
+# Columns of the kinematic record ``State.kin``: position (x, y, z), clock, velocity, radius.
+# One body's record is one 64-byte cache line, which is what a prediction reads of each
+# neighbour; in 2D the z columns stay zero.
+KIN_T = 3
+KIN_V = 4
+KIN_R = 7
+KIN_WIDTH = 8
 
 
 class State(NamedTuple):
@@ -23,14 +31,15 @@ class State(NamedTuple):
 
     Attributes
     ----------
-    x, v : (N, d) float64
-        Position [m] and velocity [m/s] of each body at its own clock ``t``.
+    kin : (N, 8) float64
+        One record per body: position [m] in columns 0-2, its own clock ``t`` [s] in column
+        ``KIN_T``, velocity [m/s] in ``KIN_V`` .. ``KIN_V + 2`` (position and velocity as of
+        ``t``: lazy clocks; z zero in 2D), and the radius [m] in ``KIN_R`` (a copy of
+        ``Model.radius``, kept here so that a neighbour's data is one cache line).
     acc : (N, d) float64
         Acceleration [m/s^2]: gravity, less the normal part a support bears; zero if static.
     w : (N, 3) float64
         Spin [rad/s] (2D: about z, in column 2).
-    t : (N,) float64
-        Each body's clock [s].
     counter : (N,) int64
         Collisions of each body so far (invalidates stale predictions).
     last_coll : (N,) float64
@@ -55,11 +64,9 @@ class State(NamedTuple):
         The event log buffer, emptied by :class:`carom.World` as it fills.
     """
 
-    x: NDArray[np.float64]
-    v: NDArray[np.float64]
+    kin: NDArray[np.float64]
     acc: NDArray[np.float64]
     w: NDArray[np.float64]
-    t: NDArray[np.float64]
     counter: NDArray[np.int64]
     last_coll: NDArray[np.float64]
     support: NDArray[np.int64]
@@ -87,24 +94,40 @@ class State(NamedTuple):
     log_n: NDArray[np.int64]
 
 
+def aligned_records(n: int, values: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+    """An (n, KIN_WIDTH) float64 array whose rows start on 64-byte cache lines (zeros, or a
+    copy of ``values``)."""
+    line = 64 // 8
+    buffer = np.zeros(n * KIN_WIDTH + line)
+    start = (-buffer.ctypes.data % 64) // 8
+    kin = buffer[start : start + n * KIN_WIDTH].reshape(n, KIN_WIDTH)
+    if values is not None:
+        kin[...] = values
+    return kin
+
+
 def allocate_state(
     x: NDArray[np.float64],
     v: NDArray[np.float64],
     acc: NDArray[np.float64],
     w: NDArray[np.float64],
+    radius: NDArray[np.float64],
     time: float,
     n_cells: int,
     capacity: int,
     log_capacity: int,
 ) -> State:
     """A fresh state at time ``time`` (schedule still empty: call ``edmd.initialise``)."""
-    n = x.shape[0]
+    n, dim = x.shape
+    kin = aligned_records(n)
+    kin[:, :dim] = x
+    kin[:, KIN_T] = time
+    kin[:, KIN_V : KIN_V + dim] = v
+    kin[:, KIN_R] = radius
     return State(
-        x=np.array(x, dtype=np.float64),
-        v=np.array(v, dtype=np.float64),
+        kin=kin,
         acc=np.array(acc, dtype=np.float64),
         w=np.array(w, dtype=np.float64),
-        t=np.full(n, time),
         counter=np.zeros(n, np.int64),
         last_coll=np.full(n, -np.inf),
         support=np.full(n, -1, np.int64),

@@ -28,7 +28,14 @@ from carom.core.neighbors import build_all
 from carom.errors import CaromError
 from carom.model import Model
 from carom.response import default_inertia_factor
-from carom.state import N_COUNTS, N_SUMS, State, allocate_state
+from carom.state import (
+    KIN_V,
+    N_COUNTS,
+    N_SUMS,
+    State,
+    aligned_records,
+    allocate_state,
+)
 
 __all__ = ["Frame", "Material", "Stats", "World"]
 
@@ -668,7 +675,7 @@ class World:
 
         Vectorised over the lists, a block of bodies at a time (bounded memory at 1e6 bodies).
         """
-        x = state.x  # engine order, at the start time
+        x = state.kin[:, : self.dim]  # engine order, at the start time
         n, capacity = state.nbr.shape
         slots = np.arange(capacity)
         block = max(1, 2_000_000 // max(capacity, 1))
@@ -716,6 +723,7 @@ class World:
                 self._v[order],
                 acc,
                 self._w[order],
+                model.radius,
                 self._time,
                 int(np.prod(model.ncell)),
                 self._capacity,
@@ -853,7 +861,7 @@ class World:
         model, state = self._model, self._state
         assert model is not None and state is not None
         while True:
-            state = state._replace(nbr=np.zeros((state.x.shape[0], capacity), np.int32))
+            state = state._replace(nbr=np.zeros((state.kin.shape[0], capacity), np.int32))
             if build_all(
                 state.origin,
                 model.radius,
@@ -1027,11 +1035,12 @@ class World:
             for name in ("radius", "mass", "q", "material"):
                 setattr(world, f"_{name}", data[f"body.{name}"])
             fields = {name: data[f"state.{name}"] for name in State._fields}
+            fields["kin"] = aligned_records(len(fields["kin"]), fields["kin"])
             state = State(**fields)
             world._capacity = meta["capacity"]
             world._order = data["engine_order"]
-            world._x = world._to_user(state.x)
-            world._v = world._to_user(state.v)
+            world._x = world._to_user(state.kin[:, : world.dim])
+            world._v = world._to_user(state.kin[:, KIN_V : KIN_V + world.dim])
             world._w = world._to_user(state.w)
             world._time = meta["time"]
             world._model = world._build_model(world._order)

@@ -43,6 +43,7 @@ from carom.core.toi import (
     toi_gap,
     toi_sphere_sphere,
 )
+from carom.state import KIN_R, KIN_T, KIN_V
 
 SHELL_MARGIN = 1.0 - 1e-9  # the fraction of the shell a body may use
 
@@ -101,6 +102,12 @@ def set_support(
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def kinematic_views(kin: np.ndarray, dim: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Positions (N, dim), velocities (N, dim) and clocks (N,): views into ``kin``."""
+    return kin[:, :dim], kin[:, KIN_V : KIN_V + dim], kin[:, KIN_T]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def advance(x: np.ndarray, v: np.ndarray, acc: np.ndarray, t: np.ndarray, i: int, T: float) -> None:
     """Move body ``i`` along its free flight to time ``T`` and set its clock."""
     dt = T - t[i]
@@ -117,10 +124,7 @@ def _first_pair_straight(
     i: int,
     T: float,
     best: float,
-    x: np.ndarray,
-    v: np.ndarray,
-    t: np.ndarray,
-    radius: np.ndarray,
+    kin: np.ndarray,
     nbr: np.ndarray,
     nbr_count: np.ndarray,
     box: np.ndarray,
@@ -131,26 +135,23 @@ def _first_pair_straight(
     Returns ``(time from T, neighbour)``, or ``(best, -1)``. The same arithmetic as
     :func:`carom.core.toi.toi_sphere_sphere`, written out per component and without branches
     on the neighbour (the hot loop of the engine: a mispredicted branch costs more than the
-    square root and division it would skip).
+    square root and division it would skip). Each neighbour's data is one record of ``kin``
+    (z is zero in 2D, so three components serve both).
     """
-    three = x.shape[1] == 3
-    xi0, xi1 = x[i, 0], x[i, 1]
-    vi0, vi1 = v[i, 0], v[i, 1]
-    xi2 = x[i, 2] if three else 0.0
-    vi2 = v[i, 2] if three else 0.0
+    xi0, xi1, xi2 = kin[i, 0], kin[i, 1], kin[i, 2]
+    vi0, vi1, vi2 = kin[i, KIN_V], kin[i, KIN_V + 1], kin[i, KIN_V + 2]
     L0, L1 = box[0], box[1]
-    L2 = box[2] if three else 1.0
+    L2 = box[2] if box.shape[0] == 3 else 1.0
     inv0, inv1, inv2 = 1.0 / L0, 1.0 / L1, 1.0 / L2
-    rad = radius[i]
+    rad = kin[i, KIN_R]
     other = -1
     for slot in range(nbr_count[i]):
         j = nbr[i, slot]
-        dtj = T - t[j]
-        vj0, vj1 = v[j, 0], v[j, 1]
-        vj2 = v[j, 2] if three else 0.0
-        r0 = xi0 - (x[j, 0] + vj0 * dtj)
-        r1 = xi1 - (x[j, 1] + vj1 * dtj)
-        r2 = xi2 - (x[j, 2] + vj2 * dtj) if three else 0.0
+        dtj = T - kin[j, KIN_T]
+        vj0, vj1, vj2 = kin[j, KIN_V], kin[j, KIN_V + 1], kin[j, KIN_V + 2]
+        r0 = xi0 - (kin[j, 0] + vj0 * dtj)
+        r1 = xi1 - (kin[j, 1] + vj1 * dtj)
+        r2 = xi2 - (kin[j, 2] + vj2 * dtj)
         if periodic:
             r0 -= L0 * math.floor(r0 * inv0 + 0.5)
             r1 -= L1 * math.floor(r1 * inv1 + 0.5)
@@ -161,7 +162,7 @@ def _first_pair_straight(
         rr = r0 * r0 + r1 * r1 + r2 * r2
         rv = r0 * dv0 + r1 * dv1 + r2 * dv2
         vv = dv0 * dv0 + dv1 * dv1 + dv2 * dv2
-        reach = rad + radius[j]
+        reach = rad + kin[j, KIN_R]
         c = rr - reach * reach
         disc = rv * rv - vv * c
         # the smaller root of vv t^2 + 2 rv t + c, cancellation-free (rv < 0); 0 when already
@@ -178,6 +179,7 @@ def _first_pair_straight(
 def predict(
     i: int,
     T: float,
+    kin: np.ndarray,
     x: np.ndarray,
     v: np.ndarray,
     acc: np.ndarray,
@@ -258,7 +260,7 @@ def predict(
 
     # neighbours: relative motion r + v t + da t^2 / 2, j extrapolated to T on the fly
     if not accelerated:
-        tp, j = _first_pair_straight(i, T, best, x, v, t, radius, nbr, nbr_count, box, periodic)
+        tp, j = _first_pair_straight(i, T, best, kin, nbr, nbr_count, box, periodic)
         if j >= 0:
             best = tp
             kind = EV_PAIR
@@ -591,9 +593,10 @@ def _collide_face(
 @njit(cache=True, error_model="numpy")
 def initialise(m, s) -> bool:  # type: ignore[no-untyped-def]
     """Build every shell and neighbour list and schedule every body; False on overflow."""
-    for i in range(s.x.shape[0]):
+    x, v, t = kinematic_views(s.kin, m.box.shape[0])
+    for i in range(x.shape[0]):
         for k in range(m.box.shape[0]):
-            s.origin[i, k] = s.x[i, k]
+            s.origin[i, k] = x[i, k]
     ok = build_all(
         s.origin,
         m.radius,
@@ -613,16 +616,17 @@ def initialise(m, s) -> bool:  # type: ignore[no-untyped-def]
     if not ok:
         return False
     T = s.clock[0]
-    for i in range(s.x.shape[0]):
-        advance(s.x, s.v, s.acc, s.t, i, T)
+    for i in range(x.shape[0]):
+        advance(x, v, s.acc, t, i, T)
         predict(
             i,
             T,
-            s.x,
-            s.v,
+            s.kin,
+            x,
+            v,
             s.acc,
             m.accelerated,
-            s.t,
+            t,
             s.origin,
             s.support,
             s.nbr,
@@ -654,7 +658,9 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     ``OVERFLOW``: a neighbour list is full (grow the lists and rebuild them).
     """
     # unpack once: the hot functions take plain arrays (see the module docstring)
-    x, v, acc, w, t = s.x, s.v, s.acc, s.w, s.t
+    kin = s.kin
+    x, v, t = kinematic_views(kin, m.box.shape[0])
+    acc, w = s.acc, s.w
     origin, support, counter, last_coll = s.origin, s.support, s.counter, s.last_coll
     nbr, nbr_count = s.nbr, s.nbr_count
     ev_time, ev_kind, ev_other, ev_stamp = s.ev_time, s.ev_kind, s.ev_other, s.ev_stamp
@@ -783,7 +789,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
             if body < 0:
                 continue
             predict(
-                body, T, x, v, acc, accelerated, t, origin, support, nbr, nbr_count, counter,
+                body, T, kin, x, v, acc, accelerated, t, origin, support, nbr, nbr_count, counter,
                 radius, mobile, box, inv_box, periodic, delta, plane_point, plane_normal,
                 ev_time, ev_kind, ev_other, ev_stamp,
             )  # fmt: skip
@@ -794,11 +800,12 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
 def positions_at(m, s, T: float, x_out: np.ndarray, v_out: np.ndarray) -> None:  # type: ignore[no-untyped-def]
     """Every body's position and velocity at time ``T`` (periodic: wrapped into the box)."""
     dim = m.box.shape[0]
-    for i in range(s.x.shape[0]):
-        dt = T - s.t[i]
+    x, v, t = kinematic_views(s.kin, dim)
+    for i in range(x.shape[0]):
+        dt = T - t[i]
         for k in range(dim):
             a = s.acc[i, k]
-            x_out[i, k] = s.x[i, k] + (s.v[i, k] + 0.5 * a * dt) * dt
-            v_out[i, k] = s.v[i, k] + a * dt
+            x_out[i, k] = x[i, k] + (v[i, k] + 0.5 * a * dt) * dt
+            v_out[i, k] = v[i, k] + a * dt
             if m.periodic:
                 x_out[i, k] -= m.box[k] * math.floor(x_out[i, k] / m.box[k])
