@@ -46,12 +46,14 @@ class State(NamedTuple):
         Time of each body's last collision [s] (TC model).
     support : (N,) int64
         Wall face or plane a body rests on, -1 when flying.
-    origin : (N, d) float64
-        Centre of each body's neighbour shell [m].
+    shell : (N, 4) float64
+        Each body's neighbour shell: centre [m] in columns 0-2 (z zero in 2D), the body's
+        radius [m] in column 3.
     nbr : (N, K) int32; nbr_count : (N,) int64
         Neighbour lists.
-    cell, cell_next, cell_prev : (N,) int64; cell_head : (C,) int64
-        The cell grid of shell origins (doubly linked lists).
+    cell, slot : (N,) int64; cell_count : (C,) int64; cell_body : (C, B) int32
+        The cell grid of shell centres: cell ``c`` holds bodies ``cell_body[c, :cell_count[c]]``;
+        body ``i`` is in cell ``cell[i]`` at place ``slot[i]``.
     ev_time : (N,) float64; ev_kind, ev_other, ev_stamp : (N,) int64
         Each body's next event: time [s], kind, partner, partner's counter when predicted.
     heap, heap_where : (N,) int64
@@ -70,13 +72,13 @@ class State(NamedTuple):
     counter: NDArray[np.int64]
     last_coll: NDArray[np.float64]
     support: NDArray[np.int64]
-    origin: NDArray[np.float64]
+    shell: NDArray[np.float64]
     nbr: NDArray[np.int32]
     nbr_count: NDArray[np.int64]
     cell: NDArray[np.int64]
-    cell_head: NDArray[np.int64]
-    cell_next: NDArray[np.int64]
-    cell_prev: NDArray[np.int64]
+    slot: NDArray[np.int64]
+    cell_count: NDArray[np.int64]
+    cell_body: NDArray[np.int32]
     ev_time: NDArray[np.float64]
     ev_kind: NDArray[np.int64]
     ev_other: NDArray[np.int64]
@@ -114,6 +116,7 @@ def allocate_state(
     radius: NDArray[np.float64],
     time: float,
     n_cells: int,
+    cell_capacity: int,
     capacity: int,
     log_capacity: int,
 ) -> State:
@@ -124,6 +127,9 @@ def allocate_state(
     kin[:, KIN_T] = time
     kin[:, KIN_V : KIN_V + dim] = v
     kin[:, KIN_R] = radius
+    shell = np.zeros((n, 4))
+    shell[:, :dim] = x
+    shell[:, 3] = radius
     return State(
         kin=kin,
         acc=np.array(acc, dtype=np.float64),
@@ -131,13 +137,13 @@ def allocate_state(
         counter=np.zeros(n, np.int64),
         last_coll=np.full(n, -np.inf),
         support=np.full(n, -1, np.int64),
-        origin=np.array(x, dtype=np.float64),
+        shell=shell,
         nbr=np.zeros((n, capacity), np.int32),
         nbr_count=np.zeros(n, np.int64),
         cell=np.zeros(n, np.int64),
-        cell_head=np.full(n_cells, -1, np.int64),
-        cell_next=np.full(n, -1, np.int64),
-        cell_prev=np.full(n, -1, np.int64),
+        slot=np.zeros(n, np.int64),
+        cell_count=np.zeros(n_cells, np.int64),
+        cell_body=np.zeros((n_cells, cell_capacity), np.int32),
         ev_time=np.full(n, np.inf),
         ev_kind=np.zeros(n, np.int64),
         ev_other=np.full(n, -1, np.int64),

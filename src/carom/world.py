@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from carom.core import edmd
 from carom.core.laws import LAW_ROUGH, LAW_SMOOTH, LAW_WALTON
-from carom.core.neighbors import build_all
+from carom.core.neighbors import FITS, LIST_FULL, build_all
 from carom.errors import CaromError
 from carom.model import Model
 from carom.response import default_inertia_factor
@@ -356,7 +356,8 @@ class World:
         # the engine numbers bodies along a space-filling curve: engine index e is body
         # _order[e]; everything the World shows is in the caller's numbering
         self._order: NDArray[np.int64] = np.zeros(0, np.int64)
-        self._capacity = 16 if dim == 2 else 32  # grows on overflow (_grow_lists)
+        self._capacity = 16 if dim == 2 else 32  # grows on overflow (_run_engine)
+        self._cell_capacity = 0  # set from the first occupancy; grows on overflow
         self._time = 0.0
         self._events: list[NDArray[Any]] = []
         self.stats = Stats(self)
@@ -717,6 +718,9 @@ class World:
         order = spatial_order(x, grid.cell_size, grid.ncell)
         model = self._build_model(order)
         acc = np.where(model.mobile[:, None], model.gravity[None, :], 0.0)
+        cells = np.clip(np.floor(x / model.cell_size).astype(np.int64), 0, model.ncell - 1)
+        occupancy = np.unique(cells, axis=0, return_counts=True)[1].max()
+        self._cell_capacity = max(self._cell_capacity, 8, 2 * int(occupancy))
         while True:
             state = allocate_state(
                 x[order],
@@ -726,12 +730,14 @@ class World:
                 model.radius,
                 self._time,
                 int(np.prod(model.ncell)),
+                self._cell_capacity,
                 self._capacity,
                 LOG_CAPACITY,
             )
-            if edmd.initialise(model, state):
+            status = edmd.initialise(model, state)
+            if status == edmd.DONE:
                 break
-            self._capacity *= 2
+            self._grow(status)
         self._order = order
         self._check_overlaps(model, state)
         self._model, self._state = model, state
@@ -846,41 +852,52 @@ class World:
             remaining -= int(state.counts[edmd.C_EVENTS]) - before
             if status in (edmd.DONE, edmd.MAX_EVENTS):
                 return
-            if status == edmd.OVERFLOW:
-                self._grow_lists()
+            if status in (edmd.LISTS_FULL, edmd.CELLS_FULL):
+                self._grow(status)
+                self._resize_grid(self._capacity, self._cell_capacity)
 
-    def _grow_lists(self) -> None:
-        """Double the neighbour-list capacity (a list overflowed); the schedule is kept."""
-        self._resize_lists(self._capacity * 2)
+    def _grow(self, status: int) -> None:
+        """Double the capacity that ran out: neighbour lists or cell rows."""
+        if status == edmd.LISTS_FULL:
+            self._capacity *= 2
+        else:
+            self._cell_capacity *= 2
 
-    def _resize_lists(self, capacity: int) -> None:
-        """Rebuild every neighbour list with room for ``capacity`` entries (more if needed).
+    def _resize_grid(self, capacity: int, cell_capacity: int) -> None:
+        """Rebuild every neighbour list and cell row with room for ``capacity`` neighbours and
+        ``cell_capacity`` bodies per cell (more if needed).
 
         Lists only say which pairs to examine; every scheduled event stays valid.
         """
         model, state = self._model, self._state
         assert model is not None and state is not None
         while True:
-            state = state._replace(nbr=np.zeros((state.kin.shape[0], capacity), np.int32))
-            if build_all(
-                state.origin,
-                model.radius,
+            state = state._replace(
+                nbr=np.zeros((state.kin.shape[0], capacity), np.int32),
+                cell_body=np.zeros((state.cell_count.shape[0], cell_capacity), np.int32),
+            )
+            status = build_all(
+                state.shell,
                 model.mobile,
                 state.nbr,
                 state.nbr_count,
-                state.cell_head,
-                state.cell_next,
-                state.cell_prev,
+                state.cell_count,
+                state.cell_body,
+                state.slot,
                 state.cell,
                 model.box,
                 model.periodic,
                 model.delta,
                 model.cell_size,
                 model.ncell,
-            ):
+            )
+            if status == FITS:
                 break
-            capacity *= 2
-        self._capacity = capacity
+            if status == LIST_FULL:
+                capacity *= 2
+            else:
+                cell_capacity *= 2
+        self._capacity, self._cell_capacity = capacity, cell_capacity
         self._state = state
 
     def _drain_log(self, keep: NDArray[np.int64] | None = None) -> None:
@@ -994,6 +1011,7 @@ class World:
             "shell": model.delta,
             "time": self._time,
             "capacity": self._capacity,
+            "cell_capacity": self._cell_capacity,
             "materials": [m.__dict__ for m in self.materials],
             "pair_overrides": [[a, b, e] for (a, b), e in self._pair_overrides.items()],
             "planes": [[p.tolist(), q.tolist(), r] for p, q, r in self._planes],
@@ -1038,6 +1056,7 @@ class World:
             fields["kin"] = aligned_records(len(fields["kin"]), fields["kin"])
             state = State(**fields)
             world._capacity = meta["capacity"]
+            world._cell_capacity = meta["cell_capacity"]
             world._order = data["engine_order"]
             world._x = world._to_user(state.kin[:, : world.dim])
             world._v = world._to_user(state.kin[:, KIN_V : KIN_V + world.dim])

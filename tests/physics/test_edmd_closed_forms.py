@@ -242,8 +242,24 @@ def test_neighbour_lists_grow_without_changing_the_physics() -> None:
     cramped._ensure_built()
     assert cramped._state is not None
     tight = int(cramped._state.nbr_count.max())
-    cramped._resize_lists(tight)  # full to the brim: the first denser neighbourhood overflows
+    cramped._resize_grid(tight, cramped._cell_capacity)  # the first denser neighbourhood overflows
     cramped.run(until=5.0)
     assert cramped._capacity > tight  # it did overflow during the run, and grew
+    assert cramped.events.tobytes() == roomy.events.tobytes()
+    np.testing.assert_array_equal(cramped.positions, roomy.positions)
+
+
+def test_cell_rows_grow_without_changing_the_physics() -> None:
+    # The same for the cell grid's rows: cells filled to the brim at the start overflow as a
+    # dissipative gas clusters.
+    roomy = _gas(3, 10, 0.3, seed=8, e=0.8)
+    roomy.run(until=5.0)
+    cramped = _gas(3, 10, 0.3, seed=8, e=0.8)
+    cramped._ensure_built()
+    assert cramped._state is not None
+    tight = int(cramped._state.cell_count.max())
+    cramped._resize_grid(cramped._capacity, tight)
+    cramped.run(until=5.0)
+    assert cramped._cell_capacity > tight
     assert cramped.events.tobytes() == roomy.events.tobytes()
     np.testing.assert_array_equal(cramped.positions, roomy.positions)

@@ -35,7 +35,7 @@ from numba import njit
 
 from carom.core.heap import heap_build, heap_update
 from carom.core.laws import LAW_SMOOTH, impulse_spheres
-from carom.core.neighbors import build_all, rebuild_shell
+from carom.core.neighbors import FITS, LIST_FULL, build_all, rebuild_shell
 from carom.core.toi import (
     INF,
     first_root_quartic,
@@ -52,10 +52,12 @@ EV_PAIR = 1
 EV_WALL = 2  # other = face: 2k lower, 2k + 1 upper wall of axis k; 2 dim + p plane p
 EV_SHELL = 3
 
+# why run() returned
 DONE = 0
 LOG_FULL = 1
 MAX_EVENTS = 2
-OVERFLOW = 3
+LISTS_FULL = 3  # a neighbour list is full: grow the lists
+CELLS_FULL = 4  # a cell row is full: grow the rows
 
 # counts[]
 C_EVENTS = 0
@@ -185,7 +187,7 @@ def predict(
     acc: np.ndarray,
     accelerated: bool,
     t: np.ndarray,
-    origin: np.ndarray,
+    shell: np.ndarray,
     support: np.ndarray,
     nbr: np.ndarray,
     nbr_count: np.ndarray,
@@ -215,7 +217,7 @@ def predict(
     speed2 = 0.0
     acc2 = 0.0
     for k in range(dim):
-        d = x[i, k] - origin[i, k]
+        d = x[i, k] - shell[i, k]
         off2 += d * d
         off_v += d * v[i, k]
         speed2 += v[i, k] * v[i, k]
@@ -591,21 +593,23 @@ def _collide_face(
 
 
 @njit(cache=True, error_model="numpy")
-def initialise(m, s) -> bool:  # type: ignore[no-untyped-def]
-    """Build every shell and neighbour list and schedule every body; False on overflow."""
+def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
+    """Build every shell and neighbour list and schedule every body.
+
+    Returns ``DONE``, or ``LISTS_FULL`` / ``CELLS_FULL`` when the arrays need to grow.
+    """
     x, v, t = kinematic_views(s.kin, m.box.shape[0])
     for i in range(x.shape[0]):
         for k in range(m.box.shape[0]):
-            s.origin[i, k] = x[i, k]
-    ok = build_all(
-        s.origin,
-        m.radius,
+            s.shell[i, k] = x[i, k]
+    status = build_all(
+        s.shell,
         m.mobile,
         s.nbr,
         s.nbr_count,
-        s.cell_head,
-        s.cell_next,
-        s.cell_prev,
+        s.cell_count,
+        s.cell_body,
+        s.slot,
         s.cell,
         m.box,
         m.periodic,
@@ -613,8 +617,8 @@ def initialise(m, s) -> bool:  # type: ignore[no-untyped-def]
         m.cell_size,
         m.ncell,
     )
-    if not ok:
-        return False
+    if status != FITS:
+        return LISTS_FULL if status == LIST_FULL else CELLS_FULL
     T = s.clock[0]
     for i in range(x.shape[0]):
         advance(x, v, s.acc, t, i, T)
@@ -627,7 +631,7 @@ def initialise(m, s) -> bool:  # type: ignore[no-untyped-def]
             s.acc,
             m.accelerated,
             t,
-            s.origin,
+            s.shell,
             s.support,
             s.nbr,
             s.nbr_count,
@@ -646,7 +650,7 @@ def initialise(m, s) -> bool:  # type: ignore[no-untyped-def]
             s.ev_stamp,
         )
     heap_build(s.ev_time, s.heap, s.heap_where)
-    return True
+    return DONE
 
 
 @njit(cache=True, error_model="numpy")
@@ -655,13 +659,14 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
 
     ``DONE``: the next event is after ``t_stop`` (the clock is set to ``t_stop``);
     ``LOG_FULL``: the event log needs emptying; ``MAX_EVENTS``: ``max_events`` processed;
-    ``OVERFLOW``: a neighbour list is full (grow the lists and rebuild them).
+    ``LISTS_FULL`` / ``CELLS_FULL``: a neighbour list or a cell row is full (grow them and
+    rebuild them all; the schedule stays valid, and the event that overflowed runs again).
     """
     # unpack once: the hot functions take plain arrays (see the module docstring)
     kin = s.kin
     x, v, t = kinematic_views(kin, m.box.shape[0])
     acc, w = s.acc, s.w
-    origin, support, counter, last_coll = s.origin, s.support, s.counter, s.last_coll
+    shell, support, counter, last_coll = s.shell, s.support, s.counter, s.last_coll
     nbr, nbr_count = s.nbr, s.nbr_count
     ev_time, ev_kind, ev_other, ev_stamp = s.ev_time, s.ev_kind, s.ev_other, s.ev_stamp
     heap, where = s.heap, s.heap_where
@@ -669,7 +674,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     # grouped as tuples for the inlined callees (a call takes at most 30 arguments there)
     logbuf = (s.log_time, s.log_a, s.log_b, s.log_impulse, s.log_un, s.log_n)
     log_time, log_n = s.log_time, s.log_n
-    cell, head, nxt, prv = s.cell, s.cell_head, s.cell_next, s.cell_prev
+    cell, slot, cell_count, cell_body = s.cell, s.slot, s.cell_count, s.cell_body
     radius, mass, inv_mass, q, mobile = m.radius, m.mass, m.inv_mass, m.q, m.mobile
     material, face_e = m.material, m.face_e
     pair_table = (m.pair_law, m.pair_e, m.pair_beta, m.pair_friction)
@@ -765,31 +770,31 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
             for k in range(dim):
                 if periodic:
                     x[i, k] -= box[k] * math.floor(x[i, k] / box[k])
-                origin[i, k] = x[i, k]
-            if not rebuild_shell(
+                shell[i, k] = x[i, k]
+            status = rebuild_shell(
                 i,
-                origin,
-                radius,
+                shell,
                 mobile,
                 nbr,
                 nbr_count,
-                head,
-                nxt,
-                prv,
+                cell_count,
+                cell_body,
+                slot,
                 cell,
                 box,
                 periodic,
                 delta,
                 cell_size,
                 ncell,
-            ):
-                return OVERFLOW
+            )
+            if status != FITS:
+                return LISTS_FULL if status == LIST_FULL else CELLS_FULL
         # re-schedule the bodies whose motion changed: i, and its partner j if it had one
         for body in (i, j):
             if body < 0:
                 continue
             predict(
-                body, T, kin, x, v, acc, accelerated, t, origin, support, nbr, nbr_count, counter,
+                body, T, kin, x, v, acc, accelerated, t, shell, support, nbr, nbr_count, counter,
                 radius, mobile, box, inv_box, periodic, delta, plane_point, plane_normal,
                 ev_time, ev_kind, ev_other, ev_stamp,
             )  # fmt: skip

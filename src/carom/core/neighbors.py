@@ -1,15 +1,21 @@
 """Neighbour shells and the cell grid that finds them (Smallenburg, EPJ E 45, 22, 2022).
 
-Each moving body ``i`` owns a shell: a sphere of radius ``a_i + delta`` about ``origin[i]``,
-its position when the shell was made. While the body stays within ``delta`` of the origin it
-stays inside its shell, so it can only touch bodies whose shells overlap its own:
-``|origin_i - origin_j| < a_i + a_j + 2 delta``. Those are its neighbours; the lists are
-symmetric between moving bodies. Leaving the shell is an event (:mod:`carom.core.edmd`) that
-rebuilds that one body's shell and list; nothing else is ever rebuilt.
+Each moving body ``i`` owns a shell: a sphere of radius ``a_i + delta`` about its centre, the
+body's position when the shell was made. While the body stays within ``delta`` of the centre
+it stays inside its shell, so it can only touch bodies whose shells overlap its own:
+``|c_i - c_j| < a_i + a_j + 2 delta``. Those are its neighbours; the lists are symmetric
+between moving bodies. Leaving the shell is an event (:mod:`carom.core.edmd`) that rebuilds
+that one body's shell and list; nothing else is ever rebuilt.
 
-The cell grid holds shell origins, in doubly linked lists per cell; cells are at least one
-largest shell diameter wide, so overlapping shells are always in adjacent cells. Static
-bodies have a shell (their own sphere plus ``delta``) but no list: they never move.
+Shells are records ``shell[i] = (cx, cy, cz, a_i)`` (z zero in 2D). The cell grid holds
+their bodies in a fixed-capacity row per cell (``cell_body[c, :cell_count[c]]``, with
+``slot[i]`` the place of ``i`` in its row), so scanning a cell reads contiguous memory and its
+bodies' records can be loaded in parallel. Cells are at least one largest shell diameter wide,
+so overlapping shells are always in adjacent cells. Static bodies have a shell (their own
+sphere plus ``delta``) but no list: they never move.
+
+Kernels that can run out of room return a status: ``FITS``, ``LIST_FULL`` (a neighbour list)
+or ``CELL_FULL`` (a cell row); the caller grows the arrays and rebuilds.
 """
 
 from __future__ import annotations
@@ -19,13 +25,17 @@ import math
 import numpy as np
 from numba import njit
 
+FITS = 0
+LIST_FULL = 1
+CELL_FULL = 2
+
 
 @njit(cache=True, error_model="numpy", inline="always")
-def cell_of(p: np.ndarray, cell_size: np.ndarray, ncell: np.ndarray) -> int:
-    """Linear index of the cell holding point ``p`` (clamped to the grid)."""
+def cell_of(shell: np.ndarray, i: int, cell_size: np.ndarray, ncell: np.ndarray) -> int:
+    """Linear index of the cell holding shell ``i``'s centre (clamped to the grid)."""
     index = 0
-    for k in range(p.shape[0]):
-        c = math.floor(p[k] / cell_size[k])
+    for k in range(ncell.shape[0]):
+        c = math.floor(shell[i, k] / cell_size[k])
         if c < 0:
             c = 0
         elif c >= ncell[k]:
@@ -36,30 +46,35 @@ def cell_of(p: np.ndarray, cell_size: np.ndarray, ncell: np.ndarray) -> int:
 
 @njit(cache=True, error_model="numpy", inline="always")
 def cell_insert(
-    i: int, c: int, head: np.ndarray, nxt: np.ndarray, prv: np.ndarray, cell: np.ndarray
-) -> None:
-    first = head[c]
-    nxt[i] = first
-    prv[i] = -1
-    if first >= 0:
-        prv[first] = i
-    head[c] = i
+    i: int,
+    c: int,
+    cell_count: np.ndarray,
+    cell_body: np.ndarray,
+    slot: np.ndarray,
+    cell: np.ndarray,
+) -> bool:
+    """Put body ``i`` at the end of cell ``c``'s row; False if the row is full."""
+    n = cell_count[c]
+    if n >= cell_body.shape[1]:
+        return False
+    cell_body[c, n] = i
+    cell_count[c] = n + 1
+    slot[i] = n
     cell[i] = c
+    return True
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def cell_remove(
-    i: int, head: np.ndarray, nxt: np.ndarray, prv: np.ndarray, cell: np.ndarray
+    i: int, cell_count: np.ndarray, cell_body: np.ndarray, slot: np.ndarray, cell: np.ndarray
 ) -> None:
+    """Take body ``i`` out of its cell's row (the row's last body fills the gap)."""
     c = cell[i]
-    if prv[i] >= 0:
-        nxt[prv[i]] = nxt[i]
-    else:
-        head[c] = nxt[i]
-    if nxt[i] >= 0:
-        prv[nxt[i]] = prv[i]
-    nxt[i] = -1
-    prv[i] = -1
+    last = cell_count[c] - 1
+    moved = cell_body[c, last]
+    cell_body[c, slot[i]] = moved
+    slot[moved] = slot[i]
+    cell_count[c] = last
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -73,163 +88,169 @@ def _list_remove(nbr: np.ndarray, count: np.ndarray, owner: int, body: int) -> N
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _scan_range(c: int, n: int, periodic: bool) -> tuple[int, int]:
+def _axis_cells(c: int, n: int, periodic: bool) -> tuple[int, int, int, int]:
+    """The cell coordinates next to ``c`` (itself included) on an axis of ``n`` cells.
+
+    Returns ``(m, first, second, third)``, the first ``m`` being meant: 3 inside, 2 at a
+    wall, every cell once when a periodic axis has fewer than 3 (no cell may be visited twice).
+    """
     if periodic and n < 3:
-        return -c, n - 1 - c
-    return -1, 1
+        return n, 0, 1, 2
+    lo = c - 1
+    hi = c + 1
+    if periodic:
+        return 3, (lo + n if lo < 0 else lo), c, (hi - n if hi >= n else hi)
+    if lo < 0:
+        return (2 if hi < n else 1), c, hi, -1
+    return (3 if hi < n else 2), lo, c, hi
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _link_overlapping(
     i: int,
-    origin: np.ndarray,
-    radius: np.ndarray,
+    shell: np.ndarray,
     mobile: np.ndarray,
     nbr: np.ndarray,
     count: np.ndarray,
-    head: np.ndarray,
-    nxt: np.ndarray,
+    cell_count: np.ndarray,
+    cell_body: np.ndarray,
     cell: np.ndarray,
     box: np.ndarray,
     periodic: bool,
     delta: float,
     ncell: np.ndarray,
-) -> bool:
+) -> int:
     """Link ``i`` with every body in the grid whose shell overlaps its shell.
 
-    Each link goes into the list of each moving side. Returns False when a list is full.
+    Each link goes into the list of each moving side. Returns ``FITS`` or ``LIST_FULL``.
     """
-    dim = origin.shape[1]
+    three = ncell.shape[0] == 3
     capacity = nbr.shape[1]
-    # cell coordinates of i's cell, and the offsets to scan on each axis: -1..1, or every
-    # cell when a periodic axis has fewer than 3 (no cell may be visited twice)
+    # cell coordinates of i's cell, and the neighbouring coordinates on each axis
     rest = cell[i]
-    c2 = rest % ncell[2] if dim == 3 else 0
-    if dim == 3:
-        rest //= ncell[2]
-    c1 = rest % ncell[1]
-    c0 = rest // ncell[1]
-    lo0, hi0 = _scan_range(c0, ncell[0], periodic)
-    lo1, hi1 = _scan_range(c1, ncell[1], periodic)
-    lo2, hi2 = _scan_range(c2, ncell[2], periodic) if dim == 3 else (0, 0)
-    reach_i = radius[i] + 2.0 * delta
-    inv0 = 1.0 / box[0]
-    inv1 = 1.0 / box[1]
-    inv2 = 1.0 / box[2] if dim == 3 else 0.0
-    for o0 in range(lo0, hi0 + 1):
-        for o1 in range(lo1, hi1 + 1):
-            for o2 in range(lo2, hi2 + 1):
-                index = 0
-                inside = True
-                for k in range(dim):
-                    base = c0 if k == 0 else (c1 if k == 1 else c2)
-                    off = o0 if k == 0 else (o1 if k == 1 else o2)
-                    c = base + off
+    n1 = ncell[1]
+    n2 = ncell[2] if three else 1
+    c2 = rest % n2
+    rest //= n2
+    c1 = rest % n1
+    c0 = rest // n1
+    ax0 = _axis_cells(c0, ncell[0], periodic)
+    ax1 = _axis_cells(c1, n1, periodic)
+    ax2 = _axis_cells(c2, n2, periodic) if three else (1, 0, 0, 0)
+    L0, L1 = box[0], box[1]
+    L2 = box[2] if three else 1.0
+    inv0, inv1, inv2 = 1.0 / L0, 1.0 / L1, 1.0 / L2
+    o0, o1, o2 = shell[i, 0], shell[i, 1], shell[i, 2]
+    reach_i = shell[i, 3] + 2.0 * delta
+    i_moves = mobile[i]
+    for a in range(1, ax0[0] + 1):
+        for b in range(1, ax1[0] + 1):
+            row = (ax0[a] * n1 + ax1[b]) * n2
+            for c in range(1, ax2[0] + 1):
+                index = row + ax2[c]
+                for s in range(cell_count[index]):
+                    j = cell_body[index, s]
+                    d0 = o0 - shell[j, 0]
+                    d1 = o1 - shell[j, 1]
+                    d2 = o2 - shell[j, 2]
                     if periodic:
-                        c %= ncell[k]
-                    elif c < 0 or c >= ncell[k]:
-                        inside = False
-                        break
-                    index = index * ncell[k] + c
-                if not inside:
-                    continue
-                j = head[index]
-                while j >= 0:
-                    if j != i:
-                        reach = reach_i + radius[j]
-                        d2 = 0.0
-                        for k in range(dim):
-                            d = origin[i, k] - origin[j, k]
-                            if periodic:
-                                inv = inv0 if k == 0 else (inv1 if k == 1 else inv2)
-                                d -= box[k] * math.floor(d * inv + 0.5)
-                            d2 += d * d
-                        if d2 < reach * reach:
-                            if (mobile[i] and count[i] >= capacity) or (
-                                mobile[j] and count[j] >= capacity
-                            ):
-                                return False
-                            if mobile[i]:
-                                nbr[i, count[i]] = j
-                                count[i] += 1
-                            if mobile[j]:
-                                nbr[j, count[j]] = i
-                                count[j] += 1
-                    j = nxt[j]
-    return True
+                        d0 -= L0 * math.floor(d0 * inv0 + 0.5)
+                        d1 -= L1 * math.floor(d1 * inv1 + 0.5)
+                        d2 -= L2 * math.floor(d2 * inv2 + 0.5)
+                    reach = reach_i + shell[j, 3]
+                    if d0 * d0 + d1 * d1 + d2 * d2 < reach * reach and j != i:
+                        j_moves = mobile[j]
+                        if (i_moves and count[i] >= capacity) or (j_moves and count[j] >= capacity):
+                            return LIST_FULL
+                        if i_moves:
+                            nbr[i, count[i]] = j
+                            count[i] += 1
+                        if j_moves:
+                            nbr[j, count[j]] = i
+                            count[j] += 1
+    return FITS
 
 
 @njit(cache=True, error_model="numpy")
 def build_all(
-    origin: np.ndarray,
-    radius: np.ndarray,
+    shell: np.ndarray,
     mobile: np.ndarray,
     nbr: np.ndarray,
     count: np.ndarray,
-    head: np.ndarray,
-    nxt: np.ndarray,
-    prv: np.ndarray,
+    cell_count: np.ndarray,
+    cell_body: np.ndarray,
+    slot: np.ndarray,
     cell: np.ndarray,
     box: np.ndarray,
     periodic: bool,
     delta: float,
     cell_size: np.ndarray,
     ncell: np.ndarray,
-) -> bool:
-    """Insert every body into an empty grid, linking each overlapping pair once."""
-    head[:] = -1
+) -> int:
+    """Insert every body into an empty grid, linking each overlapping pair once.
+
+    Returns ``FITS``, ``LIST_FULL`` or ``CELL_FULL``.
+    """
+    cell_count[:] = 0
     count[:] = 0
-    for i in range(origin.shape[0]):
-        cell_insert(i, cell_of(origin[i], cell_size, ncell), head, nxt, prv, cell)
+    for i in range(shell.shape[0]):
+        if not cell_insert(
+            i, cell_of(shell, i, cell_size, ncell), cell_count, cell_body, slot, cell
+        ):
+            return CELL_FULL
         # only bodies inserted before i are in the grid: each pair is met once
-        if not _link_overlapping(
+        status = _link_overlapping(
             i,
-            origin,
-            radius,
+            shell,
             mobile,
             nbr,
             count,
-            head,
-            nxt,
+            cell_count,
+            cell_body,
             cell,
             box,
             periodic,
             delta,
             ncell,
-        ):
-            return False
-    return True
+        )
+        if status != FITS:
+            return status
+    return FITS
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def rebuild_shell(
     i: int,
-    origin: np.ndarray,
-    radius: np.ndarray,
+    shell: np.ndarray,
     mobile: np.ndarray,
     nbr: np.ndarray,
     count: np.ndarray,
-    head: np.ndarray,
-    nxt: np.ndarray,
-    prv: np.ndarray,
+    cell_count: np.ndarray,
+    cell_body: np.ndarray,
+    slot: np.ndarray,
     cell: np.ndarray,
     box: np.ndarray,
     periodic: bool,
     delta: float,
     cell_size: np.ndarray,
     ncell: np.ndarray,
-) -> bool:
-    """Re-centre moving body ``i``'s shell on ``origin[i]`` and rebuild its neighbour list.
+) -> int:
+    """Re-centre moving body ``i``'s shell (``shell[i]`` already holds the new centre) and
+    rebuild its neighbour list.
 
-    Returns False when a list is full (the caller grows the lists and rebuilds them all).
+    Returns ``FITS``, ``LIST_FULL`` or ``CELL_FULL`` (the caller grows the arrays and
+    rebuilds them all).
     """
     for s in range(count[i]):
         j = nbr[i, s]
         if mobile[j]:
             _list_remove(nbr, count, j, i)
     count[i] = 0
-    cell_remove(i, head, nxt, prv, cell)
-    cell_insert(i, cell_of(origin[i], cell_size, ncell), head, nxt, prv, cell)
+    c = cell_of(shell, i, cell_size, ncell)
+    if c != cell[i]:
+        cell_remove(i, cell_count, cell_body, slot, cell)
+        if not cell_insert(i, c, cell_count, cell_body, slot, cell):
+            return CELL_FULL
     return _link_overlapping(
-        i, origin, radius, mobile, nbr, count, head, nxt, cell, box, periodic, delta, ncell
+        i, shell, mobile, nbr, count, cell_count, cell_body, cell, box, periodic, delta, ncell
     )
