@@ -54,8 +54,9 @@ ANCHORS = {
         "        else:\n            cyc[2] += c1 - c0\n"
         "        # re-schedule the bodies whose motion changed"
     ),
-    "            heap_update(ev_time, heap, where, body)": (
-        "            c2 = _cycles()\n            heap_update(ev_time, heap, where, body)\n"
+    "            heap_update(ev_time, heap, heap_key, where, body)": (
+        "            c2 = _cycles()\n"
+        "            heap_update(ev_time, heap, heap_key, where, body)\n"
         "            c3 = _cycles()\n            cyc[3] += c2 - c1\n            cyc[4] += c3 - c2\n"
         "            c1 = c3"
     ),

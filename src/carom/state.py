@@ -56,8 +56,8 @@ class State(NamedTuple):
         body ``i`` is in cell ``cell[i]`` at place ``slot[i]``.
     ev_time : (N,) float64; ev_kind, ev_other, ev_stamp : (N,) int64
         Each body's next event: time [s], kind, partner, partner's counter when predicted.
-    heap, heap_where : (N,) int64
-        The event heap and each body's node in it.
+    heap, heap_where : (N,) int64; heap_key : (N,) float64
+        The event heap (body and event time [s] at each node) and each body's node in it.
     clock : (1,) float64
         Simulation time [s].
     counts : (8,) int64; sums : (2,) float64
@@ -84,6 +84,7 @@ class State(NamedTuple):
     ev_other: NDArray[np.int64]
     ev_stamp: NDArray[np.int64]
     heap: NDArray[np.int64]
+    heap_key: NDArray[np.float64]
     heap_where: NDArray[np.int64]
     clock: NDArray[np.float64]
     counts: NDArray[np.int64]
@@ -149,6 +150,7 @@ def allocate_state(
         ev_other=np.full(n, -1, np.int64),
         ev_stamp=np.zeros(n, np.int64),
         heap=np.zeros(n, np.int64),
+        heap_key=np.full(n, np.inf),
         heap_where=np.zeros(n, np.int64),
         clock=np.array([time]),
         counts=np.zeros(N_COUNTS, np.int64),

@@ -169,7 +169,8 @@ def _first_pair_straight(
         disc = rv * rv - vv * c
         # the smaller root of vv t^2 + 2 rv t + c, cancellation-free (rv < 0); 0 when already
         # touching and approaching; none when separating or passing by
-        tp = max(c / (math.sqrt(max(disc, 0.0)) - rv), 0.0)
+        # (a select, not a branch; the denominator is never zero, even where discarded)
+        tp = max(c / (math.sqrt(max(disc, 0.0)) - rv if rv < 0.0 else 1.0), 0.0)
         tp = tp if (rv < 0.0 and disc >= 0.0) else INF
         if tp < best:
             best = tp
@@ -649,7 +650,7 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
             s.ev_other,
             s.ev_stamp,
         )
-    heap_build(s.ev_time, s.heap, s.heap_where)
+    heap_build(s.ev_time, s.heap, s.heap_key, s.heap_where)
     return DONE
 
 
@@ -669,7 +670,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     shell, support, counter, last_coll = s.shell, s.support, s.counter, s.last_coll
     nbr, nbr_count = s.nbr, s.nbr_count
     ev_time, ev_kind, ev_other, ev_stamp = s.ev_time, s.ev_kind, s.ev_other, s.ev_stamp
-    heap, where = s.heap, s.heap_where
+    heap, heap_key, where = s.heap, s.heap_key, s.heap_where
     counts, sums = s.counts, s.sums
     # grouped as tuples for the inlined callees (a call takes at most 30 arguments there)
     logbuf = (s.log_time, s.log_a, s.log_b, s.log_impulse, s.log_un, s.log_n)
@@ -798,7 +799,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                 radius, mobile, box, inv_box, periodic, delta, plane_point, plane_normal,
                 ev_time, ev_kind, ev_other, ev_stamp,
             )  # fmt: skip
-            heap_update(ev_time, heap, where, body)
+            heap_update(ev_time, heap, heap_key, where, body)
 
 
 @njit(cache=True, error_model="numpy")
