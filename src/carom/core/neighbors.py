@@ -106,6 +106,21 @@ def _axis_cells(c: int, n: int, periodic: bool) -> tuple[int, int, int, int]:
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _axis_images(c: int, n: int, length: float, periodic: bool) -> tuple[float, float, float]:
+    """The periodic image shift [m] to add to ``c_i - c_j`` for a body ``j`` in each cell of
+    :func:`_axis_cells` (the same order): ``+length`` for the cell reached by wrapping below
+    0, ``-length`` above n - 1, else 0.
+
+    For a pair whose shells can overlap this is the nearest image, and the same floating-point
+    result as subtracting ``length * floor(d / length + 0.5)``, with no rounding per pair.
+    Only valid on periodic axes of at least 3 cells (smaller ones wrap each pair by floor).
+    """
+    if not periodic or n < 3:
+        return 0.0, 0.0, 0.0
+    return (length if c == 0 else 0.0), 0.0, (-length if c == n - 1 else 0.0)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _link_overlapping(
     i: int,
     shell: np.ndarray,
@@ -140,34 +155,53 @@ def _link_overlapping(
     L0, L1 = box[0], box[1]
     L2 = box[2] if three else 1.0
     inv0, inv1, inv2 = 1.0 / L0, 1.0 / L1, 1.0 / L2
+    im0 = _axis_images(c0, ncell[0], L0, periodic)
+    im1 = _axis_images(c1, n1, L1, periodic)
+    im2 = _axis_images(c2, n2, L2, periodic) if three else (0.0, 0.0, 0.0)
+    # wrap each pair by floor only on a periodic axis too short for per-cell images
+    wrap0 = periodic and ncell[0] < 3
+    wrap1 = periodic and n1 < 3
+    wrap2 = periodic and three and n2 < 3
     o0, o1, o2 = shell[i, 0], shell[i, 1], shell[i, 2]
     reach_i = shell[i, 3] + 2.0 * delta
     i_moves = mobile[i]
+    # pass 1, without branches on the candidates: every candidate is written to i's row and
+    # kept (found += 1) only if the shells overlap (a mispredicted branch per candidate costs
+    # more than the write)
+    found = 0
     for a in range(1, ax0[0] + 1):
+        s0 = im0[a - 1]
         for b in range(1, ax1[0] + 1):
+            s1 = im1[b - 1]
             row = (ax0[a] * n1 + ax1[b]) * n2
             for c in range(1, ax2[0] + 1):
+                s2 = im2[c - 1]
                 index = row + ax2[c]
                 for s in range(cell_count[index]):
                     j = cell_body[index, s]
-                    d0 = o0 - shell[j, 0]
-                    d1 = o1 - shell[j, 1]
-                    d2 = o2 - shell[j, 2]
-                    if periodic:
+                    d0 = (o0 - shell[j, 0]) + s0
+                    d1 = (o1 - shell[j, 1]) + s1
+                    d2 = (o2 - shell[j, 2]) + s2
+                    if wrap0:
                         d0 -= L0 * math.floor(d0 * inv0 + 0.5)
+                    if wrap1:
                         d1 -= L1 * math.floor(d1 * inv1 + 0.5)
+                    if wrap2:
                         d2 -= L2 * math.floor(d2 * inv2 + 0.5)
                     reach = reach_i + shell[j, 3]
-                    if d0 * d0 + d1 * d1 + d2 * d2 < reach * reach and j != i:
-                        j_moves = mobile[j]
-                        if (i_moves and count[i] >= capacity) or (j_moves and count[j] >= capacity):
-                            return LIST_FULL
-                        if i_moves:
-                            nbr[i, count[i]] = j
-                            count[i] += 1
-                        if j_moves:
-                            nbr[j, count[j]] = i
-                            count[j] += 1
+                    nbr[i, found] = j
+                    found += (d0 * d0 + d1 * d1 + d2 * d2 < reach * reach) & (j != i)
+                    if found == capacity:
+                        return LIST_FULL  # no room for the next candidate
+    # pass 2: i goes into the list of each moving neighbour
+    for q in range(found):
+        j = nbr[i, q]
+        if mobile[j]:
+            if count[j] >= capacity:
+                return LIST_FULL
+            nbr[j, count[j]] = i
+            count[j] += 1
+    count[i] = found if i_moves else 0  # a static body's row was only scratch
     return FITS
 
 
