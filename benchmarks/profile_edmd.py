@@ -82,7 +82,7 @@ def instrumented_run() -> Any:
         "rebuild_shell": neighbors.rebuild_shell,
     }
     exec(compile(source, "<instrumented edmd.run>", "exec"), namespace)
-    return njit(error_model="numpy")(namespace["run_prof"])
+    return njit(error_model="numpy", **edmd.NO_REFCOUNTING)(namespace["run_prof"])
 
 
 def main() -> None:

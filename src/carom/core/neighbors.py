@@ -183,11 +183,11 @@ def _link_overlapping(
                     d1 = (o1 - shell[j, 1]) + s1
                     d2 = (o2 - shell[j, 2]) + s2
                     if wrap0:
-                        d0 -= L0 * math.floor(d0 * inv0 + 0.5)
+                        d0 -= L0 * np.floor(d0 * inv0 + 0.5)
                     if wrap1:
-                        d1 -= L1 * math.floor(d1 * inv1 + 0.5)
+                        d1 -= L1 * np.floor(d1 * inv1 + 0.5)
                     if wrap2:
-                        d2 -= L2 * math.floor(d2 * inv2 + 0.5)
+                        d2 -= L2 * np.floor(d2 * inv2 + 0.5)
                     reach = reach_i + shell[j, 3]
                     nbr[i, found] = j
                     found += (d0 * d0 + d1 * d1 + d2 * d2 < reach * reach) & (j != i)
