@@ -346,26 +346,6 @@ def _log(
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _kinetic(
-    v: np.ndarray,
-    w: np.ndarray,
-    mass: np.ndarray,
-    q: np.ndarray,
-    radius: np.ndarray,
-    mobile: np.ndarray,
-    i: int,
-) -> float:
-    """Kinetic energy of body ``i`` (translation and rotation) [J]; zero if static."""
-    if not mobile[i]:
-        return 0.0
-    ke = 0.0
-    for k in range(v.shape[1]):
-        ke += v[i, k] * v[i, k]
-    spin = w[i, 0] * w[i, 0] + w[i, 1] * w[i, 1] + w[i, 2] * w[i, 2]
-    return float(0.5 * mass[i] * (ke + q[i] * radius[i] * radius[i] * spin))
-
-
-@njit(cache=True, error_model="numpy", inline="always")
 def _collide_pair(
     i: int,
     j: int,
@@ -382,7 +362,6 @@ def _collide_pair(
     mass: np.ndarray,
     inv_mass: np.ndarray,
     q: np.ndarray,
-    mobile: np.ndarray,
     material: np.ndarray,
     pair_table: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     face_e: np.ndarray,
@@ -447,15 +426,12 @@ def _collide_pair(
         law,
         pair_beta[mat_i, mat_j],
         pair_friction[mat_i, mat_j],
-        1.0 / q[i],
-        1.0 / q[j],
+        1.0 / q[i] if law != LAW_SMOOTH else 0.0,  # (spins do not enter the smooth law)
+        1.0 / q[j] if law != LAW_SMOOTH else 0.0,
     )
     if j0 == 0.0 and j1 == 0.0 and j2 == 0.0:
         return  # not approaching after all (round-off): nothing to do
     un_before = dv0 * n0 + dv1 * n1 + dv2 * n2
-    ke_before = _kinetic(v, w, mass, q, radius, mobile, i) + _kinetic(
-        v, w, mass, q, radius, mobile, j
-    )
     for k in range(dim):
         jk = j0 if k == 0 else (j1 if k == 1 else j2)
         v[i, k] += jk * inv_i
@@ -473,10 +449,21 @@ def _collide_pair(
         w[j, 0] -= c0 * f_j
         w[j, 1] -= c1 * f_j
         w[j, 2] -= c2 * f_j
-    un_after = 0.0
-    for k in range(dim):
-        nk = n0 if k == 0 else (n1 if k == 1 else n2)
-        un_after += (v[i, k] - v[j, k]) * nk
+    # contact-point relative velocity after the impulse, as g before it
+    h0 = v[i, 0] - v[j, 0]
+    h1 = v[i, 1] - v[j, 1]
+    h2 = v[i, 2] - v[j, 2] if dim == 3 else 0.0
+    un_after = h0 * n0 + h1 * n1 + h2 * n2
+    if law != LAW_SMOOTH:
+        s0 = a_i * w[i, 0] + a_j * w[j, 0]
+        s1 = a_i * w[i, 1] + a_j * w[j, 1]
+        s2 = a_i * w[i, 2] + a_j * w[j, 2]
+        h0 -= s1 * n2 - s2 * n1
+        h1 -= s2 * n0 - s0 * n2
+        h2 -= s0 * n1 - s1 * n0
+    # energy dissipated = minus the impulse's work, J . (g_before + g_after) / 2 for rigid
+    # bodies (exact, and free of the cancellation of KE_before - KE_after)
+    sums[S_KE_LOST] -= 0.5 * (j0 * (g0 + h0) + j1 * (g1 + h1) + j2 * (g2 + h2))
     counter[i] += 1
     counter[j] += 1
     last_coll[i] = T
@@ -485,12 +472,9 @@ def _collide_pair(
     sums[S_VIRIAL] += j0 * r0 + j1 * r1 + j2 * r2
     # a body resting on a support: lifted off, or pushed into it (the support pushes back)
     if support[i] >= 0:
-        _support_reaction(i, v, acc, support, face_e, gravity, plane_normal)
+        _support_reaction(i, v, acc, support, face_e, gravity, plane_normal, mass, sums)
     if support[j] >= 0:
-        _support_reaction(j, v, acc, support, face_e, gravity, plane_normal)
-    sums[S_KE_LOST] += ke_before - (
-        _kinetic(v, w, mass, q, radius, mobile, i) + _kinetic(v, w, mass, q, radius, mobile, j)
-    )
+        _support_reaction(j, v, acc, support, face_e, gravity, plane_normal, mass, sums)
     if log_on:
         _log(
             logbuf,
@@ -514,6 +498,8 @@ def _support_reaction(
     face_e: np.ndarray,
     gravity: np.ndarray,
     plane_normal: np.ndarray,
+    mass: np.ndarray,
+    sums: np.ndarray,
 ) -> None:
     """Body ``b`` rests on a support and was just hit: it lifts off, or the support pushes
     back (an impact with the support's restitution) and then it flies."""
@@ -526,6 +512,7 @@ def _support_reaction(
         e_w = face_e[face]
         for k in range(dim):
             v[b, k] -= (1.0 + e_w) * un * face_normal(plane_normal, dim, face, k)
+        sums[S_KE_LOST] += 0.5 * mass[b] * (1.0 - e_w * e_w) * un * un
     if un != 0.0:
         set_support(gravity, plane_normal, support, acc, b, -1)
 
@@ -539,14 +526,10 @@ def _collide_face(
     x: np.ndarray,
     v: np.ndarray,
     acc: np.ndarray,
-    w: np.ndarray,
     counter: np.ndarray,
     last_coll: np.ndarray,
     support: np.ndarray,
-    radius: np.ndarray,
     mass: np.ndarray,
-    q: np.ndarray,
-    mobile: np.ndarray,
     face_e: np.ndarray,
     gravity: np.ndarray,
     plane_normal: np.ndarray,
@@ -555,7 +538,7 @@ def _collide_face(
     sums: np.ndarray,
     logbuf: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
 ) -> None:
-    """Body ``i`` (at time ``T``) meets wall or plane ``face``."""
+    """Body ``i`` (at time ``T``) meets wall or plane ``face`` (smooth: spins are kept)."""
     dim = x.shape[1]
     un = 0.0
     acc_n = 0.0
@@ -572,7 +555,6 @@ def _collide_face(
             counts[C_TC] += 1
         e = 1.0
     u_out = -e * un
-    ke_before = _kinetic(v, w, mass, q, radius, mobile, i)
     # rest: pulled onto the face, and would leave it for less than t_c (or TC applies)
     rest = acc_n < 0.0 and (tc or 2.0 * u_out < -acc_n * t_c)
     if rest:
@@ -591,7 +573,7 @@ def _collide_face(
     last_coll[i] = T
     counts[C_WALL] += 1
     sums[S_VIRIAL] += x_dot_j
-    sums[S_KE_LOST] += ke_before - _kinetic(v, w, mass, q, radius, mobile, i)
+    sums[S_KE_LOST] += 0.5 * mass[i] * (1.0 - e * e) * un * un  # walls are smooth
     if log_on:
         _log(
             logbuf,
@@ -741,7 +723,6 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                     mass,
                     inv_mass,
                     q,
-                    mobile,
                     material,
                     pair_table,
                     face_e,
@@ -763,14 +744,10 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                 x,
                 v,
                 acc,
-                w,
                 counter,
                 last_coll,
                 support,
-                radius,
                 mass,
-                q,
-                mobile,
                 face_e,
                 gravity,
                 plane_normal,
