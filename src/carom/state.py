@@ -12,7 +12,19 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["KIN_R", "KIN_T", "KIN_V", "KIN_WIDTH", "State", "aligned_records", "allocate_state"]
+__all__ = [
+    "KIN_R",
+    "KIN_T",
+    "KIN_V",
+    "KIN_WIDTH",
+    "SCHED_COUNTER",
+    "SCHED_KIND",
+    "SCHED_OTHER",
+    "SCHED_STAMP",
+    "State",
+    "aligned_records",
+    "allocate_state",
+]
 
 N_COUNTS = 8
 N_SUMS = 2
@@ -24,6 +36,12 @@ KIN_T = 3
 KIN_V = 4
 KIN_R = 7
 KIN_WIDTH = 8
+
+# Columns of the schedule record ``State.sched``.
+SCHED_KIND = 0
+SCHED_OTHER = 1
+SCHED_STAMP = 2
+SCHED_COUNTER = 3
 
 
 class State(NamedTuple):
@@ -40,8 +58,6 @@ class State(NamedTuple):
         Acceleration [m/s^2]: gravity, less the normal part a support bears; zero if static.
     w : (N, 3) float64
         Spin [rad/s] (2D: about z, in column 2).
-    counter : (N,) int64
-        Collisions of each body so far (invalidates stale predictions).
     last_coll : (N,) float64
         Time of each body's last collision [s] (TC model).
     support : (N,) int64
@@ -54,8 +70,13 @@ class State(NamedTuple):
     cell, slot : (N,) int64; cell_count : (C,) int64; cell_body : (C, B) int32
         The cell grid of shell centres: cell ``c`` holds bodies ``cell_body[c, :cell_count[c]]``;
         body ``i`` is in cell ``cell[i]`` at place ``slot[i]``.
-    ev_time : (N,) float64; ev_kind, ev_other, ev_stamp : (N,) int64
-        Each body's next event: time [s], kind, partner, partner's counter when predicted.
+    ev_time : (N,) float64
+        Each body's next event time [s].
+    sched : (N, 4) int64
+        One record per body: its next event's kind, partner (or face), and the partner's
+        collision counter when predicted (columns ``SCHED_KIND``, ``SCHED_OTHER``,
+        ``SCHED_STAMP``), and its own collision counter (``SCHED_COUNTER``; a prediction
+        whose stamp no longer matches its partner's counter is stale).
     heap, heap_where : (N,) int64; heap_key : (N,) float64
         The event heap (body and event time [s] at each node) and each body's node in it.
     clock : (1,) float64
@@ -69,7 +90,6 @@ class State(NamedTuple):
     kin: NDArray[np.float64]
     acc: NDArray[np.float64]
     w: NDArray[np.float64]
-    counter: NDArray[np.int64]
     last_coll: NDArray[np.float64]
     support: NDArray[np.int64]
     shell: NDArray[np.float64]
@@ -80,9 +100,7 @@ class State(NamedTuple):
     cell_count: NDArray[np.int64]
     cell_body: NDArray[np.int32]
     ev_time: NDArray[np.float64]
-    ev_kind: NDArray[np.int64]
-    ev_other: NDArray[np.int64]
-    ev_stamp: NDArray[np.int64]
+    sched: NDArray[np.int64]
     heap: NDArray[np.int64]
     heap_key: NDArray[np.float64]
     heap_where: NDArray[np.int64]
@@ -128,6 +146,8 @@ def allocate_state(
     kin[:, KIN_T] = time
     kin[:, KIN_V : KIN_V + dim] = v
     kin[:, KIN_R] = radius
+    sched = np.zeros((n, 4), np.int64)
+    sched[:, SCHED_OTHER] = -1
     shell = np.zeros((n, 4))
     shell[:, :dim] = x
     shell[:, 3] = radius
@@ -135,7 +155,6 @@ def allocate_state(
         kin=kin,
         acc=np.array(acc, dtype=np.float64),
         w=np.array(w, dtype=np.float64),
-        counter=np.zeros(n, np.int64),
         last_coll=np.full(n, -np.inf),
         support=np.full(n, -1, np.int64),
         shell=shell,
@@ -146,9 +165,7 @@ def allocate_state(
         cell_count=np.zeros(n_cells, np.int64),
         cell_body=np.zeros((n_cells, cell_capacity), np.int32),
         ev_time=np.full(n, np.inf),
-        ev_kind=np.zeros(n, np.int64),
-        ev_other=np.full(n, -1, np.int64),
-        ev_stamp=np.zeros(n, np.int64),
+        sched=sched,
         heap=np.zeros(n, np.int64),
         heap_key=np.full(n, np.inf),
         heap_where=np.zeros(n, np.int64),

@@ -49,7 +49,15 @@ from carom.core.toi import (
     toi_gap,
     toi_sphere_sphere,
 )
-from carom.state import KIN_R, KIN_T, KIN_V
+from carom.state import (
+    KIN_R,
+    KIN_T,
+    KIN_V,
+    SCHED_COUNTER,
+    SCHED_KIND,
+    SCHED_OTHER,
+    SCHED_STAMP,
+)
 
 # compile without reference counting (see the module docstring); an internal Numba flag
 NO_REFCOUNTING: dict[str, Any] = {"_nrt": False}
@@ -120,6 +128,19 @@ def set_support(
 def kinematic_views(kin: np.ndarray, dim: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Positions (N, dim), velocities (N, dim) and clocks (N,): views into ``kin``."""
     return kin[:, :dim], kin[:, KIN_V : KIN_V + dim], kin[:, KIN_T]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def schedule_views(
+    sched: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Event kinds, partners, stamps and collision counters, (N,) each: views into ``sched``."""
+    return (
+        sched[:, SCHED_KIND],
+        sched[:, SCHED_OTHER],
+        sched[:, SCHED_STAMP],
+        sched[:, SCHED_COUNTER],
+    )
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -595,6 +616,7 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
     Returns ``DONE``, or ``LISTS_FULL`` / ``CELLS_FULL`` when the arrays need to grow.
     """
     x, v, t = kinematic_views(s.kin, m.box.shape[0])
+    ev_kind, ev_other, ev_stamp, counter = schedule_views(s.sched)
     for i in range(x.shape[0]):
         for k in range(m.box.shape[0]):
             s.shell[i, k] = x[i, k]
@@ -631,7 +653,7 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
             s.support,
             s.nbr,
             s.nbr_count,
-            s.counter,
+            counter,
             m.radius,
             m.mobile,
             m.box,
@@ -641,9 +663,9 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
             m.plane_point,
             m.plane_normal,
             s.ev_time,
-            s.ev_kind,
-            s.ev_other,
-            s.ev_stamp,
+            ev_kind,
+            ev_other,
+            ev_stamp,
         )
     heap_build(s.ev_time, s.heap, s.heap_key, s.heap_where)
     return DONE
@@ -662,9 +684,10 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     kin = s.kin
     x, v, t = kinematic_views(kin, m.box.shape[0])
     acc, w = s.acc, s.w
-    shell, support, counter, last_coll = s.shell, s.support, s.counter, s.last_coll
+    shell, support, last_coll = s.shell, s.support, s.last_coll
     nbr, nbr_count = s.nbr, s.nbr_count
-    ev_time, ev_kind, ev_other, ev_stamp = s.ev_time, s.ev_kind, s.ev_other, s.ev_stamp
+    ev_time = s.ev_time
+    ev_kind, ev_other, ev_stamp, counter = schedule_views(s.sched)
     heap, heap_key, where = s.heap, s.heap_key, s.heap_where
     counts, sums = s.counts, s.sums
     # grouped as tuples for the inlined callees (a call takes at most 30 arguments there)
