@@ -42,6 +42,7 @@ from numba import njit
 from carom.core.heap import heap_build, heap_update
 from carom.core.laws import LAW_SMOOTH, impulse_spheres
 from carom.core.neighbors import FITS, LIST_FULL, build_all, rebuild_shell
+from carom.core.prefetch import prefetch_row
 from carom.core.toi import (
     INF,
     first_root_quartic,
@@ -181,6 +182,8 @@ def _first_pair_straight(
     inv0, inv1, inv2 = 1.0 / L0, 1.0 / L1, 1.0 / L2
     rad = kin[i, KIN_R]
     other = -1
+    for slot in range(nbr_count[i]):
+        prefetch_row(kin, nbr[i, slot])
     for slot in range(nbr_count[i]):
         j = nbr[i, slot]
         dtj = T - kin[j, KIN_T]
@@ -687,7 +690,8 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     shell, support, last_coll = s.shell, s.support, s.last_coll
     nbr, nbr_count = s.nbr, s.nbr_count
     ev_time = s.ev_time
-    ev_kind, ev_other, ev_stamp, counter = schedule_views(s.sched)
+    sched = s.sched
+    ev_kind, ev_other, ev_stamp, counter = schedule_views(sched)
     heap, heap_key, where = s.heap, s.heap_key, s.heap_where
     counts, sums = s.counts, s.sums
     # grouped as tuples for the inlined callees (a call takes at most 30 arguments there)
@@ -708,6 +712,10 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     log_cap = log_time.shape[0]
     while True:
         i = heap[0]
+        # what this event will read, asked for at once rather than miss by miss
+        prefetch_row(sched, i)
+        prefetch_row(kin, i)
+        prefetch_row(nbr, i)
         T = ev_time[i]
         if t_stop < T or math.isinf(T):
             if t_stop < INF:
@@ -725,6 +733,8 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
         advance(x, v, acc, t, i, T)  # every event moves its own body to now
         if kind == EV_PAIR:
             j = ev_other[i]
+            prefetch_row(kin, j)
+            prefetch_row(nbr, j)
             if counter[j] != ev_stamp[i]:
                 counts[C_STALE] += 1
                 j = -1  # stale: the partner collided since; just re-predict

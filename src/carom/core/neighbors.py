@@ -25,6 +25,8 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.core.prefetch import prefetch_row
+
 FITS = 0
 LIST_FULL = 1
 CELL_FULL = 2
@@ -165,6 +167,14 @@ def _link_overlapping(
     o0, o1, o2 = shell[i, 0], shell[i, 1], shell[i, 2]
     reach_i = shell[i, 3] + 2.0 * delta
     i_moves = mobile[i]
+    # ask for every candidate's record before reading any (their misses then overlap)
+    for a in range(1, ax0[0] + 1):
+        for b in range(1, ax1[0] + 1):
+            row = (ax0[a] * n1 + ax1[b]) * n2
+            for c in range(1, ax2[0] + 1):
+                index = row + ax2[c]
+                for s in range(cell_count[index]):
+                    prefetch_row(shell, cell_body[index, s])
     # pass 1, without branches on the candidates: every candidate is written to i's row and
     # kept (found += 1) only if the shells overlap (a mispredicted branch per candidate costs
     # more than the write)
@@ -275,6 +285,8 @@ def rebuild_shell(
     Returns ``FITS``, ``LIST_FULL`` or ``CELL_FULL`` (the caller grows the arrays and
     rebuilds them all).
     """
+    for s in range(count[i]):
+        prefetch_row(nbr, nbr[i, s])
     for s in range(count[i]):
         j = nbr[i, s]
         if mobile[j]:
