@@ -67,6 +67,8 @@ class State(NamedTuple):
         radius [m] in column 3.
     nbr : (N, K) int32; nbr_count : (N,) int64
         Neighbour lists.
+    nbr_mark : (N,) int64; nbr_old : (K,) int32
+        Scratch for rebuilding one list (:func:`carom.core.neighbors.rebuild_shell`).
     cell, slot : (N,) int64; cell_count : (C,) int64; cell_body : (C, B) int32
         The cell grid of shell centres: cell ``c`` holds bodies ``cell_body[c, :cell_count[c]]``;
         body ``i`` is in cell ``cell[i]`` at place ``slot[i]``.
@@ -95,6 +97,8 @@ class State(NamedTuple):
     shell: NDArray[np.float64]
     nbr: NDArray[np.int32]
     nbr_count: NDArray[np.int64]
+    nbr_mark: NDArray[np.int64]
+    nbr_old: NDArray[np.int32]
     cell: NDArray[np.int64]
     slot: NDArray[np.int64]
     cell_count: NDArray[np.int64]
@@ -160,6 +164,8 @@ def allocate_state(
         shell=shell,
         nbr=np.zeros((n, capacity), np.int32),
         nbr_count=np.zeros(n, np.int64),
+        nbr_mark=np.zeros(n, np.int64),
+        nbr_old=np.zeros(capacity, np.int32),
         cell=np.zeros(n, np.int64),
         slot=np.zeros(n, np.int64),
         cell_count=np.zeros(n_cells, np.int64),

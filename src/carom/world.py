@@ -874,6 +874,7 @@ class World:
         while True:
             state = state._replace(
                 nbr=np.zeros((state.kin.shape[0], capacity), np.int32),
+                nbr_old=np.zeros(capacity, np.int32),
                 cell_body=np.zeros((state.cell_count.shape[0], cell_capacity), np.int32),
             )
             status = build_all(
@@ -890,6 +891,7 @@ class World:
                 model.delta,
                 model.cell_size,
                 model.ncell,
+                state.nbr_mark,
             )
             if status == FITS:
                 break

@@ -637,6 +637,7 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
         m.delta,
         m.cell_size,
         m.ncell,
+        s.nbr_mark,
     )
     if status != FITS:
         return LISTS_FULL if status == LIST_FULL else CELLS_FULL
@@ -688,7 +689,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     x, v, t = kinematic_views(kin, m.box.shape[0])
     acc, w = s.acc, s.w
     shell, support, last_coll = s.shell, s.support, s.last_coll
-    nbr, nbr_count = s.nbr, s.nbr_count
+    nbr, nbr_count, nbr_mark, nbr_old = s.nbr, s.nbr_count, s.nbr_mark, s.nbr_old
     ev_time = s.ev_time
     sched = s.sched
     ev_kind, ev_other, ev_stamp, counter = schedule_views(sched)
@@ -810,6 +811,9 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                 delta,
                 cell_size,
                 ncell,
+                nbr_mark,
+                nbr_old,
+                counts[C_SHELL],  # a stamp no earlier rebuild used
             )
             if status != FITS:
                 return LISTS_FULL if status == LIST_FULL else CELLS_FULL

@@ -136,10 +136,14 @@ def _link_overlapping(
     periodic: bool,
     delta: float,
     ncell: np.ndarray,
+    mark: np.ndarray,
+    stamp: int,
 ) -> int:
     """Link ``i`` with every body in the grid whose shell overlaps its shell.
 
-    Each link goes into the list of each moving side. Returns ``FITS`` or ``LIST_FULL``.
+    Each link goes into the list of each moving side, except for bodies marked ``stamp``
+    (``i`` is in their lists already; their mark is cleared). Returns ``FITS`` or
+    ``LIST_FULL``.
     """
     three = ncell.shape[0] == 3
     capacity = nbr.shape[1]
@@ -206,7 +210,9 @@ def _link_overlapping(
     # pass 2: i goes into the list of each moving neighbour
     for q in range(found):
         j = nbr[i, q]
-        if mobile[j]:
+        if mark[j] == stamp:
+            mark[j] = 0  # a neighbour before and after
+        elif mobile[j]:
             if count[j] >= capacity:
                 return LIST_FULL
             nbr[j, count[j]] = i
@@ -230,6 +236,7 @@ def build_all(
     delta: float,
     cell_size: np.ndarray,
     ncell: np.ndarray,
+    mark: np.ndarray,
 ) -> int:
     """Insert every body into an empty grid, linking each overlapping pair once.
 
@@ -256,6 +263,8 @@ def build_all(
             periodic,
             delta,
             ncell,
+            mark,
+            -1,  # no body is marked -1
         )
         if status != FITS:
             return status
@@ -278,25 +287,54 @@ def rebuild_shell(
     delta: float,
     cell_size: np.ndarray,
     ncell: np.ndarray,
+    mark: np.ndarray,
+    old: np.ndarray,
+    stamp: int,
 ) -> int:
     """Re-centre moving body ``i``'s shell (``shell[i]`` already holds the new centre) and
     rebuild its neighbour list.
 
-    Returns ``FITS``, ``LIST_FULL`` or ``CELL_FULL`` (the caller grows the arrays and
-    rebuilds them all).
+    Only the lists of bodies that enter or leave ``i``'s list change: the old neighbours are
+    copied to ``old`` and marked ``stamp`` (a number no earlier rebuild used, >= 1), those
+    found again are unmarked and left alone, and ``i`` leaves the lists of the rest. Returns
+    ``FITS``, ``LIST_FULL`` or ``CELL_FULL`` (the caller grows the arrays and rebuilds them
+    all).
     """
-    for s in range(count[i]):
-        prefetch_row(nbr, nbr[i, s])
-    for s in range(count[i]):
+    n_old = count[i]
+    for s in range(n_old):
         j = nbr[i, s]
-        if mobile[j]:
-            _list_remove(nbr, count, j, i)
+        old[s] = j
+        mark[j] = stamp
     count[i] = 0
     c = cell_of(shell, i, cell_size, ncell)
     if c != cell[i]:
         cell_remove(i, cell_count, cell_body, slot, cell)
         if not cell_insert(i, c, cell_count, cell_body, slot, cell):
             return CELL_FULL
-    return _link_overlapping(
-        i, shell, mobile, nbr, count, cell_count, cell_body, cell, box, periodic, delta, ncell
+    status = _link_overlapping(
+        i,
+        shell,
+        mobile,
+        nbr,
+        count,
+        cell_count,
+        cell_body,
+        cell,
+        box,
+        periodic,
+        delta,
+        ncell,
+        mark,
+        stamp,
     )
+    if status != FITS:
+        return status
+    for s in range(n_old):
+        j = old[s]
+        if mark[j] == stamp:  # no longer a neighbour
+            prefetch_row(nbr, j)
+    for s in range(n_old):
+        j = old[s]
+        if mark[j] == stamp and mobile[j]:
+            _list_remove(nbr, count, j, i)
+    return FITS
