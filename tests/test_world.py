@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -95,6 +96,24 @@ def test_checkpoint_that_is_not_one(tmp_path) -> None:  # type: ignore[no-untype
     bad.write_text("hello")
     with pytest.raises(CaromError, match=r"cannot read checkpoint"):
         carom.World.load(bad)
+
+
+def test_checkpoint_from_another_state_layout(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # A checkpoint whose version differs (an older engine layout) is refused by name, not with
+    # a KeyError from a missing array.
+    world = carom.World(2, [2.0, 2.0])
+    world.add_spheres([[0.5, 0.5], [1.5, 1.5]], [[1.0, 0.0], [0.0, 1.0]], radius=0.1)
+    world.run(until=0.5)
+    path = tmp_path / "old.npz"
+    world.save(path)
+    with np.load(path) as data:
+        arrays = dict(data)
+    meta = json.loads(str(arrays["meta"]))
+    meta["version"] = 1
+    arrays["meta"] = np.array(json.dumps(meta))
+    np.savez(path, **arrays)
+    with pytest.raises(CaromError, match=r"format version 1, this carom reads version \d"):
+        carom.World.load(path)
 
 
 @pytest.mark.parametrize("dim", [2, 3])

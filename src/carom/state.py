@@ -79,7 +79,7 @@ class State(NamedTuple):
         collision counter when predicted (columns ``SCHED_KIND``, ``SCHED_OTHER``,
         ``SCHED_STAMP``), and its own collision counter (``SCHED_COUNTER``; a prediction
         whose stamp no longer matches its partner's counter is stale).
-    heap, heap_where : (N,) int64; heap_key : (N,) float64
+    heap, heap_where : (N,) int32; heap_key : (N,) float64
         The event heap (body and event time [s] at each node) and each body's node in it.
     clock : (1,) float64
         Simulation time [s].
@@ -105,9 +105,9 @@ class State(NamedTuple):
     cell_body: NDArray[np.int32]
     ev_time: NDArray[np.float64]
     sched: NDArray[np.int64]
-    heap: NDArray[np.int64]
+    heap: NDArray[np.int32]
     heap_key: NDArray[np.float64]
-    heap_where: NDArray[np.int64]
+    heap_where: NDArray[np.int32]
     clock: NDArray[np.float64]
     counts: NDArray[np.int64]
     sums: NDArray[np.float64]
@@ -172,9 +172,9 @@ def allocate_state(
         cell_body=np.zeros((n_cells, cell_capacity), np.int32),
         ev_time=np.full(n, np.inf),
         sched=sched,
-        heap=np.zeros(n, np.int64),
+        heap=np.zeros(n, np.int32),
         heap_key=np.full(n, np.inf),
-        heap_where=np.zeros(n, np.int64),
+        heap_where=np.zeros(n, np.int32),
         clock=np.array([time]),
         counts=np.zeros(N_COUNTS, np.int64),
         sums=np.zeros(N_SUMS),

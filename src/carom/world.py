@@ -43,6 +43,8 @@ FloatArray = NDArray[np.float64]
 Combine = Literal["mean", "min", "max", "geometric", "product"]
 COMBINE_RULES: tuple[str, ...] = ("mean", "min", "max", "geometric", "product")
 LOG_CAPACITY = 1 << 16
+# Bumped whenever State changes layout: a checkpoint is only read by the version that wrote it.
+CHECKPOINT_VERSION = 2
 #: One logged collision: time [s]; bodies a, b (b < 0: wall face or plane -1 - b); impulse on
 #: a [N s] (3 components, 2D: z = 0); normal relative speeds before and after [m/s]
 EVENT_DTYPE = np.dtype(
@@ -1002,7 +1004,7 @@ class World:
             arrays[f"state.{name}"] = value
         meta = {
             "format": "carom-world",
-            "version": 1,
+            "version": CHECKPOINT_VERSION,
             "dim": self.dim,
             "box": self.box.tolist(),
             "boundary": self.boundary,
@@ -1039,6 +1041,13 @@ class World:
             meta = json.loads(str(data["meta"]))
             if meta.get("format") != "carom-world":
                 raise CaromError(f"{path} is not a carom checkpoint")
+            if meta.get("version") != CHECKPOINT_VERSION:
+                raise CaromError(
+                    f"checkpoint {path} has format version {meta.get('version')}, this carom "
+                    f"reads version {CHECKPOINT_VERSION} (the engine's state layout changed); "
+                    f"re-run the simulation with this version, or load it with the carom that "
+                    f"wrote it"
+                )
             world = cls(
                 meta["dim"],
                 meta["box"],

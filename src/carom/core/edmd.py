@@ -712,7 +712,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     processed = 0
     log_cap = log_time.shape[0]
     while True:
-        i = heap[0]
+        i = int(np.int64(heap[0]))  # the heap holds int32; bodies are handled as int64
         # what this event will read, asked for at once rather than miss by miss
         prefetch_row(sched, i)
         prefetch_row(kin, i)
