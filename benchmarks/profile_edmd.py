@@ -4,7 +4,7 @@ Wall-clock timings on shared machines vary by about 15% run to run, and perf can
 Numba's JIT code. This tool builds a copy of ``carom.core.edmd.run`` with the CPU's cycle
 counter (LLVM ``readcyclecounter``) read around each phase, runs it on a melted hard-sphere
 gas, and prints nanoseconds per collision for: processing a pair event (advance both bodies,
-apply the impulse), a shell event (advance, rebuild the neighbour list), predictions, heap
+apply the impulse), a shell event (advance, rebuild the neighbour list), predictions, calendar
 updates, and the rest. It is a development tool; its figures are not recorded in RESULTS.md.
 
 Run:  python benchmarks/profile_edmd.py [--sizes 1000 10000 100000] [--dim 3] [--packing 0.3]
@@ -24,7 +24,7 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from carom import generators
-from carom.core import edmd, heap, neighbors
+from carom.core import edmd, neighbors
 
 
 @intrinsic
@@ -54,11 +54,17 @@ ANCHORS = {
         "        else:\n            cyc[2] += c1 - c0\n"
         "        # re-schedule the bodies whose motion changed"
     ),
-    "            heap_update(ev_time, heap, heap_key, where, body)": (
-        "            c2 = _cycles()\n"
-        "            heap_update(ev_time, heap, heap_key, where, body)\n"
+    "            calendar_update(\n": (
+        "            c2 = _cycles()\n            calendar_update(\n"
+    ),
+    "                cur_where, cal_f, cal_i,\n            )  # fmt: skip": (
+        "                cur_where, cal_f, cal_i,\n            )  # fmt: skip\n"
         "            c3 = _cycles()\n            cyc[3] += c2 - c1\n            cyc[4] += c3 - c2\n"
         "            c1 = c3"
+    ),
+    "        i = calendar_top(\n": ("        c4 = _cycles()\n        i = calendar_top(\n"),
+    "        T = ev_time[i] if i >= 0 else INF\n": (
+        "        T = ev_time[i] if i >= 0 else INF\n        cyc[4] += _cycles() - c4\n"
     ),
 }
 
@@ -78,7 +84,6 @@ def instrumented_run() -> Any:
     namespace: dict[str, Any] = {
         **vars(edmd),
         "_cycles": _cycles,
-        "heap_update": heap.heap_update,
         "rebuild_shell": neighbors.rebuild_shell,
     }
     exec(compile(source, "<instrumented edmd.run>", "exec"), namespace)
@@ -98,7 +103,7 @@ def main() -> None:
         "shell event (advance, rebuild)",
         "wall or stale event",
         "predictions",
-        "heap updates",
+        "event calendar",
     ]
     for n in args.sizes:
         world = generators.lattice_gas(args.dim, round(n ** (1 / args.dim)), args.packing, seed=1)
@@ -122,7 +127,7 @@ def main() -> None:
         for k, name in enumerate(names):
             print(f"   {name:32s} {counters[k] * ns / collisions:7.0f} ns")
         rest = total - int(counters[:5].sum())
-        print(f"   {'the rest (heap top, loop)':32s} {rest * ns / collisions:7.0f} ns")
+        print(f"   {'the rest (loop)':32s} {rest * ns / collisions:7.0f} ns")
 
 
 if __name__ == "__main__":

@@ -79,8 +79,8 @@ class State(NamedTuple):
         collision counter when predicted (columns ``SCHED_KIND``, ``SCHED_OTHER``,
         ``SCHED_STAMP``), and its own collision counter (``SCHED_COUNTER``; a prediction
         whose stamp no longer matches its partner's counter is stale).
-    heap, heap_where : (N,) int32; heap_key : (N,) float64
-        The event heap (body and event time [s] at each node) and each body's node in it.
+    cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key, cur_where, cal_f, cal_i
+        The event calendar (:mod:`carom.core.calendar` describes each array).
     clock : (1,) float64
         Simulation time [s].
     counts : (8,) int64; sums : (2,) float64
@@ -105,9 +105,15 @@ class State(NamedTuple):
     cell_body: NDArray[np.int32]
     ev_time: NDArray[np.float64]
     sched: NDArray[np.int64]
-    heap: NDArray[np.int32]
-    heap_key: NDArray[np.float64]
-    heap_where: NDArray[np.int32]
+    cal_head: NDArray[np.int32]
+    cal_next: NDArray[np.int32]
+    cal_prev: NDArray[np.int32]
+    cal_loc: NDArray[np.int32]
+    cur_heap: NDArray[np.int32]
+    cur_key: NDArray[np.float64]
+    cur_where: NDArray[np.int32]
+    cal_f: NDArray[np.float64]
+    cal_i: NDArray[np.int64]
     clock: NDArray[np.float64]
     counts: NDArray[np.int64]
     sums: NDArray[np.float64]
@@ -172,9 +178,15 @@ def allocate_state(
         cell_body=np.zeros((n_cells, cell_capacity), np.int32),
         ev_time=np.full(n, np.inf),
         sched=sched,
-        heap=np.zeros(n, np.int32),
-        heap_key=np.full(n, np.inf),
-        heap_where=np.zeros(n, np.int32),
+        cal_head=np.full(n + 1, -1, np.int32),
+        cal_next=np.full(n, -1, np.int32),
+        cal_prev=np.full(n, -1, np.int32),
+        cal_loc=np.full(n, -2, np.int32),
+        cur_heap=np.zeros(n, np.int32),
+        cur_key=np.full(n, np.inf),
+        cur_where=np.zeros(n, np.int32),
+        cal_f=np.array([0.0, 1.0]),
+        cal_i=np.zeros(4, np.int64),
         clock=np.array([time]),
         counts=np.zeros(N_COUNTS, np.int64),
         sums=np.zeros(N_SUMS),

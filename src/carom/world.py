@@ -44,7 +44,7 @@ Combine = Literal["mean", "min", "max", "geometric", "product"]
 COMBINE_RULES: tuple[str, ...] = ("mean", "min", "max", "geometric", "product")
 LOG_CAPACITY = 1 << 16
 # Bumped whenever State changes layout: a checkpoint is only read by the version that wrote it.
-CHECKPOINT_VERSION = 2
+CHECKPOINT_VERSION = 3
 #: One logged collision: time [s]; bodies a, b (b < 0: wall face or plane -1 - b); impulse on
 #: a [N s] (3 components, 2D: z = 0); normal relative speeds before and after [m/s]
 EVENT_DTYPE = np.dtype(

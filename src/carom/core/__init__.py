@@ -50,6 +50,6 @@ _previous = _config.CACHE_DIR
 _config.CACHE_DIR = kernel_cache_dir()
 try:
     # every kernel module is decorated here, while the cache directory points at ours
-    from carom.core import edmd, heap, laws, neighbors, toi  # noqa: F401
+    from carom.core import calendar, edmd, laws, neighbors, prefetch, toi  # noqa: F401
 finally:
     _config.CACHE_DIR = _previous

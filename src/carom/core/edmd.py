@@ -4,9 +4,9 @@ Bodies fly freely (straight lines, or parabolas under gravity) between events, a
 carries its own clock: it is advanced only when an event involves it (lazy clocks, Lubachevsky
 1991). Every moving body has exactly one scheduled event, its earliest of: a collision with a
 neighbour, with a wall or plane, or leaving its neighbour shell (Smallenburg 2022). The events
-sit in an indexed binary heap (Marin, Risso & Cordero 1993). A predicted collision with ``j``
-stores ``j``'s collision counter; if ``j`` has collided since, the event is stale and the body
-is simply re-predicted (Rapaport 1980).
+sit in an event calendar (:mod:`carom.core.calendar`, after Paul 2007). A predicted collision
+with ``j`` stores ``j``'s collision counter; if ``j`` has collided since, the event is stale
+and the body is simply re-predicted (Rapaport 1980).
 
 Dissipation and round-off:
 
@@ -39,7 +39,7 @@ from typing import Any, TypeVar, cast
 import numpy as np
 from numba import njit
 
-from carom.core.heap import heap_build, heap_update
+from carom.core.calendar import calendar_build, calendar_top, calendar_update
 from carom.core.laws import LAW_SMOOTH, impulse_spheres
 from carom.core.neighbors import FITS, LIST_FULL, build_all, rebuild_shell
 from carom.core.prefetch import prefetch_row
@@ -671,7 +671,18 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
             ev_other,
             ev_stamp,
         )
-    heap_build(s.ev_time, s.heap, s.heap_key, s.heap_where)
+    calendar_build(
+        s.ev_time,
+        s.cal_head,
+        s.cal_next,
+        s.cal_prev,
+        s.cal_loc,
+        s.cur_heap,
+        s.cur_key,
+        s.cur_where,
+        s.cal_f,
+        s.cal_i,
+    )
     return DONE
 
 
@@ -693,7 +704,14 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     ev_time = s.ev_time
     sched = s.sched
     ev_kind, ev_other, ev_stamp, counter = schedule_views(sched)
-    heap, heap_key, where = s.heap, s.heap_key, s.heap_where
+    cal_head, cal_next, cal_prev, cal_loc = s.cal_head, s.cal_next, s.cal_prev, s.cal_loc
+    cur_heap, cur_key, cur_where, cal_f, cal_i = (
+        s.cur_heap,
+        s.cur_key,
+        s.cur_where,
+        s.cal_f,
+        s.cal_i,
+    )
     counts, sums = s.counts, s.sums
     # grouped as tuples for the inlined callees (a call takes at most 30 arguments there)
     logbuf = (s.log_time, s.log_a, s.log_b, s.log_impulse, s.log_un, s.log_n)
@@ -712,12 +730,11 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     processed = 0
     log_cap = log_time.shape[0]
     while True:
-        i = int(np.int64(heap[0]))  # the heap holds int32; bodies are handled as int64
-        # what this event will read, asked for at once rather than miss by miss
-        prefetch_row(sched, i)
-        prefetch_row(kin, i)
-        prefetch_row(nbr, i)
-        T = ev_time[i]
+        i = calendar_top(
+            ev_time, cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key, cur_where,
+            cal_f, cal_i,
+        )  # fmt: skip
+        T = ev_time[i] if i >= 0 else INF
         if t_stop < T or math.isinf(T):
             if t_stop < INF:
                 s.clock[0] = t_stop
@@ -727,6 +744,10 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
         if log_on and log_n[0] + 1 > log_cap:
             return LOG_FULL
         processed += 1
+        # what this event will read, asked for at once rather than miss by miss
+        prefetch_row(sched, i)
+        prefetch_row(kin, i)
+        prefetch_row(nbr, i)
         s.clock[0] = T
         counts[C_EVENTS] += 1
         kind = ev_kind[i]
@@ -826,7 +847,10 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                 radius, mobile, box, inv_box, periodic, delta, plane_point, plane_normal,
                 ev_time, ev_kind, ev_other, ev_stamp,
             )  # fmt: skip
-            heap_update(ev_time, heap, heap_key, where, body)
+            calendar_update(
+                ev_time, body, cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key,
+                cur_where, cal_f, cal_i,
+            )  # fmt: skip
 
 
 @njit(cache=True, error_model="numpy")

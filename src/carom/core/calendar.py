@@ -1,0 +1,344 @@
+"""An event calendar: O(1) scheduling of one event per body (after Paul, JCP 221, 615, 2007).
+
+Time is cut into ``B`` buckets of width ``w`` from ``base``; a body's event at time ``t`` goes
+to bucket ``floor((t - base) / w)`` (an unsorted doubly linked list), or, if that is past the
+last bucket, to an overflow list. Only the current bucket is kept ordered, in a small binary
+heap on ``(time, body)``; when it empties, the next non-empty bucket is poured into it. When
+the last bucket is passed, a new "year" starts at the earliest overflow event and the
+overflow is shared out again, with the bucket width re-estimated from the year's event rate.
+
+Bucket index is monotone in time and equal times share a bucket, so the top is always the
+minimum of ``(time, body)`` over all events: the same order, bit for bit, as a single heap.
+Events at infinite time (none to come) are kept nowhere.
+
+Arrays (all in :class:`carom.state.State`):
+
+``cal_head`` (B + 1,) int32, first body of each bucket (index B: overflow), -1 if empty;
+``cal_next``, ``cal_prev`` (N,) int32 the lists; ``cal_loc`` (N,) int32 where each body's
+event is: a bucket, ``IN_HEAP``, or ``NOWHERE``; ``cur_heap`` (N,) int32, ``cur_key`` (N,)
+float64 and ``cur_where`` (N,) int32 the current bucket's heap and each body's node in it;
+``cal_f`` (2,) float64 ``[base, width]``; ``cal_i`` (4,) int64 ``[current bucket, heap size,
+events in the calendar, events popped this year]``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+IN_HEAP = -1
+NOWHERE = -2
+
+F_BASE = 0
+F_WIDTH = 1
+I_CUR = 0
+I_SIZE = 1
+I_COUNT = 2
+I_POPPED = 3
+
+EVENTS_PER_BUCKET = 2.0  # the width aims at about this many events per bucket
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _before(key_a: float, body_a: int, key_b: float, body_b: int) -> bool:
+    return key_a < key_b or (key_a == key_b and body_a < body_b)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _place(
+    heap: np.ndarray, key: np.ndarray, where: np.ndarray, k: int, body: int, t: float
+) -> None:
+    heap[k] = body
+    key[k] = t
+    where[body] = k
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _sift_up(
+    heap: np.ndarray, key: np.ndarray, where: np.ndarray, k: int, body: int, t: float
+) -> None:
+    while k > 0:
+        parent = (k - 1) >> 1
+        if not _before(t, body, key[parent], heap[parent]):
+            break
+        _place(heap, key, where, k, heap[parent], key[parent])
+        k = parent
+    _place(heap, key, where, k, body, t)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _sift_down(
+    heap: np.ndarray, key: np.ndarray, where: np.ndarray, n: int, k: int, body: int, t: float
+) -> None:
+    while True:
+        child = 2 * k + 1
+        if child >= n:
+            break
+        right = child + 1
+        if right < n and _before(key[right], heap[right], key[child], heap[child]):
+            child = right
+        if not _before(key[child], heap[child], t, body):
+            break
+        _place(heap, key, where, k, heap[child], key[child])
+        k = child
+    _place(heap, key, where, k, body, t)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _bucket(t: float, cal_f: np.ndarray, cur: int, n_buckets: int) -> int:
+    """Where an event at ``t`` goes: ``IN_HEAP`` (current bucket or earlier), a bucket, the
+    overflow (``n_buckets``), or ``NOWHERE`` (t infinite)."""
+    if math.isinf(t):
+        return NOWHERE
+    x = (t - cal_f[F_BASE]) / cal_f[F_WIDTH]
+    if x >= n_buckets:
+        return n_buckets
+    k = math.floor(x)
+    return IN_HEAP if k <= cur else k
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _insert(
+    body: int,
+    t: float,
+    cal_head: np.ndarray,
+    cal_next: np.ndarray,
+    cal_prev: np.ndarray,
+    cal_loc: np.ndarray,
+    cur_heap: np.ndarray,
+    cur_key: np.ndarray,
+    cur_where: np.ndarray,
+    cal_f: np.ndarray,
+    cal_i: np.ndarray,
+) -> None:
+    n_buckets = cal_head.shape[0] - 1
+    loc = _bucket(t, cal_f, cal_i[I_CUR], n_buckets)
+    cal_loc[body] = loc
+    if loc == NOWHERE:
+        return
+    cal_i[I_COUNT] += 1
+    if loc == IN_HEAP:
+        n = cal_i[I_SIZE]
+        cal_i[I_SIZE] = n + 1
+        _sift_up(cur_heap, cur_key, cur_where, n, body, t)
+        return
+    first = cal_head[loc]
+    cal_next[body] = first
+    cal_prev[body] = -1
+    if first >= 0:
+        cal_prev[first] = body
+    cal_head[loc] = body
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _remove(
+    body: int,
+    cal_head: np.ndarray,
+    cal_next: np.ndarray,
+    cal_prev: np.ndarray,
+    cal_loc: np.ndarray,
+    cur_heap: np.ndarray,
+    cur_key: np.ndarray,
+    cur_where: np.ndarray,
+    cal_i: np.ndarray,
+) -> None:
+    loc = cal_loc[body]
+    if loc == NOWHERE:
+        return
+    cal_loc[body] = NOWHERE
+    cal_i[I_COUNT] -= 1
+    if loc == IN_HEAP:
+        k = cur_where[body]
+        n = cal_i[I_SIZE] - 1
+        cal_i[I_SIZE] = n
+        if k == n:
+            return
+        last = cur_heap[n]
+        t_last = cur_key[n]
+        if k > 0 and _before(t_last, last, cur_key[(k - 1) >> 1], cur_heap[(k - 1) >> 1]):
+            _sift_up(cur_heap, cur_key, cur_where, k, last, t_last)
+        else:
+            _sift_down(cur_heap, cur_key, cur_where, n, k, last, t_last)
+        return
+    nxt = cal_next[body]
+    prv = cal_prev[body]
+    if prv >= 0:
+        cal_next[prv] = nxt
+    else:
+        cal_head[loc] = nxt
+    if nxt >= 0:
+        cal_prev[nxt] = prv
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def calendar_update(
+    keys: np.ndarray,
+    body: int,
+    cal_head: np.ndarray,
+    cal_next: np.ndarray,
+    cal_prev: np.ndarray,
+    cal_loc: np.ndarray,
+    cur_heap: np.ndarray,
+    cur_key: np.ndarray,
+    cur_where: np.ndarray,
+    cal_f: np.ndarray,
+    cal_i: np.ndarray,
+) -> None:
+    """Re-file ``body`` after its event time ``keys[body]`` changed."""
+    _remove(body, cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key, cur_where, cal_i)
+    _insert(
+        body,
+        keys[body],
+        cal_head,
+        cal_next,
+        cal_prev,
+        cal_loc,
+        cur_heap,
+        cur_key,
+        cur_where,
+        cal_f,
+        cal_i,
+    )
+
+
+@njit(cache=True, error_model="numpy")
+def _new_year(
+    keys: np.ndarray,
+    cal_head: np.ndarray,
+    cal_next: np.ndarray,
+    cal_prev: np.ndarray,
+    cal_loc: np.ndarray,
+    cur_heap: np.ndarray,
+    cur_key: np.ndarray,
+    cur_where: np.ndarray,
+    cal_f: np.ndarray,
+    cal_i: np.ndarray,
+) -> None:
+    """Every bucket is spent: start a year at the earliest overflow event, with a width from
+    the last year's event rate, and share the overflow out."""
+    n_buckets = cal_head.shape[0] - 1
+    t_min = math.inf
+    body = cal_head[n_buckets]
+    while body >= 0:
+        t_min = min(t_min, keys[body])
+        body = cal_next[body]
+    span = n_buckets * cal_f[F_WIDTH]
+    popped = cal_i[I_POPPED]
+    if popped > 0:
+        cal_f[F_WIDTH] = EVENTS_PER_BUCKET * span / popped
+    cal_f[F_BASE] = t_min
+    cal_i[I_CUR] = 0
+    cal_i[I_POPPED] = 0
+    body = cal_head[n_buckets]
+    cal_head[n_buckets] = -1
+    while body >= 0:
+        following = cal_next[body]
+        cal_loc[body] = NOWHERE
+        cal_i[I_COUNT] -= 1
+        _insert(
+            body,
+            keys[body],
+            cal_head,
+            cal_next,
+            cal_prev,
+            cal_loc,
+            cur_heap,
+            cur_key,
+            cur_where,
+            cal_f,
+            cal_i,
+        )
+        body = following
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def calendar_top(
+    keys: np.ndarray,
+    cal_head: np.ndarray,
+    cal_next: np.ndarray,
+    cal_prev: np.ndarray,
+    cal_loc: np.ndarray,
+    cur_heap: np.ndarray,
+    cur_key: np.ndarray,
+    cur_where: np.ndarray,
+    cal_f: np.ndarray,
+    cal_i: np.ndarray,
+) -> int:
+    """The body with the earliest event (ties: lowest index), or -1 if no event is left."""
+    n_buckets = cal_head.shape[0] - 1
+    while cal_i[I_SIZE] == 0:
+        if cal_i[I_COUNT] == 0:
+            return -1
+        cur = cal_i[I_CUR] + 1
+        if cur >= n_buckets:
+            _new_year(
+                keys,
+                cal_head,
+                cal_next,
+                cal_prev,
+                cal_loc,
+                cur_heap,
+                cur_key,
+                cur_where,
+                cal_f,
+                cal_i,
+            )
+            continue
+        cal_i[I_CUR] = cur
+        body = cal_head[cur]
+        cal_head[cur] = -1
+        while body >= 0:  # pour the bucket into the heap
+            following = cal_next[body]
+            cal_loc[body] = IN_HEAP
+            n = cal_i[I_SIZE]
+            cal_i[I_SIZE] = n + 1
+            _sift_up(cur_heap, cur_key, cur_where, n, body, keys[body])
+            body = following
+    cal_i[I_POPPED] += 1
+    return int(cur_heap[0])
+
+
+@njit(cache=True, error_model="numpy")
+def calendar_build(
+    keys: np.ndarray,
+    cal_head: np.ndarray,
+    cal_next: np.ndarray,
+    cal_prev: np.ndarray,
+    cal_loc: np.ndarray,
+    cur_heap: np.ndarray,
+    cur_key: np.ndarray,
+    cur_where: np.ndarray,
+    cal_f: np.ndarray,
+    cal_i: np.ndarray,
+) -> None:
+    """File every body's event; the first year starts at the earliest event, with buckets as
+    wide as ``EVENTS_PER_BUCKET`` times the mean spacing of the earliest half of the events."""
+    finite = keys[np.isfinite(keys)]
+    cal_head[:] = -1
+    cal_i[:] = 0
+    cal_loc[:] = NOWHERE
+    if finite.shape[0] == 0:
+        cal_f[F_BASE] = 0.0
+        cal_f[F_WIDTH] = 1.0
+        return
+    ordered = np.sort(finite)
+    half = max(1, ordered.shape[0] // 2)
+    spread = ordered[half - 1] - ordered[0]
+    cal_f[F_BASE] = ordered[0]
+    cal_f[F_WIDTH] = EVENTS_PER_BUCKET * spread / half if spread > 0.0 else 1.0
+    for body in range(keys.shape[0]):
+        _insert(
+            body,
+            keys[body],
+            cal_head,
+            cal_next,
+            cal_prev,
+            cal_loc,
+            cur_heap,
+            cur_key,
+            cur_where,
+            cal_f,
+            cal_i,
+        )
