@@ -330,7 +330,13 @@ class World:
         if g.shape != (dim,) or not np.all(np.isfinite(g)):
             raise CaromError(f"gravity must be {dim} finite components [m/s^2]; got {gravity!r}")
         self._gravity = g
-        wall_e = np.broadcast_to(np.asarray(wall_restitution, dtype=np.float64), (2 * dim,))
+        wall_e = np.asarray(wall_restitution, dtype=np.float64)
+        if wall_e.ndim > 1 or wall_e.size not in (1, 2 * dim):
+            raise CaromError(
+                f"wall_restitution must be one number or {2 * dim} (lower and upper wall of "
+                f"each axis in turn: x_lower, x_upper, ...); got {wall_restitution!r}"
+            )
+        wall_e = np.broadcast_to(wall_e.reshape(-1), (2 * dim,))
         if np.any(~(wall_e >= 0.0) | (wall_e > 1.0)):
             raise CaromError(f"wall_restitution must lie in [0, 1]; got {wall_restitution!r}")
         self._wall_e = np.array(wall_e)

@@ -1,0 +1,186 @@
+"""Scene files: what a good one builds, and the message each kind of bad one gets."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import carom
+from carom.scene import Scene, SceneError, load_scene
+
+GOOD = """\
+# two balls and a gas in a 2D box
+[world]
+dimension = 2
+box = [4.0, 2.0]
+boundary = "walls"
+wall_restitution = 0.9
+
+[[materials]]
+name = "rubber"
+restitution = 0.8
+
+[[bodies]]
+positions = [[0.5, 1.0], [3.5, 1.0]]
+velocities = [[1.0, 0.0], [-1.0, 0.0]]
+radius = 0.1
+mass = [1.0, 2.0]
+material = "rubber"
+
+[[gas]]
+count = 20
+packing = 0.1
+radius = 0.05
+seed = 3
+
+[run]
+until = 2.0
+frame_interval = 0.1
+"""
+
+
+def _write(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    return path
+
+
+def test_a_good_scene_builds_its_world(tmp_path: Path) -> None:
+    scene = load_scene(_write(tmp_path, GOOD))
+    world = scene.build()
+    assert world.n_bodies == 22
+    np.testing.assert_array_equal(world.box, [4.0, 2.0])
+    assert scene.run == {"until": 2.0, "frame_interval": 0.1}
+    # the gas: 20 radius-0.05 disks inside the walls, none overlapping, zero total momentum
+    # (unit mass: the mean velocity was removed), the same for the same seed
+    x = world.positions[2:]
+    assert np.all(x >= 0.05)
+    assert np.all(x <= np.array([4.0, 2.0]) - 0.05)
+    d = np.linalg.norm(x[:, None] - x[None], axis=-1) + np.eye(20)
+    assert d.min() >= 0.1
+    np.testing.assert_allclose(world.velocities[2:].sum(axis=0), 0.0, atol=1e-12)
+    again = load_scene(_write(tmp_path, GOOD)).build()
+    np.testing.assert_array_equal(again.positions, world.positions)
+    # and it runs: the two balls meet head on (e = 0.8 from the material)
+    world.run(until=scene.run["until"])
+    assert world.stats.collisions > 0
+
+
+def test_the_python_api_builds_the_same_scene(tmp_path: Path) -> None:
+    import tomllib
+
+    from_file = load_scene(_write(tmp_path, GOOD)).build()
+    from_dict = Scene.from_dict(tomllib.loads(GOOD)).build()
+    np.testing.assert_array_equal(from_file.positions, from_dict.positions)
+    np.testing.assert_array_equal(from_file.velocities, from_dict.velocities)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        # unparsable TOML: tomllib's line and column
+        (("box = [4.0, 2.0]", "box = [4.0, 2.0"), r"scene\.toml: not valid TOML: .*line \d+"),
+        # unknown key, with its line
+        (
+            ('boundary = "walls"', 'boundry = "walls"'),
+            r"scene\.toml:5: \[world\] boundry: is not a known key; use one of dimension, box",
+        ),
+        # wrong type
+        (
+            ("dimension = 2", 'dimension = "two"'),
+            r"scene\.toml:3: \[world\] dimension: must be an integer, got 'two' \(str\)",
+        ),
+        # missing required key
+        (("until = 2.0\n", ""), r"\[run\] until: is required; add until = \.\.\."),
+        # zero or negative radius and mass
+        (
+            ("radius = 0.1", "radius = -0.1"),
+            r"scene\.toml:15: \[\[bodies\]\] #1 radius: must be > 0, got -0\.1",
+        ),
+        (
+            ("mass = [1.0, 2.0]", "mass = [1.0, 0.0]"),
+            r"\[\[bodies\]\] #1 mass: must be > 0, got 0\.0",
+        ),
+        # restitution outside [0, 1]
+        (
+            ("restitution = 0.8", "restitution = 1.2"),
+            r"scene\.toml:10: \[\[materials\]\] #1 restitution: must lie in \[0, 1\], got 1\.2",
+        ),
+        # bodies overlapping at the start
+        (
+            ("[[0.5, 1.0], [3.5, 1.0]]", "[[0.5, 1.0], [0.6, 1.0]]"),
+            r"scene\.toml: spheres 0 and 1 overlap",
+        ),
+        # outside the box
+        (
+            ("[[0.5, 1.0], [3.5, 1.0]]", "[[0.5, 1.0], [4.5, 1.0]]"),
+            r"scene\.toml: sphere 1 at \[4\.5, 1\.0\] with radius 0\.1 m reaches outside the box",
+        ),
+        # frame interval <= 0
+        (
+            ("frame_interval = 0.1", "frame_interval = 0.0"),
+            r"scene\.toml:27: \[run\] frame_interval: must be > 0, got 0\.0",
+        ),
+        # a material nobody defined
+        (
+            ('material = "rubber"', 'material = "steel"'),
+            r"names material 'steel', which no \[\[materials\]\] table defines",
+        ),
+        # rows of the wrong dimension
+        (
+            ("[[1.0, 0.0], [-1.0, 0.0]]", "[[1.0, 0.0, 0.0], [-1.0, 0.0]]"),
+            r"velocities: rows must have 2 numbers in a 2D world",
+        ),
+        # wall restitutions: neither one number nor one per wall
+        (
+            ("wall_restitution = 0.9", "wall_restitution = [0.9, 0.9, 0.9]"),
+            r"\[world\]: wall_restitution must be one number or 4 \(lower and upper wall",
+        ),
+        # a gas that cannot fit
+        (
+            ("packing = 0.1", "packing = 0.001"),
+            r"\[\[gas\]\] #1: 20 spheres of radius 0\.05 need a packing of",
+        ),
+    ],
+)
+def test_each_bad_scene_gets_one_clear_message(
+    tmp_path: Path, change: tuple[str, str], message: str
+) -> None:
+    old, new = change
+    assert old in GOOD
+    path = _write(tmp_path, GOOD.replace(old, new, 1))
+    with pytest.raises(SceneError, match=message):
+        load_scene(path).build()
+
+
+def test_a_missing_file_is_named(tmp_path: Path) -> None:
+    with pytest.raises(SceneError, match=r"nope\.toml: no such scene file; check the path"):
+        load_scene(tmp_path / "nope.toml")
+
+
+def test_scene_errors_are_value_errors() -> None:
+    # the API's promise: bad input raises ValueError (CaromError) subclasses
+    assert issubclass(SceneError, carom.CaromError)
+    assert issubclass(SceneError, ValueError)
+
+
+def test_a_3d_periodic_gas_at_the_packing_asked_for() -> None:
+    # 200 spheres of radius 0.5 at packing 0.2 in a periodic cube: the box holds exactly that
+    # packing (count x 4/3 pi r^3 / L^3), no pair overlaps under the minimum image
+    side = (200 * 4 / 3 * math.pi * 0.125 / 0.2) ** (1 / 3)
+    scene = Scene.from_dict(
+        {
+            "world": {"dimension": 3, "box": [side] * 3, "boundary": "periodic"},
+            "gas": [{"count": 200, "packing": 0.2, "radius": 0.5, "seed": 1}],
+            "run": {"until": 1.0},
+        }
+    )
+    world = scene.build()
+    x = world.positions
+    d = x[:, None] - x[None]
+    d -= side * np.round(d / side)
+    dist = np.linalg.norm(d, axis=-1) + np.eye(200) * side
+    assert dist.min() >= 1.0
