@@ -68,7 +68,29 @@ def _build_parser() -> argparse.ArgumentParser:
         help="skip the PNG figures (they need the viz extra: matplotlib)",
     )
     cases.set_defaults(handler=_cmd_cases)
+
+    scenes = commands.add_parser(
+        "scenes",
+        help="list the built-in scenes",
+        description="List the scenes that ship with carom: name, title and what they show.",
+    )
+    scenes.set_defaults(handler=_cmd_scenes)
     return parser
+
+
+def _cmd_scenes(args: argparse.Namespace) -> int:
+    import textwrap
+
+    from carom.scene import builtin_scenes, load_scene
+
+    for name, path in builtin_scenes().items():
+        scene = load_scene(path)
+        title = scene.scene.get("title") or name
+        print(f"{name}\n  {title}")
+        description = scene.scene.get("description")
+        if description:
+            print(textwrap.indent(textwrap.fill(description, 76), "    "))
+    return 0
 
 
 def _cmd_cases(args: argparse.Namespace) -> int:

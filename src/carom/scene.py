@@ -23,7 +23,7 @@ import numpy as np
 from carom.errors import CaromError
 from carom.world import Material, World
 
-__all__ = ["Scene", "SceneError", "load_scene"]
+__all__ = ["Scene", "SceneError", "builtin_scenes", "find_scene", "load_scene"]
 
 
 class SceneError(CaromError):
@@ -113,7 +113,17 @@ def _show(value: Any) -> str:
     return f"{text[:40]}{'...' if len(text) > 40 else ''} ({kind})"
 
 
+def _region(value: Any) -> str | None:
+    if not isinstance(value, list) or len(value) != 2 or any(_vector(c) for c in value):
+        return f"must be [[low corner], [high corner]], got {_show(value)}"
+    return None
+
+
 SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
+    "scene": {
+        "title": (_text, False, None),
+        "description": (_text, False, None),
+    },
     "world": {
         "dimension": (_dimension, True, None),
         "box": (_vector, True, None),
@@ -154,6 +164,8 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "temperature": (_positive, False, 1.0),
         "seed": (_integer, False, 0),
         "material": (_text, False, None),
+        "region": (_region, False, None),
+        "drift": (_vector, False, None),
     },
     "run": {
         "until": (_positive, True, None),
@@ -172,6 +184,8 @@ class Scene:
 
     Attributes
     ----------
+    scene : dict
+        The optional ``[scene]`` table: ``title`` and ``description``.
     world : dict
         The ``[world]`` table, defaults filled in.
     materials, bodies, gas : list of dict
@@ -183,6 +197,7 @@ class Scene:
     """
 
     world: dict[str, Any]
+    scene: dict[str, Any] = field(default_factory=dict)
     materials: list[dict[str, Any]] = field(default_factory=list)
     bodies: list[dict[str, Any]] = field(default_factory=list)
     gas: list[dict[str, Any]] = field(default_factory=list)
@@ -246,6 +261,16 @@ class Scene:
                         [table, "material"],
                         f"names material {name!r}, which no [[materials]] table defines",
                         f"define it, or use one of {names}" if names else "define it",
+                        index,
+                    )
+        for index, entry in enumerate(self.gas):
+            points = [("drift", entry["drift"])] + [("region", c) for c in entry["region"] or []]
+            for key, value in points:
+                if value is not None and len(value) != dim:
+                    raise where.error(
+                        ["gas", key],
+                        f"needs {dim} numbers per point in a {dim}D world, got {len(value)}",
+                        f"give {dim} numbers",
                         index,
                     )
         for index, entry in enumerate(self.bodies):
@@ -355,6 +380,27 @@ def load_scene(path: str | Path) -> Scene:
     return Scene.from_dict(data, str(path), text)
 
 
+def builtin_scenes() -> dict[str, Path]:
+    """The scenes that ship with carom (``carom/scenarios/*.toml``), by name."""
+    folder = Path(__file__).parent / "scenarios"
+    return {path.stem: path for path in sorted(folder.glob("*.toml"))}
+
+
+def find_scene(name_or_path: str | Path) -> Path:
+    """A scene file: ``name_or_path`` itself if it is a file, else the built-in scene of that
+    name; a :class:`SceneError` naming both possibilities otherwise."""
+    path = Path(name_or_path)
+    if path.is_file():
+        return path
+    builtin = builtin_scenes()
+    if str(name_or_path) in builtin:
+        return builtin[str(name_or_path)]
+    raise SceneError(
+        f"{name_or_path}: no such scene file, and no built-in scene of that name; check the "
+        f"path, or use one of: {', '.join(builtin)} (carom scenes lists them)"
+    )
+
+
 def _check_table(
     table: str, entry: Mapping[str, Any], where: _Locator, index: int | None
 ) -> dict[str, Any]:
@@ -384,7 +430,10 @@ def _add_gas(world: World, gas: Mapping[str, Any], material: Material | None) ->
     fraction ``packing`` of the box, with Maxwell velocities at ``temperature`` (k_B = 1)."""
     dim = world.dim
     count, radius, packing = gas["count"], gas["radius"], gas["packing"]
-    volume = float(np.prod(world.box))
+    if gas["region"] is None:
+        volume = float(np.prod(world.box))
+    else:
+        volume = float(np.prod(np.subtract(gas["region"][1], gas["region"][0])))
     unit = math.pi * radius**2 if dim == 2 else 4.0 / 3.0 * math.pi * radius**3
     if count * unit > packing * volume * (1 + 1e-12):
         raise CaromError(
@@ -393,20 +442,36 @@ def _add_gas(world: World, gas: Mapping[str, Any], material: Material | None) ->
             f"or lower count or radius"
         )
     rng = np.random.default_rng(gas["seed"])
-    positions = _random_positions(world, count, radius, rng)
+    region = gas["region"]
+    low = np.zeros(dim) if region is None else np.asarray(region[0], dtype=float)
+    high = world.box.copy() if region is None else np.asarray(region[1], dtype=float)
+    if np.any(low < 0) or np.any(high > world.box) or np.any(high <= low):
+        raise CaromError(
+            f"region {region} must be a box inside [0, {world.box.tolist()}] with its high "
+            f"corner above its low one; fix its corners"
+        )
+    positions = _random_positions(world, count, radius, rng, low, high)
     velocities = rng.normal(scale=math.sqrt(gas["temperature"] / gas["mass"]), size=(count, dim))
     velocities -= velocities.mean(axis=0)
+    if gas["drift"] is not None:
+        velocities += np.asarray(gas["drift"], dtype=float)
     world.add_spheres(positions, velocities, radius=radius, mass=gas["mass"], material=material)
 
 
 def _random_positions(
-    world: World, count: int, radius: float, rng: np.random.Generator
+    world: World,
+    count: int,
+    radius: float,
+    rng: np.random.Generator,
+    low: np.ndarray,
+    high: np.ndarray,
 ) -> np.ndarray:
-    """Random sequential addition: uniform trial points, each kept if it overlaps nothing
-    placed before (the box's walls, earlier gas and the bodies already in the world)."""
+    """Random sequential addition in the box ``[low, high]``: uniform trial points, each kept
+    if it overlaps nothing placed before (walls, earlier gas, bodies already in the world)."""
     dim = world.dim
     box = world.box
-    margin = radius if world.boundary == "walls" else 0.0
+    walled = world.boundary == "walls" or np.any(low > 0) or np.any(high < box)
+    margin = radius if walled else 0.0
     cell = 2.0 * radius
     grid: dict[tuple[int, ...], list[int]] = {}
     others = [(p, r) for p, r in zip(world.positions, world._radius, strict=True)]
@@ -419,7 +484,7 @@ def _random_positions(
                 f"could place only {len(placed)} of {count} spheres at random without overlap; "
                 f"lower packing (random placement jams near 0.38 in 3D, 0.55 in 2D)"
             )
-        p = margin + rng.random(dim) * (box - 2 * margin)
+        p = low + margin + rng.random(dim) * (high - low - 2 * margin)
         key = tuple(int(c) for c in np.floor(p / cell))
         clash = False
         for offset in np.ndindex(*([3] * dim)):

@@ -1,0 +1,83 @@
+"""The built-in scenes: each loads, builds and runs for a short time, keeping what it should."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import carom
+from carom.scene import builtin_scenes, find_scene
+
+EXPECTED = {
+    "billiards-break",
+    "bouncing-ball",
+    "galton-board",
+    "granular-cooling",
+    "hard-sphere-gas",
+    "newtons-cradle",
+    "rain-3d",
+}
+
+
+def test_the_built_in_scenes_are_all_there() -> None:
+    assert set(builtin_scenes()) == EXPECTED
+
+
+@pytest.mark.parametrize("name", sorted(EXPECTED))
+def test_each_built_in_scene_runs_a_little(name: str) -> None:
+    scene = carom.load_scene(find_scene(name))
+    assert scene.scene["title"]
+    assert scene.scene["description"]
+    world = scene.build()
+    ke0 = world.stats.kinetic_energy
+    p0 = world.stats.momentum
+    world.run(until=min(scene.run["until"], 0.3), log=False)
+    assert world.time == pytest.approx(min(scene.run["until"], 0.3), rel=0.0, abs=0.0)
+    # nothing overlaps (to the engine's round-off bound, 1e-9 of the sum of radii) and every
+    # moving body is inside a walled box
+    x, r = world.positions, world._radius
+    d = x[:, None] - x[None]
+    if world.boundary == "periodic":
+        d -= world.box * np.round(d / world.box)
+    gap = np.linalg.norm(d, axis=-1) - (r[:, None] + r[None]) + np.eye(len(r)) * 1e9
+    assert gap.min() > -1e-9 * 2 * r.max()
+    if world.boundary == "walls":
+        assert np.all(x - r[:, None] >= -1e-9)
+        assert np.all(x + r[:, None] <= world.box + 1e-9)
+    no_gravity = not np.any(world._gravity)
+    elastic = all(m.restitution == 1.0 for m in world.materials) and np.all(world._wall_e == 1)
+    if no_gravity and elastic:
+        # energy kept to round-off (1e-10 relative over these short runs)
+        assert world.stats.kinetic_energy == pytest.approx(ke0, rel=1e-10, abs=0.0)
+    if world.boundary == "periodic":
+        np.testing.assert_allclose(world.stats.momentum, p0, rtol=0, atol=1e-9 * (1 + ke0))
+
+
+def test_newtons_cradle_scene_hands_on_the_momentum() -> None:
+    # e = 1, equal masses: each impact swaps velocities; the 1 m/s of the first ball ends in
+    # the last one, the rest at rest (to round-off). The strike is at t = 0.3 s and the last
+    # ball meets the wall at 0.75 s: look at 0.6 s.
+    world = carom.load_scene(find_scene("newtons-cradle")).build()
+    world.run(until=0.6, log=False)
+    np.testing.assert_allclose(world.velocities[:, 0], [0, 0, 0, 0, 1.0], rtol=0, atol=1e-12)
+
+
+def test_an_unknown_scene_name_lists_the_built_in_ones() -> None:
+    with pytest.raises(carom.SceneError, match=r"no-such: no such scene file, .* bouncing-ball"):
+        find_scene("no-such")
+
+
+def test_carom_scenes_lists_them() -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "carom", "scenes"],
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    for name in EXPECTED:
+        assert f"{name}\n" in done.stdout
