@@ -23,11 +23,11 @@ $(BIN)/python:
 
 # One stamp per set of extras: reinstall only when pyproject.toml changes.
 $(VENV)/.stamp-demo: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[viz]'
+	$(BIN)/python -m pip install --quiet -e '.[viz,io]'
 	@touch $@
 
 $(VENV)/.stamp-dev: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[viz,dev]'
+	$(BIN)/python -m pip install --quiet -e '.[viz,io,dev]'
 	@touch $@ $(VENV)/.stamp-demo
 
 demo: $(VENV)/.stamp-demo

@@ -80,9 +80,11 @@ def _build_parser() -> argparse.ArgumentParser:
         "run",
         help="run a scene (a built-in name or a TOML file) and write its results",
         description=(
-            "Run a scene exactly, event by event, and write DIR/events.csv (every collision: "
-            "time, bodies or wall, impulse, normal speeds before and after) and "
-            "DIR/summary.json (observables, energy balance, momentum, counts, speed). "
+            "Run a scene exactly, event by event, and write DIR/trajectory.h5 (H5MD: positions "
+            "and velocities every frame interval, read by OVITO and MDAnalysis), "
+            "DIR/events.csv (every collision: time, bodies or wall, impulse, normal speeds "
+            "before and after) and DIR/summary.json (observables, energy balance, momentum, "
+            "counts, speed). "
             "Scene files are described in docs/scenes.md; 'carom scenes' lists the built-in "
             "ones. Nothing is written unless the whole run succeeds."
         ),
@@ -94,6 +96,9 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--no-events", action="store_true", help="do not log collisions (no events.csv)"
+    )
+    run.add_argument(
+        "--no-trajectory", action="store_true", help="do not write trajectory.h5 (H5MD)"
     )
     run.add_argument(
         "--force", action="store_true", help="replace DIR if it exists and is not empty"
@@ -116,21 +121,43 @@ def _cmd_run(args: argparse.Namespace) -> int:
         raise CaromError(f"--until must be a positive number of seconds; got {args.until!r}")
     world = scene.build()
     check_output(args.out, force=args.force)
+    if not args.no_trajectory:
+        from carom.io.h5md import need_h5py
+
+        need_h5py()  # before running: a missing extra must not cost a whole run
     start = {
         "kinetic_energy": world.stats.kinetic_energy,
         "potential_energy": potential_energy(world),
         "momentum": world.stats.momentum.tolist(),
     }
-    began = time.perf_counter()
-    world.run(until=until, log=not args.no_events)
-    wall = time.perf_counter() - began
-    data = summary(world, scene=str(path), start=start, wall_seconds=wall)
+    frame_dt = scene.run["frame_interval"]
+    written = []
     with staged_output(args.out, force=args.force) as staging:
-        written = ["summary.json"]
+        began = time.perf_counter()
+        if args.no_trajectory:
+            world.run(until=until, log=not args.no_events)
+            writing = 0.0
+        else:
+            from carom.io.h5md import H5MDWriter, check_trajectory
+
+            with H5MDWriter(staging / "trajectory.h5", world) as writer:
+                writer.write(world.frame())
+                writing = 0.0
+                for frame in world.frames(until, frame_dt, log=not args.no_events):
+                    mark = time.perf_counter()
+                    writer.write(frame)
+                    writing += time.perf_counter() - mark
+                if frame_dt is None:
+                    writer.write(world.frame())
+            check_trajectory(staging / "trajectory.h5", world, writer.frames)
+            written.append("trajectory.h5")
+        wall = time.perf_counter() - began - writing
+        data = summary(world, scene=str(path), start=start, wall_seconds=wall)
         if not args.no_events:
             write_events_csv(world, staging / "events.csv")
-            written.insert(0, "events.csv")
+            written.append("events.csv")
         write_summary(data, staging / "summary.json")
+        written.append("summary.json")
     title = scene.scene.get("title") or path.stem
     rate = world.stats.collisions / wall if wall > 0 else float("inf")
     print(

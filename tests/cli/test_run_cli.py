@@ -10,6 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 
@@ -28,7 +29,7 @@ def test_run_a_bouncing_ball_and_check_its_events(tmp_path: Path) -> None:
     out = tmp_path / "ball"
     done = carom("run", "bouncing-ball", "--out", out, "--until", "2.0")
     assert done.returncode == 0, done.stderr
-    assert "wrote events.csv, summary.json" in done.stdout
+    assert "wrote trajectory.h5, events.csv, summary.json" in done.stdout
     with (out / "events.csv").open() as handle:
         rows = list(csv.DictReader(handle))
     # dropped from h0 = 1.55 - 0.05 = 1.5 m (centre above contact) under g = 9.81 m/s^2 onto a
@@ -104,3 +105,45 @@ def test_a_bad_until_is_refused(tmp_path: Path) -> None:
     out = tmp_path / "out"
     done = carom("run", "bouncing-ball", "--out", out, "--until", "-1")
     _refused(done, out, "--until must be a positive number of seconds")
+
+
+def test_the_trajectory_is_h5md_with_every_frame(tmp_path: Path) -> None:
+    h5py = pytest.importorskip("h5py", reason="the io extra (h5py) is not installed")
+    out = tmp_path / "cradle"
+    done = carom("run", "newtons-cradle", "--out", out, "--until", "0.6")
+    assert done.returncode == 0, done.stderr
+    with h5py.File(out / "trajectory.h5", "r") as f:
+        assert tuple(f["h5md"].attrs["version"]) == (1, 1)
+        assert f["h5md/creator"].attrs["name"] == "carom"
+        box = f["particles/all/box"]
+        assert box.attrs["dimension"] == 2
+        assert list(box.attrs["boundary"]) == ["none", "none"]
+        np.testing.assert_array_equal(box["edges"][()], [1.4, 0.4])
+        np.testing.assert_array_equal(f["particles/all/radius"][()], [0.05] * 5)
+        position = f["particles/all/position"]
+        assert position["value"].attrs["unit"] == "m"
+        # the start and one frame every 0.01 s to 0.6 s: 61 frames of 5 bodies in 2D
+        assert position["value"].shape == (61, 5, 2)
+        np.testing.assert_allclose(position["time"][()], np.arange(61) * 0.01, rtol=0, atol=1e-12)
+        np.testing.assert_array_equal(position["step"][()], np.arange(61))
+        # the strike at 0.3 s hands the 1 m/s to the last ball: at 0.6 s it is 0.3 m further
+        # on, the first ball stopped where it touched the second (x = 0.5)
+        last = position["value"][-1]
+        np.testing.assert_allclose(last[:, 0], [0.5, 0.6, 0.7, 0.8, 1.2], rtol=0, atol=1e-12)
+        velocity = f["particles/all/velocity/value"][-1]
+        np.testing.assert_allclose(velocity[:, 0], [0, 0, 0, 0, 1.0], rtol=0, atol=1e-12)
+        # kinetic energy, m v^2 / 2 = 0.5 J in every frame (elastic)
+        ke = f["observables/kinetic_energy/value"][()]
+        np.testing.assert_allclose(ke, 0.5, rtol=1e-12, atol=0)
+
+
+def test_without_h5py_the_run_is_refused_before_it_starts(tmp_path: Path) -> None:
+    # the io extra missing: one message saying how to install it, exit 2, nothing written
+    out = tmp_path / "out"
+    code = (
+        "import sys; sys.modules['h5py'] = None\n"
+        "from carom.cli import main\n"
+        f"sys.exit(main(['run', 'bouncing-ball', '--out', {str(out)!r}]))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    _refused(done, out, "needs h5py: pip install 'carom[io]'")

@@ -1,0 +1,156 @@
+"""Trajectories in H5MD 1.1 (HDF5, through h5py): the particle-simulation format that OVITO,
+MDAnalysis and VMD read.
+
+Layout written (de Buyl et al., Comput. Phys. Commun. 185, 1546, 2014; nongnu.org/h5md)::
+
+    /h5md                     version = [1, 1]; author, creator (carom and its version)
+    /particles/all/box        dimension, boundary ("periodic" or "none" per axis), edges [m]
+    /particles/all/position   step (F,) int64, time (F,) float64 [s], value (F, N, d) [m]
+    /particles/all/velocity   same, value in [m s-1]
+    /particles/all/radius     (N,) [m]    time-independent
+    /particles/all/mass       (N,) [kg]   (inf for static bodies)
+    /observables/kinetic_energy   step, time, value (F,) [J]
+
+Frames are appended as the run produces them (chunked, resizable datasets).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+import numpy as np
+
+from carom import __version__
+from carom.errors import CaromError
+from carom.world import Frame, World
+
+__all__ = ["H5MDWriter", "check_trajectory", "need_h5py"]
+
+
+def need_h5py() -> Any:
+    """The h5py module, or a CaromError saying how to install it."""
+    try:
+        import h5py  # type: ignore[import-untyped]
+    except ImportError:
+        raise CaromError(
+            "writing the trajectory (H5MD) needs h5py: pip install 'carom[io]' "
+            "(or pass --no-trajectory)"
+        ) from None
+    return h5py
+
+
+class H5MDWriter:
+    """Write a world's frames to an H5MD file as they come.
+
+    Parameters
+    ----------
+    path : Path
+        The file to create.
+    world : World
+        Gives the box, boundary, radii and masses (fixed for the run).
+    """
+
+    def __init__(self, path: Path, world: World) -> None:
+        h5py = need_h5py()
+        self.file = h5py.File(path, "w")
+        self.dim = world.dim
+        self.n = world.n_bodies
+        self.frames = 0
+        meta = self.file.create_group("h5md")
+        meta.attrs["version"] = np.array([1, 1], dtype=np.int32)
+        meta.create_group("author").attrs["name"] = "carom user"
+        creator = meta.create_group("creator")
+        creator.attrs["name"] = "carom"
+        creator.attrs["version"] = __version__
+        particles = self.file.create_group("particles/all")
+        box = particles.create_group("box")
+        box.attrs["dimension"] = np.int32(self.dim)
+        kind = "periodic" if world.boundary == "periodic" else "none"
+        box.attrs["boundary"] = np.array([kind] * self.dim, dtype=h5py.string_dtype())
+        box.create_dataset("edges", data=world.box).attrs["unit"] = "m"
+        radius = particles.create_dataset("radius", data=world._radius)
+        radius.attrs["unit"] = "m"
+        particles.create_dataset("mass", data=world._mass).attrs["unit"] = "kg"
+        self.groups = {
+            "position": self._element(particles, "position", (self.n, self.dim), "m"),
+            "velocity": self._element(particles, "velocity", (self.n, self.dim), "m s-1"),
+            "kinetic_energy": self._element(
+                self.file.require_group("observables"), "kinetic_energy", (), "J"
+            ),
+        }
+        self.mass = np.where(np.isfinite(world._mass), world._mass, 0.0)
+        self.inertia = world._q * self.mass * world._radius**2
+
+    @staticmethod
+    def _element(parent: Any, name: str, shape: tuple[int, ...], unit: str) -> Any:
+        group = parent.create_group(name)
+        group.create_dataset("step", shape=(0,), maxshape=(None,), dtype=np.int64, chunks=True)
+        time = group.create_dataset(
+            "time", shape=(0,), maxshape=(None,), dtype=np.float64, chunks=True
+        )
+        time.attrs["unit"] = "s"
+        value = group.create_dataset(
+            "value",
+            shape=(0, *shape),
+            maxshape=(None, *shape),
+            dtype=np.float64,
+            chunks=(1, *shape) if shape else (1024,),
+        )
+        value.attrs["unit"] = unit
+        return group
+
+    def write(self, frame: Frame) -> None:
+        """Append one frame."""
+        k = self.frames
+        moving = self.mass > 0
+        v = frame.velocities
+        ke = 0.5 * float(np.sum(self.mass[moving] * np.sum(v[moving] ** 2, axis=1)))
+        ke += 0.5 * float(np.sum(self.inertia * np.sum(frame.spins**2, axis=1)))
+        for name, value in (
+            ("position", frame.positions),
+            ("velocity", frame.velocities),
+            ("kinetic_energy", ke),
+        ):
+            group = self.groups[name]
+            for dataset in ("step", "time", "value"):
+                group[dataset].resize(k + 1, axis=0)
+            group["step"][k] = k
+            group["time"][k] = frame.time
+            group["value"][k] = value
+        self.frames = k + 1
+
+    def close(self) -> None:
+        self.file.close()
+
+    def __enter__(self) -> H5MDWriter:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        value: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
+def check_trajectory(path: Path, world: World, frames: int) -> None:
+    """Read ``path`` back and check it holds ``frames`` frames of ``world``'s bodies, the last
+    one equal to the world now; a CaromError if not (nothing half-written is kept)."""
+    h5py = need_h5py()
+    with h5py.File(path, "r") as f:
+        position = f["particles/all/position/value"]
+        velocity = f["particles/all/velocity/value"]
+        expected = (frames, world.n_bodies, world.dim)
+        ok = (
+            tuple(f["h5md"].attrs["version"]) == (1, 1)
+            and position.shape == expected
+            and velocity.shape == expected
+            and f["particles/all/position/time"][-1] == world.time
+            and np.array_equal(position[-1], world.positions)
+            and np.array_equal(velocity[-1], world.velocities)
+        )
+    if not ok:
+        raise CaromError(f"the trajectory written to {path} does not read back as written")
