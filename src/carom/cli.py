@@ -84,7 +84,8 @@ def _build_parser() -> argparse.ArgumentParser:
             "and velocities every frame interval, read by OVITO and MDAnalysis), "
             "DIR/events.csv (every collision: time, bodies or wall, impulse, normal speeds "
             "before and after) and DIR/summary.json (observables, energy balance, momentum, "
-            "counts, speed). "
+            "counts, speed), and plots: energy and momentum against time, the collision rate, "
+            "and for a gas the speed distribution against Maxwell-Boltzmann. "
             "Scene files are described in docs/scenes.md; 'carom scenes' lists the built-in "
             "ones. Nothing is written unless the whole run succeeds."
         ),
@@ -99,6 +100,11 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--no-trajectory", action="store_true", help="do not write trajectory.h5 (H5MD)"
+    )
+    run.add_argument(
+        "--no-plots",
+        action="store_true",
+        help="skip energy.png, collision_rate.png and speeds.png (they need matplotlib)",
     )
     run.add_argument(
         "--force", action="store_true", help="replace DIR if it exists and is not empty"
@@ -125,39 +131,56 @@ def _cmd_run(args: argparse.Namespace) -> int:
         from carom.io.h5md import need_h5py
 
         need_h5py()  # before running: a missing extra must not cost a whole run
+    if not args.no_plots:
+        from carom.viz import require_matplotlib
+
+        require_matplotlib()
+    from carom.io.h5md import H5MDWriter, check_trajectory
+    from carom.viz.run import RunHistory, write_run_plots
+    from carom.world import Frame
+
     start = {
         "kinetic_energy": world.stats.kinetic_energy,
         "potential_energy": potential_energy(world),
         "momentum": world.stats.momentum.tolist(),
     }
     frame_dt = scene.run["frame_interval"]
+    history = RunHistory()
     written = []
     with staged_output(args.out, force=args.force) as staging:
-        began = time.perf_counter()
-        if args.no_trajectory:
-            world.run(until=until, log=not args.no_events)
-            writing = 0.0
-        else:
-            from carom.io.h5md import H5MDWriter, check_trajectory
+        writer = None if args.no_trajectory else H5MDWriter(staging / "trajectory.h5", world)
+        writing = 0.0
 
-            with H5MDWriter(staging / "trajectory.h5", world) as writer:
-                writer.write(world.frame())
-                writing = 0.0
-                for frame in world.frames(until, frame_dt, log=not args.no_events):
-                    mark = time.perf_counter()
-                    writer.write(frame)
-                    writing += time.perf_counter() - mark
-                if frame_dt is None:
-                    writer.write(world.frame())
+        def record(frame: Frame) -> None:
+            nonlocal writing
+            mark = time.perf_counter()
+            history.add(world, frame, potential_energy(world))
+            if writer is not None:
+                writer.write(frame)
+            writing += time.perf_counter() - mark
+
+        record(world.frame())
+        began = time.perf_counter()
+        try:
+            for frame in world.frames(until, frame_dt, log=not args.no_events):
+                record(frame)
+            if frame_dt is None:
+                record(world.frame())
+        finally:
+            if writer is not None:
+                writer.close()
+        wall = time.perf_counter() - began - writing
+        if writer is not None:
             check_trajectory(staging / "trajectory.h5", world, writer.frames)
             written.append("trajectory.h5")
-        wall = time.perf_counter() - began - writing
         data = summary(world, scene=str(path), start=start, wall_seconds=wall)
         if not args.no_events:
             write_events_csv(world, staging / "events.csv")
             written.append("events.csv")
         write_summary(data, staging / "summary.json")
         written.append("summary.json")
+        if not args.no_plots:
+            written += write_run_plots(staging, world, history, world.events["time"])
     title = scene.scene.get("title") or path.stem
     rate = world.stats.collisions / wall if wall > 0 else float("inf")
     print(

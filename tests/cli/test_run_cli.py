@@ -147,3 +147,24 @@ def test_without_h5py_the_run_is_refused_before_it_starts(tmp_path: Path) -> Non
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     _refused(done, out, "needs h5py: pip install 'carom[io]'")
+
+
+def test_plots_are_written_where_they_mean_something(tmp_path: Path) -> None:
+    image = pytest.importorskip("matplotlib.image", reason="the viz extra is not installed")
+    gas = tmp_path / "gas"
+    done = carom("run", "hard-sphere-gas", "--out", gas, "--until", "0.5", "--no-trajectory")
+    assert done.returncode == 0, done.stderr
+    for name in ("energy.png", "collision_rate.png", "speeds.png"):
+        picture = image.imread(gas / name)
+        assert picture.ndim == 3
+        assert picture.shape[0] > 200
+        assert picture.shape[1] > 400
+    ball = tmp_path / "ball"
+    done = carom("run", "bouncing-ball", "--out", ball, "--until", "1.0")
+    assert done.returncode == 0, done.stderr
+    # one ball under gravity is no gas: no speed distribution
+    assert sorted(p.name for p in ball.glob("*.png")) == ["collision_rate.png", "energy.png"]
+    quiet = tmp_path / "quiet"
+    done = carom("run", "bouncing-ball", "--out", quiet, "--until", "1.0", "--no-plots")
+    assert done.returncode == 0, done.stderr
+    assert not list(quiet.glob("*.png"))

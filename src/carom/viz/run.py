@@ -1,0 +1,118 @@
+"""The figures of a run: energy and momentum against time, the collision rate, and the speed
+distribution against Maxwell-Boltzmann."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from carom.viz import require_matplotlib
+from carom.world import Frame, World
+
+__all__ = ["RunHistory", "write_run_plots"]
+
+
+@dataclass
+class RunHistory:
+    """What the figures need, collected frame by frame: time [s], kinetic and potential
+    energy [J], dissipated energy so far [J] and total momentum [kg m/s]."""
+
+    time: list[float] = field(default_factory=list)
+    kinetic: list[float] = field(default_factory=list)
+    potential: list[float] = field(default_factory=list)
+    dissipated: list[float] = field(default_factory=list)
+    momentum: list[NDArray[np.float64]] = field(default_factory=list)
+
+    def add(self, world: World, frame: Frame, potential: float) -> None:
+        """Record one frame of ``world`` (``potential``: its gravitational energy [J])."""
+        self.time.append(frame.time)
+        self.kinetic.append(world.stats.kinetic_energy)
+        self.potential.append(potential)
+        self.dissipated.append(world.stats.energy_lost)
+        self.momentum.append(world.stats.momentum)
+
+
+def write_run_plots(
+    folder: Path, world: World, history: RunHistory, event_times: NDArray[np.float64]
+) -> list[str]:
+    """Write ``energy.png``, ``collision_rate.png`` (when collisions were logged) and, for a
+    gas of equal masses in a periodic box, ``speeds.png``; return the file names written."""
+    require_matplotlib()
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    written = []
+    t = np.array(history.time)
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    ke, pe, lost = (
+        np.array(history.kinetic),
+        np.array(history.potential),
+        np.array(history.dissipated),
+    )
+    top.plot(t, ke, label="kinetic")
+    if np.any(pe):
+        top.plot(t, pe, label="potential (gravity)")
+    if np.any(lost):
+        top.plot(t, lost, label="dissipated")
+    top.plot(t, ke + pe + lost, "k--", lw=1, label="total (conserved)")
+    top.set_ylabel("energy [J]")
+    top.legend(loc="best", fontsize=8)
+    p = np.array(history.momentum)
+    for k in range(p.shape[1]):
+        bottom.plot(t, p[:, k], label=f"p_{'xyz'[k]}")
+    bottom.set_ylabel("momentum [kg m/s]")
+    bottom.set_xlabel("time [s]")
+    bottom.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(folder / "energy.png", dpi=110)
+    plt.close(fig)
+    written.append("energy.png")
+
+    if event_times.size:  # (no event log, no rate)
+        fig, ax = plt.subplots(figsize=(7, 3.5))
+        bins = max(10, min(100, int(math.sqrt(event_times.size))))
+        counts, edges = np.histogram(event_times, bins=bins, range=(t[0], t[-1]))
+        width = edges[1] - edges[0]
+        ax.step(edges[:-1], counts / width, where="post")
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("collisions per second")
+        ax.set_title("collision rate (bodies and walls)")
+        fig.tight_layout()
+        fig.savefig(folder / "collision_rate.png", dpi=110)
+        plt.close(fig)
+        written.append("collision_rate.png")
+
+    moving = np.isfinite(world._mass)
+    masses = world._mass[moving]
+    temperature = world.stats.temperature
+    if (
+        world.boundary == "periodic"
+        and moving.sum() >= 100
+        and temperature > 0
+        and np.allclose(masses, masses[0])
+    ):
+        speed = np.linalg.norm(world.velocities[moving], axis=1)
+        m, d = masses[0], world.dim
+        v = np.linspace(0, speed.max() * 1.1, 200)
+        if d == 3:
+            density = 4 * np.pi * v**2 * (m / (2 * np.pi * temperature)) ** 1.5
+        else:
+            density = (m * v / temperature) * 1.0
+        density = density * np.exp(-m * v**2 / (2 * temperature))
+        fig, ax = plt.subplots(figsize=(7, 3.5))
+        ax.hist(speed, bins=40, density=True, alpha=0.6, label=f"speeds at t = {world.time:g} s")
+        ax.plot(v, density, "k", label=f"Maxwell-Boltzmann, k_B T = {temperature:.4g} J")
+        ax.set_xlabel("speed [m/s]")
+        ax.set_ylabel("probability density [s/m]")
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(folder / "speeds.png", dpi=110)
+        plt.close(fig)
+        written.append("speeds.png")
+    return written
