@@ -54,15 +54,15 @@ ANCHORS = {
         "        else:\n            cyc[2] += c1 - c0\n"
         "        # re-schedule the bodies whose motion changed"
     ),
-    "            calendar_update(\n": (
-        "            c2 = _cycles()\n            calendar_update(\n"
-    ),
-    "                cur_where, cal_f, cal_i,\n            )  # fmt: skip": (
-        "                cur_where, cal_f, cal_i,\n            )  # fmt: skip\n"
+    "            calendar_update(ev_time, body, cal)": (
+        "            c2 = _cycles()\n"
+        "            calendar_update(ev_time, body, cal)\n"
         "            c3 = _cycles()\n            cyc[3] += c2 - c1\n            cyc[4] += c3 - c2\n"
         "            c1 = c3"
     ),
-    "        i = calendar_top(\n": ("        c4 = _cycles()\n        i = calendar_top(\n"),
+    "        i = calendar_top(ev_time, cal)": (
+        "        c4 = _cycles()\n        i = calendar_top(ev_time, cal)"
+    ),
     "        T = ev_time[i] if i >= 0 else INF\n": (
         "        T = ev_time[i] if i >= 0 else INF\n        cyc[4] += _cycles() - c4\n"
     ),

@@ -116,9 +116,13 @@ def _build_parser() -> argparse.ArgumentParser:
 def _cmd_run(args: argparse.Namespace) -> int:
     import time
 
+    from carom.io.h5md import H5MDWriter, check_trajectory, need_h5py
     from carom.io.outdir import check_output, staged_output
-    from carom.io.results import potential_energy, summary, write_events_csv, write_summary
+    from carom.io.results import summary, write_events_csv, write_summary
     from carom.scene import find_scene, load_scene
+    from carom.viz import require_matplotlib
+    from carom.viz.run import RunHistory, write_run_plots
+    from carom.world import Frame
 
     path = find_scene(args.scene)
     scene = load_scene(path)
@@ -127,23 +131,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
         raise CaromError(f"--until must be a positive number of seconds; got {args.until!r}")
     world = scene.build()
     check_output(args.out, force=args.force)
+    # a missing extra is found before running, not after a whole run
     if not args.no_trajectory:
-        from carom.io.h5md import need_h5py
-
-        need_h5py()  # before running: a missing extra must not cost a whole run
+        need_h5py()
     if not args.no_plots:
-        from carom.viz import require_matplotlib
-
         require_matplotlib()
-    from carom.io.h5md import H5MDWriter, check_trajectory
-    from carom.viz.run import RunHistory, write_run_plots
-    from carom.world import Frame
-
-    start = {
-        "kinetic_energy": world.stats.kinetic_energy,
-        "potential_energy": potential_energy(world),
-        "momentum": world.stats.momentum.tolist(),
-    }
     frame_dt = scene.run["frame_interval"]
     history = RunHistory()
     written = []
@@ -154,9 +146,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
         def record(frame: Frame) -> None:
             nonlocal writing
             mark = time.perf_counter()
-            history.add(world, frame, potential_energy(world))
+            history.add(world, frame)
             if writer is not None:
-                writer.write(frame)
+                writer.write(frame, history.kinetic[-1])
             writing += time.perf_counter() - mark
 
         record(world.frame())
@@ -173,6 +165,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
         if writer is not None:
             check_trajectory(staging / "trajectory.h5", world, writer.frames)
             written.append("trajectory.h5")
+        start = {
+            "kinetic_energy": history.kinetic[0],
+            "potential_energy": history.potential[0],
+            "momentum": history.momentum[0].tolist(),
+        }
         data = summary(world, scene=str(path), start=start, wall_seconds=wall)
         if not args.no_events:
             write_events_csv(world, staging / "events.csv")

@@ -173,21 +173,13 @@ class Stats:
     def kinetic_energy(self) -> float:
         """Total kinetic energy now, translation and rotation [J]."""
         w = self._world
-        m = w._mobile_mask()
-        v = w.velocities[m]
-        mass = w._mass[m]
-        spin = w.spins[m]
-        ke = 0.5 * np.sum(mass * np.sum(v * v, axis=1))
-        ke += 0.5 * np.sum(w._q[m] * mass * w._radius[m] ** 2 * np.sum(spin * spin, axis=1))
-        return float(ke)
+        return w.kinetic_energy_of(w.velocities, w.spins)
 
     @property
     def momentum(self) -> FloatArray:
         """Total momentum of the moving bodies now, (d,) [kg m/s]."""
         w = self._world
-        m = w._mobile_mask()
-        result: FloatArray = np.sum(w._mass[m, None] * w.velocities[m], axis=0)
-        return result
+        return w.momentum_of(w.velocities)
 
     @property
     def temperature(self) -> float:
@@ -984,6 +976,29 @@ class World:
         if len(self._events) > 1:
             self._events = [np.concatenate(self._events)]
         return self._events[0]
+
+    def kinetic_energy_of(self, velocities: FloatArray, spins: FloatArray) -> float:
+        """Kinetic energy [J], translation and rotation, of the moving bodies with these
+        velocities (N, d) [m/s] and spins (N, 3) [rad/s] (a frame's, say)."""
+        m = self._mobile_mask()
+        v, mass, spin = velocities[m], self._mass[m], spins[m]
+        ke = 0.5 * np.sum(mass * np.sum(v * v, axis=1))
+        ke += 0.5 * np.sum(self._q[m] * mass * self._radius[m] ** 2 * np.sum(spin * spin, axis=1))
+        return float(ke)
+
+    def momentum_of(self, velocities: FloatArray) -> FloatArray:
+        """Total momentum (d,) [kg m/s] of the moving bodies with these velocities (N, d)."""
+        m = self._mobile_mask()
+        result: FloatArray = np.sum(self._mass[m, None] * velocities[m], axis=0)
+        return result
+
+    def potential_energy_of(self, positions: FloatArray) -> float:
+        """Gravitational potential energy ``-sum m g . x`` [J] of the moving bodies at these
+        positions (N, d) [m]; zero without gravity."""
+        if not np.any(self._gravity):
+            return 0.0
+        m = self._mobile_mask()
+        return float(-np.sum(self._mass[m] * (positions[m] @ self._gravity)))
 
     def describe_partner(self, b: int) -> str:
         """A readable name for an event's ``b``: a body, a wall face or a plane."""

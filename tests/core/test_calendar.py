@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from carom.core.calendar import calendar_build, calendar_top, calendar_update
+from carom.core.calendar import Calendar, calendar_build, calendar_top, calendar_update
 
 
-def _calendar(n: int) -> tuple[np.ndarray, ...]:
+def _calendar(n: int) -> Calendar:
     return (
         np.full(n + 1, -1, np.int32),  # cal_head
         np.full(n, -1, np.int32),  # cal_next
@@ -45,16 +45,16 @@ def test_calendar_pops_in_time_then_body_order(seed: int) -> None:
     keys[rng.random(n) < 0.1] = np.inf
     keys[rng.random(n) < 0.2] = 0.5  # ties
     cal = _calendar(n)
-    calendar_build(keys, *cal)
+    calendar_build(keys, cal)
     now = 0.0
     for step in range(3000):
         scale = 10.0 ** (6 * math.sin(step / 300.0) - 3)
-        top = calendar_top(keys, *cal)
+        top = calendar_top(keys, cal)
         assert top == _expected(keys)
         if top < 0:  # nothing scheduled: schedule a few bodies again
             for body in rng.integers(0, n, 3):
                 keys[body] = now + rng.exponential(scale)
-                calendar_update(keys, int(body), *cal)
+                calendar_update(keys, int(body), cal)
             continue
         now = keys[top]
         draw = rng.random()
@@ -66,8 +66,8 @@ def test_calendar_pops_in_time_then_body_order(seed: int) -> None:
             keys[top] = now + 1e4 * scale * n  # far beyond this year
         else:
             keys[top] = now + rng.exponential(scale)
-        calendar_update(keys, top, *cal)
+        calendar_update(keys, top, cal)
         other = int(rng.integers(0, n))
         if math.isfinite(keys[other]) and rng.random() < 0.5:
             keys[other] = now + rng.exponential(scale)
-            calendar_update(keys, other, *cal)
+            calendar_update(keys, other, cal)

@@ -11,7 +11,8 @@ Bucket index is monotone in time and equal times share a bucket, so the top is a
 minimum of ``(time, body)`` over all events: the same order, bit for bit, as a single heap.
 Events at infinite time (none to come) are kept nowhere.
 
-Arrays (all in :class:`carom.state.State`):
+Arrays (all in :class:`carom.state.State`; the kernels take them as one tuple, ``Calendar``, in
+this order):
 
 ``cal_head`` (B + 1,) int32, first body of each bucket (index B: overflow), -1 if empty;
 ``cal_next``, ``cal_prev`` (N,) int32 the lists; ``cal_loc`` (N,) int32 where each body's
@@ -39,6 +40,13 @@ I_COUNT = 2
 I_POPPED = 3
 
 EVENTS_PER_BUCKET = 2.0  # the width aims at about this many events per bucket
+
+# The calendar's arrays, in this order, as one tuple (module docstring); a tuple costs nothing
+# in the inlined functions and keeps every call to one argument.
+Calendar = tuple[
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+    np.ndarray,
+]  # fmt: skip
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -100,19 +108,8 @@ def _bucket(t: float, cal_f: np.ndarray, cur: int, n_buckets: int) -> int:
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _insert(
-    body: int,
-    t: float,
-    cal_head: np.ndarray,
-    cal_next: np.ndarray,
-    cal_prev: np.ndarray,
-    cal_loc: np.ndarray,
-    cur_heap: np.ndarray,
-    cur_key: np.ndarray,
-    cur_where: np.ndarray,
-    cal_f: np.ndarray,
-    cal_i: np.ndarray,
-) -> None:
+def _insert(body: int, t: float, cal: Calendar) -> None:
+    cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key, cur_where, cal_f, cal_i = cal
     n_buckets = cal_head.shape[0] - 1
     loc = _bucket(t, cal_f, cal_i[I_CUR], n_buckets)
     cal_loc[body] = loc
@@ -133,17 +130,8 @@ def _insert(
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _remove(
-    body: int,
-    cal_head: np.ndarray,
-    cal_next: np.ndarray,
-    cal_prev: np.ndarray,
-    cal_loc: np.ndarray,
-    cur_heap: np.ndarray,
-    cur_key: np.ndarray,
-    cur_where: np.ndarray,
-    cal_i: np.ndarray,
-) -> None:
+def _remove(body: int, cal: Calendar) -> None:
+    cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key, cur_where, _cal_f, cal_i = cal
     loc = cal_loc[body]
     if loc == NOWHERE:
         return
@@ -173,51 +161,17 @@ def _remove(
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def calendar_update(
-    keys: np.ndarray,
-    body: int,
-    cal_head: np.ndarray,
-    cal_next: np.ndarray,
-    cal_prev: np.ndarray,
-    cal_loc: np.ndarray,
-    cur_heap: np.ndarray,
-    cur_key: np.ndarray,
-    cur_where: np.ndarray,
-    cal_f: np.ndarray,
-    cal_i: np.ndarray,
-) -> None:
+def calendar_update(keys: np.ndarray, body: int, cal: Calendar) -> None:
     """Re-file ``body`` after its event time ``keys[body]`` changed."""
-    _remove(body, cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key, cur_where, cal_i)
-    _insert(
-        body,
-        keys[body],
-        cal_head,
-        cal_next,
-        cal_prev,
-        cal_loc,
-        cur_heap,
-        cur_key,
-        cur_where,
-        cal_f,
-        cal_i,
-    )
+    _remove(body, cal)
+    _insert(body, keys[body], cal)
 
 
 @njit(cache=True, error_model="numpy")
-def _new_year(
-    keys: np.ndarray,
-    cal_head: np.ndarray,
-    cal_next: np.ndarray,
-    cal_prev: np.ndarray,
-    cal_loc: np.ndarray,
-    cur_heap: np.ndarray,
-    cur_key: np.ndarray,
-    cur_where: np.ndarray,
-    cal_f: np.ndarray,
-    cal_i: np.ndarray,
-) -> None:
+def _new_year(keys: np.ndarray, cal: Calendar) -> None:
     """Every bucket is spent: start a year at the earliest overflow event, with a width from
     the last year's event rate, and share the overflow out."""
+    cal_head, cal_next, _cal_prev, cal_loc, _cur_heap, _cur_key, _cur_where, cal_f, cal_i = cal
     n_buckets = cal_head.shape[0] - 1
     t_min = math.inf
     body = cal_head[n_buckets]
@@ -237,54 +191,21 @@ def _new_year(
         following = cal_next[body]
         cal_loc[body] = NOWHERE
         cal_i[I_COUNT] -= 1
-        _insert(
-            body,
-            keys[body],
-            cal_head,
-            cal_next,
-            cal_prev,
-            cal_loc,
-            cur_heap,
-            cur_key,
-            cur_where,
-            cal_f,
-            cal_i,
-        )
+        _insert(body, keys[body], cal)
         body = following
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def calendar_top(
-    keys: np.ndarray,
-    cal_head: np.ndarray,
-    cal_next: np.ndarray,
-    cal_prev: np.ndarray,
-    cal_loc: np.ndarray,
-    cur_heap: np.ndarray,
-    cur_key: np.ndarray,
-    cur_where: np.ndarray,
-    cal_f: np.ndarray,
-    cal_i: np.ndarray,
-) -> int:
+def calendar_top(keys: np.ndarray, cal: Calendar) -> int:
     """The body with the earliest event (ties: lowest index), or -1 if no event is left."""
+    cal_head, cal_next, _cal_prev, cal_loc, cur_heap, cur_key, cur_where, _cal_f, cal_i = cal
     n_buckets = cal_head.shape[0] - 1
     while cal_i[I_SIZE] == 0:
         if cal_i[I_COUNT] == 0:
             return -1
         cur = cal_i[I_CUR] + 1
         if cur >= n_buckets:
-            _new_year(
-                keys,
-                cal_head,
-                cal_next,
-                cal_prev,
-                cal_loc,
-                cur_heap,
-                cur_key,
-                cur_where,
-                cal_f,
-                cal_i,
-            )
+            _new_year(keys, cal)
             continue
         cal_i[I_CUR] = cur
         body = cal_head[cur]
@@ -301,20 +222,10 @@ def calendar_top(
 
 
 @njit(cache=True, error_model="numpy")
-def calendar_build(
-    keys: np.ndarray,
-    cal_head: np.ndarray,
-    cal_next: np.ndarray,
-    cal_prev: np.ndarray,
-    cal_loc: np.ndarray,
-    cur_heap: np.ndarray,
-    cur_key: np.ndarray,
-    cur_where: np.ndarray,
-    cal_f: np.ndarray,
-    cal_i: np.ndarray,
-) -> None:
+def calendar_build(keys: np.ndarray, cal: Calendar) -> None:
     """File every body's event; the first year starts at the earliest event, with buckets as
     wide as ``EVENTS_PER_BUCKET`` times the mean spacing of the earliest half of the events."""
+    cal_head, _cal_next, _cal_prev, cal_loc, _cur_heap, _cur_key, _cur_where, cal_f, cal_i = cal
     finite = keys[np.isfinite(keys)]
     cal_head[:] = -1
     cal_i[:] = 0
@@ -329,16 +240,4 @@ def calendar_build(
     cal_f[F_BASE] = ordered[0]
     cal_f[F_WIDTH] = EVENTS_PER_BUCKET * spread / half if spread > 0.0 else 1.0
     for body in range(keys.shape[0]):
-        _insert(
-            body,
-            keys[body],
-            cal_head,
-            cal_next,
-            cal_prev,
-            cal_loc,
-            cur_heap,
-            cur_key,
-            cur_where,
-            cal_f,
-            cal_i,
-        )
+        _insert(body, keys[body], cal)

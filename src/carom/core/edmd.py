@@ -145,6 +145,22 @@ def schedule_views(
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def calendar_of(s):  # type: ignore[no-untyped-def]
+    """The event calendar's arrays of state ``s``, as :mod:`carom.core.calendar` takes them."""
+    return (
+        s.cal_head,
+        s.cal_next,
+        s.cal_prev,
+        s.cal_loc,
+        s.cur_heap,
+        s.cur_key,
+        s.cur_where,
+        s.cal_f,
+        s.cal_i,
+    )
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def advance(x: np.ndarray, v: np.ndarray, acc: np.ndarray, t: np.ndarray, i: int, T: float) -> None:
     """Move body ``i`` along its free flight to time ``T`` and set its clock."""
     dt = T - t[i]
@@ -370,6 +386,31 @@ def _log(
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _contact_velocity(
+    dv0: float,
+    dv1: float,
+    dv2: float,
+    w: np.ndarray,
+    i: int,
+    j: int,
+    a_i: float,
+    a_j: float,
+    n0: float,
+    n1: float,
+    n2: float,
+    law: int,
+) -> tuple[float, float, float]:
+    """Contact-point relative velocity ``g = v_i - v_j - (a_i w_i + a_j w_j) x n`` [m/s] from
+    ``dv = v_i - v_j``; the smooth law needs only ``dv`` (spin adds nothing along ``n``)."""
+    if law == LAW_SMOOTH:
+        return dv0, dv1, dv2
+    s0 = a_i * w[i, 0] + a_j * w[j, 0]
+    s1 = a_i * w[i, 1] + a_j * w[j, 1]
+    s2 = a_i * w[i, 2] + a_j * w[j, 2]
+    return dv0 - (s1 * n2 - s2 * n1), dv1 - (s2 * n0 - s0 * n2), dv2 - (s0 * n1 - s1 * n0)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _collide_pair(
     i: int,
     j: int,
@@ -424,17 +465,9 @@ def _collide_pair(
         if e < 1.0:
             counts[C_TC] += 1
         e = 1.0
-    g0, g1, g2 = dv0, dv1, dv2
     a_i = radius[i]
     a_j = radius[j]
-    if law != LAW_SMOOTH:
-        # g = v1 - v2 - (a1 w1 + a2 w2) x n
-        s0 = a_i * w[i, 0] + a_j * w[j, 0]
-        s1 = a_i * w[i, 1] + a_j * w[j, 1]
-        s2 = a_i * w[i, 2] + a_j * w[j, 2]
-        g0 -= s1 * n2 - s2 * n1
-        g1 -= s2 * n0 - s0 * n2
-        g2 -= s0 * n1 - s1 * n0
+    g0, g1, g2 = _contact_velocity(dv0, dv1, dv2, w, i, j, a_i, a_j, n0, n1, n2, law)
     inv_i = inv_mass[i]
     inv_j = inv_mass[j]
     j0, j1, j2 = impulse_spheres(
@@ -474,17 +507,11 @@ def _collide_pair(
         w[j, 1] -= c1 * f_j
         w[j, 2] -= c2 * f_j
     # contact-point relative velocity after the impulse, as g before it
-    h0 = v[i, 0] - v[j, 0]
-    h1 = v[i, 1] - v[j, 1]
-    h2 = v[i, 2] - v[j, 2] if dim == 3 else 0.0
-    un_after = h0 * n0 + h1 * n1 + h2 * n2
-    if law != LAW_SMOOTH:
-        s0 = a_i * w[i, 0] + a_j * w[j, 0]
-        s1 = a_i * w[i, 1] + a_j * w[j, 1]
-        s2 = a_i * w[i, 2] + a_j * w[j, 2]
-        h0 -= s1 * n2 - s2 * n1
-        h1 -= s2 * n0 - s0 * n2
-        h2 -= s0 * n1 - s1 * n0
+    u0 = v[i, 0] - v[j, 0]
+    u1 = v[i, 1] - v[j, 1]
+    u2 = v[i, 2] - v[j, 2] if dim == 3 else 0.0
+    un_after = u0 * n0 + u1 * n1 + u2 * n2
+    h0, h1, h2 = _contact_velocity(u0, u1, u2, w, i, j, a_i, a_j, n0, n1, n2, law)
     # energy dissipated = minus the impulse's work, J . (g_before + g_after) / 2 for rigid
     # bodies (exact, and free of the cancellation of KE_before - KE_after)
     sums[S_KE_LOST] -= 0.5 * (j0 * (g0 + h0) + j1 * (g1 + h1) + j2 * (g2 + h2))
@@ -671,18 +698,7 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
             ev_other,
             ev_stamp,
         )
-    calendar_build(
-        s.ev_time,
-        s.cal_head,
-        s.cal_next,
-        s.cal_prev,
-        s.cal_loc,
-        s.cur_heap,
-        s.cur_key,
-        s.cur_where,
-        s.cal_f,
-        s.cal_i,
-    )
+    calendar_build(s.ev_time, calendar_of(s))
     return DONE
 
 
@@ -704,14 +720,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     ev_time = s.ev_time
     sched = s.sched
     ev_kind, ev_other, ev_stamp, counter = schedule_views(sched)
-    cal_head, cal_next, cal_prev, cal_loc = s.cal_head, s.cal_next, s.cal_prev, s.cal_loc
-    cur_heap, cur_key, cur_where, cal_f, cal_i = (
-        s.cur_heap,
-        s.cur_key,
-        s.cur_where,
-        s.cal_f,
-        s.cal_i,
-    )
+    cal = calendar_of(s)
     counts, sums = s.counts, s.sums
     # grouped as tuples for the inlined callees (a call takes at most 30 arguments there)
     logbuf = (s.log_time, s.log_a, s.log_b, s.log_impulse, s.log_un, s.log_n)
@@ -730,10 +739,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     processed = 0
     log_cap = log_time.shape[0]
     while True:
-        i = calendar_top(
-            ev_time, cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key, cur_where,
-            cal_f, cal_i,
-        )  # fmt: skip
+        i = calendar_top(ev_time, cal)
         T = ev_time[i] if i >= 0 else INF
         if t_stop < T or math.isinf(T):
             if t_stop < INF:
@@ -847,10 +853,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                 radius, mobile, box, inv_box, periodic, delta, plane_point, plane_normal,
                 ev_time, ev_kind, ev_other, ev_stamp,
             )  # fmt: skip
-            calendar_update(
-                ev_time, body, cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key,
-                cur_where, cal_f, cal_i,
-            )  # fmt: skip
+            calendar_update(ev_time, body, cal)
 
 
 @njit(cache=True, error_model="numpy")

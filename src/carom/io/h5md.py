@@ -80,8 +80,6 @@ class H5MDWriter:
                 self.file.require_group("observables"), "kinetic_energy", (), "J"
             ),
         }
-        self.mass = np.where(np.isfinite(world._mass), world._mass, 0.0)
-        self.inertia = world._q * self.mass * world._radius**2
 
     @staticmethod
     def _element(parent: Any, name: str, shape: tuple[int, ...], unit: str) -> Any:
@@ -101,17 +99,13 @@ class H5MDWriter:
         value.attrs["unit"] = unit
         return group
 
-    def write(self, frame: Frame) -> None:
-        """Append one frame."""
+    def write(self, frame: Frame, kinetic_energy: float) -> None:
+        """Append one frame and its kinetic energy [J]."""
         k = self.frames
-        moving = self.mass > 0
-        v = frame.velocities
-        ke = 0.5 * float(np.sum(self.mass[moving] * np.sum(v[moving] ** 2, axis=1)))
-        ke += 0.5 * float(np.sum(self.inertia * np.sum(frame.spins**2, axis=1)))
         for name, value in (
             ("position", frame.positions),
             ("velocity", frame.velocities),
-            ("kinetic_energy", ke),
+            ("kinetic_energy", kinetic_energy),
         ):
             group = self.groups[name]
             for dataset in ("step", "time", "value"):

@@ -8,8 +8,6 @@ import math
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from carom.world import World
 
 __all__ = ["summary", "write_events_csv", "write_summary"]
@@ -56,7 +54,11 @@ def summary(
     plus gravitational potential energy): round-off when the physics is right.
     """
     stats = world.stats
-    ke, pe = stats.kinetic_energy, potential_energy(world)
+    now = world.frame()
+    ke, pe = (
+        world.kinetic_energy_of(now.velocities, now.spins),
+        world.potential_energy_of(now.positions),
+    )
     e0 = start["kinetic_energy"] + start["potential_energy"]
     balance = (e0 - (ke + pe) - stats.energy_lost) / e0 if e0 else 0.0
     events = stats.events
@@ -79,7 +81,7 @@ def summary(
         },
         "momentum": {
             "start_kg_m_s": list(start["momentum"]),
-            "end_kg_m_s": stats.momentum.tolist(),
+            "end_kg_m_s": world.momentum_of(now.velocities).tolist(),
         },
         "temperature_J": stats.temperature,
         "performance": {
@@ -92,15 +94,6 @@ def summary(
         data["pressure_Pa"] = stats.pressure
         data["mean_free_time_s"] = stats.mean_free_time
     return data
-
-
-def potential_energy(world: World) -> float:
-    """Gravitational potential energy of the moving bodies, ``-sum m g . x`` [J]."""
-    g = world._gravity
-    if g is None or not np.any(g):
-        return 0.0
-    moving = np.isfinite(world._mass)
-    return float(-np.sum(world._mass[moving] * (world.positions[moving] @ g)))
 
 
 def write_summary(data: dict[str, Any], path: Path) -> None:

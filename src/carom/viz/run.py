@@ -27,13 +27,13 @@ class RunHistory:
     dissipated: list[float] = field(default_factory=list)
     momentum: list[NDArray[np.float64]] = field(default_factory=list)
 
-    def add(self, world: World, frame: Frame, potential: float) -> None:
-        """Record one frame of ``world`` (``potential``: its gravitational energy [J])."""
+    def add(self, world: World, frame: Frame) -> None:
+        """Record ``frame`` of ``world`` (taken now: the dissipation so far is the world's)."""
         self.time.append(frame.time)
-        self.kinetic.append(world.stats.kinetic_energy)
-        self.potential.append(potential)
+        self.kinetic.append(world.kinetic_energy_of(frame.velocities, frame.spins))
+        self.potential.append(world.potential_energy_of(frame.positions))
         self.dissipated.append(world.stats.energy_lost)
-        self.momentum.append(world.stats.momentum)
+        self.momentum.append(world.momentum_of(frame.velocities))
 
 
 def write_run_plots(
