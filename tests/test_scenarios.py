@@ -9,9 +9,12 @@ import numpy as np
 import pytest
 
 import carom
+from carom.cases import CASES, ROUND_OFF
+from carom.reference.exact import smooth_exact
 from carom.scene import builtin_scenes, find_scene
 
-EXPECTED = {
+CASE_SCENES = {f"case-{case.number}" for case in CASES}
+EXPECTED = CASE_SCENES | {
     "billiards-break",
     "bouncing-ball",
     "galton-board",
@@ -63,6 +66,29 @@ def test_newtons_cradle_scene_hands_on_the_momentum() -> None:
     world = carom.load_scene(find_scene("newtons-cradle")).build()
     world.run(until=0.6, log=False)
     np.testing.assert_allclose(world.velocities[:, 0], [0, 0, 0, 0, 1.0], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda case: f"case-{case.number}")
+def test_each_two_sphere_scene_is_its_case(case: carom.cases.Case) -> None:
+    # The scene starts the spheres 0.5 s before the case's contact configuration: they meet
+    # once, at t = 0.5 s, where the case says, and leave with the exact velocities of the
+    # study (smooth_exact, rational arithmetic) to round-off (ROUND_OFF relative to the
+    # approach speed); no wall is reached.
+    scene = carom.load_scene(find_scene(f"case-{case.number}"))
+    world = scene.build()
+    e = case.restitutions[0]
+    x0 = world.positions
+    world.run(until=scene.run["until"])
+    events = world.events
+    assert world.stats.collisions == 1
+    assert world.stats.wall_collisions == 0
+    assert events["time"][0] == pytest.approx(0.5, rel=0, abs=1e-12)
+    v = np.array([case.v1, case.v2])
+    contact = x0 + v * events["time"][0]
+    np.testing.assert_allclose(contact[0] - contact[1], np.subtract(case.x1, case.x2), atol=1e-12)
+    v1, v2, _ = smooth_exact(case.x1, case.v1, case.m1, case.x2, case.v2, case.m2, e)
+    speed = float(np.linalg.norm(v[0] - v[1]))
+    np.testing.assert_allclose(world.velocities, [v1, v2], rtol=0, atol=ROUND_OFF * speed)
 
 
 def test_an_unknown_scene_name_lists_the_built_in_ones() -> None:

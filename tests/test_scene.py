@@ -184,3 +184,104 @@ def test_a_3d_periodic_gas_at_the_packing_asked_for() -> None:
     d -= side * np.round(d / side)
     dist = np.linalg.norm(d, axis=-1) + np.eye(200) * side
     assert dist.min() >= 1.0
+
+
+GENERATED = """\
+[world]
+dimension = 2
+box = [4.0, 3.0]
+
+[[row]]
+count = 4
+start = [0.5, 0.5]
+radius = 0.1
+velocity = [0.5, 0.0]
+
+[[rack]]
+rows = 5
+apex = [2.0, 1.5]
+radius = 0.1
+gap = 0.01
+
+[[lattice]]
+shape = [3, 2]
+origin = [0.5, 2.5]
+spacing = 0.25
+radius = 0.1
+temperature = 1.0
+seed = 4
+
+[[pegs]]
+rows = 3
+top = [3.5, 2.8]
+spacing = [0.3, 0.3]
+radius = 0.05
+
+[run]
+until = 1.0
+"""
+
+
+def test_generators_place_rows_racks_lattices_and_pegs(tmp_path: Path) -> None:
+    scene = load_scene(_write(tmp_path, GENERATED))
+    world = scene.build()
+    # 4 in the row, 5 * 6 / 2 = 15 in the rack, 3 * 2 in the lattice, 3 * 4 / 2 = 6 pegs
+    assert world.n_bodies == 4 + 15 + 6 + 6
+    x, v = world.positions, world.velocities
+    row, rack, lattice = x[:4], x[4:19], x[19:25]
+    # the row touches: centres one diameter apart along +x (spacing's default)
+    np.testing.assert_allclose(np.diff(row[:, 0]), 0.2, rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(v[:4], [[0.5, 0.0]] * 4)
+    # the rack: nearest neighbours at the pitch 2 r + gap = 0.21, apex first, opening to +x
+    d = np.linalg.norm(rack[:, None] - rack[None], axis=-1) + np.eye(15)
+    np.testing.assert_allclose(d.min(axis=1), 0.21, rtol=1e-14, atol=0)
+    np.testing.assert_array_equal(rack[0], [2.0, 1.5])
+    assert rack[:, 0].max() == pytest.approx(2.0 + 4 * 0.21 * math.sqrt(3) / 2, rel=1e-14, abs=0)
+    # the lattice: a 3 x 2 grid, Maxwell velocities drawn with its seed
+    np.testing.assert_allclose(np.unique(lattice[:, 0]), [0.5, 0.75, 1.0], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(np.unique(lattice[:, 1]), [2.5, 2.75], rtol=0, atol=1e-15)
+    assert np.all(v[19:25] != 0)
+    # pegs are static: infinite mass, never moving
+    assert np.all(np.isinf(world.masses[25:]))
+    world.run(until=1.0, log=False)
+    np.testing.assert_array_equal(world.positions[25:], x[25:])
+    # and the Python API takes the same tables
+    import tomllib
+
+    again = Scene.from_dict(tomllib.loads(GENERATED)).build()
+    np.testing.assert_array_equal(again.velocities, v)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (
+            ("spacing = [0.3, 0.3]", "spacing = [0.3]"),
+            r"scene\.toml:\d+: \[\[pegs\]\] #1 spacing: must be \[dx, dy\] with both > 0",
+        ),
+        (
+            ("rows = 3\n", 'rows = 3\nlayout = "staggered"\n'),
+            r"\[\[pegs\]\] #1 columns: is required for layout = 'staggered'",
+        ),
+        (
+            ("velocity = [0.5, 0.0]", "direction = [0.0, 0.0]"),
+            r"scene\.toml:\d+: \[\[row\]\] #1 direction: is the zero vector",
+        ),
+        (
+            ("shape = [3, 2]", "shape = [3, 2, 2]"),
+            r"\[\[lattice\]\] #1 shape: has 3 components for a 2D world",
+        ),
+        (("shape = [3, 2]", "shape = [3, 0]"), r"shape: must be a list of whole numbers >= 1"),
+        (("rows = 5", "rows = 0"), r"\[\[rack\]\] #1 rows: must be >= 1, got 0"),
+        # a rack that runs into the lattice
+        (("apex = [2.0, 1.5]", "apex = [0.6, 2.3]"), r"spheres \d+ and \d+ overlap"),
+    ],
+)
+def test_each_bad_generator_gets_one_clear_message(
+    tmp_path: Path, change: tuple[str, str], message: str
+) -> None:
+    old, new = change
+    assert old in GENERATED
+    path = _write(tmp_path, GENERATED.replace(old, new, 1))
+    with pytest.raises(SceneError, match=message):
+        load_scene(path).build()

@@ -3,14 +3,204 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Literal
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from carom.errors import CaromError
 from carom.world import World
 
-__all__ = ["lattice_gas"]
+__all__ = [
+    "lattice_gas",
+    "lattice_positions",
+    "peg_positions",
+    "rack_positions",
+    "row_positions",
+]
+
+
+def _unit(direction: ArrayLike | None, dim: int) -> NDArray[np.float64]:
+    """``direction`` normalised; +x when None."""
+    if direction is None:
+        u = np.zeros(dim)
+        u[0] = 1.0
+        return u
+    u = np.asarray(direction, dtype=float)
+    norm = float(np.linalg.norm(u))
+    if u.shape != (dim,) or not norm > 0 or not math.isfinite(norm):
+        raise CaromError(f"direction must be a nonzero vector of {dim} numbers; got {direction!r}")
+    return u / norm
+
+
+def _in_plane_normal(u: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The unit vector a quarter turn anticlockwise from ``u`` in the x-y plane."""
+    n = np.zeros_like(u)
+    n[0], n[1] = -u[1], u[0]
+    norm = float(np.linalg.norm(n))
+    if not norm > 0:
+        raise CaromError("direction must not be along z: racks and rows lie in the x-y plane")
+    return n / norm
+
+
+def row_positions(
+    count: int, start: ArrayLike, spacing: float, direction: ArrayLike | None = None
+) -> NDArray[np.float64]:
+    """``count`` centres in a straight line: ``start + k spacing u``, ``k = 0 .. count - 1``.
+
+    With ``spacing = 2 radius`` the spheres touch: a Newton's cradle.
+
+    Parameters
+    ----------
+    count : int
+        Number of spheres (>= 1).
+    start : array_like, shape (d,)
+        The first centre [m].
+    spacing : float
+        Distance between neighbouring centres [m].
+    direction : array_like, shape (d,), optional
+        Direction of the row (normalised here); +x by default.
+
+    Returns
+    -------
+    ndarray, shape (count, d)
+        Centres [m].
+
+    Examples
+    --------
+    >>> row_positions(3, [0.0, 1.0], 0.5).tolist()
+    [[0.0, 1.0], [0.5, 1.0], [1.0, 1.0]]
+    """
+    origin = np.asarray(start, dtype=float)
+    u = _unit(direction, origin.size)
+    k = np.arange(count, dtype=float)[:, None]
+    return origin + k * spacing * u
+
+
+def rack_positions(
+    rows: int, apex: ArrayLike, pitch: float, direction: ArrayLike | None = None
+) -> NDArray[np.float64]:
+    """A triangular rack: row ``r`` (0 at the apex) holds ``r + 1`` spheres.
+
+    Rows lie ``pitch sqrt(3) / 2`` apart along ``direction``, the spheres of a row ``pitch``
+    apart across it, so that with ``pitch = 2 radius`` every sphere touches its neighbours
+    (15 balls for ``rows = 5``: a pool rack). In 3D the rack lies in the x-y plane through
+    the apex.
+
+    Parameters
+    ----------
+    rows : int
+        Number of rows (>= 1); ``rows (rows + 1) / 2`` spheres.
+    apex : array_like, shape (d,)
+        Centre of the front sphere [m].
+    pitch : float
+        Distance between touching centres: diameter plus gap [m].
+    direction : array_like, shape (d,), optional
+        Where the rack opens towards (normalised); +x by default.
+
+    Returns
+    -------
+    ndarray, shape (rows (rows + 1) / 2, d)
+        Centres [m], row by row.
+
+    Examples
+    --------
+    >>> rack_positions(2, [0.0, 0.0], 2.0).round(6).tolist()
+    [[0.0, 0.0], [1.732051, -1.0], [1.732051, 1.0]]
+    """
+    origin = np.asarray(apex, dtype=float)
+    u = _unit(direction, origin.size)
+    across = _in_plane_normal(u)
+    centres = [
+        origin + r * pitch * math.sqrt(3.0) / 2.0 * u + (j - r / 2.0) * pitch * across
+        for r in range(rows)
+        for j in range(r + 1)
+    ]
+    return np.array(centres)
+
+
+def lattice_positions(
+    shape: Sequence[int], origin: ArrayLike, spacing: float
+) -> NDArray[np.float64]:
+    """A simple cubic (square) lattice of ``prod(shape)`` centres, ``spacing`` apart.
+
+    Parameters
+    ----------
+    shape : sequence of int, length d
+        Sites along each axis.
+    origin : array_like, shape (d,)
+        The first centre (lowest corner) [m].
+    spacing : float
+        Lattice constant [m].
+
+    Returns
+    -------
+    ndarray, shape (prod(shape), d)
+        Centres [m], the last axis varying fastest.
+
+    Examples
+    --------
+    >>> lattice_positions([2, 2], [1.0, 1.0], 0.5).tolist()
+    [[1.0, 1.0], [1.0, 1.5], [1.5, 1.0], [1.5, 1.5]]
+    """
+    base = np.asarray(origin, dtype=float)
+    axes = [np.arange(n, dtype=float) * spacing for n in shape]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, len(shape))
+    return base + grid
+
+
+def peg_positions(
+    rows: int,
+    top: ArrayLike,
+    spacing: Sequence[float],
+    layout: Literal["triangle", "staggered"] = "triangle",
+    columns: int | None = None,
+) -> NDArray[np.float64]:
+    """Pegs of a Galton board, row by row downwards (-y) from ``top``.
+
+    ``"triangle"``: row ``r`` (0 at the top) holds ``r + 1`` pegs centred under ``top``, so a
+    ball falling on the top peg meets one peg per row. ``"staggered"``: every row holds
+    ``columns`` pegs starting at ``top``, odd rows shifted by half a spacing.
+
+    Parameters
+    ----------
+    rows : int
+        Number of rows (>= 1).
+    top : array_like, shape (d,)
+        The first peg of the top row [m] (triangle: the apex).
+    spacing : sequence of 2 floats
+        ``[dx, dy]``: between pegs of a row and between rows [m].
+    layout : {"triangle", "staggered"}
+    columns : int, optional
+        Pegs per row; needed for ``"staggered"``.
+
+    Returns
+    -------
+    ndarray, shape (n, d)
+        Centres [m].
+
+    Examples
+    --------
+    >>> peg_positions(2, [0.0, 1.0], [0.2, 0.1]).round(12).tolist()
+    [[0.0, 1.0], [-0.1, 0.9], [0.1, 0.9]]
+    """
+    origin = np.asarray(top, dtype=float)
+    dx, dy = spacing
+    pegs = []
+    for r in range(rows):
+        if layout == "triangle":
+            xs = [(j - r / 2.0) * dx for j in range(r + 1)]
+        else:
+            if columns is None:
+                raise CaromError("a staggered peg layout needs columns (pegs per row)")
+            xs = [(j + 0.5 * (r % 2)) * dx for j in range(columns)]
+        for x in xs:
+            p = origin.copy()
+            p[0] += x
+            p[1] -= r * dy
+            pegs.append(p)
+    return np.array(pegs)
 
 
 def lattice_gas(

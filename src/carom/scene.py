@@ -13,13 +13,14 @@ from __future__ import annotations
 import math
 import re
 import tomllib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from carom import generators
 from carom.errors import CaromError
 from carom.world import Material, World
 
@@ -113,6 +114,24 @@ def _show(value: Any) -> str:
     return f"{text[:40]}{'...' if len(text) > 40 else ''} ({kind})"
 
 
+def _boolean(value: Any) -> str | None:
+    return None if isinstance(value, bool) else f"must be true or false, got {_show(value)}"
+
+
+def _count(value: Any) -> str | None:
+    return _integer(value) or (None if value >= 1 else f"must be >= 1, got {value!r}")
+
+
+def _counts(value: Any) -> str | None:
+    if not isinstance(value, list) or not value or any(_count(v) for v in value):
+        return f"must be a list of whole numbers >= 1, got {_show(value)}"
+    return None
+
+
+def _not_negative(value: Any) -> str | None:
+    return _number(value) or (None if value >= 0 else f"must be >= 0, got {value!r}")
+
+
 def _region(value: Any) -> str | None:
     if not isinstance(value, list) or len(value) != 2 or any(_vector(c) for c in value):
         return f"must be [[low corner], [high corner]], got {_show(value)}"
@@ -146,18 +165,50 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "radius": (_positive_or_list, True, None),
         "mass": (_positive_or_list, False, 1.0),
         "material": (_text, False, None),
-        "static": (
-            lambda v: None if isinstance(v, bool) else "must be true or false",
-            False,
-            False,
-        ),
+        "static": (_boolean, False, False),
+    },
+    "row": {
+        "count": (_count, True, None),
+        "start": (_vector, True, None),
+        "direction": (_vector, False, None),
+        "spacing": (_positive, False, None),
+        "radius": (_positive, True, None),
+        "mass": (_positive, False, 1.0),
+        "velocity": (_vector, False, None),
+        "material": (_text, False, None),
+    },
+    "rack": {
+        "rows": (_count, True, None),
+        "apex": (_vector, True, None),
+        "direction": (_vector, False, None),
+        "gap": (_not_negative, False, 0.0),
+        "radius": (_positive, True, None),
+        "mass": (_positive, False, 1.0),
+        "velocity": (_vector, False, None),
+        "material": (_text, False, None),
+    },
+    "lattice": {
+        "shape": (_counts, True, None),
+        "origin": (_vector, True, None),
+        "spacing": (_positive, True, None),
+        "radius": (_positive, True, None),
+        "mass": (_positive, False, 1.0),
+        "velocity": (_vector, False, None),
+        "temperature": (_not_negative, False, 0.0),
+        "seed": (_integer, False, 0),
+        "material": (_text, False, None),
+    },
+    "pegs": {
+        "rows": (_count, True, None),
+        "top": (_vector, True, None),
+        "spacing": (_vector, True, None),
+        "layout": (_choice("triangle", "staggered"), False, "triangle"),
+        "columns": (_count, False, None),
+        "radius": (_positive, True, None),
+        "material": (_text, False, None),
     },
     "gas": {
-        "count": (
-            lambda v: _integer(v) or (None if v >= 1 else f"must be >= 1, got {v!r}"),
-            True,
-            None,
-        ),
+        "count": (_count, True, None),
         "packing": (_positive, True, None),
         "radius": (_positive, True, None),
         "mass": (_positive, False, 1.0),
@@ -171,8 +222,17 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "until": (_positive, True, None),
         "frame_interval": (_positive, False, None),
     },
+    "outputs": {
+        "trajectory": (_boolean, False, True),
+        "events": (_boolean, False, True),
+        "plots": (_boolean, False, True),
+        "animation": (_choice("mp4", "gif", "none"), False, "mp4"),
+    },
 }
-ARRAYS = ("materials", "bodies", "gas")  # tables that may repeat: [[name]]
+#: tables that may repeat ([[name]]); the generators place bodies in this order, after
+#: [[bodies]] and before [[gas]] (which avoids everything placed before it)
+GENERATORS = ("row", "rack", "lattice", "pegs")
+ARRAYS = ("materials", "bodies", *GENERATORS, "gas")
 
 
 # -- reading --------------------------------------------------------------------------------
@@ -188,10 +248,13 @@ class Scene:
         The optional ``[scene]`` table: ``title`` and ``description``.
     world : dict
         The ``[world]`` table, defaults filled in.
-    materials, bodies, gas : list of dict
-        The ``[[materials]]``, ``[[bodies]]`` and ``[[gas]]`` tables, defaults filled in.
+    materials, bodies, row, rack, lattice, pegs, gas : list of dict
+        The ``[[materials]]``, ``[[bodies]]``, generator (``[[row]]``, ``[[rack]]``,
+        ``[[lattice]]``, ``[[pegs]]``) and ``[[gas]]`` tables, defaults filled in.
     run : dict
         The ``[run]`` table: ``until`` [s] and ``frame_interval`` [s] (None: no frames).
+    outputs : dict
+        The ``[outputs]`` table: which files ``carom run`` writes.
     source : str
         Where it came from (a path, or ``"<dict>"``), for messages.
     """
@@ -200,8 +263,13 @@ class Scene:
     scene: dict[str, Any] = field(default_factory=dict)
     materials: list[dict[str, Any]] = field(default_factory=list)
     bodies: list[dict[str, Any]] = field(default_factory=list)
+    row: list[dict[str, Any]] = field(default_factory=list)
+    rack: list[dict[str, Any]] = field(default_factory=list)
+    lattice: list[dict[str, Any]] = field(default_factory=list)
+    pegs: list[dict[str, Any]] = field(default_factory=list)
     gas: list[dict[str, Any]] = field(default_factory=list)
     run: dict[str, Any] = field(default_factory=dict)
+    outputs: dict[str, Any] = field(default_factory=dict)
     source: str = "<dict>"
     text: str = ""
 
@@ -253,7 +321,7 @@ class Scene:
         if any(not side > 0 for side in self.world["box"]):
             raise where.error(["world", "box"], "sides must be > 0", "give positive lengths [m]")
         names = [m["name"] for m in self.materials]
-        for table in ("bodies", "gas"):
+        for table in ("bodies", *GENERATORS, "gas"):
             for index, entry in enumerate(getattr(self, table)):
                 name = entry.get("material")
                 if name is not None and name not in names:
@@ -273,6 +341,43 @@ class Scene:
                         f"give {dim} numbers",
                         index,
                     )
+        vectors = {
+            "row": ("start", "direction", "velocity"),
+            "rack": ("apex", "direction", "velocity"),
+            "lattice": ("origin", "velocity", "shape"),
+            "pegs": ("top",),
+        }
+        for table, keys in vectors.items():
+            for index, entry in enumerate(getattr(self, table)):
+                for key in keys:
+                    value = entry[key]
+                    if value is not None and len(value) != dim:
+                        raise where.error(
+                            [table, key],
+                            f"has {len(value)} components for a {dim}D world",
+                            f"give {dim} numbers",
+                            index,
+                        )
+                direction = entry.get("direction")
+                if direction is not None and not any(direction):
+                    raise where.error(
+                        [table, "direction"], "is the zero vector", "give a direction", index
+                    )
+        for index, entry in enumerate(self.pegs):
+            if len(entry["spacing"]) != 2 or not all(v > 0 for v in entry["spacing"]):
+                raise where.error(
+                    ["pegs", "spacing"],
+                    f"must be [dx, dy] with both > 0, got {entry['spacing']!r}",
+                    "give the gap between pegs in a row and between rows [m]",
+                    index,
+                )
+            if entry["layout"] == "staggered" and entry["columns"] is None:
+                raise where.error(
+                    ["pegs", "columns"],
+                    "is required for layout = 'staggered'",
+                    "add columns = ... (pegs per row)",
+                    index,
+                )
         for index, entry in enumerate(self.bodies):
             for key in ("positions", "velocities"):
                 rows = entry[key]
@@ -317,7 +422,7 @@ class Scene:
                 )
             except CaromError as exc:
                 raise where.error(["materials"], str(exc), "", index) from None
-        for index, b in enumerate(self.bodies):
+        for table, index, b in self._placed_bodies():
             material = materials.get(b["material"]) if b["material"] else None
             try:
                 if b["static"]:
@@ -331,7 +436,7 @@ class Scene:
                         material=material,
                     )
             except CaromError as exc:
-                raise where.error(["bodies"], str(exc), "", index) from None
+                raise where.error([table], str(exc), "", index) from None
         for index, g in enumerate(self.gas):
             try:
                 _add_gas(world, g, materials.get(g["material"]) if g["material"] else None)
@@ -339,13 +444,64 @@ class Scene:
                 raise where.error(["gas"], str(exc), "", index) from None
         if world.n_bodies == 0:
             raise where.error(
-                ["bodies"], "the scene has no bodies", "add [[bodies]] or [[gas]] tables"
+                ["bodies"],
+                "the scene has no bodies",
+                "add [[bodies]], [[gas]] or generator ([[row]], [[rack]], ...) tables",
             )
         try:
             world._ensure_built()  # refuses overlapping spheres and spheres outside the box
         except CaromError as exc:
             raise SceneError(f"{self.source}: {exc}") from None
         return world
+
+    def _placed_bodies(self) -> Iterator[tuple[str, int, dict[str, Any]]]:
+        """(table, index, [[bodies]]-shaped entry) for [[bodies]] and every generator, in the
+        order they are added to the world."""
+        dim = self.world["dimension"]
+        for index, entry in enumerate(self.bodies):
+            yield "bodies", index, entry
+        for table in GENERATORS:
+            for index, entry in enumerate(getattr(self, table)):
+                positions = _generated_positions(table, entry, dim)
+                count = len(positions)
+                velocity = entry.get("velocity")
+                velocities = (
+                    np.zeros((count, dim)) if velocity is None else np.tile(velocity, (count, 1))
+                )
+                if table == "lattice" and entry["temperature"] > 0:
+                    rng = np.random.default_rng(entry["seed"])
+                    velocities += rng.normal(
+                        scale=math.sqrt(entry["temperature"] / entry["mass"]), size=(count, dim)
+                    )
+                yield (
+                    table,
+                    index,
+                    {
+                        "positions": positions,
+                        "velocities": velocities,
+                        "radius": entry["radius"],
+                        "mass": entry.get("mass", 1.0),
+                        "material": entry["material"],
+                        "static": table == "pegs",
+                    },
+                )
+
+
+def _generated_positions(table: str, entry: Mapping[str, Any], dim: int) -> np.ndarray:
+    """The centres a generator table places, (n, dim) [m]."""
+    if table == "row":
+        spacing = entry["spacing"] or 2.0 * entry["radius"]
+        return generators.row_positions(entry["count"], entry["start"], spacing, entry["direction"])
+    if table == "rack":
+        return generators.rack_positions(
+            entry["rows"], entry["apex"], 2.0 * entry["radius"] + entry["gap"], entry["direction"]
+        )
+    if table == "lattice":
+        return generators.lattice_positions(entry["shape"], entry["origin"], entry["spacing"])
+    assert table == "pegs"
+    return generators.peg_positions(
+        entry["rows"], entry["top"], entry["spacing"], entry["layout"], entry["columns"]
+    )
 
 
 def load_scene(path: str | Path) -> Scene:
