@@ -23,17 +23,15 @@ $(BIN)/python:
 
 # One stamp per set of extras: reinstall only when pyproject.toml changes.
 $(VENV)/.stamp-demo: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[viz,io]'
+	$(BIN)/python -m pip install --quiet -e '.[viz,io,view]'
 	@touch $@
 
 $(VENV)/.stamp-dev: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[viz,io,dev]'
+	$(BIN)/python -m pip install --quiet -e '.[viz,io,view,dev]'
 	@touch $@ $(VENV)/.stamp-demo
 
 demo: $(VENV)/.stamp-demo
-	$(BIN)/carom cases --out $(OUT)/cases --force
-	@echo
-	@echo "Results: $(OUT)/cases/ (cases.csv, cases.json, one PNG per case)"
+	$(BIN)/carom showcase --out $(OUT) --force
 
 lint: $(VENV)/.stamp-dev
 	$(BIN)/ruff check .

@@ -7,14 +7,13 @@ Exit codes: 0 success, 2 bad input or usage (one message, no traceback; ``--debu
 from __future__ import annotations
 
 import argparse
-import csv
 import json
+import math
 import os
 import sys
 import traceback
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 from carom import __version__
 from carom.errors import CaromError
@@ -84,10 +83,13 @@ def _build_parser() -> argparse.ArgumentParser:
             "and velocities every frame interval, read by OVITO and MDAnalysis), "
             "DIR/events.csv (every collision: time, bodies or wall, impulse, normal speeds "
             "before and after) and DIR/summary.json (observables, energy balance, momentum, "
-            "counts, speed), and plots: energy and momentum against time, the collision rate, "
-            "and for a gas the speed distribution against Maxwell-Boltzmann. "
-            "Scene files are described in docs/scenes.md; 'carom scenes' lists the built-in "
-            "ones. Nothing is written unless the whole run succeeds."
+            "counts, speed), plots (energy and momentum against time, the collision rate, "
+            "and for a gas the speed distribution against Maxwell-Boltzmann) and "
+            "DIR/animation.mp4. Scene files are described in docs/scenes.md; 'carom scenes' "
+            "lists the built-in ones; a scene's [outputs] table chooses the files, the options "
+            "below override it. Nothing is written to DIR unless the whole run succeeds: the "
+            "run works in .DIR.carom-run/ beside it, where Ctrl-C leaves a checkpoint that "
+            "--resume continues from."
         ),
     )
     run.add_argument("scene", metavar="SCENE_OR_FILE", help="a built-in scene name or a path")
@@ -107,85 +109,135 @@ def _build_parser() -> argparse.ArgumentParser:
         help="skip energy.png, collision_rate.png and speeds.png (they need matplotlib)",
     )
     run.add_argument(
+        "--animation",
+        choices=("mp4", "gif", "none"),
+        help="the film of the frames: animation.mp4 (the scene's default), .gif, or none",
+    )
+    run.add_argument(
+        "--force",
+        action="store_true",
+        help="replace DIR if it exists and is not empty; discard an interrupted run of DIR",
+    )
+    run.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the interrupted run of DIR from its checkpoint (same results as an "
+        "uninterrupted run)",
+    )
+    run.add_argument(
+        "--checkpoint-every",
+        type=float,
+        default=60.0,
+        metavar="SECONDS",
+        help="wall-clock time between checkpoints (default 60); Ctrl-C always writes one",
+    )
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.set_defaults(handler=_cmd_run)
+
+    view = commands.add_parser(
+        "view",
+        help="replay a run in the rerun viewer (timeline, spheres, velocities, energy)",
+        description=(
+            "Write DIR/recording.rrd from the trajectory that 'carom run' wrote to DIR: the "
+            "box, every body as a shaded sphere coloured by speed, velocity arrows and the "
+            "energies, on a timeline of frames and simulated time. It opens in the rerun "
+            "viewer when a display is available; elsewhere, the path is printed, to open "
+            "with 'rerun DIR/recording.rrd' on a desktop. Needs the view extra: "
+            "pip install 'carom[view]'."
+        ),
+    )
+    view.add_argument("folder", type=Path, metavar="DIR", help="a 'carom run' output directory")
+    view.add_argument(
+        "--no-open", action="store_true", help="only write the recording, do not start the viewer"
+    )
+    view.set_defaults(handler=_cmd_view)
+
+    showcase = commands.add_parser(
+        "showcase",
+        help="the two-sphere study and a few scenes, with DIR/index.html showing them all",
+        description=(
+            "Run the seven-case two-sphere study and the scenes case-1 ... case-7, "
+            "newtons-cradle, billiards-break and hard-sphere-gas; write their results under "
+            "DIR (cases/, scenes/NAME/) and DIR/index.html, one page linking and showing "
+            "every figure, film and table. This is what 'make demo' runs."
+        ),
+    )
+    showcase.add_argument("--out", type=Path, default=Path("out"), metavar="DIR")
+    showcase.add_argument(
         "--force", action="store_true", help="replace DIR if it exists and is not empty"
     )
-    run.set_defaults(handler=_cmd_run)
+    showcase.set_defaults(handler=_cmd_showcase)
     return parser
 
 
+def _cmd_showcase(args: argparse.Namespace) -> int:
+    from carom.showcase import build_showcase
+
+    page = build_showcase(args.out, force=args.force)
+    print(f"\nopen {page} in a browser")
+    return 0
+
+
+def _cmd_view(args: argparse.Namespace) -> int:
+    from carom.viz.replay import can_show, open_viewer, write_recording
+
+    if not args.folder.is_dir():
+        raise CaromError(f"{args.folder} is not a directory; give the --out DIR of a 'carom run'")
+    recording = write_recording(args.folder)
+    if args.no_open or not can_show():
+        why = "" if args.no_open else " (no display here)"
+        print(f"wrote {recording}{why}; open it on a desktop with: rerun {recording}")
+        return 0
+    open_viewer(recording)
+    print(f"wrote {recording}; opening it in the rerun viewer")
+    return 0
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
-    import time
-
-    from carom.io.h5md import H5MDWriter, check_trajectory, need_h5py
-    from carom.io.outdir import check_output, staged_output
-    from carom.io.results import summary, write_events_csv, write_summary
+    from carom.runner import Outputs, RunInterrupted, run_scene, with_overrides
     from carom.scene import find_scene, load_scene
-    from carom.viz import require_matplotlib
-    from carom.viz.run import RunHistory, write_run_plots
-    from carom.world import Frame
 
-    path = find_scene(args.scene)
-    scene = load_scene(path)
-    until = scene.run["until"] if args.until is None else args.until
-    if not (until > 0 and until < float("inf")):
+    if args.until is not None and not (args.until > 0 and math.isfinite(args.until)):
         raise CaromError(f"--until must be a positive number of seconds; got {args.until!r}")
-    world = scene.build()
-    check_output(args.out, force=args.force)
-    # a missing extra is found before running, not after a whole run
-    if not args.no_trajectory:
-        need_h5py()
-    if not args.no_plots:
-        require_matplotlib()
-    frame_dt = scene.run["frame_interval"]
-    history = RunHistory()
-    written = []
-    with staged_output(args.out, force=args.force) as staging:
-        writer = None if args.no_trajectory else H5MDWriter(staging / "trajectory.h5", world)
-        writing = 0.0
-
-        def record(frame: Frame) -> None:
-            nonlocal writing
-            mark = time.perf_counter()
-            history.add(world, frame)
-            if writer is not None:
-                writer.write(frame, history.kinetic[-1])
-            writing += time.perf_counter() - mark
-
-        record(world.frame())
-        began = time.perf_counter()
-        try:
-            for frame in world.frames(until, frame_dt, log=not args.no_events):
-                record(frame)
-            if frame_dt is None:
-                record(world.frame())
-        finally:
-            if writer is not None:
-                writer.close()
-        wall = time.perf_counter() - began - writing
-        if writer is not None:
-            check_trajectory(staging / "trajectory.h5", world, writer.frames)
-            written.append("trajectory.h5")
-        start = {
-            "kinetic_energy": history.kinetic[0],
-            "potential_energy": history.potential[0],
-            "momentum": history.momentum[0].tolist(),
-        }
-        data = summary(world, scene=str(path), start=start, wall_seconds=wall)
-        if not args.no_events:
-            write_events_csv(world, staging / "events.csv")
-            written.append("events.csv")
-        write_summary(data, staging / "summary.json")
-        written.append("summary.json")
-        if not args.no_plots:
-            written += write_run_plots(staging, world, history, world.events["time"])
-    title = scene.scene.get("title") or path.stem
-    rate = world.stats.collisions / wall if wall > 0 else float("inf")
-    print(
-        f"{title}: {world.n_bodies} bodies, {until:g} s simulated, "
-        f"{world.stats.collisions} collisions and {world.stats.wall_collisions} at walls "
-        f"in {wall:.2f} s ({rate:.3g} collisions/s)"
+    if not (args.checkpoint_every > 0 and math.isfinite(args.checkpoint_every)):
+        raise CaromError(
+            f"--checkpoint-every must be a positive number of seconds; got "
+            f"{args.checkpoint_every!r}"
+        )
+    scene = load_scene(find_scene(args.scene))
+    outputs = with_overrides(
+        Outputs.of(scene),
+        trajectory=False if args.no_trajectory else None,
+        events=False if args.no_events else None,
+        plots=False if args.no_plots else None,
+        animation=args.animation,
     )
-    print(f"wrote {', '.join(written)} to {args.out}/")
+    try:
+        report = run_scene(
+            args.scene,
+            args.out,
+            until=args.until,
+            outputs=outputs,
+            resume=args.resume,
+            force=args.force,
+            progress=False if args.quiet else None,
+            checkpoint_every=args.checkpoint_every,
+        )
+    except RunInterrupted as stopped:
+        print(
+            f"carom: {stopped}; nothing was written to {args.out}. Continue with: carom run "
+            f"{args.scene} --out {args.out} --resume",
+            file=sys.stderr,
+        )
+        return 130
+    rate = report.collisions / report.wall_seconds if report.wall_seconds > 0 else float("inf")
+    resumed = "" if report.resumed_at is None else f" (resumed at {report.resumed_at:g} s)"
+    print(
+        f"{report.title}: {report.bodies} bodies, {report.simulated:g} s simulated{resumed}, "
+        f"{report.collisions} collisions and {report.wall_collisions} at walls "
+        f"in {report.wall_seconds:.2f} s ({rate:.3g} collisions/s)"
+    )
+    print(f"wrote {', '.join(report.written)} to {args.out}/")
     return 0
 
 
@@ -205,39 +257,19 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
 
 
 def _cmd_cases(args: argparse.Namespace) -> int:
-    from carom.cases import (
-        MODELS,
-        ROUND_OFF,
-        conclusions,
-        format_details,
-        format_table,
-        run_study,
-    )
+    from carom.cases import conclusions, format_details, format_table, run_study
     from carom.io.outdir import check_output, staged_output
+    from carom.io.results import case_document, write_case_study
 
     if args.out is not None:
         check_output(args.out, force=args.force)
     records = run_study()
     findings = conclusions(records)
-    document: dict[str, Any] = {
-        "carom_version": __version__,
-        "models": MODELS,
-        "round_off": ROUND_OFF,
-        "records": [r.to_dict() for r in records],
-        "conclusions": findings,
-    }
+    document = case_document(records)
     if args.out is not None:
         figures = not args.no_figures and _have_matplotlib()
         with staged_output(args.out, force=args.force) as staging:
-            (staging / "cases.json").write_text(json.dumps(document, indent=2) + "\n")
-            _write_cases_csv(staging / "cases.csv", document["records"])
-            if figures:
-                from carom.viz.cases import plot_case
-
-                for number in sorted({r.case for r in records}):
-                    plot_case(
-                        [r for r in records if r.case == number], staging / f"case-{number}.png"
-                    )
+            write_case_study(staging, records, figures=figures)
 
     if args.json:
         print(json.dumps(document, indent=2))
@@ -268,64 +300,6 @@ def _have_matplotlib() -> bool:
         )
         return False
     return True
-
-
-def _write_cases_csv(path: Path, records: list[dict[str, Any]]) -> None:
-    """One row per case, restitution and model (the exact answer is the model 'exact')."""
-    columns = [
-        "case",
-        "title",
-        "e",
-        "model",
-        "m1",
-        "m2",
-        "x1_x",
-        "x1_y",
-        "x2_x",
-        "x2_y",
-        "v1_x",
-        "v1_y",
-        "v2_x",
-        "v2_y",
-        "v1_after_x",
-        "v1_after_y",
-        "v2_after_x",
-        "v2_after_y",
-        "error",
-        "momentum_error",
-        "ke_before",
-        "ke_after",
-        "ke_lost",
-        "energy_error",
-        "separation_speed",
-        "relative_speed_after",
-        "angle_deg",
-        "gap_after_1s",
-    ]
-    with path.open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(columns)
-        for rec in records:
-            outcomes = {"exact": rec["exact"], **rec["models"]}
-            for model, out in outcomes.items():
-                row = [
-                    rec["case"],
-                    rec["title"],
-                    rec["e"],
-                    model,
-                    rec["m1"],
-                    rec["m2"],
-                    *rec["x1"],
-                    *rec["x2"],
-                    *rec["v1"],
-                    *rec["v2"],
-                    *out["v1_after"],
-                    *out["v2_after"],
-                ]
-                row += [out[c] for c in columns[len(row) :]]
-                writer.writerow(
-                    ["" if v is None else repr(v) if isinstance(v, float) else v for v in row]
-                )
 
 
 def main(argv: Sequence[str] | None = None) -> int:

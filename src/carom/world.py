@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -1011,10 +1011,13 @@ class World:
 
     # -- checkpoints --------------------------------------------------------------------------
 
-    def save(self, path: str | Path) -> None:
+    def save(self, path: str | Path, *, extra: Mapping[str, NDArray[Any]] | None = None) -> None:
         """Write a checkpoint of the whole world (model, state and schedule) to ``path``.
 
-        A world loaded from it continues exactly, bit for bit, as this one would.
+        A world loaded from it continues exactly, bit for bit, as this one would. ``extra``
+        arrays (a caller's own progress, say) are stored beside it under their names and
+        come back from :meth:`load_with_extra`. The file is written beside ``path`` and
+        renamed over it, so ``path`` always holds a whole checkpoint.
         """
         self._ensure_built()
         model, state = self._model, self._state
@@ -1045,6 +1048,8 @@ class World:
         for name in ("radius", "mass", "q", "material"):
             arrays[f"body.{name}"] = getattr(self, f"_{name}")
         arrays["engine_order"] = self._order
+        for name, value in (extra or {}).items():
+            arrays[f"extra.{name}"] = value
         path = Path(path)
         tmp = path.with_name(path.name + ".partial")
         with tmp.open("wb") as handle:
@@ -1054,6 +1059,11 @@ class World:
     @classmethod
     def load(cls, path: str | Path) -> World:
         """Read a checkpoint written by :meth:`save`."""
+        return cls.load_with_extra(path)[0]
+
+    @classmethod
+    def load_with_extra(cls, path: str | Path) -> tuple[World, dict[str, NDArray[Any]]]:
+        """Read a checkpoint written by :meth:`save`, and the ``extra`` arrays saved with it."""
         try:
             data = np.load(Path(path), allow_pickle=False)
         except (OSError, ValueError) as exc:
@@ -1096,4 +1106,5 @@ class World:
             world._time = meta["time"]
             world._model = world._build_model(world._order)
             world._state = state
-        return world
+            extra = {k[len("extra.") :]: data[k] for k in data.files if k.startswith("extra.")}
+        return world, extra

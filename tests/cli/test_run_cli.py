@@ -168,3 +168,112 @@ def test_plots_are_written_where_they_mean_something(tmp_path: Path) -> None:
     done = carom("run", "bouncing-ball", "--out", quiet, "--until", "1.0", "--no-plots")
     assert done.returncode == 0, done.stderr
     assert not list(quiet.glob("*.png"))
+
+
+def _coloured(frame: np.ndarray) -> np.ndarray:
+    """Mask of strongly coloured pixels (the bodies; box, text and background are grey)."""
+    f = frame.astype(float)
+    return (f.max(axis=-1) - f.min(axis=-1)) > 60
+
+
+def test_the_animation_decodes_with_one_frame_per_trajectory_frame(tmp_path: Path) -> None:
+    imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg", reason="the viz extra is missing")
+    out = tmp_path / "cradle"
+    done = carom("run", "newtons-cradle", "--out", out, "--until", "0.6")
+    assert done.returncode == 0, done.stderr
+    assert "animation.mp4" in done.stdout
+    # decoded by the ffmpeg that imageio-ffmpeg ships, to raw RGB: 960 x 720 per frame
+    raw = subprocess.run(
+        [
+            imageio_ffmpeg.get_ffmpeg_exe(),
+            "-v",
+            "error",
+            "-i",
+            str(out / "animation.mp4"),
+            "-f",
+            "rawvideo",
+            "-pix_fmt",
+            "rgb24",
+            "-",
+        ],
+        capture_output=True,
+        check=True,
+        timeout=120,
+    ).stdout
+    width, height = 960, 720
+    assert len(raw) % (width * height * 3) == 0
+    frames = list(np.frombuffer(raw, np.uint8).reshape(-1, height, width, 3))
+    assert len(frames) == 61  # the start and one every 0.01 s to 0.6 s, as in trajectory.h5
+    # the balls are drawn in colour, the same area in every frame (five disks; the colour
+    # bar's column is left out), and their centre of area moves right with the momentum
+    # (1 kg m/s to the right all along: the centre of mass moves 0.2 m / 0.6 s = 0.33 m/s)
+    columns = np.arange(width) < int(0.86 * width)
+    areas, centres = [], []
+    for frame in frames[::10]:
+        mask = _coloured(frame) & columns[None, :]
+        areas.append(mask.sum())
+        centres.append(np.nonzero(mask)[1].mean())
+    assert min(areas) > 1000
+    assert max(areas) < 1.1 * min(areas)
+    assert np.all(np.diff(centres) > 0)
+
+
+def test_a_gif_on_request(tmp_path: Path) -> None:
+    iio = pytest.importorskip("imageio.v3", reason="the viz extra is missing")
+    out = tmp_path / "ball"
+    done = carom("run", "case-4", "--out", out, "--animation", "gif", "--no-plots")
+    assert done.returncode == 0, done.stderr
+    film = iio.imread(out / "animation.gif", index=None)
+    assert film.shape[0] == 101  # 0 to 1 s every 0.01 s
+    assert not (out / "animation.mp4").exists()
+
+
+def test_the_progress_bar_shows_on_a_terminal_only(tmp_path: Path) -> None:
+    import fcntl
+    import pty
+    import struct
+    import termios
+
+    done = carom("run", "hard-sphere-gas", "--out", tmp_path / "a", "--until", "0.5")
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == ""  # not a terminal: quiet
+    leader, follower = pty.openpty()
+    # a terminal 120 columns wide, as a person's would be
+    fcntl.ioctl(follower, termios.TIOCSWINSZ, struct.pack("HHHH", 40, 120, 0, 0))
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "carom",
+            "run",
+            "hard-sphere-gas",
+            "--out",
+            str(tmp_path / "b"),
+            "--until",
+            "0.5",
+            "--animation",
+            "none",
+        ],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=follower,
+        env={**os.environ, "MPLBACKEND": "Agg"},
+    )
+    os.close(follower)
+    seen = b""
+    while True:
+        try:
+            chunk = os.read(leader, 4096)
+        except OSError:
+            break
+        if not chunk:
+            break
+        seen += chunk
+    os.close(leader)
+    assert process.wait(timeout=300) == 0
+    text = seen.decode(errors="replace")
+    # simulated time, the rate of events and the time left
+    assert "simulating 100%" in text
+    assert "t = 0.5 of 0.5 s" in text
+    assert "events/s" in text
+    assert "<" in text

@@ -9,13 +9,16 @@ Layout written (de Buyl et al., Comput. Phys. Commun. 185, 1546, 2014; nongnu.or
     /particles/all/velocity   same, value in [m s-1]
     /particles/all/radius     (N,) [m]    time-independent
     /particles/all/mass       (N,) [kg]   (inf for static bodies)
-    /observables/kinetic_energy   step, time, value (F,) [J]
+    /observables/kinetic_energy      step, time, value (F,) [J]
+    /observables/potential_energy    same (gravity; zero without it) [J]
+    /observables/dissipated_energy   same: lost in collisions since the start [J]
 
 Frames are appended as the run produces them (chunked, resizable datasets).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -26,7 +29,10 @@ from carom import __version__
 from carom.errors import CaromError
 from carom.world import Frame, World
 
-__all__ = ["H5MDWriter", "check_trajectory", "need_h5py"]
+__all__ = ["ENERGIES", "H5MDWriter", "check_trajectory", "need_h5py"]
+
+#: the observables written with every frame, in joules
+ENERGIES = ("kinetic_energy", "potential_energy", "dissipated_energy")
 
 
 def need_h5py() -> Any:
@@ -73,13 +79,47 @@ class H5MDWriter:
         radius = particles.create_dataset("radius", data=world._radius)
         radius.attrs["unit"] = "m"
         particles.create_dataset("mass", data=world._mass).attrs["unit"] = "kg"
+        observables = self.file.require_group("observables")
         self.groups = {
             "position": self._element(particles, "position", (self.n, self.dim), "m"),
             "velocity": self._element(particles, "velocity", (self.n, self.dim), "m s-1"),
-            "kinetic_energy": self._element(
-                self.file.require_group("observables"), "kinetic_energy", (), "J"
-            ),
+            **{name: self._element(observables, name, (), "J") for name in ENERGIES},
         }
+
+    @classmethod
+    def reopen(cls, path: Path, world: World, frames: int) -> H5MDWriter:
+        """Open a trajectory written by an interrupted run to append to it, keeping its first
+        ``frames`` frames (those its checkpoint knows) and dropping any written after."""
+        h5py = need_h5py()
+        self = cls.__new__(cls)
+        try:
+            self.file = h5py.File(path, "r+")
+            self.groups = {
+                "position": self.file["particles/all/position"],
+                "velocity": self.file["particles/all/velocity"],
+                **{name: self.file[f"observables/{name}"] for name in ENERGIES},
+            }
+        except (OSError, KeyError) as exc:
+            raise CaromError(
+                f"cannot reopen the trajectory {path} to resume ({exc}); pass --force to start "
+                f"again"
+            ) from None
+        self.dim, self.n = world.dim, world.n_bodies
+        for group in self.groups.values():
+            for dataset in ("step", "time", "value"):
+                if group[dataset].shape[0] < frames:
+                    self.file.close()
+                    raise CaromError(
+                        f"the trajectory {path} holds fewer frames than its checkpoint "
+                        f"({group[dataset].shape[0]} < {frames}); pass --force to start again"
+                    )
+                group[dataset].resize(frames, axis=0)
+        self.frames = frames
+        return self
+
+    def flush(self) -> None:
+        """Push everything written so far to the file (before a checkpoint names it)."""
+        self.file.flush()
 
     @staticmethod
     def _element(parent: Any, name: str, shape: tuple[int, ...], unit: str) -> Any:
@@ -99,14 +139,12 @@ class H5MDWriter:
         value.attrs["unit"] = unit
         return group
 
-    def write(self, frame: Frame, kinetic_energy: float) -> None:
-        """Append one frame and its kinetic energy [J]."""
+    def write(self, frame: Frame, energies: Mapping[str, float]) -> None:
+        """Append one frame and its energies [J] (``kinetic_energy``, ``potential_energy``,
+        ``dissipated_energy``)."""
         k = self.frames
-        for name, value in (
-            ("position", frame.positions),
-            ("velocity", frame.velocities),
-            ("kinetic_energy", kinetic_energy),
-        ):
+        values = [("position", frame.positions), ("velocity", frame.velocities)]
+        for name, value in [*values, *((name, energies[name]) for name in ENERGIES)]:
             group = self.groups[name]
             for dataset in ("step", "time", "value"):
                 group[dataset].resize(k + 1, axis=0)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from carom.errors import CaromError
 
-__all__ = ["check_output", "staged_output"]
+__all__ = ["check_output", "publish", "staged_output"]
 
 
 def check_output(path: str | os.PathLike[str], *, force: bool = False) -> Path:
@@ -56,6 +56,12 @@ def staged_output(path: str | os.PathLike[str], *, force: bool = False) -> Itera
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
+    publish(staging, target)
+
+
+def publish(staging: Path, target: Path) -> None:
+    """Move the finished directory ``staging`` to ``target``, replacing what is there (the
+    caller checked ``--force``) by two renames, so ``target`` is never half-written."""
     if target.exists():
         retired = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=target.parent))
         target.rename(retired / target.name)

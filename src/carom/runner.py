@@ -1,0 +1,430 @@
+"""The job behind ``carom run``: run a scene, write its results, survive interruption.
+
+A run works in a directory of its own beside the output, ``.DIR.carom-run/``: the
+trajectory grows there frame by frame and a checkpoint (the world, bit for bit, and the
+run's progress) is written there every ``checkpoint_every`` seconds and when the run is
+interrupted (Ctrl-C). Only a finished run is moved to ``DIR``, by renames, so ``DIR`` never
+holds half-written files. ``resume=True`` continues from the checkpoint; because the engine
+stops and restarts at frame times without changing a bit, a resumed run writes the same
+trajectory, events and summary as one that was never interrupted.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import math
+import shutil
+import signal
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from types import FrameType
+from typing import Any, Literal
+
+import numpy as np
+
+from carom.errors import CaromError
+from carom.scene import Scene, find_scene, load_scene
+from carom.world import World
+
+__all__ = ["Outputs", "RunInterrupted", "RunReport", "run_scene", "work_directory"]
+
+CHECKPOINT = "checkpoint.npz"
+TRAJECTORY = "trajectory.h5"
+#: progress updates (and chances to stop) per run when the scene asks for no frames
+CHUNKS_WITHOUT_FRAMES = 100
+
+
+@dataclass(frozen=True)
+class Outputs:
+    """Which files a run writes besides ``summary.json`` (the scene's ``[outputs]`` table)."""
+
+    trajectory: bool = True
+    events: bool = True
+    plots: bool = True
+    animation: Literal["mp4", "gif", "none"] = "mp4"
+
+    @classmethod
+    def of(cls, scene: Scene) -> Outputs:
+        """The outputs a scene asks for (defaults where it says nothing)."""
+        return cls(**{k: v for k, v in scene.outputs.items() if k in cls.__dataclass_fields__})
+
+
+@dataclass
+class RunReport:
+    """What a finished run did: for the command's closing lines."""
+
+    title: str
+    bodies: int
+    simulated: float
+    collisions: int
+    wall_collisions: int
+    wall_seconds: float
+    written: list[str] = field(default_factory=list)
+    resumed_at: float | None = None
+
+
+class RunInterrupted(Exception):  # noqa: N818 (it is not an error: the user asked to stop)
+    """The run was stopped (Ctrl-C); a checkpoint to resume from was written."""
+
+
+def work_directory(out: Path) -> Path:
+    """Where a run writing to ``out`` keeps its trajectory and checkpoint until it is done."""
+    return out.parent / f".{out.name}.carom-run"
+
+
+def run_scene(
+    scene_or_file: str | Path,
+    out: str | Path,
+    *,
+    until: float | None = None,
+    outputs: Outputs | None = None,
+    resume: bool = False,
+    force: bool = False,
+    progress: bool | None = None,
+    checkpoint_every: float = 60.0,
+) -> RunReport:
+    """Run a scene and write its results to ``out``.
+
+    Parameters
+    ----------
+    scene_or_file : str or Path
+        A built-in scene name or a scene file.
+    out : str or Path
+        The output directory; it must not exist or be empty, unless ``force``.
+    until : float, optional
+        Simulated time to reach [s]; the scene's ``[run] until`` by default.
+    outputs : Outputs, optional
+        What to write; the scene's ``[outputs]`` by default.
+    resume : bool
+        Continue the interrupted run found in :func:`work_directory` ``(out)``.
+    force : bool
+        Replace a non-empty ``out``; without ``resume``, discard an interrupted run.
+    progress : bool, optional
+        Show a progress bar on standard error; by default only when it is a terminal.
+    checkpoint_every : float
+        Wall-clock seconds between checkpoints [s].
+
+    Returns
+    -------
+    RunReport
+
+    Raises
+    ------
+    CaromError
+        Bad scene, options or output directory; a missing optional package.
+    RunInterrupted
+        Ctrl-C: the checkpoint is written, ``out`` untouched; resume with ``resume=True``.
+    """
+    from carom.io.outdir import check_output, publish
+
+    path = find_scene(scene_or_file)
+    scene = load_scene(path)
+    until = float(scene.run["until"] if until is None else until)
+    if not (until > 0 and math.isfinite(until)):
+        raise CaromError(f"until must be a positive number of seconds; got {until!r}")
+    outputs = outputs or Outputs.of(scene)
+    target = check_output(Path(out), force=force)
+    work = work_directory(target)
+    job = {
+        "scene_sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
+        "until": until,
+        "frame_interval": scene.run["frame_interval"],
+        "outputs": asdict(outputs),
+    }
+    if resume and not (work / CHECKPOINT).is_file():
+        raise CaromError(
+            f"nothing to resume for {target}: {work / CHECKPOINT} does not exist; run "
+            f"without --resume"
+        )
+    if not resume and work.exists():
+        if not force:
+            raise CaromError(
+                f"{work} holds an interrupted run writing to {target}; pass --resume to "
+                f"continue it, or --force to start again"
+            )
+        shutil.rmtree(work)
+    _check_extras(outputs)
+    if resume:
+        run = _Run.resume(work, job)
+    else:
+        _make_directory(work)
+        run = _Run.start(work, scene.build(), job)
+    title = scene.scene.get("title") or path.stem
+    try:
+        with _stop_on_ctrl_c() as stop:
+            run.advance(
+                until, scene.run["frame_interval"], outputs, progress, stop, checkpoint_every
+            )
+    finally:
+        run.close()
+    written = run.finish(str(path), title, outputs)
+    publish(work, target)
+    world = run.world
+    return RunReport(
+        title=title,
+        bodies=world.n_bodies,
+        simulated=world.time,
+        collisions=world.stats.collisions,
+        wall_collisions=world.stats.wall_collisions,
+        wall_seconds=run.wall,
+        written=written,
+        resumed_at=run.resumed_at,
+    )
+
+
+def _make_directory(path: Path) -> None:
+    try:
+        path.mkdir(parents=True)
+    except OSError as exc:
+        raise CaromError(f"cannot create the working directory {path}: {exc.strerror}") from None
+
+
+def _check_extras(outputs: Outputs) -> None:
+    """A missing optional package is named before the run, not after it."""
+    from carom.io.h5md import need_h5py
+    from carom.viz import require_matplotlib
+
+    if outputs.trajectory or outputs.animation != "none":
+        need_h5py()  # the animation is drawn from the trajectory
+    if outputs.plots or outputs.animation != "none":
+        require_matplotlib()
+    if outputs.animation != "none":
+        from carom.viz.animate import need_encoder
+
+        need_encoder(outputs.animation)
+
+
+class _Stop:
+    """Set by the first Ctrl-C; the run stops at the next frame, after a checkpoint."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def __bool__(self) -> bool:
+        return self.requested
+
+
+@contextlib.contextmanager
+def _stop_on_ctrl_c() -> Iterator[_Stop]:
+    """Turn the first SIGINT into a request to stop cleanly (a second one interrupts at once).
+
+    Only the main thread can own signal handlers; elsewhere Ctrl-C keeps its usual meaning.
+    """
+    stop = _Stop()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def handler(signum: int, frame: FrameType | None) -> None:
+        if stop.requested:
+            raise KeyboardInterrupt
+        stop.requested = True
+
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield stop
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+class _Run:
+    """A run's world, trajectory writer and history, and how to checkpoint them."""
+
+    def __init__(self, work: Path, world: World, job: dict[str, Any]) -> None:
+        from carom.viz.run import RunHistory
+
+        self.work = work
+        self.world = world
+        self.job = job
+        self.history = RunHistory()
+        self.writer: Any = None
+        self.frames = 0  # frames in the trajectory
+        self.t0 = world.time  # frames fall at t0 + k frame_interval
+        self.wall = 0.0  # seconds spent in the engine
+        self.resumed_at: float | None = None
+
+    @classmethod
+    def start(cls, work: Path, world: World, job: dict[str, Any]) -> _Run:
+        run = cls(work, world, job)
+        run._open_trajectory(resume=False)
+        run._record()
+        return run
+
+    @classmethod
+    def resume(cls, work: Path, job: dict[str, Any]) -> _Run:
+        world, extra = World.load_with_extra(work / CHECKPOINT)
+        saved = json.loads(str(extra["job"]))
+        changed = [k for k in job if saved.get(k) != job[k]]
+        if changed:
+            raise CaromError(
+                f"the interrupted run in {work} was started with another "
+                f"{' and '.join(changed).replace('_', ' ')} ({saved.get(changed[0])!r}, now "
+                f"{job[changed[0]]!r}); resume it as it was started, or pass --force to start "
+                f"again"
+            )
+        run = cls(work, world, job)
+        progress = json.loads(str(extra["progress"]))
+        run.frames, run.t0, run.wall = progress["frames"], progress["t0"], progress["wall"]
+        run.resumed_at = world.time
+        history = run.history
+        history.time = extra["history.time"].tolist()
+        history.kinetic = extra["history.kinetic"].tolist()
+        history.potential = extra["history.potential"].tolist()
+        history.dissipated = extra["history.dissipated"].tolist()
+        history.momentum = list(extra["history.momentum"])
+        world._events = [extra["events"]] if extra["events"].size else []
+        run._open_trajectory(resume=True)
+        return run
+
+    def _open_trajectory(self, *, resume: bool) -> None:
+        outputs = self.job["outputs"]
+        if not outputs["trajectory"] and outputs["animation"] == "none":
+            return
+        from carom.io.h5md import H5MDWriter
+
+        path = self.work / TRAJECTORY
+        if resume:
+            self.writer = H5MDWriter.reopen(path, self.world, self.frames)
+        else:
+            self.writer = H5MDWriter(path, self.world)
+
+    def _record(self) -> None:
+        frame = self.world.frame()
+        self.history.add(self.world, frame)
+        if self.writer is not None:
+            h = self.history
+            energies = {
+                "kinetic_energy": h.kinetic[-1],
+                "potential_energy": h.potential[-1],
+                "dissipated_energy": h.dissipated[-1],
+            }
+            self.writer.write(frame, energies)
+            self.frames = self.writer.frames
+
+    def checkpoint(self) -> None:
+        """Flush the trajectory, then write the checkpoint (atomically) that matches it."""
+        if self.writer is not None:
+            self.writer.flush()
+        h = self.history
+        progress = {"frames": self.frames, "t0": self.t0, "wall": self.wall}
+        self.world.save(
+            self.work / CHECKPOINT,
+            extra={
+                "job": np.array(json.dumps(self.job)),
+                "progress": np.array(json.dumps(progress)),
+                "history.time": np.array(h.time),
+                "history.kinetic": np.array(h.kinetic),
+                "history.potential": np.array(h.potential),
+                "history.dissipated": np.array(h.dissipated),
+                "history.momentum": np.array(h.momentum),
+                "events": self.world.events,
+            },
+        )
+
+    def advance(
+        self,
+        until: float,
+        frame_dt: float | None,
+        outputs: Outputs,
+        progress: bool | None,
+        stop: _Stop,
+        checkpoint_every: float,
+    ) -> None:
+        """Run to ``until``, frame by frame, with a progress bar; checkpoint on the way."""
+        from tqdm import tqdm
+
+        world = self.world
+        log = outputs.events or outputs.plots
+        span = until - self.t0
+        step = frame_dt if frame_dt is not None else span / CHUNKS_WITHOUT_FRAMES
+        k = round((world.time - self.t0) / step) if world.time > self.t0 else 0
+        bar = tqdm(
+            total=span,
+            initial=world.time - self.t0,
+            disable=(None if progress is None else not progress),
+            file=sys.stderr,
+            unit="s",
+            bar_format="{desc} {percentage:3.0f}%|{bar}| t = {n:.4g} of {total:.4g} s "
+            "[{elapsed} < {remaining}{postfix}]",
+            desc="simulating",
+            dynamic_ncols=True,
+        )
+        saved = time.perf_counter()
+        events0 = world.stats.events
+        began = time.perf_counter()
+        with bar:
+            while world.time < until:
+                if stop:
+                    self.checkpoint()
+                    raise RunInterrupted(
+                        f"stopped at t = {world.time:.6g} s of {until:g} s; checkpoint written"
+                    )
+                k += 1
+                target = min(until, self.t0 + k * step)
+                mark = time.perf_counter()
+                world.run(until=target, log=log)
+                self.wall += time.perf_counter() - mark
+                if frame_dt is not None or target >= until:
+                    self._record()
+                elapsed = time.perf_counter() - began
+                bar.set_postfix_str(
+                    f", {(world.stats.events - events0) / max(elapsed, 1e-9):.3g} events/s",
+                    refresh=False,
+                )
+                bar.update(world.time - self.t0 - bar.n)
+                if time.perf_counter() - saved > checkpoint_every and world.time < until:
+                    self.checkpoint()
+                    saved = time.perf_counter()
+
+    def close(self) -> None:
+        if self.writer is not None:
+            self.writer.close()
+
+    def finish(self, scene: str, title: str, outputs: Outputs) -> list[str]:
+        """Write everything else in the working directory; return the file names."""
+        from carom.io.h5md import check_trajectory
+        from carom.io.results import summary, write_events_csv, write_summary
+
+        world, h = self.world, self.history
+        written = []
+        trajectory = self.work / TRAJECTORY
+        if self.writer is not None:
+            check_trajectory(trajectory, world, self.frames)
+            if outputs.trajectory:
+                written.append(TRAJECTORY)
+        start = {
+            "kinetic_energy": h.kinetic[0],
+            "potential_energy": h.potential[0],
+            "momentum": np.asarray(h.momentum[0]).tolist(),
+        }
+        data = summary(world, scene=scene, start=start, wall_seconds=self.wall)
+        if outputs.events:
+            write_events_csv(world, self.work / "events.csv")
+            written.append("events.csv")
+        write_summary(data, self.work / "summary.json")
+        written.append("summary.json")
+        if outputs.plots:
+            from carom.viz.run import write_run_plots
+
+            written += write_run_plots(self.work, world, h, world.events["time"])
+        if outputs.animation != "none":
+            from carom.viz.animate import write_animation
+
+            name = f"animation.{outputs.animation}"
+            write_animation(trajectory, self.work / name, title=title)
+            written.append(name)
+        if not outputs.trajectory and trajectory.exists():
+            trajectory.unlink()
+        (self.work / CHECKPOINT).unlink(missing_ok=True)
+        return written
+
+
+def with_overrides(outputs: Outputs, **changes: Any) -> Outputs:
+    """``outputs`` with the given fields changed (those given as None left alone)."""
+    return replace(outputs, **{k: v for k, v in changes.items() if v is not None})

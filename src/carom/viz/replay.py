@@ -1,0 +1,154 @@
+"""Interactive replays in the rerun viewer (the ``view`` extra: ``pip install 'carom[view]'``).
+
+:func:`write_recording` turns the H5MD trajectory that ``carom run`` wrote into a rerun
+recording (``.rrd``): the box, every body as a shaded sphere (a disk in 2D) coloured by speed,
+its velocity as an arrow, and the energies against time, all on two timelines, ``frame``
+(the frame number) and ``time`` (simulated seconds). The viewer's timeline scrubs, plays
+and loops it.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from carom.errors import CaromError
+
+__all__ = ["RECORDING", "can_show", "need_rerun", "open_viewer", "write_recording"]
+
+RECORDING = "recording.rrd"
+#: entity paths in the recording
+BOX, BODIES, VELOCITIES, ENERGY = "world/box", "world/bodies", "world/velocities", "energy"
+
+
+def need_rerun() -> Any:
+    """The rerun module, or a CaromError saying how to install it."""
+    try:
+        import rerun as rr
+    except ImportError:
+        raise CaromError(
+            "carom view needs the rerun viewer's SDK: install the view extra, "
+            "pip install 'carom[view]'"
+        ) from None
+    return rr
+
+
+def write_recording(folder: Path, out: Path | None = None) -> Path:
+    """Write ``folder/recording.rrd`` (or ``out``) from ``folder/trajectory.h5``.
+
+    Parameters
+    ----------
+    folder : Path
+        A ``carom run`` output directory holding ``trajectory.h5``.
+    out : Path, optional
+        Where to write the recording; ``folder / "recording.rrd"`` by default. It is written
+        beside it first and renamed, so an existing recording is replaced whole or not at all.
+
+    Returns
+    -------
+    Path
+        The recording.
+
+    Raises
+    ------
+    CaromError
+        No trajectory in ``folder``, or rerun (or h5py) missing.
+    """
+    from carom.io.h5md import ENERGIES, need_h5py
+
+    trajectory = folder / "trajectory.h5"
+    if not trajectory.is_file():
+        raise CaromError(
+            f"{folder} holds no trajectory.h5 to replay; run 'carom run SCENE --out {folder}' "
+            f"first (without --no-trajectory)"
+        )
+    rr = need_rerun()
+    h5py = need_h5py()
+    out = out or folder / RECORDING
+    partial = out.with_name(out.name + ".partial")
+    stream = rr.RecordingStream("carom", recording_id=f"carom:{folder.resolve().name}")
+    stream.save(partial)
+    try:
+        with h5py.File(trajectory, "r") as f:
+            _log_all(rr, stream, f, ENERGIES)
+        stream.flush()
+        stream.disconnect()
+    except BaseException:
+        partial.unlink(missing_ok=True)
+        raise
+    partial.replace(out)
+    return out
+
+
+def _log_all(rr: Any, stream: Any, f: Any, energies: tuple[str, ...]) -> None:
+    box = np.asarray(f["particles/all/box/edges"][:], dtype=float)
+    dim = int(f["particles/all/box"].attrs["dimension"])
+    radius = np.asarray(f["particles/all/radius"][:], dtype=float)
+    moving = np.isfinite(np.asarray(f["particles/all/mass"][:], dtype=float))
+    times = f["particles/all/position/time"][:]
+    positions = f["particles/all/position/value"]
+    velocities = f["particles/all/velocity/value"]
+    Points = rr.Points3D if dim == 3 else rr.Points2D
+    Arrows = rr.Arrows3D if dim == 3 else rr.Arrows2D
+    if dim == 3:
+        stream.log(BOX, rr.Boxes3D(centers=[box / 2], half_sizes=[box / 2]), static=True)
+    else:
+        stream.log(BOX, rr.Boxes2D(mins=[[0.0, 0.0]], sizes=[box]), static=True)
+    # arrows: a typical speed (the 90th percentile over a few frames) draws two radii long
+    picks = np.unique(np.linspace(0, len(times) - 1, 20).astype(int))
+    speeds = np.concatenate([np.linalg.norm(velocities[k][moving], axis=1) for k in picks])
+    typical = float(np.percentile(speeds, 90)) if speeds.size else 0.0
+    arrow_time = 2.0 * float(np.median(radius)) / typical if typical > 0 else 0.0
+    top = float(np.percentile(speeds, 99)) if speeds.size else 1.0
+    observed = f["observables"]
+    series = {name: observed[f"{name}/value"][:] for name in energies if name in observed}
+    for k in range(len(times)):
+        stream.set_time("frame", sequence=k)
+        stream.set_time("time", duration=float(times[k]))
+        x, v = positions[k], velocities[k]
+        stream.log(BODIES, Points(x, radii=radius, colors=_speed_colours(v, moving, top)))
+        stream.log(VELOCITIES, Arrows(origins=x[moving], vectors=v[moving] * arrow_time))
+        total = 0.0
+        for name, values in series.items():
+            stream.log(f"{ENERGY}/{name.removesuffix('_energy')}", rr.Scalars(float(values[k])))
+            total += float(values[k])
+        stream.log(f"{ENERGY}/total", rr.Scalars(total))
+
+
+def _speed_colours(v: NDArray[np.float64], moving: NDArray[np.bool_], top: float) -> Any:
+    """RGB bytes per body: the plasma colour map by speed (as the animation), static grey."""
+    import matplotlib
+
+    level = np.clip(np.linalg.norm(v, axis=1) / (top if top > 0 else 1.0), 0.0, 1.0)
+    rgb = (np.asarray(matplotlib.colormaps["plasma"](level))[:, :3] * 255).astype(np.uint8)
+    rgb[~moving] = 160
+    return rgb
+
+
+def can_show() -> bool:
+    """Whether a viewer window can open here: a desktop, and not a CI machine."""
+    if os.environ.get("CI"):
+        return False
+    if sys.platform in ("darwin", "win32"):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def open_viewer(recording: Path) -> None:
+    """Start the rerun viewer on ``recording`` in the background."""
+    viewer = shutil.which("rerun")
+    command = [viewer] if viewer else [sys.executable, "-m", "rerun"]
+    subprocess.Popen(
+        [*command, str(recording)],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )

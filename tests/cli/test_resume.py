@@ -1,0 +1,150 @@
+"""Interrupting a run and resuming it: same files as a run never interrupted; Ctrl-C leaves a
+valid checkpoint and nothing half-written."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import carom
+from carom import runner
+from carom.runner import CHECKPOINT, Outputs, RunInterrupted, run_scene, work_directory
+
+h5py = pytest.importorskip("h5py", reason="the io extra (h5py) is not installed")
+pytest.importorskip("matplotlib", reason="the viz extra (matplotlib) is not installed")
+
+NO_FILM = Outputs(animation="none")
+
+
+def _stop_after(monkeypatch: pytest.MonkeyPatch, polls: int) -> None:
+    """Make the run's stop flag read as set from its ``polls``-th look on (as Ctrl-C does)."""
+    seen = {"n": 0}
+
+    def stop_requested(self: object) -> bool:
+        seen["n"] += 1
+        return seen["n"] >= polls
+
+    monkeypatch.setattr(runner._Stop, "__bool__", stop_requested)
+
+
+def _without_performance(path: Path) -> dict[str, object]:
+    data = json.loads(path.read_text())
+    data.pop("performance")  # wall-clock figures: the only part that may differ
+    data.pop("scene")
+    return data
+
+
+def _assert_same_results(a: Path, b: Path) -> None:
+    names = sorted(p.name for p in a.iterdir())
+    assert names == sorted(p.name for p in b.iterdir())
+    assert (a / "events.csv").read_bytes() == (b / "events.csv").read_bytes()
+    assert _without_performance(a / "summary.json") == _without_performance(b / "summary.json")
+    for png in a.glob("*.png"):
+        assert png.read_bytes() == (b / png.name).read_bytes(), png.name
+    with h5py.File(a / "trajectory.h5", "r") as fa, h5py.File(b / "trajectory.h5", "r") as fb:
+        datasets: list[str] = []
+        fa.visit(lambda name: datasets.append(name) if isinstance(fa[name], h5py.Dataset) else None)
+        assert len(datasets) >= 10
+        for name in datasets:
+            np.testing.assert_array_equal(fa[name][()], fb[name][()], err_msg=name)
+
+
+@pytest.mark.parametrize("scene", ["billiards-break", "hard-sphere-gas"])
+def test_a_resumed_run_writes_what_an_uninterrupted_one_does(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, scene: str
+) -> None:
+    straight = tmp_path / "straight"
+    run_scene(scene, straight, until=1.0, outputs=NO_FILM, progress=False)
+    # the same run, stopped after 7 frames and again after 5 more, then finished
+    out = tmp_path / "out"
+    work = work_directory(out)
+    for polls in (7, 5):
+        _stop_after(monkeypatch, polls)
+        with pytest.raises(RunInterrupted, match=r"stopped at t = .* checkpoint written"):
+            run_scene(scene, out, until=1.0, outputs=NO_FILM, progress=False, resume=polls == 5)
+        assert not out.exists()  # nothing half-written where the results go
+        world = carom.World.load(work / CHECKPOINT)  # a valid checkpoint
+        assert 0 < world.time < 1.0
+    monkeypatch.undo()
+    report = run_scene(scene, out, until=1.0, outputs=NO_FILM, progress=False, resume=True)
+    assert report.resumed_at is not None
+    assert report.resumed_at > 0
+    assert not work.exists()
+    _assert_same_results(straight, out)
+
+
+def test_resume_refuses_what_it_cannot_continue(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    out = tmp_path / "out"
+    with pytest.raises(carom.CaromError, match=r"nothing to resume for .*run without --resume"):
+        run_scene("newtons-cradle", out, resume=True, progress=False)
+    _stop_after(monkeypatch, 3)
+    with pytest.raises(RunInterrupted):
+        run_scene("newtons-cradle", out, outputs=NO_FILM, progress=False)
+    monkeypatch.undo()
+    # an interrupted run is not silently replaced by a new one...
+    with pytest.raises(carom.CaromError, match=r"holds an interrupted run .* --resume .* --force"):
+        run_scene("newtons-cradle", out, outputs=NO_FILM, progress=False)
+    # ...nor resumed with other settings
+    with pytest.raises(carom.CaromError, match=r"started with another until"):
+        run_scene("newtons-cradle", out, until=0.5, outputs=NO_FILM, progress=False, resume=True)
+    # --force starts again
+    run_scene("newtons-cradle", out, outputs=NO_FILM, progress=False, force=True)
+    assert (out / "summary.json").exists()
+
+
+def test_the_first_ctrl_c_asks_to_stop_and_the_second_interrupts() -> None:
+    with runner._stop_on_ctrl_c() as stop:
+        assert not stop
+        signal.raise_signal(signal.SIGINT)
+        assert stop  # the run will stop at the next frame, after a checkpoint
+        with pytest.raises(KeyboardInterrupt):
+            signal.raise_signal(signal.SIGINT)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+@pytest.mark.needs_jit
+def test_ctrl_c_on_the_command_line_then_resume(tmp_path: Path) -> None:
+    # A real SIGINT to a real run: exit 130, a message saying how to resume, no output
+    # directory, a checkpoint; then --resume finishes it.
+    out = tmp_path / "gas"
+    work = work_directory(out)
+    command = [sys.executable, "-m", "carom", "run", "hard-sphere-gas", "--out", str(out)]
+    command += ["--until", "400", "--animation", "none", "--no-plots"]
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    process = subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+    )
+    deadline = time.monotonic() + 240
+    while not (work / "trajectory.h5").exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.5)
+    process.send_signal(signal.SIGINT)
+    _stdout, stderr = process.communicate(timeout=240)
+    assert process.returncode == 130, stderr
+    assert "Traceback" not in stderr
+    assert f"Continue with: carom run hard-sphere-gas --out {out} --resume" in stderr
+    assert not out.exists()
+    world = carom.World.load(work / CHECKPOINT)
+    assert 0 < world.time < 400
+    done = subprocess.run(
+        [*command, "--resume"], capture_output=True, text=True, env=env, timeout=600
+    )
+    assert done.returncode == 0, done.stderr
+    assert f"(resumed at {world.time:g} s)" in done.stdout
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["simulated_time_s"] == 400
+    with h5py.File(out / "trajectory.h5", "r") as f:
+        # 0.05 s frames from 0 to 400 s, each written once
+        np.testing.assert_allclose(
+            f["particles/all/position/time"][()], np.arange(8001) * 0.05, rtol=1e-12, atol=0
+        )

@@ -1,0 +1,91 @@
+"""`carom view`: the rerun recording of a run, read back."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+h5py = pytest.importorskip("h5py", reason="the io extra (h5py) is not installed")
+pytest.importorskip("rerun", reason="the view extra (rerun-sdk) is not installed")
+
+
+def carom(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "carom", *map(str, args)],
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=300,
+        env={**os.environ, "MPLBACKEND": "Agg", "CI": "true"},
+    )
+
+
+def _read(recording: Path) -> dict[str, dict[int, dict[str, np.ndarray]]]:
+    """entity -> frame -> component -> values, from the .rrd file."""
+    from rerun.chunk import RrdReader
+
+    entities: dict[str, dict[int, dict[str, np.ndarray]]] = {}
+    for chunk in RrdReader(recording).store().stream():
+        batch = chunk.to_record_batch()
+        names = batch.schema.names
+        frames = batch.column("frame").to_pylist() if "frame" in names else [-1] * batch.num_rows
+        for row, frame in enumerate(frames):
+            values = {}
+            for name in names:
+                if ":" in name:
+                    values[name.split(":", 1)[1]] = np.array(batch.column(name)[row].as_py())
+            entities.setdefault(str(chunk.entity_path), {})[frame] = values
+    return entities
+
+
+@pytest.mark.parametrize(("scene", "dim"), [("newtons-cradle", 2), ("rain-3d", 3)])
+def test_the_recording_holds_the_run(tmp_path: Path, scene: str, dim: int) -> None:
+    out = tmp_path / "run"
+    done = carom("run", scene, "--out", out, "--until", "0.6", "--animation", "none")
+    assert done.returncode == 0, done.stderr
+    done = carom("view", out)
+    assert done.returncode == 0, done.stderr
+    # CI has no display: the recording is written and its path said
+    assert f"wrote {out / 'recording.rrd'} (no display here)" in done.stdout
+    data = _read(out / "recording.rrd")
+    with h5py.File(out / "trajectory.h5", "r") as f:
+        x = f["particles/all/position/value"][()]
+        v = f["particles/all/velocity/value"][()]
+        ke = f["observables/kinetic_energy/value"][()]
+        radius = f["particles/all/radius"][()]
+        box = f["particles/all/box/edges"][()]
+    frames = x.shape[0]
+    assert {"/world/box", "/world/bodies", "/world/velocities", "/energy/kinetic"} <= set(data)
+    bodies = data["/world/bodies"]
+    assert sorted(bodies) == list(range(frames))  # every frame, once
+    for k in (0, frames // 2, frames - 1):
+        # positions and radii as in the trajectory (rerun stores float32)
+        np.testing.assert_allclose(np.stack(bodies[k]["positions"]), x[k], rtol=1e-6, atol=1e-6)
+        np.testing.assert_allclose(bodies[k]["radii"], radius, rtol=1e-6)
+        # arrows start at the moving bodies and point along their velocities
+        arrows = data["/world/velocities"][k]
+        vectors = np.stack(arrows["vectors"])
+        moving = np.linalg.norm(v[k], axis=1) > 0
+        cosine = np.sum(vectors[moving] * v[k][moving], axis=1) / (
+            np.linalg.norm(vectors[moving], axis=1) * np.linalg.norm(v[k][moving], axis=1)
+        )
+        np.testing.assert_allclose(cosine, 1.0, rtol=0, atol=1e-5)
+        assert data["/energy/kinetic"][k]["scalars"] == pytest.approx(ke[k], rel=1e-12, abs=0)
+    half = data["/world/box"][-1]["half_sizes"]
+    np.testing.assert_allclose(np.ravel(half), box / 2, rtol=1e-6)
+
+
+def test_view_needs_a_run(tmp_path: Path) -> None:
+    done = carom("view", tmp_path / "nothing")
+    assert done.returncode == 2
+    assert "Traceback" not in done.stderr
+    assert "is not a directory; give the --out DIR of a 'carom run'" in done.stderr
+    done = carom("view", tmp_path)
+    assert done.returncode == 2
+    assert "holds no trajectory.h5 to replay; run 'carom run SCENE --out" in done.stderr
+    assert not (tmp_path / "recording.rrd").exists()
