@@ -78,74 +78,75 @@ def test_the_python_api_builds_the_same_scene(tmp_path: Path) -> None:
     np.testing.assert_array_equal(from_file.velocities, from_dict.velocities)
 
 
-@pytest.mark.parametrize(
-    ("change", "message"),
-    [
-        # unparsable TOML: tomllib's line and column
-        (("box = [4.0, 2.0]", "box = [4.0, 2.0"), r"scene\.toml: not valid TOML: .*line \d+"),
-        # unknown key, with its line
-        (
-            ('boundary = "walls"', 'boundry = "walls"'),
-            r"scene\.toml:5: \[world\] boundry: is not a known key; use one of dimension, box",
-        ),
-        # wrong type
-        (
-            ("dimension = 2", 'dimension = "two"'),
-            r"scene\.toml:3: \[world\] dimension: must be an integer, got 'two' \(str\)",
-        ),
-        # missing required key
-        (("until = 2.0\n", ""), r"\[run\] until: is required; add until = \.\.\."),
-        # zero or negative radius and mass
-        (
-            ("radius = 0.1", "radius = -0.1"),
-            r"scene\.toml:15: \[\[bodies\]\] #1 radius: must be > 0, got -0\.1",
-        ),
-        (
-            ("mass = [1.0, 2.0]", "mass = [1.0, 0.0]"),
-            r"\[\[bodies\]\] #1 mass: must be > 0, got 0\.0",
-        ),
-        # restitution outside [0, 1]
-        (
-            ("restitution = 0.8", "restitution = 1.2"),
-            r"scene\.toml:10: \[\[materials\]\] #1 restitution: must lie in \[0, 1\], got 1\.2",
-        ),
-        # bodies overlapping at the start
-        (
-            ("[[0.5, 1.0], [3.5, 1.0]]", "[[0.5, 1.0], [0.6, 1.0]]"),
-            r"scene\.toml: spheres 0 and 1 overlap",
-        ),
-        # outside the box
-        (
-            ("[[0.5, 1.0], [3.5, 1.0]]", "[[0.5, 1.0], [4.5, 1.0]]"),
-            r"scene\.toml: sphere 1 at \[4\.5, 1\.0\] with radius 0\.1 m reaches outside the box",
-        ),
-        # frame interval <= 0
-        (
-            ("frame_interval = 0.1", "frame_interval = 0.0"),
-            r"scene\.toml:27: \[run\] frame_interval: must be > 0, got 0\.0",
-        ),
-        # a material nobody defined
-        (
-            ('material = "rubber"', 'material = "steel"'),
-            r"names material 'steel', which no \[\[materials\]\] table defines",
-        ),
-        # rows of the wrong dimension
-        (
-            ("[[1.0, 0.0], [-1.0, 0.0]]", "[[1.0, 0.0, 0.0], [-1.0, 0.0]]"),
-            r"velocities: rows must have 2 numbers in a 2D world",
-        ),
-        # wall restitutions: neither one number nor one per wall
-        (
-            ("wall_restitution = 0.9", "wall_restitution = [0.9, 0.9, 0.9]"),
-            r"\[world\]: wall_restitution must be one number or 4 \(lower and upper wall",
-        ),
-        # a gas that cannot fit
-        (
-            ("packing = 0.1", "packing = 0.001"),
-            r"\[\[gas\]\] #1: 20 spheres of radius 0\.05 need a packing of",
-        ),
-    ],
-)
+#: (change to GOOD, the message it must get): each bad input the scene format refuses
+BAD_SCENES: list[tuple[tuple[str, str], str]] = [
+    # unparsable TOML: tomllib's line and column
+    (("box = [4.0, 2.0]", "box = [4.0, 2.0"), r"scene\.toml: not valid TOML: .*line \d+"),
+    # unknown key, with its line
+    (
+        ('boundary = "walls"', 'boundry = "walls"'),
+        r"scene\.toml:5: \[world\] boundry: is not a known key; use one of dimension, box",
+    ),
+    # wrong type
+    (
+        ("dimension = 2", 'dimension = "two"'),
+        r"scene\.toml:3: \[world\] dimension: must be an integer, got 'two' \(str\)",
+    ),
+    # missing required key
+    (("until = 2.0\n", ""), r"\[run\] until: is required; add until = \.\.\."),
+    # zero or negative radius and mass
+    (
+        ("radius = 0.1", "radius = -0.1"),
+        r"scene\.toml:15: \[\[bodies\]\] #1 radius: must be > 0, got -0\.1",
+    ),
+    (
+        ("mass = [1.0, 2.0]", "mass = [1.0, 0.0]"),
+        r"\[\[bodies\]\] #1 mass: must be > 0, got 0\.0",
+    ),
+    # restitution outside [0, 1]
+    (
+        ("restitution = 0.8", "restitution = 1.2"),
+        r"scene\.toml:10: \[\[materials\]\] #1 restitution: must lie in \[0, 1\], got 1\.2",
+    ),
+    # bodies overlapping at the start
+    (
+        ("[[0.5, 1.0], [3.5, 1.0]]", "[[0.5, 1.0], [0.6, 1.0]]"),
+        r"scene\.toml: spheres 0 and 1 overlap",
+    ),
+    # outside the box
+    (
+        ("[[0.5, 1.0], [3.5, 1.0]]", "[[0.5, 1.0], [4.5, 1.0]]"),
+        r"scene\.toml: sphere 1 at \[4\.5, 1\.0\] with radius 0\.1 m reaches outside the box",
+    ),
+    # frame interval <= 0
+    (
+        ("frame_interval = 0.1", "frame_interval = 0.0"),
+        r"scene\.toml:27: \[run\] frame_interval: must be > 0, got 0\.0",
+    ),
+    # a material nobody defined
+    (
+        ('material = "rubber"', 'material = "steel"'),
+        r"names material 'steel', which no \[\[materials\]\] table defines",
+    ),
+    # rows of the wrong dimension
+    (
+        ("[[1.0, 0.0], [-1.0, 0.0]]", "[[1.0, 0.0, 0.0], [-1.0, 0.0]]"),
+        r"velocities: rows must have 2 numbers in a 2D world",
+    ),
+    # wall restitutions: neither one number nor one per wall
+    (
+        ("wall_restitution = 0.9", "wall_restitution = [0.9, 0.9, 0.9]"),
+        r"\[world\]: wall_restitution must be one number or 4 \(lower and upper wall",
+    ),
+    # a gas that cannot fit
+    (
+        ("packing = 0.1", "packing = 0.001"),
+        r"\[\[gas\]\] #1: 20 spheres of radius 0\.05 need a packing of",
+    ),
+]
+
+
+@pytest.mark.parametrize(("change", "message"), BAD_SCENES)
 def test_each_bad_scene_gets_one_clear_message(
     tmp_path: Path, change: tuple[str, str], message: str
 ) -> None:

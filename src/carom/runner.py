@@ -143,7 +143,8 @@ def run_scene(
             f"without --resume"
         )
     if not resume and work.exists():
-        if not force:
+        # (a run stopped before its first checkpoint left nothing to resume: replaced)
+        if not force and (work / CHECKPOINT).exists():
             raise CaromError(
                 f"{work} holds an interrupted run writing to {target}; pass --resume to "
                 f"continue it, or --force to start again"
@@ -153,8 +154,13 @@ def run_scene(
     if resume:
         run = _Run.resume(work, job)
     else:
+        world = scene.build()  # refuses a bad scene before anything is written
         _make_directory(work)
-        run = _Run.start(work, scene.build(), job)
+        try:
+            run = _Run.start(work, world, job)
+        except BaseException:
+            shutil.rmtree(work, ignore_errors=True)
+            raise
     title = scene.scene.get("title") or path.stem
     try:
         with _stop_on_ctrl_c() as stop:

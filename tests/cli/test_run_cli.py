@@ -6,12 +6,15 @@ import csv
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from tests.test_scene import BAD_SCENES, GOOD
 
 
 def carom(*args: str | Path) -> subprocess.CompletedProcess[str]:
@@ -277,3 +280,26 @@ def test_the_progress_bar_shows_on_a_terminal_only(tmp_path: Path) -> None:
     assert "t = 0.5 of 0.5 s" in text
     assert "events/s" in text
     assert "<" in text
+
+
+@pytest.mark.parametrize(("change", "message"), BAD_SCENES)
+def test_each_bad_scene_ends_the_command_with_one_message(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], change: tuple[str, str], message: str
+) -> None:
+    # in-process (main() is what the carom script calls): exit code 2, one line on standard
+    # error naming file, key and fix, no traceback, nothing written
+    from carom.cli import main
+
+    old, new = change
+    scene = tmp_path / "scene.toml"
+    scene.write_text(GOOD.replace(old, new, 1))
+    out = tmp_path / "out"
+    assert main(["run", str(scene), "--out", str(out)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.startswith("carom: error: ")
+    assert captured.err.count("\n") == 1
+    assert "Traceback" not in captured.err
+    assert re.search(message, captured.err)
+    assert not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.toml"]  # no work directory
