@@ -547,9 +547,9 @@ def _collide_pair(
     sums[S_VIRIAL] += j0 * r0 + j1 * r1 + j2 * r2
     # a body resting on a support: lifted off, or pushed into it (the support pushes back)
     if support[i] >= 0:
-        _support_reaction(i, v, acc, support, face_e, gravity, plane_normal, mass, sums)
+        _support_reaction(i, v, acc, support, face_e, gravity, plane_normal, mass, t_c, sums)
     if support[j] >= 0:
-        _support_reaction(j, v, acc, support, face_e, gravity, plane_normal, mass, sums)
+        _support_reaction(j, v, acc, support, face_e, gravity, plane_normal, mass, t_c, sums)
     if log_on:
         _log(
             logbuf,
@@ -574,20 +574,32 @@ def _support_reaction(
     gravity: np.ndarray,
     plane_normal: np.ndarray,
     mass: np.ndarray,
+    t_c: float,
     sums: np.ndarray,
 ) -> None:
     """Body ``b`` rests on a support and was just hit: it lifts off, or the support pushes
-    back (an impact with the support's restitution) and then it flies."""
+    back (an impact with the support's restitution) and then it flies; unless it would be
+    back within t_c (a push along the support, as from a neighbour resting beside it, leaves
+    it round-off off the face): then it stays, as the rule for impacts on faces says."""
     dim = v.shape[1]
     face = support[b]
     un = 0.0
+    g_n = 0.0
     for k in range(dim):
-        un += v[b, k] * face_normal(plane_normal, dim, face, k)
+        nk = face_normal(plane_normal, dim, face, k)
+        un += v[b, k] * nk
+        g_n += gravity[k] * nk
     if un < 0.0:
         e_w = face_e[face]
         for k in range(dim):
             v[b, k] -= (1.0 + e_w) * un * face_normal(plane_normal, dim, face, k)
         sums[S_KE_LOST] += 0.5 * mass[b] * (1.0 - e_w * e_w) * un * un
+        un = -e_w * un
+    if un > 0.0 and 2.0 * un < -g_n * t_c:
+        for k in range(dim):
+            v[b, k] -= un * face_normal(plane_normal, dim, face, k)
+        sums[S_KE_LOST] += 0.5 * mass[b] * un * un
+        return
     if un != 0.0:
         set_support(gravity, plane_normal, support, acc, b, -1)
 

@@ -72,13 +72,14 @@ def toi_gap(d0: float, u: float, acc: float) -> float:
             return 0.0
         if u == 0.0 or acc >= 0.0:
             return INF  # leaving for good, or resting without a push
-        # leaving now but pulled back: the gap closes again at the larger root
+        # Leaving now but pulled back: it is back where it started after 2 u / |acc|. (Not
+        # "when the gap closes": overlapped by round-off, d0 < 0, and leaving slower than
+        # sqrt(2 |acc d0|), the gap never opens, and a body told INF falls through.)
+        return -2.0 * u / acc
     half = 0.5 * acc
     if half == 0.0:
         return -d0 / u if u < 0.0 else INF
     lo, hi = _quadratic_roots(half, u, d0)  # NaN when there is no real root: never > 0
-    if touching:
-        return hi if hi > 0.0 else INF
     # d0 > 0: the gap first closes at the smallest positive root
     if lo > 0.0:
         return lo
@@ -121,7 +122,25 @@ def first_root_quartic(
     non-positive is bisected to the last bit. No root is missed and no iteration can stall.
     """
     if c0 <= 0.0:
-        return 0.0 if c1 < 0.0 or (c1 == 0.0 and c2 < 0.0) else INF
+        # touching (or overlapped by round-off)
+        if c1 < 0.0 or (c1 == 0.0 and c2 < 0.0):
+            return 0.0  # closing: now
+        # Parting. If the acceleration brings them back, they meet when f is back at c0:
+        # the first fall to zero of (f - c0) / t = c4 t^3 + c3 t^2 + c2 t + c1 (of
+        # c4 t^2 + c3 t + c2 when c1 = 0). Not "when f falls to zero": overlapped by
+        # round-off and parting slowly, f may never rise above zero, and a pair told INF
+        # would pass through each other.
+        if c1 > 0.0:
+            return _first_fall(0.0, c4, c3, c2, c1, t_max)
+        if c2 > 0.0:
+            return _first_fall(0.0, 0.0, c4, c3, c2, t_max)
+        return INF
+    return _first_fall(c4, c3, c2, c1, c0, t_max)
+
+
+@njit(cache=True, error_model="numpy")
+def _first_fall(c4: float, c3: float, c2: float, c1: float, c0: float, t_max: float) -> float:
+    """First time in (0, t_max] where the quartic, positive at 0 (``c0 > 0``), falls to zero."""
     if not t_max > 0.0:
         return INF
     # critical points of f': roots of f'' = 12 c4 t^2 + 6 c3 t + 2 c2
