@@ -23,7 +23,7 @@ $(BIN)/python:
 
 # One stamp per set of extras: reinstall only when pyproject.toml changes.
 $(VENV)/.stamp-demo: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[viz,io,view]'
+	$(BIN)/python -m pip install --quiet -e '.[viz,io]'
 	@touch $@
 
 $(VENV)/.stamp-dev: pyproject.toml | $(BIN)/python
