@@ -5,7 +5,6 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -13,18 +12,7 @@ from pathlib import Path
 import pytest
 
 from carom.cases import MODELS, ROUND_OFF
-
-
-def carom(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "carom", *args],
-        capture_output=True,
-        text=True,
-        cwd=cwd,
-        stdin=subprocess.DEVNULL,
-        timeout=300,
-        env={**os.environ, "MPLBACKEND": "Agg"},
-    )
+from tests.cli.helpers import carom
 
 
 @pytest.fixture(scope="module")

@@ -14,18 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.cli.helpers import carom
 from tests.test_scene import BAD_SCENES, GOOD
-
-
-def carom(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "carom", *map(str, args)],
-        capture_output=True,
-        text=True,
-        stdin=subprocess.DEVNULL,
-        timeout=300,
-        env={**os.environ, "MPLBACKEND": "Agg"},
-    )
 
 
 def test_run_a_bouncing_ball_and_check_its_events(tmp_path: Path) -> None:

@@ -2,27 +2,15 @@
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests.cli.helpers import carom
+
 h5py = pytest.importorskip("h5py", reason="the io extra (h5py) is not installed")
 pytest.importorskip("rerun", reason="the view extra (rerun-sdk) is not installed")
-
-
-def carom(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "carom", *map(str, args)],
-        capture_output=True,
-        text=True,
-        stdin=subprocess.DEVNULL,
-        timeout=300,
-        env={**os.environ, "MPLBACKEND": "Agg", "CI": "true"},
-    )
 
 
 def _read(recording: Path) -> dict[str, dict[int, dict[str, np.ndarray]]]:
@@ -48,7 +36,7 @@ def test_the_recording_holds_the_run(tmp_path: Path, scene: str, dim: int) -> No
     out = tmp_path / "run"
     done = carom("run", scene, "--out", out, "--until", "0.6", "--animation", "none")
     assert done.returncode == 0, done.stderr
-    done = carom("view", out)
+    done = carom("view", out, CI="true")
     assert done.returncode == 0, done.stderr
     # CI has no display: the recording is written and its path said
     assert f"wrote {out / 'recording.rrd'} (no display here)" in done.stdout
@@ -81,11 +69,11 @@ def test_the_recording_holds_the_run(tmp_path: Path, scene: str, dim: int) -> No
 
 
 def test_view_needs_a_run(tmp_path: Path) -> None:
-    done = carom("view", tmp_path / "nothing")
+    done = carom("view", tmp_path / "nothing", CI="true")
     assert done.returncode == 2
     assert "Traceback" not in done.stderr
     assert "is not a directory; give the --out DIR of a 'carom run'" in done.stderr
-    done = carom("view", tmp_path)
+    done = carom("view", tmp_path, CI="true")
     assert done.returncode == 2
     assert "holds no trajectory.h5 to replay; run 'carom run SCENE --out" in done.stderr
     assert not (tmp_path / "recording.rrd").exists()

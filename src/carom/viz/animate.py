@@ -88,14 +88,14 @@ def write_animation(
 
     h5py = need_h5py()
     with h5py.File(trajectory, "r") as f:
-        scene = _Scene.read(f)
+        scene = TrajectoryScene.read(f)
         times = f["particles/all/position/time"][:]
         positions = f["particles/all/position/value"]
         velocities = f["particles/all/velocity/value"]
         if fps is None:
             dt = float(np.median(np.diff(times))) if len(times) > 1 else 1.0
             fps = min(25.0 if fmt == "gif" else 60.0, max(10.0, 1.0 / dt if dt > 0 else 10.0))
-        scene.speed_scale = _speed_scale(velocities, scene.moving)
+        scene.speed_scale = speed_scale(sampled_speeds(velocities, scene.moving))
         painter = _Painter(scene, title, _PIXELS[fmt])
         try:
             frames = (
@@ -109,12 +109,28 @@ def write_animation(
             painter.close()
 
 
-def _speed_scale(velocities: Any, moving: NDArray[np.bool_]) -> float:
-    """The top of the colour scale: the 99th percentile of the speeds in up to 50 frames."""
+def sampled_speeds(velocities: Any, moving: NDArray[np.bool_]) -> FloatArray:
+    """Speeds [m/s] of the moving bodies in up to 50 evenly spaced frames of a trajectory's
+    velocities (F, N, d): what the colour scale (and the replay's arrows) are set from."""
     picks = np.unique(np.linspace(0, velocities.shape[0] - 1, 50).astype(int))
-    speeds = np.concatenate([np.linalg.norm(velocities[k][moving], axis=1) for k in picks])
+    return np.concatenate([np.linalg.norm(velocities[k][moving], axis=1) for k in picks])
+
+
+def speed_scale(speeds: FloatArray) -> float:
+    """The top of the colour scale [m/s]: the 99th percentile of ``speeds`` (1 if none move)."""
     top = float(np.percentile(speeds, 99)) if speeds.size else 0.0
     return top if top > 0 else 1.0
+
+
+def speed_colours(velocities: FloatArray, moving: NDArray[np.bool_], top: float) -> FloatArray:
+    """RGB in [0, 1] per body (N, 3): the plasma colour map by speed up to ``top`` [m/s];
+    static bodies grey. The film and the replay colour alike."""
+    import matplotlib
+
+    level = np.clip(np.linalg.norm(velocities, axis=1) / top, 0.0, 1.0)
+    rgb = np.asarray(matplotlib.colormaps["plasma"](level))[:, :3]
+    rgb[~moving] = _STATIC
+    return rgb
 
 
 def _encode_mp4(
@@ -151,7 +167,7 @@ def _encode_gif(frames: Iterator[NDArray[np.uint8]], out: Path, fps: float) -> i
     return len(images)
 
 
-class _Scene:
+class TrajectoryScene:
     """What the drawing needs from the trajectory: box, bodies and how to look at them."""
 
     def __init__(
@@ -163,7 +179,8 @@ class _Scene:
         self.speed_scale = 1.0
 
     @classmethod
-    def read(cls, f: Any) -> _Scene:
+    def read(cls, f: Any) -> TrajectoryScene:
+        """From an open H5MD file."""
         box = f["particles/all/box"]
         boundary = [
             str(b, "utf-8") if isinstance(b, bytes) else str(b) for b in box.attrs["boundary"]
@@ -200,7 +217,7 @@ class _Camera:
 class _Painter:
     """One matplotlib figure, redrawn for every frame."""
 
-    def __init__(self, scene: _Scene, title: str, pixels: tuple[int, int]) -> None:
+    def __init__(self, scene: TrajectoryScene, title: str, pixels: tuple[int, int]) -> None:
         import matplotlib
 
         matplotlib.use("Agg")
@@ -209,8 +226,6 @@ class _Painter:
         from matplotlib.colors import Normalize
 
         self.scene, self.pixels = scene, pixels
-        self.cmap = matplotlib.colormaps["plasma"]
-        self.norm = Normalize(0.0, scene.speed_scale)
         dpi = 100
         self.fig = plt.figure(figsize=(pixels[0] / dpi, pixels[1] / dpi), dpi=dpi)
         self.ax = self.fig.add_axes((0.03, 0.04, 0.82, 0.86))
@@ -262,16 +277,16 @@ class _Painter:
         self.stamp = self.fig.text(0.04, 0.93, "", family="monospace", fontsize=13)
         self.fig.text(0.04, 0.965, title, fontsize=13, weight="bold")
         bar_ax = self.fig.add_axes((0.88, 0.15, 0.025, 0.6))
-        mappable = matplotlib.cm.ScalarMappable(norm=self.norm, cmap=self.cmap)
+        mappable = matplotlib.cm.ScalarMappable(
+            norm=Normalize(0.0, scene.speed_scale), cmap=matplotlib.colormaps["plasma"]
+        )
         self.fig.colorbar(mappable, cax=bar_ax, label="speed [m/s]")
         self.plt = plt
 
     def draw(self, t: float, positions: FloatArray, velocities: FloatArray) -> NDArray[np.uint8]:
         """The picture at time ``t`` [s]: (height, width, 3) RGB bytes."""
         scene = self.scene
-        speed = np.linalg.norm(velocities, axis=1)
-        base = self.cmap(self.norm(speed))[:, :3]
-        base[~scene.moving] = _STATIC
+        base = speed_colours(velocities, scene.moving, scene.speed_scale)
         if self.camera is None:
             centre, size = positions[:, :2], scene.radius.copy()
             order = np.arange(len(size))

@@ -17,7 +17,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from carom.errors import CaromError
 
@@ -88,48 +87,38 @@ def write_recording(folder: Path, out: Path | None = None) -> Path:
 
 
 def _log_all(rr: Any, stream: Any, f: Any, energies: tuple[str, ...]) -> None:
-    box = np.asarray(f["particles/all/box/edges"][:], dtype=float)
-    dim = int(f["particles/all/box"].attrs["dimension"])
-    radius = np.asarray(f["particles/all/radius"][:], dtype=float)
-    moving = np.isfinite(np.asarray(f["particles/all/mass"][:], dtype=float))
+    from carom.viz.animate import TrajectoryScene, sampled_speeds, speed_colours, speed_scale
+
+    scene = TrajectoryScene.read(f)
+    box, radius, moving = scene.box, scene.radius, scene.moving
     times = f["particles/all/position/time"][:]
     positions = f["particles/all/position/value"]
     velocities = f["particles/all/velocity/value"]
-    Points = rr.Points3D if dim == 3 else rr.Points2D
-    Arrows = rr.Arrows3D if dim == 3 else rr.Arrows2D
-    if dim == 3:
+    Points = rr.Points3D if scene.dim == 3 else rr.Points2D
+    Arrows = rr.Arrows3D if scene.dim == 3 else rr.Arrows2D
+    if scene.dim == 3:
         stream.log(BOX, rr.Boxes3D(centers=[box / 2], half_sizes=[box / 2]), static=True)
     else:
         stream.log(BOX, rr.Boxes2D(mins=[[0.0, 0.0]], sizes=[box]), static=True)
-    # arrows: a typical speed (the 90th percentile over a few frames) draws two radii long
-    picks = np.unique(np.linspace(0, len(times) - 1, 20).astype(int))
-    speeds = np.concatenate([np.linalg.norm(velocities[k][moving], axis=1) for k in picks])
+    # colours as in the film; arrows: a typical speed (the 90th percentile) draws two radii
+    speeds = sampled_speeds(velocities, moving)
+    top = speed_scale(speeds)
     typical = float(np.percentile(speeds, 90)) if speeds.size else 0.0
     arrow_time = 2.0 * float(np.median(radius)) / typical if typical > 0 else 0.0
-    top = float(np.percentile(speeds, 99)) if speeds.size else 1.0
     observed = f["observables"]
     series = {name: observed[f"{name}/value"][:] for name in energies if name in observed}
     for k in range(len(times)):
         stream.set_time("frame", sequence=k)
         stream.set_time("time", duration=float(times[k]))
         x, v = positions[k], velocities[k]
-        stream.log(BODIES, Points(x, radii=radius, colors=_speed_colours(v, moving, top)))
+        colours = (speed_colours(v, moving, top) * 255).astype(np.uint8)
+        stream.log(BODIES, Points(x, radii=radius, colors=colours))
         stream.log(VELOCITIES, Arrows(origins=x[moving], vectors=v[moving] * arrow_time))
         total = 0.0
         for name, values in series.items():
             stream.log(f"{ENERGY}/{name.removesuffix('_energy')}", rr.Scalars(float(values[k])))
             total += float(values[k])
         stream.log(f"{ENERGY}/total", rr.Scalars(total))
-
-
-def _speed_colours(v: NDArray[np.float64], moving: NDArray[np.bool_], top: float) -> Any:
-    """RGB bytes per body: the plasma colour map by speed (as the animation), static grey."""
-    import matplotlib
-
-    level = np.clip(np.linalg.norm(v, axis=1) / (top if top > 0 else 1.0), 0.0, 1.0)
-    rgb = (np.asarray(matplotlib.colormaps["plasma"](level))[:, :3] * 255).astype(np.uint8)
-    rgb[~moving] = 160
-    return rgb
 
 
 def can_show() -> bool:
