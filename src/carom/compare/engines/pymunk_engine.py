@@ -1,0 +1,127 @@
+"""pymunk (Chipmunk2D) in a comparison, set up as its documentation recommends.
+
+* Fixed step ``dt = 1/60`` s: the docs and examples step ``space.step(1/60)`` ("a fixed time
+  step ... 1/60 is a good default").
+* ``Circle`` shapes with ``friction = 0`` and ``elasticity`` such that the product rule the docs
+  state ("the elasticity of a collision is the product of the two shapes' elasticity") gives
+  carom's restitution for every pair and wall.
+* Walls are static boxes as thick as the box is wide, so nothing tunnels for lack of depth.
+* ``collision_slop``, the overlap the solver allows, "as high as you can without noticeable
+  overlapping": the default 0.1 is meant for pixels; here 1% of the smallest radius.
+* Everything else (10 iterations, collision bias, no damping, no sleeping) at its default.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pymunk
+import pymunk.batch
+
+from carom.compare.spec import PeerScene, factor_restitution
+
+__all__ = ["start"]
+
+DT = 1.0 / 60.0
+BODY, WALL = 1, 2  # collision types; walls are WALL + face
+SLOP_PER_RADIUS = 0.01
+
+
+class PymunkSimulation:
+    def __init__(self, scene: PeerScene) -> None:
+        body_e, wall_e, notes, walls_exact = factor_restitution(scene, "pymunk")
+        space = pymunk.Space()
+        space.gravity = (float(scene.gravity[0]), float(scene.gravity[1]))
+        space.collision_slop = SLOP_PER_RADIUS * float(scene.radius.min())
+        self.bodies: list[pymunk.Body] = []
+        for i in range(scene.n):
+            m, r = float(scene.mass[i]), float(scene.radius[i])
+            body = pymunk.Body(m, pymunk.moment_for_circle(m, 0.0, r))
+            body.position = (float(scene.positions[i, 0]), float(scene.positions[i, 1]))
+            body.velocity = (float(scene.velocities[i, 0]), float(scene.velocities[i, 1]))
+            shape = pymunk.Circle(body, r)
+            shape.elasticity = float(body_e[i])
+            shape.friction = 0.0
+            shape.collision_type = BODY
+            space.add(body, shape)
+            self.bodies.append(body)
+        width, height = (float(s) for s in scene.box)
+        thick = max(width, height)
+        # x_lower, x_upper, y_lower, y_upper: solid slabs outside the box
+        slabs = [
+            (-thick, -thick, 0.0, height + thick),
+            (width, -thick, width + thick, height + thick),
+            (-thick, -thick, width + thick, 0.0),
+            (-thick, height, width + thick, height + thick),
+        ]
+        for face, ((x0, y0, x1, y1), e) in enumerate(zip(slabs, wall_e, strict=True)):
+            wall = pymunk.Poly(space.static_body, [(x0, y0), (x1, y0), (x1, y1), (x0, y1)])
+            wall.elasticity = float(e)
+            wall.friction = 0.0
+            wall.collision_type = WALL + face
+            space.add(wall)
+        if not walls_exact:
+            # the documented override: Arbiter.restitution set in a pre_solve callback
+            index = {id(shape): i for i, b in enumerate(self.bodies) for shape in b.shapes}
+            table = scene.wall_restitution
+
+            def wall_restitution(arbiter: pymunk.Arbiter, _space: Any, face: int) -> None:
+                ball = next(s for s in arbiter.shapes if s.collision_type == BODY)
+                arbiter.restitution = float(table[index[id(ball)], face])
+
+            for face in range(4):
+                space.on_collision(BODY, WALL + face, pre_solve=wall_restitution, data=face)
+            notes.append("body-wall restitution set per contact in a pre_solve callback")
+        self.space = space
+        self.dt = DT
+        self._ids = np.array([b.id for b in self.bodies], dtype=np.uint64)
+        self._fields = (
+            pymunk.batch.BodyFields.BODY_ID
+            | pymunk.batch.BodyFields.POSITION
+            | pymunk.batch.BodyFields.VELOCITY
+        )
+        self._buffer = pymunk.batch.Buffer()
+        self.settings: dict[str, Any] = {
+            "dt_s": DT,
+            "iterations": space.iterations,
+            "collision_slop_m": space.collision_slop,
+            "collision_bias": space.collision_bias,
+            "collision_persistence": space.collision_persistence,
+            "damping": space.damping,
+            "idle_speed_threshold": space.idle_speed_threshold,
+            "sleep_time_threshold": space.sleep_time_threshold,
+            "shape": "Circle",
+            "friction": 0.0,
+            "body_elasticity": sorted(set(body_e.tolist())),
+            "wall_elasticity": wall_e.tolist(),
+            "walls": "static Poly slabs as thick as the box",
+            "restitution_combine": "product",
+            "ccd": "none (pymunk has no continuous collision detection)",
+        }
+        self.notes = [
+            *notes,
+            f"collision_slop = {SLOP_PER_RADIUS:g} x smallest radius (the docs: as high as "
+            f"possible without noticeable overlap; the default 0.1 assumes pixel units)",
+            "dt = 1/60 s, the step of pymunk's documentation and examples",
+        ]
+
+    def step(self) -> None:
+        self.space.step(self.dt)
+
+    def state(self) -> tuple[np.ndarray, np.ndarray]:
+        self._buffer.clear()
+        pymunk.batch.get_space_bodies(self.space, self._fields, self._buffer)
+        ids = np.frombuffer(self._buffer.int_buf(), dtype=np.uint64)
+        data = np.frombuffer(self._buffer.float_buf(), dtype=np.float64).reshape(-1, 4)
+        if not np.array_equal(ids, self._ids):  # the space lists other bodies too (walls)
+            order = np.argsort(ids)
+            data = data[order[np.searchsorted(ids[order], self._ids)]]
+        return data[:, 0:2].copy(), data[:, 2:4].copy()
+
+    def close(self) -> None:
+        pass
+
+
+def start(scene: PeerScene) -> PymunkSimulation:
+    return PymunkSimulation(scene)

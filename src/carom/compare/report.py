@@ -1,0 +1,144 @@
+"""A comparison as a terminal table, ``compare.json`` and ``compare.png``."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+from carom.compare.driver import Comparison
+
+__all__ = ["format_table", "plot_comparison", "write_comparison"]
+
+#: colours per engine, the same in every plot
+COLOURS = {"carom": "#d62728", "pymunk": "#1f77b4", "pybullet": "#2ca02c", "mujoco": "#9467bd"}
+#: where a zero is drawn on a log axis
+FLOOR = 1e-17
+
+
+def _number(x: float | None, digits: int = 2) -> str:
+    if x is None:
+        return "-"
+    if x == 0.0:
+        return "0"
+    return f"{x:.{digits}e}"
+
+
+def format_table(comparison: Comparison) -> str:
+    """The comparison as a fixed-width table, one row per engine."""
+    spec = comparison.scene
+    source = comparison.expected.source if comparison.expected is not None else "none"
+    lines = [
+        f"{spec.name}: {spec.n} bodies, {spec.dim}D, {spec.until:g} s simulated",
+        f"closed form: {source}",
+        "",
+        f"{'engine':<9} {'version':<8} {'dt [s]':>9} {'velocity err':>12} {'energy err':>10} "
+        f"{'max pen./r':>10} {'tunnelled':>9} {'wall [s]':>9} {'x carom':>8}",
+    ]
+    carom = comparison.engines.get("carom")
+    for name, run in comparison.engines.items():
+        m = run["metrics"]
+        ratio = "-"
+        if carom is not None and carom["wall_s"] > 0:
+            ratio = f"{run['wall_s'] / carom['wall_s']:.3g}"
+        dt = "events" if name == "carom" else f"{run['dt_s']:.4g}"
+        lines.append(
+            f"{name:<9} {run['version']:<8} {dt:>9} {_number(m['velocity_error']):>12} "
+            f"{_number(m['energy_error']):>10} {_number(m['max_penetration_per_radius']):>10} "
+            f"{'yes' if m['tunnelled'] else 'no':>9} {run['wall_s']:>9.3g} {ratio:>8}"
+        )
+    for name, why in comparison.skipped.items():
+        lines.append(f"{name:<9} skipped: {why}")
+    lines += [
+        "",
+        "velocity err: max |v - v_exact| / speed scale at the closed form's check times; energy "
+        "err: (E - E_exact) / E0; max pen./r: deepest overlap (pairs and walls) / smallest "
+        "radius; wall: time inside the engine's step calls",
+    ]
+    return "\n".join(lines)
+
+
+def plot_comparison(comparison: Comparison, path: Path) -> None:
+    """Energy and penetration over time, velocity error and wall time per engine."""
+    from carom.viz import require_matplotlib
+
+    require_matplotlib()
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), constrained_layout=True)
+    spec = comparison.scene
+    names = list(comparison.engines)
+    colours = [COLOURS.get(n, "0.4") for n in names]
+    (energy_ax, pen_ax), (vel_ax, time_ax) = axes
+    for name, colour in zip(names, colours, strict=True):
+        series = comparison.engines[name]["series"]
+        on_top = 3 if name == "carom" else 2
+        e0 = series["energy"][0]
+        energy_ax.plot(
+            series["time"],
+            [e / e0 for e in series["energy"]],
+            color=colour,
+            lw=1.4,
+            label=name,
+            zorder=on_top,
+        )
+        pen = [max(p / float(spec.radius.min()), FLOOR) for p in series["penetration"]]
+        pen_ax.plot(series["time"], pen, color=colour, lw=1.2, label=name, zorder=on_top)
+    energy_ax.set(xlabel="time [s]", ylabel="E / E(0)", title="total energy")
+    energy_ax.legend(fontsize=8)
+    pen_ax.set(
+        xlabel="time [s]",
+        ylabel="deepest overlap / radius",
+        yscale="log",
+        title="penetration (zero drawn at 1e-17)",
+    )
+
+    def bars(ax: Any, values: list[float | None], title: str, unit: str) -> None:
+        shown = [FLOOR if v is None or v == 0.0 else abs(v) for v in values]
+        ax.bar(names, shown, color=colours)
+        ax.set(yscale="log", title=title, ylabel=unit)
+        for k, v in enumerate(values):
+            text = "n/a" if v is None else ("0" if v == 0.0 else f"{abs(v):.1e}")
+            ax.text(k, shown[k], text, ha="center", va="bottom", fontsize=8)
+
+    bars(
+        vel_ax,
+        [comparison.engines[n]["metrics"]["velocity_error"] for n in names],
+        "velocity error vs closed form",
+        "max |v - v_exact| / speed",
+    )
+    bars(
+        time_ax,
+        [comparison.engines[n]["wall_s"] for n in names],
+        f"wall time for {spec.until:g} s simulated",
+        "s",
+    )
+    fig.suptitle(f"{comparison.title}: {spec.n} bodies, {spec.dim}D", fontsize=12)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def write_comparison(comparison: Comparison, folder: Path, *, plot: bool = True) -> list[str]:
+    """Write ``compare.json``, ``compare.txt`` and (with matplotlib) ``compare.png``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    data = comparison.to_json()
+    (folder / "compare.json").write_text(json.dumps(data, indent=2, default=_jsonable) + "\n")
+    (folder / "compare.txt").write_text(format_table(comparison) + "\n")
+    written = ["compare.json", "compare.txt"]
+    if plot:
+        plot_comparison(comparison, folder / "compare.png")
+        written.append("compare.png")
+    return written
+
+
+def _jsonable(value: Any) -> Any:
+    """numpy numbers and arrays, and non-finite floats, for json.dumps."""
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, float) and not math.isfinite(value):
+        return str(value)
+    raise TypeError(f"cannot write {type(value).__name__} to JSON")
