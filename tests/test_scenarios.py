@@ -17,6 +17,8 @@ CASE_SCENES = {f"case-{case.number}" for case in CASES}
 EXPECTED = CASE_SCENES | {
     "billiards-break",
     "bouncing-ball",
+    "gas-2d",
+    "gas-3d",
     "galton-board",
     "granular-cooling",
     "hard-sphere-gas",

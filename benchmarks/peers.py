@@ -1,0 +1,140 @@
+"""carom beside pymunk, pybullet and MuJoCo on the same scenes, in one run, as ratios.
+
+The suite is ``carom compare`` on: the seven two-sphere cases, the bouncing ball and Newton's
+cradle (every engine; the 2D scenes run in the plane z = 0 in the 3D engines), and the walled
+gas at N bodies (default 10^4): ``gas-2d`` against pymunk, ``gas-3d`` against pybullet and
+MuJoCo, for the scene's 2 s. Each peer runs at its usual step, set up as its documentation
+recommends (see docs/compare.md); wall time is the time inside the engines' step calls only.
+
+Targets (issue 5):
+* carom exact to round-off (velocity and energy errors <= 64 ulps) on every two-sphere case
+  and on Newton's cradle;
+* on the 10^4-body gas, carom's wall time at most half the fastest peer's, in 2D and in 3D.
+
+Run:  python benchmarks/peers.py                       (appends to benchmarks/RESULTS.md)
+      python benchmarks/peers.py --gas-bodies 2000 --no-record
+Needs the compare extra: pip install -e '.[compare]'.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import sys
+import tomllib
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from edmd import RESULTS, commit, machine
+
+from carom.cases import ROUND_OFF
+from carom.compare import Comparison, compare, peer_scene
+from carom.compare.engines import ENGINES
+from carom.compare.report import format_table
+from carom.scene import Scene, find_scene
+
+EXACT_SCENES = [f"case-{k}" for k in range(1, 8)] + ["newtons-cradle"]
+SMALL_SCENES = [*EXACT_SCENES, "bouncing-ball"]
+
+
+def scaled_gas(name: str, count: int) -> Scene:
+    """The built-in walled gas ``name`` with ``count`` bodies at the same packing."""
+    data: dict[str, Any] = tomllib.loads(find_scene(name).read_text())
+    dim = data["world"]["dimension"]
+    factor = (count / data["gas"][0]["count"]) ** (1 / dim)
+    data["world"]["box"] = [side * factor for side in data["world"]["box"]]
+    data["gas"][0]["count"] = count
+    return Scene.from_dict(data, source=f"{name}-{count}")
+
+
+def row(scene: str, comparison: Comparison) -> list[str]:
+    """Markdown rows: one per engine of one scene."""
+    carom = comparison.engines["carom"]["wall_s"]
+    out = []
+    for name, run in comparison.engines.items():
+        m = run["metrics"]
+
+        def show(x: float | None) -> str:
+            return "-" if x is None else ("0" if x == 0 else f"{x:.2e}")
+
+        tunnel = (
+            "no"
+            if not m["tunnelled"]
+            else (f"{m['pairs_passed_through']} pairs, {m['bodies_through_walls']} through walls")
+        )
+        step = "events" if name == "carom" else f"{run['dt_s']:.4g}"
+        out.append(
+            f"| {scene} | {name} | {step} | "
+            f"{show(m['velocity_error'])} | {show(m['energy_error'])} | "
+            f"{show(m['max_penetration_per_radius'])} | {tunnel} | {run['wall_s']:.3g} | "
+            f"{run['wall_s'] / carom:.3g} |"
+        )
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--gas-bodies", type=int, default=10_000)
+    parser.add_argument("--no-record", action="store_true", help="do not append to RESULTS.md")
+    args = parser.parse_args()
+    missing = [e.missing() for e in ENGINES.values() if e.missing() is not None]
+    if missing:
+        sys.exit("; ".join(str(m) for m in missing))
+
+    rows: list[str] = []
+    exact_worst = 0.0
+    for name in SMALL_SCENES:
+        result = compare(name)
+        print(format_table(result) + "\n", flush=True)
+        rows += row(name, result)
+        if name in EXACT_SCENES:
+            m = result.engines["carom"]["metrics"]
+            exact_worst = max(exact_worst, m["velocity_error"], abs(m["energy_error"]))
+    ratios = {}
+    for name, peers in (("gas-2d", ["pymunk"]), ("gas-3d", ["pybullet", "mujoco"])):
+        scene = scaled_gas(name, args.gas_bodies)
+        label = f"{name}, N = {args.gas_bodies}"
+        result = compare(peer_scene(scene, name=label), ["carom", *peers])
+        print(format_table(result) + "\n", flush=True)
+        rows += row(label, result)
+        fastest = min(peers, key=lambda p: result.engines[p]["wall_s"])
+        ratios[name] = (
+            fastest,
+            result.engines["carom"]["wall_s"] / result.engines[fastest]["wall_s"],
+        )
+
+    table = "\n".join(
+        [
+            "| scene | engine | dt [s] | velocity error | energy error | max penetration / r "
+            "| tunnelled | wall [s] | wall / carom |",
+            "|---|---|---|---|---|---|---|---|---|",
+            *rows,
+        ]
+    )
+    exact = "met" if exact_worst <= ROUND_OFF else "missed"
+    verdict = [
+        f"- carom exact to round-off on the seven cases and the cradle (<= {ROUND_OFF:.1e}): "
+        f"worst error {exact_worst:.1e}, {exact}",
+    ]
+    for name, (fastest, ratio) in ratios.items():
+        verdict.append(
+            f"- {name}, N = {args.gas_bodies}: carom's wall time / fastest peer's ({fastest}) = "
+            f"{ratio:.3g} (target <= 0.5, {'met' if ratio <= 0.5 else 'missed'})"
+        )
+    print(table + "\n\n" + "\n".join(verdict))
+    if args.no_record:
+        return
+    command = "python benchmarks/peers.py " + " ".join(sys.argv[1:])
+    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    versions = ", ".join(f"{e.name} {e.version()}" for e in ENGINES.values())
+    with RESULTS.open("a") as handle:
+        handle.write(f"\n## peers: carom beside pymunk, pybullet and MuJoCo, {stamp}\n\n")
+        handle.write(f"- machine: {machine()}\n- commit: {commit()}\n- command: `{command}`\n")
+        handle.write(f"- engines: {versions}\n\n")
+        handle.write(table + "\n\n" + "\n".join(verdict) + "\n")
+
+
+if __name__ == "__main__":
+    main()
