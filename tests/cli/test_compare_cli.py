@@ -37,7 +37,11 @@ def test_every_installed_peer_runs_by_default(tmp_path):
     out = tmp_path / "cradle"
     result = carom("compare", "newtons-cradle", "--out", out)
     assert result.returncode == 0, result.stderr
-    data = json.loads((out / "compare.json").read_text())
+
+    def strict(constant):
+        raise AssertionError(f"{constant} is not JSON (pymunk's sleep threshold is inf)")
+
+    data = json.loads((out / "compare.json").read_text(), parse_constant=strict)
     assert list(data["engines"]) == ["carom", "pymunk", "pybullet", "mujoco"]
     assert data["skipped"] == {}
     for name, run in data["engines"].items():
@@ -87,7 +91,6 @@ def test_a_peer_that_is_not_installed_is_skipped_or_refused(monkeypatch, capsys)
         importlib.util, "find_spec", lambda name, *a: None if name == "pymunk" else real(name, *a)
     )
     assert main(["compare", "case-1", "--engines", "carom"]) == 0
-    assert main(["compare", "case-1", "--engines", "carom,pybullet,mujoco"]) in (0, 2)
     capsys.readouterr()
     assert main(["compare", "case-5"]) == 0
     out = capsys.readouterr().out

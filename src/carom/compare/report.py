@@ -126,7 +126,9 @@ def write_comparison(comparison: Comparison, folder: Path, *, plot: bool = True)
     """Write ``compare.json``, ``compare.txt`` and (with matplotlib) ``compare.png``."""
     folder.mkdir(parents=True, exist_ok=True)
     data = comparison.to_json()
-    (folder / "compare.json").write_text(json.dumps(data, indent=2, default=_jsonable) + "\n")
+    (folder / "compare.json").write_text(
+        json.dumps(_jsonable(data), indent=2, allow_nan=False) + "\n"
+    )
     (folder / "compare.txt").write_text(format_table(comparison) + "\n")
     written = ["compare.json", "compare.txt"]
     if plot:
@@ -136,9 +138,14 @@ def write_comparison(comparison: Comparison, folder: Path, *, plot: bool = True)
 
 
 def _jsonable(value: Any) -> Any:
-    """numpy numbers and arrays, and non-finite floats, for json.dumps."""
+    """``value`` with numpy arrays and numbers as lists and floats, and non-finite floats as
+    strings ("inf"), so that the file is strict JSON."""
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
     if hasattr(value, "tolist"):
-        return value.tolist()
+        return _jsonable(value.tolist())
     if isinstance(value, float) and not math.isfinite(value):
         return str(value)
-    raise TypeError(f"cannot write {type(value).__name__} to JSON")
+    return value
