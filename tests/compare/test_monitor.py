@@ -70,6 +70,8 @@ def test_monitor_measures_wall_penetration_and_escape():
     result = monitor.result()
     assert result["max_overlap_walls"] == pytest.approx(0.004, rel=1e-12, abs=0)
     assert result["max_penetration_per_radius"] == pytest.approx(0.08, rel=1e-12, abs=0)
+    # the ball moved from y = 1.55 m to 0.046 m in one step, 1.504 m = 30.08 radii
+    assert result["max_step_per_radius"] == pytest.approx(1.504 / 0.05, rel=1e-12, abs=0)
     assert not result["tunnelled"]
     x[0, 1] = -0.01  # the centre below the floor: it went through
     monitor.observe(1.0, x, v)

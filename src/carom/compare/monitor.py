@@ -162,10 +162,10 @@ class Monitor:
         out = np.nonzero(np.any((positions < 0.0) | (positions > scene.box), axis=1))[0]
         self.outside.update(int(i) for i in out)
         overlap = -math.inf
+        previous = positions if self._previous is None else self._previous
+        step = float(np.max(np.linalg.norm(positions - previous, axis=1)))
+        self.max_displacement = max(self.max_displacement, step)
         if scene.n > 1:
-            previous = positions if self._previous is None else self._previous
-            step = float(np.max(np.abs(positions - previous)))
-            self.max_displacement = max(self.max_displacement, step)
             size = 2.0 * float(r.max()) + 2.0 * step
             overlap, crossings = pair_check(previous, positions, r, scene.box, size)
             self.crossings += crossings
