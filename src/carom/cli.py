@@ -177,6 +177,7 @@ def _build_parser() -> argparse.ArgumentParser:
         "--until", type=float, metavar="SECONDS", help="simulated time (default: the scene's)"
     )
     compare.add_argument("--no-plot", action="store_true", help="no compare.png")
+    compare.add_argument("--quiet", action="store_true", help="no progress bars")
     compare.add_argument(
         "--force", action="store_true", help="replace DIR if it exists and is not empty"
     )
@@ -219,7 +220,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         args.scene,
         engines,
         until=args.until,
-        progress=lambda line: print(f"running {line}", file=sys.stderr, flush=True),
+        progress=False if args.quiet else None,
     )
     print(format_table(result))
     if args.out is not None:

@@ -97,3 +97,12 @@ def test_a_peer_that_is_not_installed_is_skipped_or_refused(monkeypatch, capsys)
     assert "pymunk    skipped: pymunk is not installed; pip install 'carom[compare]'" in out
     assert main(["compare", "case-5", "--engines", "pymunk"]) == 2
     assert "pymunk is not installed" in capsys.readouterr().err
+
+
+def test_progress_bars_count_each_engine_s_steps(capsys):
+    from carom.compare import compare
+
+    compare("case-1", ["carom"], progress=True)  # 1 s at carom's 0.01 s frames
+    err = capsys.readouterr().err
+    assert "carom" in err
+    assert "100/100" in err

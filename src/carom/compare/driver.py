@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import math
 import platform
+import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from tqdm import tqdm
 
 from carom.compare.closed_form import Expectation, expectation
 from carom.compare.engines import ENGINES, Engine, engine
@@ -104,7 +107,7 @@ def compare(
     engines: Sequence[str] | None = None,
     *,
     until: float | None = None,
-    progress: Callable[[str], object] | None = None,
+    progress: bool | None = False,
 ) -> Comparison:
     """Run ``scene`` in each engine and measure them against the closed form.
 
@@ -118,8 +121,9 @@ def compare(
         named in :attr:`Comparison.skipped`) unless asked for by name.
     until : float, optional
         Simulated time [s]; default the scene's ``[run] until``.
-    progress : callable, optional
-        Called with a line of text as each engine starts.
+    progress : bool or None, default False
+        A progress bar per engine on standard error (tqdm); None shows it only when standard
+        error is a terminal.
 
     Raises
     ------
@@ -146,13 +150,13 @@ def compare(
     expected = expectation(spec)
     runs = {}
     for e in chosen:
-        if progress is not None:
-            progress(f"{e.name} ...")
-        runs[e.name] = run_engine(e, spec, expected)
+        runs[e.name] = run_engine(e, spec, expected, progress)
     return Comparison(spec, spec.title, expected, runs, skipped)
 
 
-def run_engine(e: Engine, scene: PeerScene, expected: Expectation | None) -> dict[str, Any]:
+def run_engine(
+    e: Engine, scene: PeerScene, expected: Expectation | None, progress: bool | None = False
+) -> dict[str, Any]:
     """Set ``e`` up, step it to ``until`` with the monitor watching; time only the steps."""
     began = time.perf_counter()
     sim = e.start(scene)
@@ -162,11 +166,21 @@ def run_engine(e: Engine, scene: PeerScene, expected: Expectation | None) -> dic
         monitor = Monitor(scene, expected, sim.dt)
         monitor.observe(0.0, *sim.state())
         wall = 0.0
-        for k in range(1, steps + 1):
-            began = time.perf_counter()
-            sim.step()
-            wall += time.perf_counter() - began
-            monitor.observe(k * sim.dt, *sim.state())
+        bar = tqdm(
+            total=steps,
+            disable=None if progress is None else not progress,
+            file=sys.stderr,
+            desc=f"{e.name:<9}",
+            unit="step",
+            leave=True,
+        )
+        with bar:
+            for k in range(1, steps + 1):
+                began = time.perf_counter()
+                sim.step()
+                wall += time.perf_counter() - began
+                monitor.observe(k * sim.dt, *sim.state())
+                bar.update()
     finally:
         sim.close()
     metrics = monitor.result()
