@@ -25,12 +25,16 @@ def _number(x: float | None, digits: int = 2) -> str:
     return f"{x:.{digits}e}"
 
 
+def _bodies(n: int) -> str:
+    return "1 body" if n == 1 else f"{n} bodies"
+
+
 def format_table(comparison: Comparison) -> str:
     """The comparison as a fixed-width table, one row per engine."""
     spec = comparison.scene
     source = comparison.expected.source if comparison.expected is not None else "none"
     lines = [
-        f"{spec.name}: {spec.n} bodies, {spec.dim}D, {spec.until:g} s simulated",
+        f"{spec.name}: {_bodies(spec.n)}, {spec.dim}D, {spec.until:g} s simulated",
         f"closed form: {source}",
         "",
         f"{'engine':<9} {'version':<8} {'dt [s]':>9} {'velocity err':>12} {'energy err':>10} "
@@ -117,7 +121,7 @@ def plot_comparison(comparison: Comparison, path: Path) -> None:
         f"wall time for {spec.until:g} s simulated",
         "s",
     )
-    fig.suptitle(f"{comparison.title}: {spec.n} bodies, {spec.dim}D", fontsize=12)
+    fig.suptitle(f"{comparison.title}: {_bodies(spec.n)}, {spec.dim}D", fontsize=12)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
