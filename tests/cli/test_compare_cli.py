@@ -106,3 +106,16 @@ def test_progress_bars_count_each_engine_s_steps(capsys):
     err = capsys.readouterr().err
     assert "carom" in err
     assert "100/100" in err
+
+
+def test_a_gas_plots_its_energy_error_where_no_velocity_closed_form_exists(tmp_path):
+    out = tmp_path / "gas"
+    result = carom("compare", "gas-2d", "--engines", "carom", "--until", "0.05", "--out", out)
+    assert result.returncode == 0, result.stderr
+    assert "closed form: energy conservation" in result.stdout
+    data = json.loads((out / "compare.json").read_text())
+    metrics = data["engines"]["carom"]["metrics"]
+    assert metrics["velocity_error"] is None
+    # 1000 elastic disks: the energy is a sum of 1000 terms, each exact to round-off
+    assert abs(metrics["energy_error"]) < 1e-13
+    assert (out / "compare.png").stat().st_size > 10_000
