@@ -34,7 +34,7 @@ from edmd import RESULTS, commit, machine
 from carom.cases import ROUND_OFF
 from carom.compare import Comparison, compare, peer_scene
 from carom.compare.engines import ENGINES
-from carom.compare.report import format_table
+from carom.compare.report import format_number, format_table
 from carom.scene import Scene, find_scene
 
 EXACT_SCENES = [f"case-{k}" for k in range(1, 8)] + ["newtons-cradle"]
@@ -73,9 +73,6 @@ def row(scene: str, comparison: Comparison) -> list[str]:
     for name, run in comparison.engines.items():
         m = run["metrics"]
 
-        def show(x: float | None) -> str:
-            return "-" if x is None else ("0" if x == 0 else f"{x:.2e}")
-
         tunnel = (
             "no"
             if not m["tunnelled"]
@@ -84,8 +81,8 @@ def row(scene: str, comparison: Comparison) -> list[str]:
         step = "events" if name == "carom" else f"{run['dt_s']:.4g}"
         out.append(
             f"| {scene} | {name} | {step} | "
-            f"{show(m['velocity_error'])} | {show(m['energy_error'])} | "
-            f"{show(m['max_penetration_per_radius'])} | {tunnel} | {run['wall_s']:.3g} | "
+            f"{format_number(m['velocity_error'])} | {format_number(m['energy_error'])} | "
+            f"{format_number(m['max_penetration_per_radius'])} | {tunnel} | {run['wall_s']:.3g} | "
             f"{run['wall_s'] / carom:.3g} |"
         )
     return out

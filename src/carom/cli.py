@@ -201,13 +201,18 @@ def _build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _check_seconds(option: str, value: float | None) -> None:
+    """Refuse an option that is given but is not a positive, finite number of seconds."""
+    if value is not None and not (value > 0 and math.isfinite(value)):
+        raise CaromError(f"{option} must be a positive number of seconds; got {value!r}")
+
+
 def _cmd_compare(args: argparse.Namespace) -> int:
     from carom.compare import compare
     from carom.compare.report import format_table, write_comparison
     from carom.io.outdir import check_output, staged_output
 
-    if args.until is not None and not (args.until > 0 and math.isfinite(args.until)):
-        raise CaromError(f"--until must be a positive number of seconds; got {args.until!r}")
+    _check_seconds("--until", args.until)
     engines = None
     if args.engines is not None:
         engines = [e.strip() for e in args.engines.split(",") if e.strip()]
@@ -257,13 +262,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from carom.runner import Outputs, RunInterrupted, run_scene, with_overrides
     from carom.scene import find_scene, load_scene
 
-    if args.until is not None and not (args.until > 0 and math.isfinite(args.until)):
-        raise CaromError(f"--until must be a positive number of seconds; got {args.until!r}")
-    if not (args.checkpoint_every > 0 and math.isfinite(args.checkpoint_every)):
-        raise CaromError(
-            f"--checkpoint-every must be a positive number of seconds; got "
-            f"{args.checkpoint_every!r}"
-        )
+    _check_seconds("--until", args.until)
+    _check_seconds("--checkpoint-every", args.checkpoint_every)
     scene = load_scene(find_scene(args.scene))
     outputs = with_overrides(
         Outputs.of(scene),

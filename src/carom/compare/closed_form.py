@@ -159,6 +159,7 @@ def _line(scene: PeerScene) -> Expectation | None:
     s0 = scene.positions @ line
     base = scene.positions[0] - s0[0] * line  # the line's point nearest the origin
     order = np.argsort(s0, kind="stable")
+    rank = np.argsort(order)  # scene body i is the rank[i]-th along the line
     pos = [Fraction(float(s0[i])) for i in order]
     vel = [Fraction(float(scene.velocities[i] @ line)) for i in order]
     mass = [Fraction(float(scene.mass[i])) for i in order]
@@ -167,8 +168,7 @@ def _line(scene: PeerScene) -> Expectation | None:
         Fraction(float(scene.pair_restitution[order[k], order[k + 1]]))
         for k in range(len(order) - 1)
     ]
-    now, last, lost = Fraction(0), Fraction(0), Fraction(0)
-    until = Fraction(scene.until)
+    now, lost = Fraction(0), Fraction(0)  # time of the last collision [s], energy lost [J]
     for _ in range(100 * scene.n + 100):
         # the next collision of neighbours k, k + 1 (1D order never changes)
         best: tuple[Fraction, int] | None = None
@@ -179,8 +179,8 @@ def _line(scene: PeerScene) -> Expectation | None:
                 t = now + max(gap, Fraction(0)) / closing
                 if best is None or t < best[0]:
                     best = (t, k)
-        x_now = base + np.outer([float(p) for p in pos], line)[np.argsort(order)]
-        v_now = np.outer([float(w) for w in vel], line)[np.argsort(order)]
+        x_now = base + np.outer([float(p) for p in pos], line)[rank]
+        v_now = np.outer([float(w) for w in vel], line)[rank]
         wall = float(now) + _first_wall_time(scene, x_now, v_now)
         if best is None or float(best[0]) >= min(wall, scene.until):
             # free flight from the last collision to the next event (or the end)
@@ -188,14 +188,12 @@ def _line(scene: PeerScene) -> Expectation | None:
             energy = scene.energy(scene.positions, scene.velocities) - float(lost)
             return Expectation(
                 "bodies on one line: sequential collisions, 1D impulse law in rational arithmetic",
-                [Check(_check_after(scene, float(last), end), v_now, energy)],
+                [Check(_check_after(scene, float(now), end), v_now, energy)],
                 float(max(abs(w) for w in vel)) or 1.0,
             )
         t, k = best
         pos = [p + w * (t - now) for p, w in zip(pos, vel, strict=True)]
-        now = last = t
-        if now > until:
-            break
+        now = t
         m1, m2, w1, w2, e = mass[k], mass[k + 1], vel[k], vel[k + 1], e_pair[k]
         mu = m1 * m2 / (m1 + m2)
         lost += mu * (1 - e * e) * (w1 - w2) ** 2 / 2

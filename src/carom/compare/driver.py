@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import platform
 import sys
 import time
@@ -31,8 +30,6 @@ class Comparison:
     ----------
     scene : PeerScene
         The scene every engine ran.
-    title : str
-        The scene's title.
     expected : Expectation or None
         The closed form the engines were held to.
     engines : dict
@@ -45,10 +42,14 @@ class Comparison:
     """
 
     scene: PeerScene
-    title: str
     expected: Expectation | None
     engines: dict[str, dict[str, Any]]
     skipped: dict[str, str]
+
+    @property
+    def title(self) -> str:
+        """The scene's title."""
+        return self.scene.title
 
     def to_json(self) -> dict[str, Any]:
         """Everything but the series, as JSON-ready data."""
@@ -151,9 +152,7 @@ def compare(
     skipped: dict[str, str] = {}
     for name in names:
         e = engine(name)
-        problem = e.missing()
-        if problem is None and spec.dim not in e.dims:
-            problem = f"{name} simulates {' and '.join(f'{d}D' for d in e.dims)} only"
+        problem = e.unable(spec.dim)
         if problem is not None:
             if asked:
                 raise CaromError(problem)
@@ -164,7 +163,7 @@ def compare(
     runs = {}
     for e in chosen:
         runs[e.name] = run_engine(e, spec, expected, progress)
-    return Comparison(spec, spec.title, expected, runs, skipped)
+    return Comparison(spec, expected, runs, skipped)
 
 
 def run_engine(
@@ -209,9 +208,3 @@ def run_engine(
         "metrics": metrics,
         "series": monitor.series,
     }
-
-
-def exact_to_round_off(metrics: dict[str, Any], bound: float) -> bool:
-    """Whether a run's velocity and energy errors are within ``bound`` (relative)."""
-    errors = [metrics[k] for k in ("velocity_error", "energy_error") if metrics[k] is not None]
-    return all(math.isfinite(x) and abs(x) <= bound for x in errors)

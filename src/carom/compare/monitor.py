@@ -66,13 +66,11 @@ def pair_check(
     cell = np.empty(n, np.int64)
     coord = np.zeros((n, 3), np.int64)
     for i in range(n):
-        c = 0
         for k in range(dim):
             q = math.floor(after[i, k] / box[k] * ncell[k])
             q = min(max(q, 0), ncell[k] - 1)
             coord[i, k] = q
-        c = (coord[i, 0] * ncell[1] + coord[i, 1]) * ncell[2] + coord[i, 2]
-        cell[i] = c
+        cell[i] = (coord[i, 0] * ncell[1] + coord[i, 1]) * ncell[2] + coord[i, 2]
     order = np.argsort(cell, kind="mergesort")
     total = ncell[0] * ncell[1] * ncell[2]
     start = np.zeros(total + 1, np.int64)

@@ -9,7 +9,7 @@ from typing import Any
 
 from carom.compare.driver import Comparison
 
-__all__ = ["format_table", "plot_comparison", "write_comparison"]
+__all__ = ["format_number", "format_table", "plot_comparison", "write_comparison"]
 
 #: colours per engine, the same in every plot
 COLOURS = {"carom": "#d62728", "pymunk": "#1f77b4", "pybullet": "#2ca02c", "mujoco": "#9467bd"}
@@ -17,7 +17,8 @@ COLOURS = {"carom": "#d62728", "pymunk": "#1f77b4", "pybullet": "#2ca02c", "mujo
 FLOOR = 1e-17
 
 
-def _number(x: float | None, digits: int = 2) -> str:
+def format_number(x: float | None, digits: int = 2) -> str:
+    """``x`` in e-notation; "-" for None (not measured), "0" for an exact zero."""
     if x is None:
         return "-"
     if x == 0.0:
@@ -47,9 +48,12 @@ def format_table(comparison: Comparison) -> str:
         if carom is not None and carom["wall_s"] > 0:
             ratio = f"{run['wall_s'] / carom['wall_s']:.3g}"
         dt = "events" if name == "carom" else f"{run['dt_s']:.4g}"
+        velocity, energy, depth = (
+            format_number(m[k])
+            for k in ("velocity_error", "energy_error", "max_penetration_per_radius")
+        )
         lines.append(
-            f"{name:<9} {run['version']:<8} {dt:>9} {_number(m['velocity_error']):>12} "
-            f"{_number(m['energy_error']):>10} {_number(m['max_penetration_per_radius']):>10} "
+            f"{name:<9} {run['version']:<8} {dt:>9} {velocity:>12} {energy:>10} {depth:>10} "
             f"{'yes' if m['tunnelled'] else 'no':>9} {run['wall_s']:>9.3g} {ratio:>8}"
         )
     for name, why in comparison.skipped.items():

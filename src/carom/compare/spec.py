@@ -159,14 +159,6 @@ class PeerScene:
         kinetic = 0.5 * float(np.sum(self.mass * np.sum(velocities * velocities, axis=1)))
         return kinetic - float(np.sum(self.mass * (positions @ self.gravity)))
 
-    def contacts(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-        """Index pairs (i < j) of the bodies that touch at the start (gap within 1e-12 of
-        the radii): where a peer's contact solver meets a chain such as Newton's cradle."""
-        d = self.positions[:, None, :] - self.positions[None, :, :]
-        gap = np.sqrt(np.sum(d * d, axis=2)) - (self.radius[:, None] + self.radius[None, :])
-        i, j = np.nonzero(np.triu(gap <= 1e-12 * self.radius.max(), k=1))
-        return i, j
-
 
 def factor_restitution(
     scene: PeerScene, engine: str

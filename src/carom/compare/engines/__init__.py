@@ -74,19 +74,21 @@ class Engine:
             return f"{self.name} is not installed; pip install 'carom[compare]'"
         return None
 
+    def unable(self, dim: int) -> str | None:
+        """None when installed and able to simulate ``dim`` dimensions, else why not."""
+        problem = self.missing()
+        if problem is None and dim not in self.dims:
+            problem = f"{self.name} simulates {' and '.join(f'{d}D' for d in self.dims)} only"
+        return problem
+
     def version(self) -> str:
         return importlib.metadata.version(self.distribution)
 
     def start(self, scene: PeerScene) -> Simulation:
         """Set the engine up for ``scene``."""
-        problem = self.missing()
+        problem = self.unable(scene.dim)
         if problem is not None:
-            raise CaromError(problem)
-        if scene.dim not in self.dims:
-            raise CaromError(
-                f"{self.name} simulates {' and '.join(f'{d}D' for d in self.dims)} only; "
-                f"scene {scene.name!r} is {scene.dim}D"
-            )
+            raise CaromError(f"{problem}; scene {scene.name!r} is {scene.dim}D")
         starter: Callable[[PeerScene], Simulation] = importlib.import_module(self.module).start
         return starter(scene)
 

@@ -22,7 +22,6 @@ class CaromSimulation:
     def __init__(self, scene: PeerScene) -> None:
         _warm_up(scene.dim)
         world = scene.world()  # the scene's own world: its combine rule, t_c and all
-        self.world = world
         self.dt = scene.frame_interval
         world._ensure_built()  # the set-up (neighbour grid, first predictions) is not timed
         self._frame: Frame = world.frame()
