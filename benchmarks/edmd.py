@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 import carom
-from carom import generators
+from carom.scene import layouts
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "RESULTS.md"
@@ -37,7 +37,7 @@ TARGET = 7e5  # collisions/s per core at N = 1e4 in 3D (issue: exact engine)
 
 def lattice_gas(dim: int, n: int, packing: float, seed: int = 1) -> carom.World:
     """About ``n`` spheres (the nearest lattice size) of unit diameter at ``packing``."""
-    return generators.lattice_gas(dim, round(n ** (1 / dim)), packing, seed=seed)
+    return layouts.lattice_gas(dim, round(n ** (1 / dim)), packing, seed=seed)
 
 
 def memory_per_particle(world: carom.World) -> float:

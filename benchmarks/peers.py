@@ -31,11 +31,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from edmd import RESULTS, commit, machine
 
-from carom.cases import ROUND_OFF
 from carom.compare import Comparison, compare, peer_scene
 from carom.compare.engines import ENGINES
 from carom.compare.report import format_number, format_table
 from carom.scene import Scene, find_scene
+from carom.studies.two_spheres import ROUND_OFF
 
 EXACT_SCENES = [f"case-{k}" for k in range(1, 8)] + ["newtons-cradle"]
 SMALL_SCENES = [*EXACT_SCENES, "bouncing-ball"]

@@ -1,7 +1,7 @@
 """Where the event loop spends its time, in CPU cycles, phase by phase.
 
 Wall-clock timings on shared machines vary by about 15% run to run, and perf cannot see into
-Numba's JIT code. This tool builds a copy of ``carom.core.edmd.run`` with the CPU's cycle
+Numba's JIT code. This tool builds a copy of ``carom.engines.edmd.loop.run`` with the CPU's cycle
 counter (LLVM ``readcyclecounter``) read around each phase, runs it on a melted hard-sphere
 gas, and prints nanoseconds per collision for: processing a pair event (advance both bodies,
 apply the impulse), a shell event (advance, rebuild the neighbour list), predictions, calendar
@@ -23,8 +23,8 @@ from numba import njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from carom import generators
-from carom.core import edmd, neighbors
+from carom.engines.edmd import codes, loop, neighbours
+from carom.scene import layouts
 
 
 @intrinsic
@@ -71,7 +71,7 @@ ANCHORS = {
 
 def instrumented_run() -> Any:
     """``edmd.run`` with cycle counters added at the anchors, compiled fresh."""
-    source = inspect.getsource(edmd.run.py_func)
+    source = inspect.getsource(loop.run.py_func)
     source = source.split("\n", 1)[1]  # drop the decorator
     source = source.replace(
         "def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:",
@@ -82,12 +82,12 @@ def instrumented_run() -> Any:
             raise SystemExit(f"edmd.run changed: anchor not found: {anchor!r}; update ANCHORS")
         source = source.replace(anchor, replacement)
     namespace: dict[str, Any] = {
-        **vars(edmd),
+        **vars(loop),
         "_cycles": _cycles,
-        "rebuild_shell": neighbors.rebuild_shell,
+        "rebuild_shell": neighbours.rebuild_shell,
     }
     exec(compile(source, "<instrumented edmd.run>", "exec"), namespace)
-    return njit(error_model="numpy", **edmd.NO_REFCOUNTING)(namespace["run_prof"])
+    return njit(error_model="numpy", **loop.NO_REFCOUNTING)(namespace["run_prof"])
 
 
 def main() -> None:
@@ -106,7 +106,7 @@ def main() -> None:
         "event calendar",
     ]
     for n in args.sizes:
-        world = generators.lattice_gas(args.dim, round(n ** (1 / args.dim)), args.packing, seed=1)
+        world = layouts.lattice_gas(args.dim, round(n ** (1 / args.dim)), args.packing, seed=1)
         world.run(until=0.3, log=False)
         model, state = world._model, world._state
         counters = np.zeros(8, np.int64)
@@ -118,7 +118,7 @@ def main() -> None:
             model, state, state.clock[0] + (1.0 if n < 50_000 else 0.3), 10**12, False, counters
         )
         total, wall = cycles() - start, time.perf_counter() - start_wall
-        collisions = int(state.counts[edmd.C_PAIR] - before[edmd.C_PAIR])
+        collisions = int(state.counts[codes.C_PAIR] - before[codes.C_PAIR])
         ns = wall / total * 1e9
         print(
             f"N = {world.n_bodies:,}: {collisions / wall:.3g} collisions/s, "

@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 import carom
-from carom import hecker
+from carom.studies import hecker
 
 
 def main() -> None:

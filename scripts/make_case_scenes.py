@@ -1,4 +1,5 @@
-"""Write the seven two-sphere cases of ``carom.cases`` as built-in scenes (case-1.toml ...).
+"""Write the seven two-sphere cases of ``carom.studies.two_spheres`` as built-in scenes
+(case-1.toml ...).
 
 Each scene starts the spheres half a second before the contact configuration of its case, so
 they meet at t = 0.5 s exactly as the case states, and runs to t = 1 s. The box is sized to
@@ -14,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from carom.cases import CASES
 from carom.reference.exact import smooth_exact
+from carom.studies.two_spheres import CASES
 
 T_CONTACT = 0.5  # s
 UNTIL = 1.0  # s

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import carom
-from carom import hecker
+from carom.studies import hecker
 
 RNG_SEED = 20261121
 

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from carom.cases import CASES, ROUND_OFF, Record, conclusions, run_study
+from carom.studies.two_spheres import CASES, ROUND_OFF, Record, conclusions, run_study
 
 
 @pytest.fixture(scope="module")

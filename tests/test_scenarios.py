@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import carom
-from carom.cases import CASES, ROUND_OFF
 from carom.reference.exact import smooth_exact
 from carom.scene import builtin_scenes, find_scene
+from carom.studies.two_spheres import CASES, ROUND_OFF
 
 CASE_SCENES = {f"case-{case.number}" for case in CASES}
 EXPECTED = CASE_SCENES | {
@@ -71,7 +71,7 @@ def test_newtons_cradle_scene_hands_on_the_momentum() -> None:
 
 
 @pytest.mark.parametrize("case", CASES, ids=lambda case: f"case-{case.number}")
-def test_each_two_sphere_scene_is_its_case(case: carom.cases.Case) -> None:
+def test_each_two_sphere_scene_is_its_case(case: carom.studies.two_spheres.Case) -> None:
     # The scene starts the spheres 0.5 s before the case's contact configuration: they meet
     # once, at t = 0.5 s, where the case says, and leave with the exact velocities of the
     # study (smooth_exact, rational arithmetic) to round-off (ROUND_OFF relative to the

@@ -1,16 +1,17 @@
 """carom: exact, impulse-based collision response.
 
-The closed-form two-body laws (:func:`collide`), Hecker's impulse formula (:mod:`carom.hecker`),
-the seven-case study (:mod:`carom.cases`), the event-driven engine (:class:`World`) and scene
-files (:func:`load_scene`, ``docs/scenes.md``).
+The closed-form two-body laws (:func:`collide`, :mod:`carom.laws`), Hecker's impulse formula
+and its readings (:mod:`carom.hecker`), the seven-case study (:mod:`carom.studies.two_spheres`),
+the :class:`World` and its engines (:mod:`carom.engines`), and scene files (:func:`load_scene`,
+``docs/scenes.md``).
 """
 
 from __future__ import annotations
 
-from carom import hecker
 from carom.errors import CaromError
-from carom.response import CollisionResult, collide
+from carom.laws.spheres import CollisionResult, collide
 from carom.scene import Scene, SceneError, load_scene
+from carom.studies import hecker
 from carom.world import Frame, Material, World
 
 __all__ = [

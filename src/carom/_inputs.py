@@ -216,3 +216,14 @@ def inverse_mass(m: FloatArray) -> FloatArray:
     """1/m with 1/inf = 0 (a static body)."""
     with np.errstate(divide="ignore"):
         return np.where(np.isinf(m), 0.0, 1.0 / m)
+
+
+def check_not_both_static(m1: FloatArray, m2: FloatArray) -> None:
+    """Refuse pairs whose two masses are both infinite (no impulse can be shared)."""
+    both = np.isinf(m1) & np.isinf(m2)
+    if both.any():
+        where = "" if both.size == 1 else f" at index {int(np.argmax(both))}"
+        raise CaromError(
+            f"m1 and m2 are both infinite{where}: two static bodies cannot exchange an impulse; "
+            "give at least one body a finite mass"
+        )

@@ -236,7 +236,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
 
 def _cmd_showcase(args: argparse.Namespace) -> int:
-    from carom.showcase import build_showcase
+    from carom.run.showcase import build_showcase
 
     page = build_showcase(args.out, force=args.force)
     print(f"\nopen {page} in a browser")
@@ -259,7 +259,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from carom.runner import Outputs, RunInterrupted, run_scene, with_overrides
+    from carom.run.runner import Outputs, RunInterrupted, run_scene, with_overrides
     from carom.scene import find_scene, load_scene
 
     _check_seconds("--until", args.until)
@@ -317,9 +317,9 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
 
 
 def _cmd_cases(args: argparse.Namespace) -> int:
-    from carom.cases import conclusions, format_details, format_table, run_study
     from carom.io.outdir import check_output, staged_output
     from carom.io.results import case_document, write_case_study
+    from carom.studies.two_spheres import conclusions, format_details, format_table, run_study
 
     if args.out is not None:
         check_output(args.out, force=args.force)

@@ -22,13 +22,10 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from carom.core import edmd
-from carom.core.laws import LAW_ROUGH, LAW_SMOOTH, LAW_WALTON
-from carom.core.neighbors import FITS, LIST_FULL, build_all
-from carom.errors import CaromError
-from carom.model import Model
-from carom.response import default_inertia_factor
-from carom.state import (
+from carom.engines.edmd import codes, loop
+from carom.engines.edmd.model import Model
+from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
+from carom.engines.edmd.state import (
     KIN_V,
     N_COUNTS,
     N_SUMS,
@@ -36,6 +33,9 @@ from carom.state import (
     aligned_records,
     allocate_state,
 )
+from carom.errors import CaromError
+from carom.laws.kernels import LAW_ROUGH, LAW_SMOOTH, LAW_WALTON
+from carom.laws.spheres import default_inertia_factor
 
 __all__ = ["Frame", "Material", "Stats", "World"]
 
@@ -152,22 +152,22 @@ class Stats:
     @property
     def collisions(self) -> int:
         """Collisions between two bodies since the last reset."""
-        return self._delta_counts(edmd.C_PAIR)
+        return self._delta_counts(codes.C_PAIR)
 
     @property
     def wall_collisions(self) -> int:
         """Collisions with walls and planes since the last reset."""
-        return self._delta_counts(edmd.C_WALL)
+        return self._delta_counts(codes.C_WALL)
 
     @property
     def events(self) -> int:
         """Events processed since the last reset (collisions, shell rebuilds, stale ones)."""
-        return self._delta_counts(edmd.C_EVENTS)
+        return self._delta_counts(codes.C_EVENTS)
 
     @property
     def tc_collisions(self) -> int:
         """Collisions the TC model made elastic since the last reset."""
-        return self._delta_counts(edmd.C_TC)
+        return self._delta_counts(codes.C_TC)
 
     @property
     def kinetic_energy(self) -> float:
@@ -208,7 +208,7 @@ class Stats:
         if dt <= 0.0 or np.any(w._gravity != 0.0):
             return math.nan
         volume = float(np.prod(w.box))
-        virial = self._delta_sums(edmd.S_VIRIAL)
+        virial = self._delta_sums(codes.S_VIRIAL)
         return (2.0 * self.kinetic_energy + virial / dt) / (w.dim * volume)
 
     @property
@@ -223,7 +223,7 @@ class Stats:
     @property
     def energy_lost(self) -> float:
         """Kinetic energy dissipated by collisions since the last reset [J]."""
-        return self._delta_sums(edmd.S_KE_LOST)
+        return self._delta_sums(codes.S_KE_LOST)
 
 
 def _spread_bits(c: NDArray[np.uint64], dim: int) -> NDArray[np.uint64]:
@@ -555,7 +555,7 @@ class World:
             return self._x.copy(), self._v.copy()
         x = np.empty_like(self._x)
         v = np.empty_like(self._v)
-        edmd.positions_at(self._model, self._state, self._time, x, v)
+        loop.positions_at(self._model, self._state, self._time, x, v)
         return self._to_user(x), self._to_user(v)
 
     def _to_user(self, rows: NDArray[Any]) -> NDArray[Any]:
@@ -734,8 +734,8 @@ class World:
                 self._capacity,
                 LOG_CAPACITY,
             )
-            status = edmd.initialise(model, state)
-            if status == edmd.DONE:
+            status = loop.initialise(model, state)
+            if status == codes.DONE:
                 break
             self._grow(status)
         self._order = order
@@ -846,19 +846,19 @@ class World:
         while True:
             model, state = self._model, self._state
             assert model is not None and state is not None
-            before = int(state.counts[edmd.C_EVENTS])
-            status = edmd.run(model, state, t_stop, remaining, log)
+            before = int(state.counts[codes.C_EVENTS])
+            status = loop.run(model, state, t_stop, remaining, log)
             self._drain_log(keep)
-            remaining -= int(state.counts[edmd.C_EVENTS]) - before
-            if status in (edmd.DONE, edmd.MAX_EVENTS):
+            remaining -= int(state.counts[codes.C_EVENTS]) - before
+            if status in (codes.DONE, codes.MAX_EVENTS):
                 return
-            if status in (edmd.LISTS_FULL, edmd.CELLS_FULL):
+            if status in (codes.LISTS_FULL, codes.CELLS_FULL):
                 self._grow(status)
                 self._resize_grid(self._capacity, self._cell_capacity)
 
     def _grow(self, status: int) -> None:
         """Double the capacity that ran out: neighbour lists or cell rows."""
-        if status == edmd.LISTS_FULL:
+        if status == codes.LISTS_FULL:
             self._capacity *= 2
         else:
             self._cell_capacity *= 2

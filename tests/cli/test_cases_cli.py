@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from carom.cases import MODELS, ROUND_OFF
+from carom.studies.two_spheres import MODELS, ROUND_OFF
 from tests.cli.helpers import carom
 
 

@@ -7,9 +7,9 @@ import json
 
 import pytest
 
-from carom.cases import ROUND_OFF
 from carom.cli import main
 from carom.compare.engines import ENGINES
+from carom.studies.two_spheres import ROUND_OFF
 from tests.cli.helpers import carom
 
 

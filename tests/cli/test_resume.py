@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import carom
-from carom import runner
-from carom.runner import CHECKPOINT, Outputs, RunInterrupted, run_scene, work_directory
+from carom.run import runner
+from carom.run.runner import CHECKPOINT, Outputs, RunInterrupted, run_scene, work_directory
 
 h5py = pytest.importorskip("h5py", reason="the io extra (h5py) is not installed")
 pytest.importorskip("matplotlib", reason="the viz extra (matplotlib) is not installed")

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from carom.cases import run_study
-from carom.showcase import SHOWCASE_SCENES, build_showcase
+from carom.run.showcase import SHOWCASE_SCENES, build_showcase
+from carom.studies.two_spheres import run_study
 
 pytest.importorskip("h5py", reason="the io extra (h5py) is not installed")
 pytest.importorskip("imageio_ffmpeg", reason="the viz extra is not installed")

@@ -8,11 +8,11 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from carom.cases import CASES, ROUND_OFF
 from carom.compare.closed_form import expectation
 from carom.compare.driver import peer_scene
 from carom.reference.exact import smooth_exact
 from carom.scene import Scene
+from carom.studies.two_spheres import CASES, ROUND_OFF
 
 
 @pytest.mark.parametrize("case", CASES, ids=lambda c: f"case-{c.number}")

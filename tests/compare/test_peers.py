@@ -11,11 +11,11 @@ import math
 import numpy as np
 import pytest
 
-from carom.cases import ROUND_OFF
 from carom.compare import compare
 from carom.compare.driver import peer_scene
 from carom.compare.engines import ENGINES
 from carom.scene import Scene
+from carom.studies.two_spheres import ROUND_OFF
 
 PEERS = ["pymunk", "pybullet", "mujoco"]
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from carom.core.calendar import Calendar, calendar_build, calendar_top, calendar_update
+from carom.engines.edmd.calendar import Calendar, calendar_build, calendar_top, calendar_update
 
 
 def _calendar(n: int) -> Calendar:

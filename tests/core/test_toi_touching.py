@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from carom.core.toi import INF, first_root_quartic, toi_gap
+from carom.geometry.toi import INF, first_root_quartic, toi_gap
 
 G = 9.81  # m/s^2
 

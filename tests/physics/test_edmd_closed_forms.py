@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import carom
-from carom.generators import lattice_gas
+from carom.scene.layouts import lattice_gas
 
 EPS = float(np.finfo(np.float64).eps)
 G = 9.81

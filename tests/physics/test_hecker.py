@@ -16,7 +16,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 import carom
-from carom import hecker
+from carom.studies import hecker
 from tests.strategies import EPS, Pair, masses, pairs, restitutions, unit_vectors, vectors
 
 TOL = 1024 * EPS

@@ -20,7 +20,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 import carom
-from carom.response import CollisionResult
+from carom.laws.spheres import CollisionResult
 from tests.strategies import (
     EPS,
     Pair,

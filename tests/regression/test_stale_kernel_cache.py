@@ -2,25 +2,48 @@
 
 Numba keys a cached function on its own source file; edmd.py's cached code kept an old
 toi.shell_exit_time after toi.py changed. The cache directory is now named by a hash of every
-kernel file, so any edit to any of them starts a fresh cache.
+file of the kernel packages, so any edit to any of them starts a fresh cache.
 """
 
 from __future__ import annotations
 
+import ast
 import shutil
 from pathlib import Path
 
-import carom.core
-from carom.core import kernel_cache_dir
+import carom
+from carom._jit import KERNEL_PACKAGES, kernel_cache_dir, kernel_sources
+
+ROOT = Path(carom.__file__).parent
 
 
 def test_editing_any_kernel_file_changes_the_cache_directory(tmp_path: Path) -> None:
-    copy = tmp_path / "core"
-    shutil.copytree(
-        Path(carom.core.__file__).parent, copy, ignore=shutil.ignore_patterns("__pycache__")
-    )
+    copy = tmp_path / "carom"
+    shutil.copytree(ROOT, copy, ignore=shutil.ignore_patterns("__pycache__"))
     before = kernel_cache_dir(copy)
-    assert before == kernel_cache_dir(copy)  # stable while nothing changes
-    toi = copy / "toi.py"
-    toi.write_text(toi.read_text() + "\n# an edit\n")
-    assert kernel_cache_dir(copy) != before
+    for source in kernel_sources(copy):
+        text = source.read_text()
+        source.write_text(text + "\n# an edit\n")
+        assert kernel_cache_dir.__wrapped__(copy) != before, source  # type: ignore[attr-defined]
+        source.write_text(text)
+    assert kernel_cache_dir.__wrapped__(copy) == before  # type: ignore[attr-defined]
+
+
+def test_every_kernel_lives_in_a_hashed_package() -> None:
+    # a module that compiles kernels, or that a kernel module imports from, outside the hashed
+    # packages would escape the hash: its edits would run stale machine code (compare/monitor.py
+    # calls numba.njit on a self-contained kernel, which Numba's own cache keys correctly)
+    hashed = set(kernel_sources(ROOT))
+    for path in ROOT.rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        names = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+        if "njit" in names:
+            assert path in hashed, path
+    for path in hashed:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("carom."):
+                package = node.module.split(".")[1]  # type: ignore[union-attr]
+                assert package in (*KERNEL_PACKAGES, "_jit", "_inputs", "errors"), (
+                    path,
+                    node.module,
+                )

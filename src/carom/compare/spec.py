@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.core.laws import LAW_SMOOTH
 from carom.errors import CaromError
+from carom.laws.kernels import LAW_SMOOTH
 from carom.world import World
 
 __all__ = ["PeerScene", "factor_restitution"]

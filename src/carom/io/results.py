@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from carom import __version__
-from carom.cases import MODELS, ROUND_OFF, Record, conclusions
+from carom.studies.two_spheres import MODELS, ROUND_OFF, Record, conclusions
 from carom.world import World
 
 __all__ = [

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.response import collide
+from carom.laws.spheres import collide
 
 __all__ = ["ReferenceEvent", "reference_events"]
 

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from carom.cases import MODELS, ROUND_OFF, Record
+from carom.studies.two_spheres import MODELS, ROUND_OFF, Record
 from carom.viz import require_matplotlib
 
 if TYPE_CHECKING:
@@ -74,7 +74,8 @@ def plot_case(records: list[Record], path: Path) -> Path:
     Parameters
     ----------
     records : list of Record
-        The records of one case (one per restitution), from :func:`carom.cases.run_study`.
+        The records of one case (one per restitution), from
+        :func:`carom.studies.two_spheres.run_study`.
     path : Path
         Where to write the PNG.
 

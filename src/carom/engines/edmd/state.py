@@ -45,7 +45,7 @@ SCHED_COUNTER = 3
 
 
 class State(NamedTuple):
-    """The changing part of a simulation of ``N`` bodies (see :mod:`carom.core.edmd`).
+    """The changing part of a simulation of ``N`` bodies (see :mod:`carom.engines.edmd.loop`).
 
     Attributes
     ----------
@@ -68,7 +68,7 @@ class State(NamedTuple):
     nbr : (N, K) int32; nbr_count : (N,) int64
         Neighbour lists.
     nbr_mark : (N,) int64; nbr_old : (K,) int32
-        Scratch for rebuilding one list (:func:`carom.core.neighbors.rebuild_shell`).
+        Scratch for rebuilding one list (:func:`carom.engines.edmd.neighbours.rebuild_shell`).
     cell, slot : (N,) int64; cell_count : (C,) int64; cell_body : (C, B) int32
         The cell grid of shell centres: cell ``c`` holds bodies ``cell_body[c, :cell_count[c]]``;
         body ``i`` is in cell ``cell[i]`` at place ``slot[i]``.
@@ -80,11 +80,11 @@ class State(NamedTuple):
         ``SCHED_STAMP``), and its own collision counter (``SCHED_COUNTER``; a prediction
         whose stamp no longer matches its partner's counter is stale).
     cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key, cur_where, cal_f, cal_i
-        The event calendar (:mod:`carom.core.calendar` describes each array).
+        The event calendar (:mod:`carom.engines.edmd.calendar` describes each array).
     clock : (1,) float64
         Simulation time [s].
     counts : (8,) int64; sums : (2,) float64
-        Running statistics (:mod:`carom.core.edmd` names the slots).
+        Running statistics (:mod:`carom.engines.edmd.loop` names the slots).
     log_time, log_a, log_b, log_impulse, log_un, log_n
         The event log buffer, emptied by :class:`carom.World` as it fills.
     """

@@ -4,7 +4,7 @@ Each moving body ``i`` owns a shell: a sphere of radius ``a_i + delta`` about it
 body's position when the shell was made. While the body stays within ``delta`` of the centre
 it stays inside its shell, so it can only touch bodies whose shells overlap its own:
 ``|c_i - c_j| < a_i + a_j + 2 delta``. Those are its neighbours; the lists are symmetric
-between moving bodies. Leaving the shell is an event (:mod:`carom.core.edmd`) that rebuilds
+between moving bodies. Leaving the shell is an event (:mod:`carom.engines.edmd.loop`) that rebuilds
 that one body's shell and list; nothing else is ever rebuilt.
 
 Shells are records ``shell[i] = (cx, cy, cz, a_i)`` (z zero in 2D). The cell grid holds
@@ -25,7 +25,7 @@ import math
 import numpy as np
 from numba import njit
 
-from carom.core.prefetch import prefetch_row
+from carom.engines.edmd.prefetch import prefetch_row
 
 FITS = 0
 LIST_FULL = 1

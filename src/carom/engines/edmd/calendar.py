@@ -11,8 +11,8 @@ Bucket index is monotone in time and equal times share a bucket, so the top is a
 minimum of ``(time, body)`` over all events: the same order, bit for bit, as a single heap.
 Events at infinite time (none to come) are kept nowhere.
 
-Arrays (all in :class:`carom.state.State`; the kernels take them as one tuple, ``Calendar``, in
-this order):
+Arrays (all in :class:`carom.engines.edmd.state.State`; the kernels take them as one tuple,
+``Calendar``, in this order):
 
 ``cal_head`` (B + 1,) int32, first body of each bucket (index B: overflow), -1 if empty;
 ``cal_next``, ``cal_prev`` (N,) int32 the lists; ``cal_loc`` (N,) int32 where each body's

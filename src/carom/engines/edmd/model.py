@@ -1,7 +1,8 @@
 """Model: the constants of a simulation, as plain arrays (MuJoCo's MjModel split).
 
 A :class:`Model` never changes while a simulation runs: geometry, masses, materials, walls,
-gravity and the engine's settings. Everything that changes lives in :class:`carom.state.State`.
+gravity and the engine's settings. Everything that changes lives in
+:class:`carom.engines.edmd.state.State`.
 Both are named tuples of NumPy arrays and scalars, so the Numba kernels take them as they are.
 """
 
@@ -38,7 +39,7 @@ class Model(NamedTuple):
     material : (N,) int64
         Material index of each body.
     pair_law : (M, M) int64
-        Impulse law per material pair (:mod:`carom.core.laws`).
+        Impulse law per material pair (:mod:`carom.laws.kernels`).
     pair_e, pair_beta, pair_friction : (M, M) float64
         Normal restitution [-]; constant ``beta`` or Walton's ``beta0`` [-]; Coulomb
         coefficient [-].

@@ -3,7 +3,7 @@
 Vectors are handled as three scalar components; 2D problems pass a zero third component and
 keep spins along z, so one kernel serves both dimensions (a 2D spin ``w`` is ``(0, 0, w)`` and
 the 3D cross products reduce to the 2D ones). The formulas and their derivation are those of
-:mod:`carom.response` and PHYSICS.md sections 1 and 3; tests hold the two against each other.
+:mod:`carom.laws.spheres` and PHYSICS.md sections 1 and 3; tests hold the two against each other.
 """
 
 from __future__ import annotations

@@ -16,11 +16,11 @@ from pathlib import Path
 from typing import Any
 
 from carom import __version__
-from carom.cases import CASES, MODELS, run_study
 from carom.io.outdir import check_output, staged_output
 from carom.io.results import write_case_study
-from carom.runner import run_scene
+from carom.run.runner import run_scene
 from carom.scene import find_scene, load_scene
+from carom.studies.two_spheres import CASES, MODELS, run_study
 
 __all__ = ["SHOWCASE_SCENES", "build_showcase"]
 

@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike
 from carom._inputs import (
     FloatArray,
     PairInputs,
+    check_not_both_static,
     cross_scalar_vector,
     cross_vector_vector,
     dot,
@@ -321,17 +322,6 @@ def _register_masses(inp: PairInputs, m1: ArrayLike, m2: ArrayLike) -> None:
     for name, value in (("m1", m1), ("m2", m2)):
         inp.scalar(
             name, value, low=0.0, high=math.inf, low_open=True, allow_inf=True, unit="kg", hint=hint
-        )
-
-
-def check_not_both_static(m1: FloatArray, m2: FloatArray) -> None:
-    """Refuse pairs whose two masses are both infinite (no impulse can be shared)."""
-    both = np.isinf(m1) & np.isinf(m2)
-    if both.any():
-        where = "" if both.size == 1 else f" at index {int(np.argmax(both))}"
-        raise CaromError(
-            f"m1 and m2 are both infinite{where}: two static bodies cannot exchange an impulse; "
-            "give at least one body a finite mass"
         )
 
 

@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from carom import hecker
+from carom.laws.spheres import CollisionResult, collide
 from carom.reference.exact import smooth_exact
-from carom.response import CollisionResult, collide
+from carom.studies import hecker
 
 __all__ = [
     "CASES",

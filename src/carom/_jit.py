@@ -1,0 +1,75 @@
+"""Where compiled kernels are cached, and the one way kernel packages import their modules.
+
+Compiled kernels are cached on disk, in a directory named by a hash of every source file of
+the kernel packages (:data:`KERNEL_PACKAGES`). Numba's own cache keys a function on its own
+file only, so editing a kernel it calls from another file (``geometry/toi.py`` under
+``engines/edmd/loop.py``), or a constant it reads from one, would otherwise run stale machine
+code. The directory is ``$NUMBA_CACHE_DIR/carom-<hash>`` if that variable is set, else
+``$XDG_CACHE_HOME/carom/kernels-<hash>`` (default ``~/.cache``); a temporary directory is used
+when neither is writable.
+
+Numba picks a function's cache directory when it is decorated, so each kernel package's
+``__init__`` imports its modules inside :func:`kernel_cache`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import os
+import tempfile
+from collections.abc import Iterator
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import numba
+
+__all__ = ["KERNEL_PACKAGES", "kernel_cache", "kernel_cache_dir"]
+
+#: the packages that hold Numba kernels, or constants and functions a kernel reads
+KERNEL_PACKAGES = ("engines", "geometry", "laws")
+
+_config: Any = numba.config
+_HERE = Path(__file__).resolve().parent
+
+
+def kernel_sources(root: Path = _HERE) -> list[Path]:
+    """Every source file of the kernel packages under ``root``, in a fixed order."""
+    return sorted(p for name in KERNEL_PACKAGES for p in (root / name).rglob("*.py"))
+
+
+@cache
+def kernel_cache_dir(root: Path = _HERE) -> str:
+    """The cache directory for the kernels of the package at ``root`` (default: carom)."""
+    digest = hashlib.sha256()
+    for path in kernel_sources(root):
+        digest.update(path.relative_to(root).as_posix().encode())
+        digest.update(path.read_bytes())
+    tag = digest.hexdigest()[:16]
+    user = os.environ.get("NUMBA_CACHE_DIR")
+    if user:
+        candidates = [os.path.join(user, f"carom-{tag}")]
+    else:
+        home = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        candidates = [os.path.join(home, "carom", f"kernels-{tag}")]
+    candidates.append(os.path.join(tempfile.gettempdir(), f"carom-kernels-{tag}"))
+    for candidate in candidates:
+        try:
+            os.makedirs(candidate, exist_ok=True)
+        except OSError:
+            continue
+        if os.access(candidate, os.W_OK):
+            return candidate
+    return candidates[-1]
+
+
+@contextlib.contextmanager
+def kernel_cache() -> Iterator[None]:
+    """Kernels decorated inside this block are cached in :func:`kernel_cache_dir`."""
+    previous = _config.CACHE_DIR
+    _config.CACHE_DIR = kernel_cache_dir()
+    try:
+        yield
+    finally:
+        _config.CACHE_DIR = previous

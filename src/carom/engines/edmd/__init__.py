@@ -1,0 +1,12 @@
+"""The exact event-driven engine for spheres and disks (docs/engine.md).
+
+``settings`` (what a user may set), ``model`` and ``state`` (the constants and the changing
+arrays), ``predict`` (the next event of a body), ``collide`` (what an event does), ``loop``
+(events in time order), ``calendar`` (the event queue), ``neighbours`` (shells and the cell
+grid), ``prefetch``, and ``driver`` (the :class:`carom.engines.base.Engine` that a World runs).
+"""
+
+from carom._jit import kernel_cache
+
+with kernel_cache():
+    from carom.engines.edmd import calendar, collide, loop, neighbours, predict  # noqa: F401

@@ -1,0 +1,344 @@
+"""Collisions: what an event between two bodies, or a body and a wall or plane, does to them.
+
+The impulse laws are :mod:`carom.laws.kernels` (PHYSICS.md sections 1 and 3); this module adds
+the engine's rules around them: the TC model, rest on a support, the parting-speed floor, the
+energy ledger and the log (the module docstring of :mod:`carom.engines.edmd.loop`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from carom.engines.edmd.codes import C_PAIR, C_REST, C_TC, C_WALL, S_KE_LOST, S_VIRIAL
+from carom.engines.edmd.predict import face_normal, set_support
+from carom.laws.kernels import LAW_SMOOTH, impulse_spheres
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def log_event(
+    logbuf: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    T: float,
+    a: int,
+    b: int,
+    j0: float,
+    j1: float,
+    j2: float,
+    un_before: float,
+    un_after: float,
+) -> None:
+    log_time, log_a, log_b, log_impulse, log_un, log_n = logbuf
+    n = log_n[0]
+    log_time[n] = T
+    log_a[n] = a
+    log_b[n] = b
+    log_impulse[n, 0] = j0
+    log_impulse[n, 1] = j1
+    log_impulse[n, 2] = j2
+    log_un[n, 0] = un_before
+    log_un[n, 1] = un_after
+    log_n[0] = n + 1
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def contact_velocity(
+    dv0: float,
+    dv1: float,
+    dv2: float,
+    w: np.ndarray,
+    i: int,
+    j: int,
+    a_i: float,
+    a_j: float,
+    n0: float,
+    n1: float,
+    n2: float,
+    law: int,
+) -> tuple[float, float, float]:
+    """Contact-point relative velocity ``g = v_i - v_j - (a_i w_i + a_j w_j) x n`` [m/s] from
+    ``dv = v_i - v_j``; the smooth law needs only ``dv`` (spin adds nothing along ``n``)."""
+    if law == LAW_SMOOTH:
+        return dv0, dv1, dv2
+    s0 = a_i * w[i, 0] + a_j * w[j, 0]
+    s1 = a_i * w[i, 1] + a_j * w[j, 1]
+    s2 = a_i * w[i, 2] + a_j * w[j, 2]
+    return dv0 - (s1 * n2 - s2 * n1), dv1 - (s2 * n0 - s0 * n2), dv2 - (s0 * n1 - s1 * n0)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def collide_pair(
+    i: int,
+    j: int,
+    T: float,
+    log_on: bool,
+    x: np.ndarray,
+    v: np.ndarray,
+    acc: np.ndarray,
+    w: np.ndarray,
+    counter: np.ndarray,
+    last_coll: np.ndarray,
+    support: np.ndarray,
+    radius: np.ndarray,
+    mass: np.ndarray,
+    inv_mass: np.ndarray,
+    q: np.ndarray,
+    material: np.ndarray,
+    pair_table: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    face_e: np.ndarray,
+    gravity: np.ndarray,
+    accelerated: bool,
+    plane_normal: np.ndarray,
+    box: np.ndarray,
+    periodic: bool,
+    t_c: float,
+    counts: np.ndarray,
+    sums: np.ndarray,
+    logbuf: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    dim = x.shape[1]
+    # separation r = x_i - x_j (nearest image) and relative velocity, as three components
+    r0 = r1 = r2 = 0.0
+    dv0 = dv1 = dv2 = 0.0
+    for k in range(dim):
+        d = x[i, k] - x[j, k]
+        if periodic:
+            d -= box[k] * np.floor(d / box[k] + 0.5)
+        dv = v[i, k] - v[j, k]
+        if k == 0:
+            r0, dv0 = d, dv
+        elif k == 1:
+            r1, dv1 = d, dv
+        else:
+            r2, dv2 = d, dv
+    dist = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    n0, n1, n2 = r0 / dist, r1 / dist, r2 / dist
+    pair_law, pair_e, pair_beta, pair_friction = pair_table
+    mat_i = material[i]
+    mat_j = material[j]
+    law = pair_law[mat_i, mat_j]
+    e = pair_e[mat_i, mat_j]
+    if T - last_coll[i] < t_c or T - last_coll[j] < t_c:
+        if e < 1.0:
+            counts[C_TC] += 1
+        e = 1.0
+    a_i = radius[i]
+    a_j = radius[j]
+    g0, g1, g2 = contact_velocity(dv0, dv1, dv2, w, i, j, a_i, a_j, n0, n1, n2, law)
+    inv_i = inv_mass[i]
+    inv_j = inv_mass[j]
+    j0, j1, j2 = impulse_spheres(
+        n0,
+        n1,
+        n2,
+        g0,
+        g1,
+        g2,
+        inv_i,
+        inv_j,
+        e,
+        law,
+        pair_beta[mat_i, mat_j],
+        pair_friction[mat_i, mat_j],
+        1.0 / q[i] if law != LAW_SMOOTH else 0.0,  # (spins do not enter the smooth law)
+        1.0 / q[j] if law != LAW_SMOOTH else 0.0,
+    )
+    # They must part: else the next prediction finds them meeting now again, a loop of
+    # events at one time. The impulse law makes them part at e times the approach speed,
+    # which is zero, or round-off, when they meet at a grazing angle, in a plastic impact
+    # (e = 0), or when gravity presses them together (one rests on a support or is static,
+    # the other is pulled onto it: a resting contact, which hard spheres do not have). The
+    # parting speed is raised, when below it, to
+    #     u_min = 2^-48 |g| + max(0, -a_n) t_c / 4,
+    # 16 ulps of the relative speed, above the round-off of the approach test and below any
+    # measurement; under a pull a_n, the speed that brings them back after t_c / 2, as the TC
+    # model would (energy given: m a_n^2 t_c^2 / 32, 1e-12 J for 1 kg at t_c = 1e-6 s). The
+    # extra impulse is an impulse like any other, in the energy ledger and the log.
+    # (the hot path: acc is read only under gravity, and the square root taken only when
+    # the floor applies, u_out < u_pull + 2^-48 |g| tested as d < 0 or d^2 < 2^-96 |g|^2)
+    u = g0 * n0 + g1 * n1 + g2 * n2
+    u_pull = 0.0
+    if accelerated:
+        a_n = 0.0
+        for k in range(dim):
+            nk = n0 if k == 0 else (n1 if k == 1 else n2)
+            a_n += (acc[i, k] - acc[j, k]) * nk
+        u_pull = max(0.0, -a_n) * t_c * 0.25
+    inv_sum = inv_i + inv_j
+    u_out = u + (j0 * n0 + j1 * n1 + j2 * n2) * inv_sum
+    gg = g0 * g0 + g1 * g1 + g2 * g2
+    d = u_out - u_pull
+    if d < 0.0 or d * d < 2.0**-96 * gg:
+        u_min = 2.0**-48 * math.sqrt(gg) + u_pull
+        extra = (u_min - u_out) / inv_sum
+        j0 += extra * n0
+        j1 += extra * n1
+        j2 += extra * n2
+    if j0 == 0.0 and j1 == 0.0 and j2 == 0.0:
+        return  # at rest relative to each other, and nothing pulls them together
+    un_before = dv0 * n0 + dv1 * n1 + dv2 * n2
+    for k in range(dim):
+        jk = j0 if k == 0 else (j1 if k == 1 else j2)
+        v[i, k] += jk * inv_i
+        v[j, k] -= jk * inv_j
+    if law != LAW_SMOOTH:
+        # w_i' = w_i - (n x J) / (q_i m_i a_i), the same sign for both bodies
+        c0 = n1 * j2 - n2 * j1
+        c1 = n2 * j0 - n0 * j2
+        c2 = n0 * j1 - n1 * j0
+        f_i = inv_i / (q[i] * a_i)
+        f_j = inv_j / (q[j] * a_j)
+        w[i, 0] -= c0 * f_i
+        w[i, 1] -= c1 * f_i
+        w[i, 2] -= c2 * f_i
+        w[j, 0] -= c0 * f_j
+        w[j, 1] -= c1 * f_j
+        w[j, 2] -= c2 * f_j
+    # contact-point relative velocity after the impulse, as g before it
+    u0 = v[i, 0] - v[j, 0]
+    u1 = v[i, 1] - v[j, 1]
+    u2 = v[i, 2] - v[j, 2] if dim == 3 else 0.0
+    un_after = u0 * n0 + u1 * n1 + u2 * n2
+    h0, h1, h2 = contact_velocity(u0, u1, u2, w, i, j, a_i, a_j, n0, n1, n2, law)
+    # energy dissipated = minus the impulse's work, J . (g_before + g_after) / 2 for rigid
+    # bodies (exact, and free of the cancellation of KE_before - KE_after)
+    sums[S_KE_LOST] -= 0.5 * (j0 * (g0 + h0) + j1 * (g1 + h1) + j2 * (g2 + h2))
+    counter[i] += 1
+    counter[j] += 1
+    last_coll[i] = T
+    last_coll[j] = T
+    counts[C_PAIR] += 1
+    sums[S_VIRIAL] += j0 * r0 + j1 * r1 + j2 * r2
+    # a body resting on a support: lifted off, or pushed into it (the support pushes back)
+    if support[i] >= 0:
+        support_reaction(i, v, acc, support, face_e, gravity, plane_normal, mass, t_c, sums)
+    if support[j] >= 0:
+        support_reaction(j, v, acc, support, face_e, gravity, plane_normal, mass, t_c, sums)
+    if log_on:
+        log_event(
+            logbuf,
+            T,
+            i,
+            j,
+            j0,
+            j1,
+            j2,
+            un_before,
+            un_after,
+        )
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def support_reaction(
+    b: int,
+    v: np.ndarray,
+    acc: np.ndarray,
+    support: np.ndarray,
+    face_e: np.ndarray,
+    gravity: np.ndarray,
+    plane_normal: np.ndarray,
+    mass: np.ndarray,
+    t_c: float,
+    sums: np.ndarray,
+) -> None:
+    """Body ``b`` rests on a support and was just hit: it lifts off, or the support pushes
+    back (an impact with the support's restitution) and then it flies; unless it would be
+    back within t_c (a push along the support, as from a neighbour resting beside it, leaves
+    it round-off off the face): then it stays, as the rule for impacts on faces says."""
+    dim = v.shape[1]
+    face = support[b]
+    un = 0.0
+    g_n = 0.0
+    for k in range(dim):
+        nk = face_normal(plane_normal, dim, face, k)
+        un += v[b, k] * nk
+        g_n += gravity[k] * nk
+    if un < 0.0:
+        e_w = face_e[face]
+        for k in range(dim):
+            v[b, k] -= (1.0 + e_w) * un * face_normal(plane_normal, dim, face, k)
+        sums[S_KE_LOST] += 0.5 * mass[b] * (1.0 - e_w * e_w) * un * un
+        un = -e_w * un
+    if un > 0.0 and 2.0 * un < -g_n * t_c:
+        for k in range(dim):
+            v[b, k] -= un * face_normal(plane_normal, dim, face, k)
+        sums[S_KE_LOST] += 0.5 * mass[b] * un * un
+        return
+    if un != 0.0:
+        set_support(gravity, plane_normal, support, acc, b, -1)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def collide_face(
+    i: int,
+    face: int,
+    T: float,
+    log_on: bool,
+    x: np.ndarray,
+    v: np.ndarray,
+    acc: np.ndarray,
+    counter: np.ndarray,
+    last_coll: np.ndarray,
+    support: np.ndarray,
+    mass: np.ndarray,
+    face_e: np.ndarray,
+    gravity: np.ndarray,
+    plane_normal: np.ndarray,
+    t_c: float,
+    counts: np.ndarray,
+    sums: np.ndarray,
+    logbuf: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """Body ``i`` (at time ``T``) meets wall or plane ``face`` (smooth: spins are kept)."""
+    dim = x.shape[1]
+    un = 0.0
+    acc_n = 0.0
+    for k in range(dim):
+        nk = face_normal(plane_normal, dim, face, k)
+        un += v[i, k] * nk
+        acc_n += acc[i, k] * nk
+    # Leaving (un > 0) flies off, unless so slowly that gravity brings it back within t_c
+    # (the gap reopens for 2 u / |a_n|, which can be below the clock's resolution: a loop of
+    # events at one time); then it rests, by the rule for impacts below.
+    approaching = un < 0.0 or (un == 0.0 and acc_n < 0.0)
+    if not approaching and not (acc_n < 0.0 and 2.0 * un < -acc_n * t_c):
+        return
+    e = face_e[face]
+    tc = T - last_coll[i] < t_c
+    if tc and acc_n >= 0.0:
+        if e < 1.0:
+            counts[C_TC] += 1
+        e = 1.0
+    u_out = -e * un
+    # rest: pulled onto the face, and would leave it for less than t_c (or TC applies)
+    rest = acc_n < 0.0 and (tc or 2.0 * u_out < -acc_n * t_c)
+    if rest:
+        e = 0.0
+        u_out = 0.0
+        counts[C_REST] += 1
+    jn = -(1.0 + e) * un * mass[i]
+    x_dot_j = 0.0
+    for k in range(dim):
+        nk = face_normal(plane_normal, dim, face, k)
+        v[i, k] -= (1.0 + e) * un * nk
+        x_dot_j += x[i, k] * jn * nk
+    if rest:
+        set_support(gravity, plane_normal, support, acc, i, face)
+    counter[i] += 1
+    last_coll[i] = T
+    counts[C_WALL] += 1
+    sums[S_VIRIAL] += x_dot_j
+    sums[S_KE_LOST] += 0.5 * mass[i] * (1.0 - e * e) * un * un  # walls are smooth
+    if log_on:
+        log_event(
+            logbuf,
+            T,
+            i,
+            -1 - face,
+            jn * face_normal(plane_normal, dim, face, 0),
+            jn * face_normal(plane_normal, dim, face, 1),
+            jn * face_normal(plane_normal, dim, face, 2) if dim == 3 else 0.0,
+            un,
+            u_out,
+        )

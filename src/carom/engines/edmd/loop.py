@@ -1,0 +1,305 @@
+"""Event-driven dynamics of spheres and disks: the exact engine's main loop.
+
+Bodies fly freely (straight lines, or parabolas under gravity) between events, and each
+carries its own clock: it is advanced only when an event involves it (lazy clocks, Lubachevsky
+1991). Every moving body has exactly one scheduled event, its earliest of: a collision with a
+neighbour, with a wall or plane, or leaving its neighbour shell (Smallenburg 2022). The events
+sit in an event calendar (:mod:`carom.engines.edmd.calendar`, after Paul 2007). A predicted
+collision with ``j`` stores ``j``'s collision counter; if ``j`` has collided since, the event is
+stale and the body is simply re-predicted (Rapaport 1980).
+
+Dissipation and round-off:
+
+* TC model (Luding & McNamara 1998): a collision within ``t_c`` of the previous collision of
+  either body is elastic, which stops inelastic collapse.
+* Rest: a body pulled by gravity onto a wall or plane that would leave it again for less than
+  ``t_c`` (or that the TC model would bounce elastically) comes to rest on it: its normal
+  velocity and normal acceleration are set to zero and it slides until a collision lifts it.
+  This ends the Zeno sequence of a settling ball in a finite number of events.
+* Overlap by round-off: an approaching pair that already touches collides now; a separating
+  one never does (Bannerman et al. 2014). Overlaps therefore cannot grow.
+
+The model ``m`` and state ``s`` are the named tuples of :mod:`carom.engines.edmd.model` and
+:mod:`carom.engines.edmd.state`. :func:`run` unpacks them once: the functions of the hot loop
+take the arrays they need one by one, because Numba passes a named tuple of arrays into a call by
+reference-counting every array in it (measured: 95 ns a call, against under 1 ns for a few
+plain arrays, which LLVM inlines). Nothing is allocated per event, so :func:`run` is compiled
+without Numba's reference counting (``_nrt=False``, the remedy Numba's developers give in
+numba#2345): every inlined call would otherwise increment and decrement an atomic counter per
+array argument, and each such locked instruction stalls the loads around it (measured: the
+event loop 1.4x faster without them). A kernel that allocated would fail to compile, loudly.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any, TypeVar, cast
+
+import numpy as np
+from numba import njit
+
+from carom.engines.edmd.calendar import calendar_build, calendar_top, calendar_update
+from carom.engines.edmd.codes import (
+    C_EVENTS,
+    C_SHELL,
+    C_STALE,
+    CELLS_FULL,
+    DONE,
+    EV_PAIR,
+    EV_WALL,
+    LISTS_FULL,
+    LOG_FULL,
+    MAX_EVENTS,
+)
+from carom.engines.edmd.collide import collide_face, collide_pair
+from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all, rebuild_shell
+from carom.engines.edmd.predict import (
+    calendar_of,
+    free_flight,
+    kinematic_views,
+    predict,
+    schedule_views,
+)
+from carom.engines.edmd.prefetch import prefetch_row
+from carom.geometry.toi import INF
+
+# compile without reference counting (see the module docstring); an internal Numba flag
+NO_REFCOUNTING: dict[str, Any] = {"_nrt": False}
+_F = TypeVar("_F", bound=Callable[..., Any])
+_njit_without_refcounting = cast(
+    Callable[[_F], _F], njit(cache=True, error_model="numpy", **NO_REFCOUNTING)
+)
+
+
+@njit(cache=True, error_model="numpy")
+def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
+    """Build every shell and neighbour list and schedule every body.
+
+    Returns ``DONE``, or ``LISTS_FULL`` / ``CELLS_FULL`` when the arrays need to grow.
+    """
+    x, v, t = kinematic_views(s.kin, m.box.shape[0])
+    ev_kind, ev_other, ev_stamp, counter = schedule_views(s.sched)
+    for i in range(x.shape[0]):
+        for k in range(m.box.shape[0]):
+            s.shell[i, k] = x[i, k]
+    status = build_all(
+        s.shell,
+        m.mobile,
+        s.nbr,
+        s.nbr_count,
+        s.cell_count,
+        s.cell_body,
+        s.slot,
+        s.cell,
+        m.box,
+        m.periodic,
+        m.delta,
+        m.cell_size,
+        m.ncell,
+        s.nbr_mark,
+    )
+    if status != FITS:
+        return LISTS_FULL if status == LIST_FULL else CELLS_FULL
+    T = s.clock[0]
+    for i in range(x.shape[0]):
+        free_flight(x, v, s.acc, t, i, T)
+        predict(
+            i,
+            T,
+            s.kin,
+            x,
+            v,
+            s.acc,
+            m.accelerated,
+            t,
+            s.shell,
+            s.support,
+            s.nbr,
+            s.nbr_count,
+            counter,
+            m.radius,
+            m.mobile,
+            m.box,
+            m.inv_box,
+            m.periodic,
+            m.delta,
+            m.plane_point,
+            m.plane_normal,
+            s.ev_time,
+            ev_kind,
+            ev_other,
+            ev_stamp,
+        )
+    calendar_build(s.ev_time, calendar_of(s))
+    return DONE
+
+
+@_njit_without_refcounting
+def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ignore[no-untyped-def]
+    """Process events in time order up to ``t_stop``; return why it stopped.
+
+    ``DONE``: the next event is after ``t_stop`` (the clock is set to ``t_stop``);
+    ``LOG_FULL``: the event log needs emptying; ``MAX_EVENTS``: ``max_events`` processed;
+    ``LISTS_FULL`` / ``CELLS_FULL``: a neighbour list or a cell row is full (grow them and
+    rebuild them all; the schedule stays valid, and the event that overflowed runs again).
+    """
+    # unpack once: the hot functions take plain arrays (see the module docstring)
+    kin = s.kin
+    x, v, t = kinematic_views(kin, m.box.shape[0])
+    acc, w = s.acc, s.w
+    shell, support, last_coll = s.shell, s.support, s.last_coll
+    nbr, nbr_count, nbr_mark, nbr_old = s.nbr, s.nbr_count, s.nbr_mark, s.nbr_old
+    ev_time = s.ev_time
+    sched = s.sched
+    ev_kind, ev_other, ev_stamp, counter = schedule_views(sched)
+    cal = calendar_of(s)
+    counts, sums = s.counts, s.sums
+    # grouped as tuples for the inlined callees (a call takes at most 30 arguments there)
+    logbuf = (s.log_time, s.log_a, s.log_b, s.log_impulse, s.log_un, s.log_n)
+    log_time, log_n = s.log_time, s.log_n
+    cell, slot, cell_count, cell_body = s.cell, s.slot, s.cell_count, s.cell_body
+    radius, mass, inv_mass, q, mobile = m.radius, m.mass, m.inv_mass, m.q, m.mobile
+    material, face_e = m.material, m.face_e
+    pair_table = (m.pair_law, m.pair_e, m.pair_beta, m.pair_friction)
+    gravity, box, periodic, delta, t_c = m.gravity, m.box, m.periodic, m.delta, m.t_c
+    accelerated = m.accelerated
+    inv_box = m.inv_box
+    plane_point, plane_normal = m.plane_point, m.plane_normal
+    cell_size, ncell = m.cell_size, m.ncell
+
+    dim = x.shape[1]
+    processed = 0
+    log_cap = log_time.shape[0]
+    while True:
+        i = calendar_top(ev_time, cal)
+        T = ev_time[i] if i >= 0 else INF
+        if t_stop < T or math.isinf(T):
+            if t_stop < INF:
+                s.clock[0] = t_stop
+            return DONE
+        if processed >= max_events:
+            return MAX_EVENTS
+        if log_on and log_n[0] + 1 > log_cap:
+            return LOG_FULL
+        processed += 1
+        # what this event will read, asked for at once rather than miss by miss
+        prefetch_row(sched, i)
+        prefetch_row(kin, i)
+        prefetch_row(nbr, i)
+        s.clock[0] = T
+        counts[C_EVENTS] += 1
+        kind = ev_kind[i]
+        j = -1
+        free_flight(x, v, acc, t, i, T)  # every event moves its own body to now
+        if kind == EV_PAIR:
+            j = ev_other[i]
+            prefetch_row(kin, j)
+            prefetch_row(nbr, j)
+            if counter[j] != ev_stamp[i]:
+                counts[C_STALE] += 1
+                j = -1  # stale: the partner collided since; just re-predict
+            else:
+                free_flight(x, v, acc, t, j, T)
+                collide_pair(
+                    i,
+                    j,
+                    T,
+                    log_on,
+                    x,
+                    v,
+                    acc,
+                    w,
+                    counter,
+                    last_coll,
+                    support,
+                    radius,
+                    mass,
+                    inv_mass,
+                    q,
+                    material,
+                    pair_table,
+                    face_e,
+                    gravity,
+                    accelerated,
+                    plane_normal,
+                    box,
+                    periodic,
+                    t_c,
+                    counts,
+                    sums,
+                    logbuf,
+                )
+        elif kind == EV_WALL:
+            collide_face(
+                i,
+                ev_other[i],
+                T,
+                log_on,
+                x,
+                v,
+                acc,
+                counter,
+                last_coll,
+                support,
+                mass,
+                face_e,
+                gravity,
+                plane_normal,
+                t_c,
+                counts,
+                sums,
+                logbuf,
+            )
+        else:  # EV_SHELL
+            counts[C_SHELL] += 1
+            for k in range(dim):
+                if periodic:
+                    x[i, k] -= box[k] * np.floor(x[i, k] / box[k])
+                shell[i, k] = x[i, k]
+            status = rebuild_shell(
+                i,
+                shell,
+                mobile,
+                nbr,
+                nbr_count,
+                cell_count,
+                cell_body,
+                slot,
+                cell,
+                box,
+                periodic,
+                delta,
+                cell_size,
+                ncell,
+                nbr_mark,
+                nbr_old,
+                counts[C_SHELL],  # a stamp no earlier rebuild used
+            )
+            if status != FITS:
+                return LISTS_FULL if status == LIST_FULL else CELLS_FULL
+        # re-schedule the bodies whose motion changed: i, and its partner j if it had one
+        for body in (i, j):
+            if body < 0:
+                continue
+            predict(
+                body, T, kin, x, v, acc, accelerated, t, shell, support, nbr, nbr_count, counter,
+                radius, mobile, box, inv_box, periodic, delta, plane_point, plane_normal,
+                ev_time, ev_kind, ev_other, ev_stamp,
+            )  # fmt: skip
+            calendar_update(ev_time, body, cal)
+
+
+@njit(cache=True, error_model="numpy")
+def positions_at(m, s, T: float, x_out: np.ndarray, v_out: np.ndarray) -> None:  # type: ignore[no-untyped-def]
+    """Every body's position and velocity at time ``T`` (periodic: wrapped into the box)."""
+    dim = m.box.shape[0]
+    x, v, t = kinematic_views(s.kin, dim)
+    for i in range(x.shape[0]):
+        dt = T - t[i]
+        for k in range(dim):
+            a = s.acc[i, k]
+            x_out[i, k] = x[i, k] + (v[i, k] + 0.5 * a * dt) * dt
+            v_out[i, k] = v[i, k] + a * dt
+            if m.periodic:
+                x_out[i, k] -= m.box[k] * np.floor(x_out[i, k] / m.box[k])

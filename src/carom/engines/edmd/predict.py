@@ -1,0 +1,301 @@
+"""Prediction: a body's next event (a collision with a neighbour, a wall or a plane, or leaving
+its neighbour shell), and the free flight between events.
+
+Bodies fly on straight lines, or parabolas under gravity. Times of impact use the
+cancellation-free forms of :mod:`carom.geometry.toi` (PHYSICS.md section 4).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from carom.engines.edmd.codes import EV_NONE, EV_PAIR, EV_SHELL, EV_WALL, SHELL_MARGIN
+from carom.engines.edmd.prefetch import prefetch_row
+from carom.engines.edmd.state import (
+    KIN_R,
+    KIN_T,
+    KIN_V,
+    SCHED_COUNTER,
+    SCHED_KIND,
+    SCHED_OTHER,
+    SCHED_STAMP,
+)
+from carom.geometry.toi import (
+    INF,
+    first_root_quartic,
+    shell_exit_time,
+    toi_gap,
+    toi_sphere_sphere,
+)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def face_normal(plane_normal: np.ndarray, dim: int, face: int, k: int) -> float:
+    """Component ``k`` of the inward unit normal of wall face or plane ``face``."""
+    if face < 2 * dim:
+        if k != face // 2:
+            return 0.0
+        return 1.0 if face % 2 == 0 else -1.0
+    return float(plane_normal[face - 2 * dim, k])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def set_support(
+    gravity: np.ndarray,
+    plane_normal: np.ndarray,
+    support: np.ndarray,
+    acc: np.ndarray,
+    i: int,
+    face: int,
+) -> None:
+    """Rest body ``i`` on ``face`` (or lift it off, ``face = -1``) and update its acceleration."""
+    dim = gravity.shape[0]
+    support[i] = face
+    g_n = 0.0
+    if face >= 0:
+        for k in range(dim):
+            g_n += gravity[k] * face_normal(plane_normal, dim, face, k)
+    for k in range(dim):
+        nk = face_normal(plane_normal, dim, face, k) if face >= 0 else 0.0
+        acc[i, k] = gravity[k] - g_n * nk
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def kinematic_views(kin: np.ndarray, dim: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Positions (N, dim), velocities (N, dim) and clocks (N,): views into ``kin``."""
+    return kin[:, :dim], kin[:, KIN_V : KIN_V + dim], kin[:, KIN_T]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def schedule_views(
+    sched: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Event kinds, partners, stamps and collision counters, (N,) each: views into ``sched``."""
+    return (
+        sched[:, SCHED_KIND],
+        sched[:, SCHED_OTHER],
+        sched[:, SCHED_STAMP],
+        sched[:, SCHED_COUNTER],
+    )
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def calendar_of(s):  # type: ignore[no-untyped-def]
+    """The event calendar's arrays of state ``s``, as :mod:`carom.engines.edmd.calendar`
+    takes them."""
+    return (
+        s.cal_head,
+        s.cal_next,
+        s.cal_prev,
+        s.cal_loc,
+        s.cur_heap,
+        s.cur_key,
+        s.cur_where,
+        s.cal_f,
+        s.cal_i,
+    )
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def free_flight(
+    x: np.ndarray, v: np.ndarray, acc: np.ndarray, t: np.ndarray, i: int, T: float
+) -> None:
+    """Move body ``i`` along its free flight to time ``T`` and set its clock."""
+    dt = T - t[i]
+    if dt != 0.0:
+        for k in range(x.shape[1]):
+            a = acc[i, k]
+            x[i, k] += (v[i, k] + 0.5 * a * dt) * dt
+            v[i, k] += a * dt
+    t[i] = T
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _first_pair_straight(
+    i: int,
+    T: float,
+    best: float,
+    kin: np.ndarray,
+    nbr: np.ndarray,
+    nbr_count: np.ndarray,
+    box: np.ndarray,
+    periodic: bool,
+) -> tuple[float, int]:
+    """Body ``i``'s first collision with a neighbour before ``best`` when nothing accelerates.
+
+    Returns ``(time from T, neighbour)``, or ``(best, -1)``. The same arithmetic as
+    :func:`carom.geometry.toi.toi_sphere_sphere`, written out per component and without branches
+    on the neighbour (the hot loop of the engine: a mispredicted branch costs more than the
+    square root and division it would skip). Each neighbour's data is one record of ``kin``
+    (z is zero in 2D, so three components serve both).
+    """
+    xi0, xi1, xi2 = kin[i, 0], kin[i, 1], kin[i, 2]
+    vi0, vi1, vi2 = kin[i, KIN_V], kin[i, KIN_V + 1], kin[i, KIN_V + 2]
+    L0, L1 = box[0], box[1]
+    L2 = box[2] if box.shape[0] == 3 else 1.0
+    inv0, inv1, inv2 = 1.0 / L0, 1.0 / L1, 1.0 / L2
+    rad = kin[i, KIN_R]
+    other = -1
+    for slot in range(nbr_count[i]):
+        prefetch_row(kin, nbr[i, slot])
+    for slot in range(nbr_count[i]):
+        j = nbr[i, slot]
+        dtj = T - kin[j, KIN_T]
+        vj0, vj1, vj2 = kin[j, KIN_V], kin[j, KIN_V + 1], kin[j, KIN_V + 2]
+        r0 = xi0 - (kin[j, 0] + vj0 * dtj)
+        r1 = xi1 - (kin[j, 1] + vj1 * dtj)
+        r2 = xi2 - (kin[j, 2] + vj2 * dtj)
+        if periodic:
+            r0 -= L0 * np.floor(r0 * inv0 + 0.5)
+            r1 -= L1 * np.floor(r1 * inv1 + 0.5)
+            r2 -= L2 * np.floor(r2 * inv2 + 0.5)
+        dv0 = vi0 - vj0
+        dv1 = vi1 - vj1
+        dv2 = vi2 - vj2
+        rr = r0 * r0 + r1 * r1 + r2 * r2
+        rv = r0 * dv0 + r1 * dv1 + r2 * dv2
+        vv = dv0 * dv0 + dv1 * dv1 + dv2 * dv2
+        reach = rad + kin[j, KIN_R]
+        c = rr - reach * reach
+        disc = rv * rv - vv * c
+        # the smaller root of vv t^2 + 2 rv t + c, cancellation-free (rv < 0); 0 when already
+        # touching and approaching; none when separating or passing by
+        # (a select, not a branch; the denominator is never zero, even where discarded)
+        tp = max(c / (math.sqrt(max(disc, 0.0)) - rv if rv < 0.0 else 1.0), 0.0)
+        tp = tp if (rv < 0.0 and disc >= 0.0) else INF
+        if tp < best:
+            best = tp
+            other = j
+    return best, other
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def predict(
+    i: int,
+    T: float,
+    kin: np.ndarray,
+    x: np.ndarray,
+    v: np.ndarray,
+    acc: np.ndarray,
+    accelerated: bool,
+    t: np.ndarray,
+    shell: np.ndarray,
+    support: np.ndarray,
+    nbr: np.ndarray,
+    nbr_count: np.ndarray,
+    counter: np.ndarray,
+    radius: np.ndarray,
+    mobile: np.ndarray,
+    box: np.ndarray,
+    inv_box: np.ndarray,
+    periodic: bool,
+    delta: float,
+    plane_point: np.ndarray,
+    plane_normal: np.ndarray,
+    ev_time: np.ndarray,
+    ev_kind: np.ndarray,
+    ev_other: np.ndarray,
+    ev_stamp: np.ndarray,
+) -> None:
+    """Schedule body ``i``'s next event; ``i`` must be at time ``T``."""
+    dim = x.shape[1]
+    if not mobile[i]:
+        ev_time[i] = INF
+        ev_kind[i] = EV_NONE
+        return
+    rad = radius[i]
+    off2 = 0.0
+    off_v = 0.0
+    speed2 = 0.0
+    acc2 = 0.0
+    for k in range(dim):
+        d = x[i, k] - shell[i, k]
+        off2 += d * d
+        off_v += d * v[i, k]
+        speed2 += v[i, k] * v[i, k]
+        acc2 += acc[i, k] * acc[i, k]
+    # leave the shell a hair early, so that round-off in the exit time never lets a body
+    # stray beyond delta from its centre
+    best = shell_exit_time(off2, off_v, speed2, math.sqrt(acc2), delta * SHELL_MARGIN)
+    kind = EV_SHELL
+    other = -1
+
+    # walls (faces 0 .. 2 dim - 1, none when periodic) and planes (faces 2 dim + p): the gap
+    # d(t) = d0 + u t + acc t^2 / 2 along each inward normal
+    first_face = 2 * dim if periodic else 0
+    for face in range(first_face, 2 * dim + plane_normal.shape[0]):
+        if face == support[i]:
+            continue
+        if face < 2 * dim:
+            k = face // 2
+            if face % 2 == 0:
+                d0 = x[i, k] - rad
+                u = v[i, k]
+                a_n = acc[i, k]
+            else:
+                d0 = box[k] - x[i, k] - rad
+                u = -v[i, k]
+                a_n = -acc[i, k]
+        else:
+            p = face - 2 * dim
+            d0 = -rad
+            u = 0.0
+            a_n = 0.0
+            for q in range(dim):
+                nq = plane_normal[p, q]
+                d0 += nq * (x[i, q] - plane_point[p, q])
+                u += nq * v[i, q]
+                a_n += nq * acc[i, q]
+        tf = toi_gap(d0, u, a_n)
+        if tf < best:
+            best = tf
+            kind = EV_WALL
+            other = face
+
+    # neighbours: relative motion r + v t + da t^2 / 2, j extrapolated to T on the fly
+    if not accelerated:
+        tp, j = _first_pair_straight(i, T, best, kin, nbr, nbr_count, box, periodic)
+        if j >= 0:
+            best = tp
+            kind = EV_PAIR
+            other = j
+    for slot in range(nbr_count[i] if accelerated else 0):
+        j = nbr[i, slot]
+        dtj = T - t[j]
+        rr = 0.0
+        rv = 0.0
+        vv = 0.0
+        rda = 0.0
+        vda = 0.0
+        dada = 0.0
+        for k in range(dim):
+            aj = acc[j, k]
+            r = x[i, k] - (x[j, k] + (v[j, k] + 0.5 * aj * dtj) * dtj)
+            dv = v[i, k] - (v[j, k] + aj * dtj)
+            da = acc[i, k] - aj
+            if periodic:
+                r -= box[k] * np.floor(r * inv_box[k] + 0.5)
+            rr += r * r
+            rv += r * dv
+            vv += dv * dv
+            rda += r * da
+            vda += dv * da
+            dada += da * da
+        reach = rad + radius[j]
+        if dada == 0.0:
+            tp = toi_sphere_sphere(rr - reach * reach, rv, vv)
+        else:
+            tp = first_root_quartic(0.25 * dada, vda, vv + rda, 2.0 * rv, rr - reach * reach, best)
+        if tp < best:
+            best = tp
+            kind = EV_PAIR
+            other = j
+
+    ev_time[i] = T + best
+    ev_kind[i] = kind
+    ev_other[i] = other
+    if kind == EV_PAIR:
+        ev_stamp[i] = counter[other]

@@ -1,0 +1,261 @@
+"""Reading a scene: TOML (parsed with the standard library) or nested dicts, checked against
+:mod:`carom.scene.schema` into a :class:`Scene`; finding built-in scenes by name."""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from carom.scene.schema import ARRAYS, GENERATORS, SCHEMA, Locator, SceneError
+
+if TYPE_CHECKING:
+    from carom.world import World
+
+__all__ = ["Scene", "builtin_scenes", "find_scene", "load_scene"]
+
+
+@dataclass
+class Scene:
+    """A checked scene: plain data, ready to :meth:`build`.
+
+    Attributes
+    ----------
+    scene : dict
+        The optional ``[scene]`` table: ``title`` and ``description``.
+    world : dict
+        The ``[world]`` table, defaults filled in.
+    materials, bodies, row, rack, lattice, pegs, gas : list of dict
+        The ``[[materials]]``, ``[[bodies]]``, generator (``[[row]]``, ``[[rack]]``,
+        ``[[lattice]]``, ``[[pegs]]``) and ``[[gas]]`` tables, defaults filled in.
+    run : dict
+        The ``[run]`` table: ``until`` [s] and ``frame_interval`` [s] (None: no frames).
+    outputs : dict
+        The ``[outputs]`` table: which files ``carom run`` writes.
+    source : str
+        Where it came from (a path, or ``"<dict>"``), for messages.
+    """
+
+    world: dict[str, Any]
+    scene: dict[str, Any] = field(default_factory=dict)
+    materials: list[dict[str, Any]] = field(default_factory=list)
+    bodies: list[dict[str, Any]] = field(default_factory=list)
+    row: list[dict[str, Any]] = field(default_factory=list)
+    rack: list[dict[str, Any]] = field(default_factory=list)
+    lattice: list[dict[str, Any]] = field(default_factory=list)
+    pegs: list[dict[str, Any]] = field(default_factory=list)
+    gas: list[dict[str, Any]] = field(default_factory=list)
+    run: dict[str, Any] = field(default_factory=dict)
+    outputs: dict[str, Any] = field(default_factory=dict)
+    source: str = "<dict>"
+    text: str = ""
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], source: str = "<dict>", text: str = "") -> Scene:
+        """Check a scene given as nested dicts and lists (the shape of the TOML file)."""
+        where = Locator(source, text)
+        for table in data:
+            if table not in SCHEMA:
+                raise where.error(
+                    [table],
+                    f"unknown table [{table}]",
+                    f"use one of {', '.join('[' + t + ']' for t in SCHEMA)}",
+                )
+        parts: dict[str, Any] = {}
+        for table in SCHEMA:
+            value = data.get(table)
+            if table in ARRAYS:
+                entries = [] if value is None else value
+                if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
+                    raise where.error([table], "must be written as [[" + table + "]] tables", "")
+                parts[table] = [
+                    _check_table(table, entry, where, index) for index, entry in enumerate(entries)
+                ]
+            else:
+                if value is None:
+                    if table in ("world", "run"):
+                        raise where.error(
+                            [table], f"the [{table}] table is missing", f"add a [{table}] table"
+                        )
+                    value = {}
+                if not isinstance(value, dict):
+                    raise where.error([table], f"[{table}] must be a table", "")
+                parts[table] = _check_table(table, value, where, None)
+        scene = cls(source=source, text=text, **parts)
+        scene._check_consistency(where)
+        return scene
+
+    def _check_consistency(self, where: Locator) -> None:
+        dim = self.world["dimension"]
+        for key in ("box", "gravity"):
+            value = self.world[key]
+            if value is not None and len(value) != dim:
+                raise where.error(
+                    ["world", key],
+                    f"has {len(value)} components for a {dim}D world",
+                    f"give {dim} numbers",
+                )
+        if any(not side > 0 for side in self.world["box"]):
+            raise where.error(["world", "box"], "sides must be > 0", "give positive lengths [m]")
+        names = [m["name"] for m in self.materials]
+        for table in ("bodies", *GENERATORS, "gas"):
+            for index, entry in enumerate(getattr(self, table)):
+                name = entry.get("material")
+                if name is not None and name not in names:
+                    raise where.error(
+                        [table, "material"],
+                        f"names material {name!r}, which no [[materials]] table defines",
+                        f"define it, or use one of {names}" if names else "define it",
+                        index,
+                    )
+        for index, entry in enumerate(self.gas):
+            points = [("drift", entry["drift"])] + [("region", c) for c in entry["region"] or []]
+            for key, value in points:
+                if value is not None and len(value) != dim:
+                    raise where.error(
+                        ["gas", key],
+                        f"needs {dim} numbers per point in a {dim}D world, got {len(value)}",
+                        f"give {dim} numbers",
+                        index,
+                    )
+        vectors = {
+            "row": ("start", "direction", "velocity"),
+            "rack": ("apex", "direction", "velocity"),
+            "lattice": ("origin", "velocity", "shape"),
+            "pegs": ("top",),
+        }
+        for table, keys in vectors.items():
+            for index, entry in enumerate(getattr(self, table)):
+                for key in keys:
+                    value = entry[key]
+                    if value is not None and len(value) != dim:
+                        raise where.error(
+                            [table, key],
+                            f"has {len(value)} components for a {dim}D world",
+                            f"give {dim} numbers",
+                            index,
+                        )
+                direction = entry.get("direction")
+                if direction is not None and not any(direction):
+                    raise where.error(
+                        [table, "direction"], "is the zero vector", "give a direction", index
+                    )
+        for index, entry in enumerate(self.pegs):
+            if len(entry["spacing"]) != 2 or not all(v > 0 for v in entry["spacing"]):
+                raise where.error(
+                    ["pegs", "spacing"],
+                    f"must be [dx, dy] with both > 0, got {entry['spacing']!r}",
+                    "give the gap between pegs in a row and between rows [m]",
+                    index,
+                )
+            if entry["layout"] == "staggered" and entry["columns"] is None:
+                raise where.error(
+                    ["pegs", "columns"],
+                    "is required for layout = 'staggered'",
+                    "add columns = ... (pegs per row)",
+                    index,
+                )
+        for index, entry in enumerate(self.bodies):
+            for key in ("positions", "velocities"):
+                rows = entry[key]
+                if rows is not None and any(len(row) != dim for row in rows):
+                    raise where.error(
+                        ["bodies", key],
+                        f"rows must have {dim} numbers in a {dim}D world",
+                        f"write each as [x, y{', z' if dim == 3 else ''}]",
+                        index,
+                    )
+            if entry["velocities"] is not None and len(entry["velocities"]) != len(
+                entry["positions"]
+            ):
+                raise where.error(
+                    ["bodies", "velocities"],
+                    f"has {len(entry['velocities'])} rows for {len(entry['positions'])} positions",
+                    "give one velocity per position, or none",
+                    index,
+                )
+
+    def build(self) -> World:
+        """The :class:`carom.World` this scene describes (bodies placed, nothing run yet)."""
+        from carom.scene.build import build_world
+
+        return build_world(self)
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and check a scene file.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.toml`` scene file.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        The file is missing or unreadable, is not valid TOML (with its line and column), or
+        breaks a rule of ``docs/scenes.md`` (with the key and its line).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneError(f"{path}: no such scene file; check the path") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(f"{path}: cannot be read ({exc})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{path}: not valid TOML: {exc}; fix the syntax there") from None
+    return Scene.from_dict(data, str(path), text)
+
+
+def builtin_scenes() -> dict[str, Path]:
+    """The scenes that ship with carom (``carom/scenarios/*.toml``), by name."""
+    folder = Path(__file__).parent.parent / "scenarios"
+    return {path.stem: path for path in sorted(folder.glob("*.toml"))}
+
+
+def find_scene(name_or_path: str | Path) -> Path:
+    """A scene file: ``name_or_path`` itself if it is a file, else the built-in scene of that
+    name; a :class:`SceneError` naming both possibilities otherwise."""
+    path = Path(name_or_path)
+    if path.is_file():
+        return path
+    builtin = builtin_scenes()
+    if str(name_or_path) in builtin:
+        return builtin[str(name_or_path)]
+    raise SceneError(
+        f"{name_or_path}: no such scene file, and no built-in scene of that name; check the "
+        f"path, or use one of: {', '.join(builtin)} (carom scenes lists them)"
+    )
+
+
+def _check_table(
+    table: str, entry: Mapping[str, Any], where: Locator, index: int | None
+) -> dict[str, Any]:
+    schema = SCHEMA[table]
+    result: dict[str, Any] = {}
+    for key, value in entry.items():
+        if key not in schema:
+            raise where.error(
+                [table, key], "is not a known key", f"use one of {', '.join(schema)}", index
+            )
+        problem = schema[key][0](value)
+        if problem:
+            raise where.error([table, key], problem, "", index)
+        result[key] = value
+    for key, (_, required, default) in schema.items():
+        if key not in result:
+            if required:
+                raise where.error(
+                    [table, key], "is required", f"add {key} = ... to this table", index
+                )
+            result[key] = default
+    return result

@@ -1,0 +1,267 @@
+"""The scene schema: every table and key, its check, whether it is required and its default;
+and how a scene's errors are worded (file, line, table, key, what is wrong, the fix)."""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable
+from typing import Any
+
+from carom.errors import CaromError
+
+__all__ = ["ARRAYS", "GENERATORS", "SCHEMA", "Locator", "SceneError"]
+
+
+class SceneError(CaromError):
+    """A scene that cannot be used, with the file, key and line it concerns."""
+
+
+# -- the schema: key -> (check, required, default) per table ----------------------------------
+
+Check = Callable[[Any], str | None]  # returns what is wrong, or None
+
+
+def _number(value: Any) -> str | None:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return f"must be a number, got {_show(value)}"
+    if not math.isfinite(value):
+        return f"must be finite, got {value!r}"
+    return None
+
+
+def _positive(value: Any) -> str | None:
+    return _number(value) or (None if value > 0 else f"must be > 0, got {value!r}")
+
+
+def _unit_interval(value: Any) -> str | None:
+    return _number(value) or (None if 0 <= value <= 1 else f"must lie in [0, 1], got {value!r}")
+
+
+def _integer(value: Any) -> str | None:
+    if isinstance(value, bool) or not isinstance(value, int):
+        return f"must be an integer, got {_show(value)}"
+    return None
+
+
+def _dimension(value: Any) -> str | None:
+    return _integer(value) or (None if value in (2, 3) else f"must be 2 or 3, got {value!r}")
+
+
+def _choice(*options: str) -> Check:
+    def check(value: Any) -> str | None:
+        if value in options:
+            return None
+        return f"must be one of {', '.join(repr(o) for o in options)}, got {_show(value)}"
+
+    return check
+
+
+def _text(value: Any) -> str | None:
+    return None if isinstance(value, str) and value else f"must be a name, got {_show(value)}"
+
+
+def _vector(value: Any) -> str | None:
+    if not isinstance(value, list) or not value:
+        return f"must be a list of numbers, got {_show(value)}"
+    for item in value:
+        problem = _number(item)
+        if problem:
+            return f"must be a list of numbers: an entry {problem}"
+    return None
+
+
+def _number_or_vector(value: Any) -> str | None:
+    return _vector(value) if isinstance(value, list) else _number(value)
+
+
+def _rows(value: Any) -> str | None:
+    if not isinstance(value, list) or not value:
+        return f"must be a list of [x, y(, z)] rows, got {_show(value)}"
+    for row in value:
+        if _vector(row):
+            return f"must be a list of [x, y(, z)] rows of numbers, got {_show(row)}"
+    return None
+
+
+def _positive_or_list(value: Any) -> str | None:
+    if isinstance(value, list):
+        problem = _vector(value)
+        if problem:
+            return problem
+        bad = [v for v in value if not v > 0]
+        return f"must be > 0, got {bad[0]!r}" if bad else None
+    return _positive(value)
+
+
+def _show(value: Any) -> str:
+    kind = type(value).__name__
+    text = repr(value)
+    return f"{text[:40]}{'...' if len(text) > 40 else ''} ({kind})"
+
+
+def _boolean(value: Any) -> str | None:
+    return None if isinstance(value, bool) else f"must be true or false, got {_show(value)}"
+
+
+def _count(value: Any) -> str | None:
+    return _integer(value) or (None if value >= 1 else f"must be >= 1, got {value!r}")
+
+
+def _counts(value: Any) -> str | None:
+    if not isinstance(value, list) or not value or any(_count(v) for v in value):
+        return f"must be a list of whole numbers >= 1, got {_show(value)}"
+    return None
+
+
+def _not_negative(value: Any) -> str | None:
+    return _number(value) or (None if value >= 0 else f"must be >= 0, got {value!r}")
+
+
+def _region(value: Any) -> str | None:
+    if not isinstance(value, list) or len(value) != 2 or any(_vector(c) for c in value):
+        return f"must be [[low corner], [high corner]], got {_show(value)}"
+    return None
+
+
+SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
+    "scene": {
+        "title": (_text, False, None),
+        "description": (_text, False, None),
+    },
+    "world": {
+        "dimension": (_dimension, True, None),
+        "box": (_vector, True, None),
+        "boundary": (_choice("walls", "periodic"), False, "walls"),
+        "gravity": (_vector, False, None),
+        "wall_restitution": (_number_or_vector, False, 1.0),
+        "tc": (_positive, False, 1e-6),
+        "combine": (_choice("mean", "min", "max", "geometric", "product"), False, "mean"),
+    },
+    "materials": {
+        "name": (_text, True, None),
+        "restitution": (_unit_interval, True, None),
+        "beta": (_number, False, None),
+        "friction": (_number, False, None),
+        "beta0": (_number, False, None),
+    },
+    "bodies": {
+        "positions": (_rows, True, None),
+        "velocities": (_rows, False, None),
+        "radius": (_positive_or_list, True, None),
+        "mass": (_positive_or_list, False, 1.0),
+        "material": (_text, False, None),
+        "static": (_boolean, False, False),
+    },
+    "row": {
+        "count": (_count, True, None),
+        "start": (_vector, True, None),
+        "direction": (_vector, False, None),
+        "spacing": (_positive, False, None),
+        "radius": (_positive, True, None),
+        "mass": (_positive, False, 1.0),
+        "velocity": (_vector, False, None),
+        "material": (_text, False, None),
+    },
+    "rack": {
+        "rows": (_count, True, None),
+        "apex": (_vector, True, None),
+        "direction": (_vector, False, None),
+        "gap": (_not_negative, False, 0.0),
+        "radius": (_positive, True, None),
+        "mass": (_positive, False, 1.0),
+        "velocity": (_vector, False, None),
+        "material": (_text, False, None),
+    },
+    "lattice": {
+        "shape": (_counts, True, None),
+        "origin": (_vector, True, None),
+        "spacing": (_positive, True, None),
+        "radius": (_positive, True, None),
+        "mass": (_positive, False, 1.0),
+        "velocity": (_vector, False, None),
+        "temperature": (_not_negative, False, 0.0),
+        "seed": (_integer, False, 0),
+        "material": (_text, False, None),
+    },
+    "pegs": {
+        "rows": (_count, True, None),
+        "top": (_vector, True, None),
+        "spacing": (_vector, True, None),
+        "layout": (_choice("triangle", "staggered"), False, "triangle"),
+        "columns": (_count, False, None),
+        "radius": (_positive, True, None),
+        "material": (_text, False, None),
+    },
+    "gas": {
+        "count": (_count, True, None),
+        "packing": (_positive, True, None),
+        "radius": (_positive, True, None),
+        "mass": (_positive, False, 1.0),
+        "temperature": (_positive, False, 1.0),
+        "seed": (_integer, False, 0),
+        "material": (_text, False, None),
+        "region": (_region, False, None),
+        "drift": (_vector, False, None),
+    },
+    "run": {
+        "until": (_positive, True, None),
+        "frame_interval": (_positive, False, None),
+    },
+    "outputs": {
+        "trajectory": (_boolean, False, True),
+        "events": (_boolean, False, True),
+        "plots": (_boolean, False, True),
+        "animation": (_choice("mp4", "gif", "none"), False, "mp4"),
+    },
+}
+#: tables that may repeat ([[name]]); the generators place bodies in this order, after
+#: [[bodies]] and before [[gas]] (which avoids everything placed before it)
+GENERATORS = ("row", "rack", "lattice", "pegs")
+ARRAYS = ("materials", "bodies", *GENERATORS, "gas")
+
+
+class Locator:
+    """Finds the line of a key in the TOML text (best effort) and words the message."""
+
+    def __init__(self, source: str, text: str) -> None:
+        self.source = source
+        self.lines = text.splitlines()
+
+    def line_of(self, path: list[str], index: int | None) -> int | None:
+        table = path[0]
+        header = re.compile(
+            r"^\s*\[\[\s*" + re.escape(table) + r"\s*\]\]"
+            if table in ARRAYS
+            else r"^\s*\[\s*" + re.escape(table) + r"\s*\]"
+        )
+        seen = -1
+        start = None
+        for number, line in enumerate(self.lines):
+            if header.match(line):
+                seen += 1
+                if index is None or seen == index:
+                    start = number
+                    break
+        if start is None:
+            return None
+        if len(path) == 1:
+            return start + 1
+        key = re.compile(r"^\s*" + re.escape(path[1]) + r"\s*=")
+        for number in range(start + 1, len(self.lines)):
+            if self.lines[number].lstrip().startswith("["):
+                break
+            if key.match(self.lines[number]):
+                return number + 1
+        return start + 1
+
+    def error(
+        self, path: list[str], problem: str, fix: str, index: int | None = None
+    ) -> SceneError:
+        table = path[0]
+        name = f"[[{table}]] #{index + 1}" if index is not None else f"[{table}]"
+        if len(path) > 1:
+            name += f" {path[1]}"
+        line = self.line_of(path, index)
+        where = f"{self.source}:{line}" if line is not None else self.source
+        return SceneError(f"{where}: {name}: {problem}" + (f"; {fix}" if fix else ""))
