@@ -42,12 +42,12 @@ def lattice_gas(dim: int, n: int, packing: float, seed: int = 1) -> carom.World:
 
 def memory_per_particle(world: carom.World) -> float:
     """Bytes of every model and state array, per particle (the event log excluded)."""
-    assert world._model is not None
-    assert world._state is not None
+    engine = world.engine
+    assert engine is not None
     total = 0
-    for value in world._model._asdict().values():
+    for value in engine.model._asdict().values():
         total += getattr(value, "nbytes", 0)
-    for name, value in world._state._asdict().items():
+    for name, value in engine.state._asdict().items():
         if not name.startswith("log_"):
             total += value.nbytes
     return total / world.n_bodies
@@ -72,7 +72,7 @@ def measure(dim: int, n: int, packing: float, repeats: int) -> dict[str, float]:
         elapsed = time.perf_counter() - start
         result = {
             "collisions_per_s": world.stats.collisions / elapsed,
-            "events_per_s": world.stats.events / elapsed,
+            "events_per_s": world.stats.events_processed / elapsed,
             "collisions": float(world.stats.collisions),
             "seconds": elapsed,
         }

@@ -108,7 +108,8 @@ def main() -> None:
     for n in args.sizes:
         world = layouts.lattice_gas(args.dim, round(n ** (1 / args.dim)), args.packing, seed=1)
         world.run(until=0.3, log=False)
-        model, state = world._model, world._state
+        engine = world.build()
+        model, state = engine.model, engine.state
         counters = np.zeros(8, np.int64)
         run_prof(model, state, state.clock[0] + 0.01, 10**12, False, counters)  # compile
         counters[:] = 0

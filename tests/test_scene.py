@@ -17,7 +17,7 @@ GOOD = """\
 dimension = 2
 box = [4.0, 2.0]
 boundary = "walls"
-wall_restitution = 0.9
+walls = 0.9
 
 [[materials]]
 name = "rubber"
@@ -135,8 +135,8 @@ BAD_SCENES: list[tuple[tuple[str, str], str]] = [
     ),
     # wall restitutions: neither one number nor one per wall
     (
-        ("wall_restitution = 0.9", "wall_restitution = [0.9, 0.9, 0.9]"),
-        r"\[world\]: wall_restitution must be one number or 4 \(lower and upper wall",
+        ("walls = 0.9", "walls = [0.9, 0.9, 0.9]"),
+        r"\[world\] walls: must be one restitution or material name, or one per wall face",
     ),
     # a gas that cannot fit
     (

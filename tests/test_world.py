@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import json
 import math
+import tracemalloc
 
 import numpy as np
 import pytest
 
 import carom
 from carom import CaromError
+from carom.engines.base import KIND_PAIR, KIND_WALL
+from carom.scene import layouts
 
 EPS = float(np.finfo(np.float64).eps)
 
@@ -21,7 +24,7 @@ EPS = float(np.finfo(np.float64).eps)
         (lambda: carom.World(2, [1.0, -1.0]), r"box must be 2 positive lengths"),
         (lambda: carom.World(2, [1, 1], "open"), r"boundary must be 'walls' or 'periodic'"),
         (lambda: carom.World(2, [1, 1], gravity=[0, 0, -9.8]), r"gravity must be 2 finite"),
-        (lambda: carom.World(2, [1, 1], wall_restitution=1.5), r"wall_restitution must lie"),
+        (lambda: carom.World(2, [1, 1], walls=1.5), r"restitution must lie"),
         (lambda: carom.World(2, [1, 1], t_c=-1.0), r"t_c must be >= 0"),
         (lambda: carom.World(2, [1, 1], combine="sum"), r"combine must be one of"),  # type: ignore[arg-type]
         (lambda: carom.Material(restitution=2.0), r"restitution must lie in \[0, 1\]"),
@@ -43,6 +46,13 @@ def test_bad_spheres_are_refused_and_named() -> None:
         world.add_spheres([[0.2, 0.2], [0.5, 0.5]], [[1.0, 0.0]] * 3, radius=0.1)
     with pytest.raises(CaromError, match=r"mass must be positive"):
         world.add_spheres([[0.5, 0.5]], radius=0.1, mass=0.0)
+    # (these two were accepted: negative rotational energy, and an energy of NaN)
+    with pytest.raises(CaromError, match=r"inertia_factor must lie in \(0, 1\]"):
+        world.add_spheres([[0.5, 0.5]], radius=0.1, inertia_factor=-1.0)
+    with pytest.raises(CaromError, match=r"angular_velocities\[0\] = \[0.0, 0.0, nan\] is not"):
+        world.add_spheres([[0.5, 0.5]], radius=0.1, angular_velocities=math.nan)
+    with pytest.raises(CaromError, match=r"angular_velocities must have shape \(2,\)"):
+        world.add_spheres([[0.2, 0.5], [0.5, 0.5]], radius=0.1, angular_velocities=[1, 2, 3])
 
 
 def test_overlapping_spheres_at_the_start_are_refused() -> None:
@@ -55,8 +65,12 @@ def test_overlapping_spheres_at_the_start_are_refused() -> None:
 def test_touching_spheres_are_accepted() -> None:
     # exactly touching (Newton's cradle) is legal; round-off overlaps of 1e-17 m are not errors
     world = carom.World(3, [1.0, 1.0, 1.0])
-    world.add_spheres([[0.1 * k + 0.2, 0.5, 0.5] for k in range(5)], radius=0.05)
+    start = np.array([[0.1 * k + 0.2, 0.5, 0.5] for k in range(5)])
+    world.add_spheres(start, radius=0.05)
     world.run(until=0.1)
+    # at rest and touching: nothing approaches, so nothing collides and nothing moves
+    assert world.stats.collisions == 0
+    assert world.positions.tobytes() == start.tobytes()
 
 
 def test_spheres_outside_the_box_or_behind_a_plane_are_refused() -> None:
@@ -83,9 +97,9 @@ def test_periodic_box_too_small_and_bad_run_arguments() -> None:
     world.run(until=1.0)
     with pytest.raises(CaromError, match=r"until must be a finite time >= the current time"):
         world.run(until=0.5)
-    with pytest.raises(CaromError, match=r"frame_dt must be a positive time"):
-        world.run(until=2.0, frame_dt=0.0)
-    with pytest.raises(CaromError, match=r"callback needs frame_dt"):
+    with pytest.raises(CaromError, match=r"frame_interval must be a positive time"):
+        world.run(until=2.0, frame_interval=0.0)
+    with pytest.raises(CaromError, match=r"callback needs frame_interval"):
         world.run(until=2.0, callback=print)
     with pytest.raises(CaromError, match=r"log must be True, False or body indices"):
         world.run(until=2.0, log=[5])
@@ -116,6 +130,25 @@ def test_checkpoint_from_another_state_layout(tmp_path) -> None:  # type: ignore
         carom.World.load(path)
 
 
+def test_checkpoint_of_the_older_format_is_refused_by_name(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # carom before the two-engine layout wrote format 'carom-world' version 3 (no orientations)
+    path = tmp_path / "v3.npz"
+    np.savez(path, meta=np.array(json.dumps({"format": "carom-world", "version": 3})))
+    with pytest.raises(CaromError, match=r"written by an older carom .*'carom-world', version 3"):
+        carom.World.load(path)
+
+
+def test_truncated_checkpoint_is_refused(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    world = carom.World(2, [2.0, 2.0])
+    world.add_spheres([[0.5, 0.5], [1.5, 1.5]], [[1.0, 0.0], [0.0, 1.0]], radius=0.1)
+    world.run(until=0.5)
+    path = tmp_path / "cut.npz"
+    world.save(path)
+    path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    with pytest.raises(CaromError, match=r"checkpoint .*cut.npz"):
+        carom.World.load(path)
+
+
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize(
     "material", [carom.Material(0.7, beta=0.4), carom.Material(0.8, friction=0.2, beta0=0.1)]
@@ -137,12 +170,13 @@ def test_rough_laws_in_the_engine_match_collide(dim: int, material: carom.Materi
         radius=a,
         mass=[1.0, 2.0],
         material=material,
-        spins=spins if dim == 3 else spins[:, 2],
+        angular_velocities=spins if dim == 3 else spins[:, 2],
     )
-    while len(world.events) == 0:  # shell rebuilds may come first; then their collision
-        world.step()
-    event = world.events[0]
-    assert (event["a"], event["b"]) in ((0, 1), (1, 0))
+    while len(world.collisions) == 0:  # shell rebuilds may come first; then their collision
+        world.run_events(log=True)
+    event = world.collisions[0]
+    assert event["kind"] == KIND_PAIR
+    assert (event["body"], event["partner"]) in ((0, 1), (1, 0))
     t = event["time"]
     y1 = x1 + np.array([1.0, 0.1, -0.1][:dim]) * t
     y2 = x2 + np.array([-0.5, 0.0, 0.2][:dim]) * t
@@ -168,7 +202,7 @@ def test_rough_laws_in_the_engine_match_collide(dim: int, material: carom.Materi
     )  # type: ignore[arg-type]
     tol = 64 * EPS * 10
     np.testing.assert_allclose(world.velocities, [expected.v1, expected.v2], atol=tol, rtol=0)
-    got_spins = world.spins if dim == 3 else world.spins[:, 2]
+    got_spins = world.angular_velocities if dim == 3 else world.angular_velocities[:, 2]
     np.testing.assert_allclose(got_spins, [expected.w1, expected.w2], atol=tol * 50, rtol=0)
 
 
@@ -205,27 +239,82 @@ def test_log_can_be_filtered_and_switched_off() -> None:
         return w
 
     everything = world()
-    everything.run(until=1.0)
+    everything.run(until=1.0, log=True)
     only_two = world()
     only_two.run(until=1.0, log=[2])
     silent = world()
     silent.run(until=1.0, log=False)
-    involves_two = (everything.events["a"] == 2) | (everything.events["b"] == 2)
-    assert only_two.events.tobytes() == everything.events[involves_two].tobytes()
-    assert len(silent.events) == 0
+    log = everything.collisions
+    involves_two = (log["body"] == 2) | ((log["kind"] == KIND_PAIR) & (log["partner"] == 2))
+    assert involves_two.any()  # the filter has work to do
+    assert not involves_two.all()
+    assert only_two.collisions.tobytes() == log[involves_two].tobytes()
+    assert len(silent.collisions) == 0
     assert silent.stats.collisions == everything.stats.collisions  # it still ran
-    assert everything.describe_partner(-1) == "wall x-"
-    assert everything.describe_partner(-4) == "wall y+"
+    assert everything.describe_partner(KIND_WALL, 0) == "wall x-"
+    assert everything.describe_partner(KIND_WALL, 3) == "wall y+"
 
 
 def test_step_moves_to_the_next_event() -> None:
     world = carom.World(2, [1.0, 1.0])
     world.add_spheres([[0.5, 0.5]], [[1.0, 0.0]], radius=0.1)
-    world.step()
-    events = world.events
-    assert len(events) <= 1  # a shell rebuild may come first
-    while len(world.events) == 0:
-        world.step()
+    world.run_events(log=True)
+    assert len(world.collisions) <= 1  # a shell rebuild may come first
+    while len(world.collisions) == 0:
+        world.run_events(log=True)
     # the wall x+ at 1 - 0.1: reached after 0.4 s
     assert world.time == pytest.approx(0.4, abs=1e-15)
-    assert world.events[0]["b"] == -2
+    assert (world.collisions[0]["kind"], world.collisions[0]["partner"]) == (KIND_WALL, 1)
+
+
+def _gas_2d() -> carom.World:
+    return layouts.lattice_gas(2, 20, 0.3, seed=3)  # 400 disks: about 900 collisions a second
+
+
+def test_collisions_are_not_kept_unless_asked() -> None:
+    # regression: World.run kept every collision in memory by default (64 B each: 10^8
+    # collisions needed 6.4 GB); now the default keeps none
+    world = _gas_2d()
+    world.run(until=5.0)
+    assert world.stats.collisions > 1000
+    assert len(world.collisions) == 0
+
+
+@pytest.mark.needs_jit
+def test_streamed_collisions_keep_memory_flat() -> None:
+    # with on_collisions every collision passes through and nothing stays: a run of ten times
+    # as many collisions allocates no more at its peak than a short one (the engine's log
+    # buffer is fixed at 65536 records, and each block handed over is dropped after use)
+    def peak(until: float) -> tuple[int, int]:
+        world = layouts.lattice_gas(2, 40, 0.5, seed=3)  # 1600 disks
+        world.prepare()
+        seen = [0]
+
+        def count(block: np.ndarray) -> None:
+            seen[0] += block.size
+
+        tracemalloc.start()
+        world.run(until=until, on_collisions=count)
+        _, top = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+        assert seen[0] == world.stats.collisions + world.stats.wall_collisions
+        return top, seen[0]
+
+    short, n_short = peak(60.0)
+    long, n_long = peak(600.0)
+    assert n_short > 4 * 65536  # the short run already fills the log buffer several times
+    assert n_long > 9 * n_short
+    # kept, the extra collisions would take 64 B each, (n_long - n_short) * 64 > 100 MB;
+    # streamed, the peaks differ by less than one buffer's block, 65536 * 64 B = 4.2 MB
+    assert abs(long - short) < 65536 * 64
+
+
+def test_the_in_memory_log_is_bounded(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(carom.world, "LOG_LIMIT", 100)
+    world = _gas_2d()
+    with pytest.warns(carom.CaromWarning, match=r"collision log is full \(100 collisions"):
+        world.run(until=1.0, log=True)
+    total = world.stats.collisions + world.stats.wall_collisions
+    assert len(world.collisions) == 100
+    assert world.collisions_dropped == total - 100
+    assert np.all(np.diff(world.collisions["time"]) >= 0)  # the first 100, in time order

@@ -8,7 +8,7 @@ the :class:`World` and its engines (:mod:`carom.engines`), and scene files (:fun
 
 from __future__ import annotations
 
-from carom.errors import CaromError
+from carom.errors import CaromError, CaromWarning
 from carom.laws.spheres import CollisionResult, collide
 from carom.scene import Scene, SceneError, load_scene
 from carom.studies import hecker
@@ -16,6 +16,7 @@ from carom.world import Frame, Material, World
 
 __all__ = [
     "CaromError",
+    "CaromWarning",
     "CollisionResult",
     "Frame",
     "Material",

@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from carom import __version__
+from carom._text import plural
 from carom.errors import CaromError
 
 __all__ = ["main"]
@@ -259,6 +260,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from carom.jit import kernels_cached
     from carom.run.runner import Outputs, RunInterrupted, run_scene, with_overrides
     from carom.scene import find_scene, load_scene
 
@@ -272,6 +274,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
         plots=False if args.no_plots else None,
         animation=args.animation,
     )
+    if not kernels_cached():
+        print(
+            "carom: compiling the engine's kernels (once per install; about a minute)...",
+            file=sys.stderr,
+            flush=True,
+        )
     try:
         report = run_scene(
             args.scene,
@@ -292,10 +300,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
         return 130
     rate = report.collisions / report.wall_seconds if report.wall_seconds > 0 else float("inf")
     resumed = "" if report.resumed_at is None else f" (resumed at {report.resumed_at:g} s)"
+    prepared = (
+        f"; kernels compiled or loaded in {report.prepare_seconds:.1f} s before it"
+        if report.prepare_seconds >= 1.0
+        else ""
+    )
     print(
-        f"{report.title}: {report.bodies} bodies, {report.simulated:g} s simulated{resumed}, "
-        f"{report.collisions} collisions and {report.wall_collisions} at walls "
-        f"in {report.wall_seconds:.2f} s ({rate:.3g} collisions/s)"
+        f"{report.title}: {plural(report.bodies, 'body', 'bodies')}, {report.simulated:g} s "
+        f"simulated{resumed}, {plural(report.collisions, 'collision')} and "
+        f"{report.wall_collisions} at walls in {report.wall_seconds:.2f} s "
+        f"({rate:.3g} collisions/s){prepared}"
     )
     print(f"wrote {', '.join(report.written)} to {args.out}/")
     return 0
@@ -318,7 +332,7 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
 
 def _cmd_cases(args: argparse.Namespace) -> int:
     from carom.io.outdir import check_output, staged_output
-    from carom.io.results import case_document, write_case_study
+    from carom.run.study import case_document, write_case_study
     from carom.studies.two_spheres import conclusions, format_details, format_table, run_study
 
     if args.out is not None:
@@ -365,10 +379,13 @@ def _have_matplotlib() -> bool:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the carom command; return the exit code."""
     parser = _build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit:
+        _flush_stdout()  # --help and --version print, then exit: to a reader that may be gone
+        raise
     try:
         code: int = args.handler(args)
-        return code
     except CaromError as exc:
         if args.debug:
             traceback.print_exc()
@@ -378,7 +395,24 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("carom: interrupted; nothing was written", file=sys.stderr)
         return 130
     except BrokenPipeError:
-        # the reader went away (carom cases | head): stop quietly, as other tools do
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
+        _reader_gone()
         return 0
+    _flush_stdout()
+    return code
+
+
+def _flush_stdout() -> None:
+    """Flush standard output now, so that a reader that went away (carom cases | head) is
+    found here and not when the interpreter flushes at exit (exit code 120, a traceback)."""
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _reader_gone()
+
+
+def _reader_gone() -> None:
+    """The reader of standard output went away: stop quietly, as other tools do, sending
+    whatever is still buffered nowhere."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)

@@ -1,8 +1,8 @@
-"""The one exception type carom raises for bad input."""
+"""The exception carom raises for bad input, and its one warning."""
 
 from __future__ import annotations
 
-__all__ = ["CaromError"]
+__all__ = ["CaromError", "CaromWarning"]
 
 
 class CaromError(ValueError):
@@ -10,3 +10,7 @@ class CaromError(ValueError):
 
     A subclass of :class:`ValueError`, so ``except ValueError`` catches it too.
     """
+
+
+class CaromWarning(UserWarning):
+    """Something the user should know that does not stop the work (a full in-memory log)."""

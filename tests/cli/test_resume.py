@@ -32,7 +32,7 @@ def _stop_after(monkeypatch: pytest.MonkeyPatch, polls: int) -> None:
         seen["n"] += 1
         return seen["n"] >= polls
 
-    monkeypatch.setattr(runner._Stop, "__bool__", stop_requested)
+    monkeypatch.setattr(runner.Stop, "__bool__", stop_requested)
 
 
 def _without_performance(path: Path) -> dict[str, object]:
@@ -103,7 +103,7 @@ def test_resume_refuses_what_it_cannot_continue(
 
 
 def test_the_first_ctrl_c_asks_to_stop_and_the_second_interrupts() -> None:
-    with runner._stop_on_ctrl_c() as stop:
+    with runner.stop_on_ctrl_c() as stop:
         assert not stop
         signal.raise_signal(signal.SIGINT)
         assert stop  # the run will stop at the next frame, after a checkpoint

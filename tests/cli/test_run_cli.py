@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from carom.run.runner import Outputs
 from tests.cli.helpers import carom
 from tests.test_scene import BAD_SCENES, GOOD
 
@@ -30,13 +31,20 @@ def test_run_a_bouncing_ball_and_check_its_events(tmp_path: Path) -> None:
     # -e u; each later flight lasts 2 e^k sqrt(2 h0 / g) (closed forms, to round-off)
     g, h0, e = 9.81, 1.5, 0.8
     t1, u1 = math.sqrt(2 * h0 / g), math.sqrt(2 * g * h0)
-    assert rows[0]["partner"] == "wall y-"
+    # numeric columns: partner_kind "wall", partner 2 = the lower wall of y (2 k + 0, k = 1);
+    # the ball has the default mass, 1 kg, so its impulse is (1 + e) u1 in N s
+    assert (rows[0]["partner_kind"], int(rows[0]["body"]), int(rows[0]["partner"])) == (
+        "wall",
+        0,
+        2,
+    )
     assert float(rows[0]["time_s"]) == pytest.approx(t1, rel=1e-12, abs=0.0)
     assert float(rows[0]["un_before_m_s"]) == pytest.approx(-u1, rel=1e-12, abs=0.0)
     assert float(rows[0]["un_after_m_s"]) == pytest.approx(e * u1, rel=1e-12, abs=0.0)
     assert float(rows[1]["time_s"]) - float(rows[0]["time_s"]) == pytest.approx(
         2 * e * t1, rel=1e-12, abs=0.0
     )
+    assert float(rows[0]["impulse_y_Ns"]) == pytest.approx((1 + e) * u1, rel=1e-12, abs=0.0)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["wall_collisions"] == len(rows)
     assert summary["simulated_time_s"] == 2.0
@@ -293,3 +301,30 @@ def test_each_bad_scene_ends_the_command_with_one_message(
     assert re.search(message, captured.err)
     assert not out.exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.toml"]  # no work directory
+
+
+def test_first_run_says_it_compiles_and_times_the_run_apart(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # regression: the first `make demo` said "case 1: 1 collisions in 33.11 s", the kernels'
+    # compile time reported as the run's. Now a run whose kernels are not cached says first
+    # that they are being compiled, and the run's time excludes preparing them.
+    import carom.jit
+    from carom.cli import main
+    from carom.run.runner import run_scene
+
+    monkeypatch.setattr(carom.jit, "kernels_cached", lambda: False)
+    assert main(["run", "case-1", "--out", str(tmp_path / "a"), "--no-trajectory",
+                 "--no-plots", "--animation", "none", "--quiet"]) == 0  # fmt: skip
+    out, err = capsys.readouterr()
+    assert "compiling the engine's kernels (once per install" in err
+    assert "case 1" in out.lower()
+    assert "2 bodies, 1 s simulated, 1 collision and 0 at walls" in out
+    report = run_scene(
+        "case-1",
+        tmp_path / "b",
+        outputs=Outputs(trajectory=False, plots=False, animation="none"),
+        progress=False,
+    )
+    assert report.prepare_seconds > 0.0
+    assert report.collisions == 1

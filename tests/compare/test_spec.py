@@ -18,7 +18,7 @@ def _two(restitutions, combine="mean", walls=1.0):
                 "dimension": 2,
                 "box": [2.0, 1.0],
                 "combine": combine,
-                "wall_restitution": walls,
+                "walls": walls,
             },
             "materials": [{"name": f"m{k}", "restitution": e} for k, e in enumerate(restitutions)],
             "bodies": [

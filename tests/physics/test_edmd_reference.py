@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import carom
+from carom.engines.base import KIND_PAIR, KIND_WALL
 from carom.reference.edmd import reference_events
 
 CASES = [
@@ -41,7 +42,7 @@ def random_system(dim: int, n: int, gravity: bool, seed: int):  # type: ignore[n
 
 
 def make_world(dim, periodic, g, e, x, v, radius, mass, box):  # type: ignore[no-untyped-def]
-    world = carom.World(dim, box, "periodic" if periodic else "walls", g, wall_restitution=e)
+    world = carom.World(dim, box, "periodic" if periodic else "walls", g, walls=e)
     for i in range(len(x)):
         world.add_spheres(x[i], v[i], radius=radius[i], mass=mass[i], restitution=e)
     return world
@@ -51,6 +52,15 @@ def same_partners(ref_a: int, ref_b: int, a: int, b: int) -> bool:
     if ref_b < 0:
         return (ref_a, ref_b) == (a, b)
     return {ref_a, ref_b} == {a, b}
+
+
+def face_code(record: np.void, dim: int) -> int:
+    """A collision's partner as the reference numbers it: a body, or ``-1 - face`` with the
+    walls' faces 0 .. 2 dim - 1 and the planes after them."""
+    kind, partner = int(record["kind"]), int(record["partner"])
+    if kind == KIND_PAIR:
+        return partner
+    return -1 - (partner if kind == KIND_WALL else 2 * dim + partner)
 
 
 @pytest.mark.parametrize(("dim", "periodic", "gravity", "e"), CASES)
@@ -73,11 +83,11 @@ def test_same_event_sequence(dim: int, periodic: bool, gravity: bool, e: float, 
     )
     assert len(ref) == n_events
     world = make_world(dim, periodic, g, e, x, v, radius, mass, box)
-    world.run(until=ref[-1].time * (1 + 1e-9))
-    events = world.events
+    world.run(until=ref[-1].time * (1 + 1e-9), log=True)
+    events = world.collisions
     assert len(events) == n_events
     for k, (r, f) in enumerate(zip(ref, events, strict=True)):
-        assert same_partners(r.a, r.b, int(f["a"]), int(f["b"]))
+        assert same_partners(r.a, r.b, int(f["body"]), face_code(f, dim))
         # round-off (1e-16) amplified about tenfold per collision (measured, periodic 3D):
         # below 1e-12 for the first 8 events, and still far below 1e-9 at the 25th
         assert abs(f["time"] - r.time) <= (1e-12 if k < 8 else 1e-9) * r.time
@@ -107,11 +117,11 @@ def test_every_prediction_shadowed(dim: int, periodic: bool, gravity: bool, e: f
             n_events=1,
             resting=resting,
         )
-        before = len(world.events)
-        while len(world.events) == before:  # skip neighbour-list rebuilds
-            world.step(log=True)
-        got = world.events[-1]
+        before = len(world.collisions)
+        while len(world.collisions) == before:  # skip neighbour-list rebuilds
+            world.run_events(log=True)
+        got = world.collisions[-1]
         expected_time = now + ref[0].time
-        assert same_partners(ref[0].a, ref[0].b, int(got["a"]), int(got["b"]))
+        assert same_partners(ref[0].a, ref[0].b, int(got["body"]), face_code(got, dim))
         assert abs(got["time"] - expected_time) <= 1e-12 * max(expected_time, 1.0)
         checked += 1

@@ -12,7 +12,7 @@ import shutil
 from pathlib import Path
 
 import carom
-from carom._jit import KERNEL_PACKAGES, kernel_cache_dir, kernel_sources
+from carom.jit import KERNEL_PACKAGES, kernel_sources, kernel_tag
 
 ROOT = Path(carom.__file__).parent
 
@@ -20,13 +20,13 @@ ROOT = Path(carom.__file__).parent
 def test_editing_any_kernel_file_changes_the_cache_directory(tmp_path: Path) -> None:
     copy = tmp_path / "carom"
     shutil.copytree(ROOT, copy, ignore=shutil.ignore_patterns("__pycache__"))
-    before = kernel_cache_dir(copy)
+    before = kernel_tag(copy)
     for source in kernel_sources(copy):
         text = source.read_text()
         source.write_text(text + "\n# an edit\n")
-        assert kernel_cache_dir.__wrapped__(copy) != before, source  # type: ignore[attr-defined]
+        assert kernel_tag(copy) != before, source
         source.write_text(text)
-    assert kernel_cache_dir.__wrapped__(copy) == before  # type: ignore[attr-defined]
+    assert kernel_tag(copy) == before
 
 
 def test_every_kernel_lives_in_a_hashed_package() -> None:
@@ -40,10 +40,13 @@ def test_every_kernel_lives_in_a_hashed_package() -> None:
         if "njit" in names:
             assert path in hashed, path
     for path in hashed:
-        for node in ast.walk(ast.parse(path.read_text())):
+        tree = ast.parse(path.read_text())
+        if "njit" not in {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}:
+            continue  # a driver or NumPy code beside the kernels: imports what it likes
+        for node in ast.walk(tree):
             if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("carom."):
                 package = node.module.split(".")[1]  # type: ignore[union-attr]
-                assert package in (*KERNEL_PACKAGES, "_jit", "_inputs", "errors"), (
+                assert package in (*KERNEL_PACKAGES, "jit", "_inputs", "errors"), (
                     path,
                     node.module,
                 )

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from carom.errors import CaromError
-from carom.laws.kernels import LAW_SMOOTH
+from carom.materials import LAW_CODES, pair_table
 from carom.world import World
 
 __all__ = ["PeerScene", "factor_restitution"]
@@ -96,31 +96,32 @@ class PeerScene:
                 f"scene {name!r} has a periodic box; pymunk, pybullet and MuJoCo have no "
                 f"periodic boundary. Compare a walled scene instead (gas-2d, gas-3d)"
             )
-        model = world._build_model()  # caller's body order
-        if not np.all(model.mobile):
+        if not np.all(world.bodies.mobile):
             raise CaromError(
                 f"scene {name!r} has static bodies (pegs); carom compare handles moving "
                 f"spheres and walls only"
             )
-        if model.plane_point.shape[0]:
+        if world.planes:
             raise CaromError(
                 f"scene {name!r} has extra planes; carom compare handles the box walls only"
             )
-        if np.any(model.pair_law != LAW_SMOOTH):
+        table = pair_table(world.materials, world.combine, world.pair_overrides)
+        if np.any(table.law != LAW_CODES["smooth"]):
             raise CaromError(
                 f"scene {name!r} has rough or frictional materials (beta, friction); carom "
                 f"compare handles smooth spheres, the case every peer can be set up for"
             )
         n = world.n_bodies
-        material = model.material
-        pair = model.pair_e[material[:, None], material[None, :]]
-        walls = np.broadcast_to(model.face_e[: 2 * world.dim], (n, 2 * world.dim)).copy()
+        material = world.bodies.material
+        pair = table.e[material[:, None], material[None, :]]
+        wall_e = np.array([m.restitution for m in world.walls])
+        walls = np.broadcast_to(wall_e, (n, 2 * world.dim)).copy()
         dt = frame_interval if frame_interval is not None else until / 100.0
         return cls(
             name=name,
             dim=world.dim,
             box=world.box.copy(),
-            gravity=model.gravity.copy(),
+            gravity=world.gravity.copy(),
             positions=world.positions.copy(),
             velocities=world.velocities.copy(),
             radius=world.radii.copy(),

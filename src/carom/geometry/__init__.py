@@ -1,7 +1,7 @@
 """World-free geometry kernels: times of impact (and, for the rigid-body engine, contact
 manifolds), one algorithm per module, named ``<operation>_<shape1>_<shape2>``."""
 
-from carom._jit import kernel_cache
+from carom.jit import kernel_cache
 
 with kernel_cache():
-    from carom.geometry import toi  # noqa: F401
+    from carom.geometry import rotation, toi  # noqa: F401

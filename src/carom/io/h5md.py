@@ -7,13 +7,18 @@ Layout written (de Buyl et al., Comput. Phys. Commun. 185, 1546, 2014; nongnu.or
     /particles/all/box        dimension, boundary ("periodic" or "none" per axis), edges [m]
     /particles/all/position   step (F,) int64, time (F,) float64 [s], value (F, N, d) [m]
     /particles/all/velocity   same, value in [m s-1]
+    /particles/all/orientation       same, value (F, N) [rad] in 2D (angle about z), (F, N, 4)
+                              in 3D (unit quaternion w, x, y, z, body to world)
+    /particles/all/angular_velocity  same, value (F, N, 3) [rad s-1] (2D: about z, column 2)
+    /particles/all/shape      (N,) strings ("sphere")   time-independent
     /particles/all/radius     (N,) [m]    time-independent
     /particles/all/mass       (N,) [kg]   (inf for static bodies)
     /observables/kinetic_energy      step, time, value (F,) [J]
     /observables/potential_energy    same (gravity; zero without it) [J]
     /observables/dissipated_energy   same: lost in collisions since the start [J]
 
-Frames are appended as the run produces them (chunked, resizable datasets).
+Frames are appended as the run produces them (chunked, resizable datasets). The orientation,
+angular velocity and shape elements are carom's own (H5MD lets a program add elements).
 """
 
 from __future__ import annotations
@@ -27,12 +32,15 @@ import numpy as np
 
 from carom import __version__
 from carom.errors import CaromError
+from carom.shapes import SHAPE_NAMES
 from carom.world import Frame, World
 
-__all__ = ["ENERGIES", "H5MDWriter", "check_trajectory", "need_h5py"]
+__all__ = ["ELEMENTS", "ENERGIES", "H5MDWriter", "check_trajectory", "need_h5py"]
 
 #: the observables written with every frame, in joules
 ENERGIES = ("kinetic_energy", "potential_energy", "dissipated_energy")
+#: the per-body elements written with every frame
+ELEMENTS = ("position", "velocity", "orientation", "angular_velocity")
 
 
 def need_h5py() -> Any:
@@ -76,13 +84,22 @@ class H5MDWriter:
         kind = "periodic" if world.boundary == "periodic" else "none"
         box.attrs["boundary"] = np.array([kind] * self.dim, dtype=h5py.string_dtype())
         box.create_dataset("edges", data=world.box).attrs["unit"] = "m"
-        radius = particles.create_dataset("radius", data=world._radius)
+        radius = particles.create_dataset("radius", data=world.radii)
         radius.attrs["unit"] = "m"
-        particles.create_dataset("mass", data=world._mass).attrs["unit"] = "kg"
+        particles.create_dataset("mass", data=world.masses).attrs["unit"] = "kg"
+        shapes = [SHAPE_NAMES[int(code)] for code in world.bodies.shape]
+        particles.create_dataset("shape", data=np.array(shapes, dtype=h5py.string_dtype()))
+        orientation = (self.n,) if self.dim == 2 else (self.n, 4)
         observables = self.file.require_group("observables")
         self.groups = {
             "position": self._element(particles, "position", (self.n, self.dim), "m"),
             "velocity": self._element(particles, "velocity", (self.n, self.dim), "m s-1"),
+            "orientation": self._element(
+                particles, "orientation", orientation, "rad" if self.dim == 2 else ""
+            ),
+            "angular_velocity": self._element(
+                particles, "angular_velocity", (self.n, 3), "rad s-1"
+            ),
             **{name: self._element(observables, name, (), "J") for name in ENERGIES},
         }
 
@@ -95,8 +112,7 @@ class H5MDWriter:
         try:
             self.file = h5py.File(path, "r+")
             self.groups = {
-                "position": self.file["particles/all/position"],
-                "velocity": self.file["particles/all/velocity"],
+                **{name: self.file[f"particles/all/{name}"] for name in ELEMENTS},
                 **{name: self.file[f"observables/{name}"] for name in ENERGIES},
             }
         except (OSError, KeyError) as exc:
@@ -107,11 +123,12 @@ class H5MDWriter:
         self.dim, self.n = world.dim, world.n_bodies
         for group in self.groups.values():
             for dataset in ("step", "time", "value"):
-                if group[dataset].shape[0] < frames:
-                    self.file.close()
+                held = group[dataset].shape[0]
+                if held < frames:
+                    self.file.close()  # (the count was read first: a closed file reads nothing)
                     raise CaromError(
                         f"the trajectory {path} holds fewer frames than its checkpoint "
-                        f"({group[dataset].shape[0]} < {frames}); pass --force to start again"
+                        f"({held} < {frames}); pass --force to start again"
                     )
                 group[dataset].resize(frames, axis=0)
         self.frames = frames
@@ -143,7 +160,12 @@ class H5MDWriter:
         """Append one frame and its energies [J] (``kinetic_energy``, ``potential_energy``,
         ``dissipated_energy``)."""
         k = self.frames
-        values = [("position", frame.positions), ("velocity", frame.velocities)]
+        values = [
+            ("position", frame.positions),
+            ("velocity", frame.velocities),
+            ("orientation", frame.orientations),
+            ("angular_velocity", frame.angular_velocities),
+        ]
         for name, value in [*values, *((name, energies[name]) for name in ENERGIES)]:
             group = self.groups[name]
             for dataset in ("step", "time", "value"):
@@ -173,16 +195,16 @@ def check_trajectory(path: Path, world: World, frames: int) -> None:
     one equal to the world now; a CaromError if not (nothing half-written is kept)."""
     h5py = need_h5py()
     with h5py.File(path, "r") as f:
-        position = f["particles/all/position/value"]
-        velocity = f["particles/all/velocity/value"]
-        expected = (frames, world.n_bodies, world.dim)
+        now = world.frame()
+        last = {name: f[f"particles/all/{name}/value"] for name in ELEMENTS}
         ok = (
             tuple(f["h5md"].attrs["version"]) == (1, 1)
-            and position.shape == expected
-            and velocity.shape == expected
+            and all(d.shape[0] == frames for d in last.values())
             and f["particles/all/position/time"][-1] == world.time
-            and np.array_equal(position[-1], world.positions)
-            and np.array_equal(velocity[-1], world.velocities)
+            and np.array_equal(last["position"][-1], now.positions)
+            and np.array_equal(last["velocity"][-1], now.velocities)
+            and np.array_equal(last["orientation"][-1], now.orientations)
+            and np.array_equal(last["angular_velocity"][-1], now.angular_velocities)
         )
     if not ok:
         raise CaromError(f"the trajectory written to {path} does not read back as written")

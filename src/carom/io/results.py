@@ -8,45 +8,79 @@ import math
 from pathlib import Path
 from typing import Any
 
-from carom import __version__
-from carom.studies.two_spheres import MODELS, ROUND_OFF, Record, conclusions
+from numpy.typing import NDArray
+
+from carom.engines.base import KIND_PAIR, KIND_PLANE, KIND_WALL
+from carom.observables import kinetic_energy, momentum, potential_energy
 from carom.world import World
 
+#: the ``partner_kind`` column of events.csv, by kind code
+PARTNER_KINDS = {KIND_PAIR: "body", KIND_WALL: "wall", KIND_PLANE: "plane"}
+
 __all__ = [
-    "case_document",
+    "PARTNER_KINDS",
+    "EventsWriter",
     "summary",
-    "write_case_study",
-    "write_cases_csv",
-    "write_events_csv",
     "write_summary",
 ]
 
 
-def write_events_csv(world: World, path: Path) -> int:
-    """Write every logged collision of ``world`` to ``path``; return how many.
+class EventsWriter:
+    """Write collisions to a CSV file as they come (memory flat however long the run).
 
-    Columns: ``time_s``, ``body``, ``partner`` (``body N``, ``wall x-`` ... or ``plane K``),
-    the impulse on ``body`` per axis ``impulse_x_Ns`` ..., and the normal relative speed
-    before and after, ``un_before_m_s`` and ``un_after_m_s`` (negative: approaching).
+    Columns: ``time_s``; ``body``; ``partner_kind`` (``body``, ``wall`` or ``plane``) and
+    ``partner``, a number: the other body, the wall face (``2 k`` the lower and ``2 k + 1``
+    the upper wall of axis ``k``: 0 is x-, 1 is x+, 2 is y-, ...), or the plane; the impulse
+    on ``body`` per axis ``impulse_x_Ns`` ...; the normal relative speed before and after,
+    ``un_before_m_s`` and ``un_after_m_s`` (negative: approaching). Every number is written
+    in full (``repr``), so the file reads back to the same bits.
+
+    Parameters
+    ----------
+    path : Path
+        The file; created (``keep=None``), or reopened with its first ``keep`` bytes kept and
+        anything after them dropped (resuming a run from its checkpoint).
+    dim : int
+        The world's dimension.
     """
-    events = world.events
-    axes = "xyz"[: world.dim]
-    with path.open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        impulse = [f"impulse_{a}_Ns" for a in axes]
-        writer.writerow(["time_s", "body", "partner", *impulse, "un_before_m_s", "un_after_m_s"])
-        for e in events:
-            writer.writerow(
+
+    def __init__(self, path: Path, dim: int, keep: int | None = None) -> None:
+        self.dim = dim
+        if keep is None:
+            self.file = path.open("w", newline="")
+            axes = "xyz"[:dim]
+            header = ["time_s", "body", "partner_kind", "partner"]
+            header += [f"impulse_{a}_Ns" for a in axes] + ["un_before_m_s", "un_after_m_s"]
+            csv.writer(self.file).writerow(header)
+        else:
+            self.file = path.open("r+", newline="")
+            self.file.truncate(keep)
+            self.file.seek(keep)
+        self.writer = csv.writer(self.file)
+
+    def write(self, block: NDArray[Any]) -> None:
+        """Append a block of collisions (:data:`carom.engines.base.COLLISION_DTYPE`)."""
+        d = self.dim
+        for e in block:
+            self.writer.writerow(
                 [
                     repr(float(e["time"])),
-                    int(e["a"]),
-                    world.describe_partner(int(e["b"])),
-                    *(repr(float(j)) for j in e["impulse"][: world.dim]),
+                    int(e["body"]),
+                    PARTNER_KINDS[int(e["kind"])],
+                    int(e["partner"]),
+                    *(repr(float(j)) for j in e["impulse"][:d]),
                     repr(float(e["un_before"])),
                     repr(float(e["un_after"])),
                 ]
             )
-    return len(events)
+
+    def flush(self) -> int:
+        """Push what was written to the file; return its size in bytes (for a checkpoint)."""
+        self.file.flush()
+        return self.file.tell()
+
+    def close(self) -> None:
+        self.file.close()
 
 
 def summary(
@@ -64,13 +98,11 @@ def summary(
     """
     stats = world.stats
     now = world.frame()
-    ke, pe = (
-        world.kinetic_energy_of(now.velocities, now.spins),
-        world.potential_energy_of(now.positions),
-    )
+    ke = kinetic_energy(world.bodies, now.velocities, now.angular_velocities)
+    pe = potential_energy(world.bodies, now.positions, world.gravity)
     e0 = start["kinetic_energy"] + start["potential_energy"]
     balance = (e0 - (ke + pe) - stats.energy_lost) / e0 if e0 else 0.0
-    events = stats.events
+    events = stats.events_processed
     data: dict[str, Any] = {
         "scene": scene,
         "bodies": world.n_bodies,
@@ -90,9 +122,10 @@ def summary(
         },
         "momentum": {
             "start_kg_m_s": list(start["momentum"]),
-            "end_kg_m_s": world.momentum_of(now.velocities).tolist(),
+            "end_kg_m_s": momentum(world.bodies, now.velocities).tolist(),
         },
         "temperature_J": stats.temperature,
+        "rotational_temperature_J": stats.rotational_temperature,
         "performance": {
             "wall_time_s": wall_seconds,
             "collisions_per_s": stats.collisions / wall_seconds if wall_seconds > 0 else None,
@@ -118,88 +151,3 @@ def write_summary(data: dict[str, Any], path: Path) -> None:
         return value
 
     path.write_text(json.dumps(clean(data), indent=2) + "\n")
-
-
-def case_document(records: list[Record]) -> dict[str, Any]:
-    """The two-sphere study as JSON data: models, round-off bound, records, conclusions."""
-    return {
-        "carom_version": __version__,
-        "models": MODELS,
-        "round_off": ROUND_OFF,
-        "records": [r.to_dict() for r in records],
-        "conclusions": conclusions(records),
-    }
-
-
-def write_case_study(folder: Path, records: list[Record], *, figures: bool = True) -> list[str]:
-    """Write ``cases.json``, ``cases.csv`` and (with ``figures``) ``case-N.png`` to ``folder``;
-    return the file names."""
-    document = case_document(records)
-    (folder / "cases.json").write_text(json.dumps(document, indent=2) + "\n")
-    write_cases_csv(folder / "cases.csv", document["records"])
-    written = ["cases.json", "cases.csv"]
-    if figures:
-        from carom.viz.cases import plot_case
-
-        for number in sorted({r.case for r in records}):
-            plot_case([r for r in records if r.case == number], folder / f"case-{number}.png")
-            written.append(f"case-{number}.png")
-    return written
-
-
-def write_cases_csv(path: Path, records: list[dict[str, Any]]) -> None:
-    """One row per case, restitution and model (the exact answer is the model 'exact')."""
-    columns = [
-        "case",
-        "title",
-        "e",
-        "model",
-        "m1",
-        "m2",
-        "x1_x",
-        "x1_y",
-        "x2_x",
-        "x2_y",
-        "v1_x",
-        "v1_y",
-        "v2_x",
-        "v2_y",
-        "v1_after_x",
-        "v1_after_y",
-        "v2_after_x",
-        "v2_after_y",
-        "error",
-        "momentum_error",
-        "ke_before",
-        "ke_after",
-        "ke_lost",
-        "energy_error",
-        "separation_speed",
-        "relative_speed_after",
-        "angle_deg",
-        "gap_after_1s",
-    ]
-    with path.open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(columns)
-        for rec in records:
-            outcomes = {"exact": rec["exact"], **rec["models"]}
-            for model, out in outcomes.items():
-                row = [
-                    rec["case"],
-                    rec["title"],
-                    rec["e"],
-                    model,
-                    rec["m1"],
-                    rec["m2"],
-                    *rec["x1"],
-                    *rec["x2"],
-                    *rec["v1"],
-                    *rec["v2"],
-                    *out["v1_after"],
-                    *out["v2_after"],
-                ]
-                row += [out[c] for c in columns[len(row) :]]
-                writer.writerow(
-                    ["" if v is None else repr(v) if isinstance(v, float) else v for v in row]
-                )

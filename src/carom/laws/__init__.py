@@ -2,7 +2,7 @@
 (:mod:`carom.laws.spheres`) and as Numba kernels (:mod:`carom.laws.kernels`), and the point
 impulse between rigid bodies with inertia (:mod:`carom.laws.point_impulse`)."""
 
-from carom._jit import kernel_cache
+from carom.jit import kernel_cache
 
 with kernel_cache():
     from carom.laws import kernels  # noqa: F401

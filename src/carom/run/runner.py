@@ -29,13 +29,22 @@ from typing import Any, Literal
 import numpy as np
 
 from carom.errors import CaromError
+from carom.observables import RunHistory
 from carom.scene import Scene, find_scene, load_scene
 from carom.world import World
 
-__all__ = ["Outputs", "RunInterrupted", "RunReport", "run_scene", "work_directory"]
+__all__ = [
+    "Outputs",
+    "RunInterrupted",
+    "RunReport",
+    "run_scene",
+    "stop_on_ctrl_c",
+    "work_directory",
+]
 
 CHECKPOINT = "checkpoint.npz"
 TRAJECTORY = "trajectory.h5"
+EVENTS = "events.csv"
 #: progress updates (and chances to stop) per run when the scene asks for no frames
 CHUNKS_WITHOUT_FRAMES = 100
 
@@ -67,6 +76,9 @@ class RunReport:
     wall_seconds: float
     written: list[str] = field(default_factory=list)
     resumed_at: float | None = None
+    #: seconds spent before the run compiling the engine's kernels (once per install) or
+    #: loading them from the cache; not part of ``wall_seconds``
+    prepare_seconds: float = 0.0
 
 
 class RunInterrupted(Exception):  # noqa: N818 (it is not an error: the user asked to stop)
@@ -151,20 +163,24 @@ def run_scene(
             )
         shutil.rmtree(work)
     _check_extras(outputs)
+    began = time.perf_counter()
     if resume:
         run = _Run.resume(work, job)
+        run.world.prepare()
     else:
         world = scene.build()  # refuses a bad scene before anything is written
+        world.prepare()  # compiled (or loaded) apart from the run's own time
         _make_directory(work)
         try:
             run = _Run.start(work, world, job)
         except BaseException:
             shutil.rmtree(work, ignore_errors=True)
             raise
+    run.prepare_seconds = time.perf_counter() - began
     title = scene.scene.get("title") or path.stem
     try:
-        with _stop_on_ctrl_c() as stop:
-            run.advance(
+        with stop_on_ctrl_c() as stop:
+            run.simulate(
                 until, scene.run["frame_interval"], outputs, progress, stop, checkpoint_every
             )
     finally:
@@ -181,6 +197,7 @@ def run_scene(
         wall_seconds=run.wall,
         written=written,
         resumed_at=run.resumed_at,
+        prepare_seconds=run.prepare_seconds,
     )
 
 
@@ -206,7 +223,7 @@ def _check_extras(outputs: Outputs) -> None:
         need_encoder(outputs.animation)
 
 
-class _Stop:
+class Stop:
     """Set by the first Ctrl-C; the run stops at the next frame, after a checkpoint."""
 
     def __init__(self) -> None:
@@ -217,12 +234,12 @@ class _Stop:
 
 
 @contextlib.contextmanager
-def _stop_on_ctrl_c() -> Iterator[_Stop]:
+def stop_on_ctrl_c() -> Iterator[Stop]:
     """Turn the first SIGINT into a request to stop cleanly (a second one interrupts at once).
 
     Only the main thread can own signal handlers; elsewhere Ctrl-C keeps its usual meaning.
     """
-    stop = _Stop()
+    stop = Stop()
     if threading.current_thread() is not threading.main_thread():
         yield stop
         return
@@ -243,13 +260,13 @@ class _Run:
     """A run's world, trajectory writer and history, and how to checkpoint them."""
 
     def __init__(self, work: Path, world: World, job: dict[str, Any]) -> None:
-        from carom.viz.run import RunHistory
-
         self.work = work
         self.world = world
         self.job = job
         self.history = RunHistory()
         self.writer: Any = None
+        self.events: Any = None  # the events.csv writer
+        self.prepare_seconds = 0.0
         self.frames = 0  # frames in the trajectory
         self.t0 = world.time  # frames fall at t0 + k frame_interval
         self.wall = 0.0  # seconds spent in the engine
@@ -259,6 +276,7 @@ class _Run:
     def start(cls, work: Path, world: World, job: dict[str, Any]) -> _Run:
         run = cls(work, world, job)
         run._open_trajectory(resume=False)
+        run._open_events(keep=None)
         run._record()
         return run
 
@@ -278,15 +296,28 @@ class _Run:
         progress = json.loads(str(extra["progress"]))
         run.frames, run.t0, run.wall = progress["frames"], progress["t0"], progress["wall"]
         run.resumed_at = world.time
-        history = run.history
-        history.time = extra["history.time"].tolist()
-        history.kinetic = extra["history.kinetic"].tolist()
-        history.potential = extra["history.potential"].tolist()
-        history.dissipated = extra["history.dissipated"].tolist()
-        history.momentum = list(extra["history.momentum"])
-        world._events = [extra["events"]] if extra["events"].size else []
+        prefix = "history."
+        run.history = RunHistory.from_arrays(
+            {k[len(prefix) :]: v for k, v in extra.items() if k.startswith(prefix)}
+        )
         run._open_trajectory(resume=True)
+        run._open_events(keep=progress["events_bytes"])
         return run
+
+    def _open_events(self, *, keep: int | None) -> None:
+        """The events.csv writer (new, or the file of an interrupted run cut back to what its
+        checkpoint knows)."""
+        if not self.job["outputs"]["events"]:
+            return
+        from carom.io.results import EventsWriter
+
+        path = self.work / EVENTS
+        if keep is not None and (not path.is_file() or path.stat().st_size < keep):
+            raise CaromError(
+                f"the events file {path} holds less than its checkpoint knows; pass --force to "
+                f"start again"
+            )
+        self.events = EventsWriter(path, self.world.dim, keep)
 
     def _open_trajectory(self, *, resume: bool) -> None:
         outputs = self.job["outputs"]
@@ -300,10 +331,11 @@ class _Run:
         else:
             self.writer = H5MDWriter(path, self.world)
 
-    def _record(self) -> None:
+    def _record(self, *, frame_too: bool = True) -> None:
+        """Record the world now in the history and, for a frame, in the trajectory."""
         frame = self.world.frame()
         self.history.add(self.world, frame)
-        if self.writer is not None:
+        if self.writer is not None and frame_too:
             h = self.history
             energies = {
                 "kinetic_energy": h.kinetic[-1],
@@ -317,38 +349,39 @@ class _Run:
         """Flush the trajectory, then write the checkpoint (atomically) that matches it."""
         if self.writer is not None:
             self.writer.flush()
-        h = self.history
-        progress = {"frames": self.frames, "t0": self.t0, "wall": self.wall}
+        events_bytes = self.events.flush() if self.events is not None else 0
+        progress = {
+            "frames": self.frames,
+            "t0": self.t0,
+            "wall": self.wall,
+            "events_bytes": events_bytes,
+        }
+        history = {f"history.{k}": v for k, v in self.history.arrays().items()}
         self.world.save(
             self.work / CHECKPOINT,
             extra={
                 "job": np.array(json.dumps(self.job)),
                 "progress": np.array(json.dumps(progress)),
-                "history.time": np.array(h.time),
-                "history.kinetic": np.array(h.kinetic),
-                "history.potential": np.array(h.potential),
-                "history.dissipated": np.array(h.dissipated),
-                "history.momentum": np.array(h.momentum),
-                "events": self.world.events,
+                **history,
             },
         )
 
-    def advance(
+    def simulate(
         self,
         until: float,
-        frame_dt: float | None,
+        frame_interval: float | None,
         outputs: Outputs,
         progress: bool | None,
-        stop: _Stop,
+        stop: Stop,
         checkpoint_every: float,
     ) -> None:
         """Run to ``until``, frame by frame, with a progress bar; checkpoint on the way."""
         from tqdm import tqdm
 
         world = self.world
-        log = outputs.events or outputs.plots
+        stream = self.events.write if self.events is not None else None
         span = until - self.t0
-        step = frame_dt if frame_dt is not None else span / CHUNKS_WITHOUT_FRAMES
+        step = frame_interval if frame_interval is not None else span / CHUNKS_WITHOUT_FRAMES
         k = round((world.time - self.t0) / step) if world.time > self.t0 else 0
         bar = tqdm(
             total=span,
@@ -362,7 +395,7 @@ class _Run:
             dynamic_ncols=True,
         )
         saved = time.perf_counter()
-        events0 = world.stats.events
+        events0 = world.counters().events
         began = time.perf_counter()
         with bar:
             while world.time < until:
@@ -374,13 +407,12 @@ class _Run:
                 k += 1
                 target = min(until, self.t0 + k * step)
                 mark = time.perf_counter()
-                world.run(until=target, log=log)
+                world.run(until=target, on_collisions=stream)
                 self.wall += time.perf_counter() - mark
-                if frame_dt is not None or target >= until:
-                    self._record()
+                self._record(frame_too=frame_interval is not None or target >= until)
                 elapsed = time.perf_counter() - began
                 bar.set_postfix_str(
-                    f", {(world.stats.events - events0) / max(elapsed, 1e-9):.3g} events/s",
+                    f", {(world.counters().events - events0) / max(elapsed, 1e-9):.3g} events/s",
                     refresh=False,
                 )
                 bar.update(world.time - self.t0 - bar.n)
@@ -391,11 +423,13 @@ class _Run:
     def close(self) -> None:
         if self.writer is not None:
             self.writer.close()
+        if self.events is not None:
+            self.events.close()
 
     def finish(self, scene: str, title: str, outputs: Outputs) -> list[str]:
         """Write everything else in the working directory; return the file names."""
         from carom.io.h5md import check_trajectory
-        from carom.io.results import summary, write_events_csv, write_summary
+        from carom.io.results import summary, write_summary
 
         world, h = self.world, self.history
         written = []
@@ -411,14 +445,13 @@ class _Run:
         }
         data = summary(world, scene=scene, start=start, wall_seconds=self.wall)
         if outputs.events:
-            write_events_csv(world, self.work / "events.csv")
-            written.append("events.csv")
+            written.append(EVENTS)
         write_summary(data, self.work / "summary.json")
         written.append("summary.json")
         if outputs.plots:
             from carom.viz.run import write_run_plots
 
-            written += write_run_plots(self.work, world, h, world.events["time"])
+            written += write_run_plots(self.work, world, h)
         if outputs.animation != "none":
             from carom.viz.animate import write_animation
 

@@ -16,9 +16,10 @@ from pathlib import Path
 from typing import Any
 
 from carom import __version__
+from carom._text import plural
 from carom.io.outdir import check_output, staged_output
-from carom.io.results import write_case_study
 from carom.run.runner import run_scene
+from carom.run.study import write_case_study
 from carom.scene import find_scene, load_scene
 from carom.studies.two_spheres import CASES, MODELS, run_study
 
@@ -67,12 +68,18 @@ def build_showcase(
         records = run_study()
         write_case_study(cases, records)
         say(f"the seven two-sphere cases: {len(records)} impacts -> {out / 'cases'}/")
-        shown = []
+        shown: list[tuple[str, Path, list[str]]] = []
         for scene in scenes:
             folder = staging / "scenes" / Path(scene).stem
             report = run_scene(scene, folder, progress=False)
+            if report.prepare_seconds >= 1.0 and not shown:
+                say(
+                    f"(the engine's kernels: compiled or loaded in {report.prepare_seconds:.1f} "
+                    f"s, once per install; not counted in the run times)"
+                )
             say(
-                f"{report.title}: {report.collisions} collisions in {report.wall_seconds:.2f} s "
+                f"{report.title}: {plural(report.collisions, 'collision')} in "
+                f"{report.wall_seconds:.2f} s "
                 f"-> {out / 'scenes' / folder.name}/"
             )
             shown.append((scene, folder, report.written))

@@ -10,10 +10,11 @@ from typing import Any
 import numpy as np
 
 from carom.errors import CaromError
+from carom.materials import Material
 from carom.scene import layouts
 from carom.scene.load import Scene
 from carom.scene.schema import GENERATORS, Locator, SceneError
-from carom.world import Material, World
+from carom.world import World
 
 __all__ = ["build_world"]
 
@@ -21,19 +22,6 @@ __all__ = ["build_world"]
 def build_world(scene: Scene) -> World:
     """The :class:`carom.World` ``scene`` describes (bodies placed, nothing run yet)."""
     where = Locator(scene.source, scene.text)
-    w = scene.world
-    try:
-        world = World(
-            w["dimension"],
-            w["box"],
-            w["boundary"],
-            w["gravity"],
-            wall_restitution=w["wall_restitution"],
-            t_c=w["tc"],
-            combine=w["combine"],
-        )
-    except CaromError as exc:
-        raise where.error(["world"], str(exc), "") from None
     materials: dict[str, Material] = {}
     for index, m in enumerate(scene.materials):
         try:
@@ -42,6 +30,19 @@ def build_world(scene: Scene) -> World:
             )
         except CaromError as exc:
             raise where.error(["materials"], str(exc), "", index) from None
+    w = scene.world
+    try:
+        world = World(
+            w["dimension"],
+            w["box"],
+            w["boundary"],
+            w["gravity"],
+            walls=_walls(w["walls"], materials),
+            t_c=w["t_c"],
+            combine=w["combine"],
+        )
+    except CaromError as exc:
+        raise where.error(["world"], str(exc), "") from None
     for table, index, b in _placed_bodies(scene):
         material = materials.get(b["material"]) if b["material"] else None
         try:
@@ -69,7 +70,7 @@ def build_world(scene: Scene) -> World:
             "add [[bodies]], [[gas]] or generator ([[row]], [[rack]], ...) tables",
         )
     try:
-        world._ensure_built()  # refuses overlapping spheres and spheres outside the box
+        world.build()  # refuses overlapping spheres and spheres outside the box
     except CaromError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
     return world
@@ -91,8 +92,8 @@ def _placed_bodies(scene: Scene) -> Iterator[tuple[str, int, dict[str, Any]]]:
             )
             if table == "lattice" and entry["temperature"] > 0:
                 rng = np.random.default_rng(entry["seed"])
-                velocities += rng.normal(
-                    scale=math.sqrt(entry["temperature"] / entry["mass"]), size=(count, dim)
+                velocities += layouts.maxwell_velocities(
+                    rng, count, dim, entry["temperature"], entry["mass"]
                 )
             yield (
                 table,
@@ -151,8 +152,7 @@ def _add_gas(world: World, gas: Mapping[str, Any], material: Material | None) ->
             f"corner above its low one; fix its corners"
         )
     positions = _random_positions(world, count, radius, rng, low, high)
-    velocities = rng.normal(scale=math.sqrt(gas["temperature"] / gas["mass"]), size=(count, dim))
-    velocities -= velocities.mean(axis=0)
+    velocities = layouts.maxwell_velocities(rng, count, dim, gas["temperature"], gas["mass"])
     if gas["drift"] is not None:
         velocities += np.asarray(gas["drift"], dtype=float)
     world.add_spheres(positions, velocities, radius=radius, mass=gas["mass"], material=material)
@@ -174,7 +174,7 @@ def _random_positions(
     margin = radius if walled else 0.0
     cell = 2.0 * radius
     grid: dict[tuple[int, ...], list[int]] = {}
-    others = [(p, r) for p, r in zip(world.positions, world._radius, strict=True)]
+    others = [(p, r) for p, r in zip(world.positions, world.radii, strict=True)]
     placed: list[np.ndarray] = []
     tries = 0
     while len(placed) < count:
@@ -215,3 +215,9 @@ def _random_positions(
         grid.setdefault(key, []).append(len(placed))
         placed.append(p)
     return np.array(placed)
+
+
+def _walls(value: Any, materials: Mapping[str, Material]) -> list[Material | float]:
+    """``[world] walls``: restitutions or material names, one or one per wall face."""
+    items = value if isinstance(value, list) else [value]
+    return [materials[v] if isinstance(v, str) else float(v) for v in items]

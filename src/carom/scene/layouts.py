@@ -15,6 +15,7 @@ from carom.world import World
 __all__ = [
     "lattice_gas",
     "lattice_positions",
+    "maxwell_velocities",
     "peg_positions",
     "rack_positions",
     "row_positions",
@@ -203,6 +204,18 @@ def peg_positions(
     return np.array(pegs)
 
 
+def maxwell_velocities(
+    rng: np.random.Generator, count: int, dim: int, temperature: float, mass: float
+) -> NDArray[np.float64]:
+    """``count`` velocities (count, dim) [m/s] drawn from Maxwell-Boltzmann at ``temperature``
+    [J] (``k_B = 1``) for bodies of ``mass`` [kg]: each component Gaussian with variance
+    ``temperature / mass`` (PHYSICS.md section 6), then the mean removed so that the bodies'
+    centre of mass is at rest (a drift is added apart, by whoever wants one)."""
+    v: NDArray[np.float64] = rng.normal(scale=math.sqrt(temperature / mass), size=(count, dim))
+    v -= v.mean(axis=0)
+    return v
+
+
 def lattice_gas(
     dim: int,
     n_side: int,
@@ -256,8 +269,7 @@ def lattice_gas(
     grid = (np.arange(n_side) + 0.5) * side / n_side
     x = np.stack(np.meshgrid(*([grid] * dim), indexing="ij"), -1).reshape(-1, dim)
     rng = np.random.default_rng(seed)
-    v = rng.normal(scale=math.sqrt(temperature), size=(count, dim))
-    v -= v.mean(axis=0)
+    v = maxwell_velocities(rng, count, dim, temperature, 1.0)
     world = World(dim, [side] * dim, boundary)
     world.add_spheres(x, v, radius=0.5, restitution=restitution)
     return world

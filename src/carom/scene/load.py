@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from carom.scene.schema import ARRAYS, GENERATORS, SCHEMA, Locator, SceneError
+from carom.scene.schema import ARRAYS, GENERATORS, RENAMED, SCHEMA, Locator, SceneError
 
 if TYPE_CHECKING:
     from carom.world import World
@@ -100,6 +100,22 @@ class Scene:
         if any(not side > 0 for side in self.world["box"]):
             raise where.error(["world", "box"], "sides must be > 0", "give positive lengths [m]")
         names = [m["name"] for m in self.materials]
+        for index, name in enumerate(names):
+            if name in names[:index]:
+                raise where.error(
+                    ["materials", "name"],
+                    f"{name!r} is defined twice (also [[materials]] #{names.index(name) + 1})",
+                    "give each material its own name",
+                    index,
+                )
+        walls = self.world["walls"]
+        for name in walls if isinstance(walls, list) else [walls]:
+            if isinstance(name, str) and name not in names:
+                raise where.error(
+                    ["world", "walls"],
+                    f"names material {name!r}, which no [[materials]] table defines",
+                    f"define it, or use one of {names}" if names else "define it",
+                )
         for table in ("bodies", *GENERATORS, "gas"):
             for index, entry in enumerate(getattr(self, table)):
                 name = entry.get("material")
@@ -243,6 +259,11 @@ def _check_table(
     schema = SCHEMA[table]
     result: dict[str, Any] = {}
     for key, value in entry.items():
+        if key in RENAMED.get(table, {}):
+            new = RENAMED[table][key]
+            raise where.error(
+                [table, key], f"was renamed to {new}", f"write {new} = ... instead", index
+            )
         if key not in schema:
             raise where.error(
                 [table, key], "is not a known key", f"use one of {', '.join(schema)}", index

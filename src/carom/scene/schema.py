@@ -9,8 +9,9 @@ from collections.abc import Callable
 from typing import Any
 
 from carom.errors import CaromError
+from carom.materials import COMBINE_RULES
 
-__all__ = ["ARRAYS", "GENERATORS", "SCHEMA", "Locator", "SceneError"]
+__all__ = ["ARRAYS", "GENERATORS", "RENAMED", "SCHEMA", "Locator", "SceneError"]
 
 
 class SceneError(CaromError):
@@ -84,6 +85,19 @@ def _rows(value: Any) -> str | None:
     return None
 
 
+def _walls(value: Any) -> str | None:
+    items = value if isinstance(value, list) else [value]
+    if not items or len(items) not in (1, 4, 6):
+        return f"must be one restitution or material name, or one per wall face, got {_show(value)}"
+    for item in items:
+        if isinstance(item, str):
+            continue
+        problem = _unit_interval(item)
+        if problem:
+            return f"must be restitutions in [0, 1] or material names: an entry {problem}"
+    return None
+
+
 def _positive_or_list(value: Any) -> str | None:
     if isinstance(value, list):
         problem = _vector(value)
@@ -134,9 +148,9 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "box": (_vector, True, None),
         "boundary": (_choice("walls", "periodic"), False, "walls"),
         "gravity": (_vector, False, None),
-        "wall_restitution": (_number_or_vector, False, 1.0),
-        "tc": (_positive, False, 1e-6),
-        "combine": (_choice("mean", "min", "max", "geometric", "product"), False, "mean"),
+        "walls": (_walls, False, 1.0),
+        "t_c": (_positive, False, 1e-6),
+        "combine": (_choice(*COMBINE_RULES), False, "mean"),
     },
     "materials": {
         "name": (_text, True, None),
@@ -218,6 +232,8 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
 #: tables that may repeat ([[name]]); the generators place bodies in this order, after
 #: [[bodies]] and before [[gas]] (which avoids everything placed before it)
 GENERATORS = ("row", "rack", "lattice", "pegs")
+#: keys that carom once read under another name: table -> old key -> new key
+RENAMED = {"world": {"wall_restitution": "walls", "tc": "t_c"}}
 ARRAYS = ("materials", "bodies", *GENERATORS, "gas")
 
 

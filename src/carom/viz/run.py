@@ -3,43 +3,19 @@ distribution against Maxwell-Boltzmann."""
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
+from carom.observables import RunHistory
 from carom.viz import require_matplotlib
-from carom.world import Frame, World
+from carom.world import World
 
-__all__ = ["RunHistory", "write_run_plots"]
-
-
-@dataclass
-class RunHistory:
-    """What the figures need, collected frame by frame: time [s], kinetic and potential
-    energy [J], dissipated energy so far [J] and total momentum [kg m/s]."""
-
-    time: list[float] = field(default_factory=list)
-    kinetic: list[float] = field(default_factory=list)
-    potential: list[float] = field(default_factory=list)
-    dissipated: list[float] = field(default_factory=list)
-    momentum: list[NDArray[np.float64]] = field(default_factory=list)
-
-    def add(self, world: World, frame: Frame) -> None:
-        """Record ``frame`` of ``world`` (taken now: the dissipation so far is the world's)."""
-        self.time.append(frame.time)
-        self.kinetic.append(world.kinetic_energy_of(frame.velocities, frame.spins))
-        self.potential.append(world.potential_energy_of(frame.positions))
-        self.dissipated.append(world.stats.energy_lost)
-        self.momentum.append(world.momentum_of(frame.velocities))
+__all__ = ["write_run_plots"]
 
 
-def write_run_plots(
-    folder: Path, world: World, history: RunHistory, event_times: NDArray[np.float64]
-) -> list[str]:
-    """Write ``energy.png``, ``collision_rate.png`` (when collisions were logged) and, for a
+def write_run_plots(folder: Path, world: World, history: RunHistory) -> list[str]:
+    """Write ``energy.png``, ``collision_rate.png`` (when there were collisions) and, for a
     gas of equal masses in a periodic box, ``speeds.png``; return the file names written."""
     require_matplotlib()
     import matplotlib
@@ -74,12 +50,12 @@ def write_run_plots(
     plt.close(fig)
     written.append("energy.png")
 
-    if event_times.size:  # (no event log, no rate)
+    collisions = np.array(history.collisions)
+    if t.size > 1 and collisions[-1] > collisions[0]:
+        # the rate between successive records: collisions counted over each interval
         fig, ax = plt.subplots(figsize=(7, 3.5))
-        bins = max(10, min(100, int(math.sqrt(event_times.size))))
-        counts, edges = np.histogram(event_times, bins=bins, range=(t[0], t[-1]))
-        width = edges[1] - edges[0]
-        ax.step(edges[:-1], counts / width, where="post")
+        rate = np.diff(collisions) / np.diff(t)
+        ax.step(t[:-1], rate, where="post")
         ax.set_xlabel("time [s]")
         ax.set_ylabel("collisions per second")
         ax.set_title("collision rate (bodies and walls)")
@@ -88,8 +64,8 @@ def write_run_plots(
         plt.close(fig)
         written.append("collision_rate.png")
 
-    moving = np.isfinite(world._mass)
-    masses = world._mass[moving]
+    moving = world.bodies.mobile
+    masses = world.masses[moving]
     temperature = world.stats.temperature
     if (
         world.boundary == "periodic"

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from carom.compare.spec import PeerScene
-from carom.world import Frame, World
+from carom.world import Frame
 
 __all__ = ["start"]
 
@@ -20,16 +20,15 @@ class CaromSimulation:
     """
 
     def __init__(self, scene: PeerScene) -> None:
-        _warm_up(scene.dim)
         world = scene.world()  # the scene's own world: its combine rule, t_c and all
         self.dt = scene.frame_interval
-        world._ensure_built()  # the set-up (neighbour grid, first predictions) is not timed
+        world.prepare()  # the set-up (neighbour grid, first predictions, kernels) is not timed
         self._frame: Frame = world.frame()
-        self._frames = world.frames(scene.duration(self.dt), self.dt, log=False)
+        self._frames = world.frames(scene.duration(self.dt), self.dt)
         self.settings: dict[str, Any] = {
             "method": "event-driven: exact times of impact, one impulse per collision",
             "frame_interval_s": self.dt,
-            "tc_s": world.t_c,
+            "t_c_s": world.settings.t_c,
             "combine": world.combine,
         }
         self.notes = [
@@ -45,13 +44,6 @@ class CaromSimulation:
 
     def close(self) -> None:
         pass
-
-
-def _warm_up(dim: int) -> None:
-    """Load the compiled kernels (from Numba's cache, or compile them) before timing."""
-    world = World(dim, [1.0] * dim)
-    world.add_spheres([[0.25] * dim, [0.75] * dim], [[1.0] * dim, [-1.0] * dim], radius=0.1)
-    world.run(1.0, frame_dt=0.5, log=False)
 
 
 def start(scene: PeerScene) -> CaromSimulation:

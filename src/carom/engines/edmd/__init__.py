@@ -6,7 +6,7 @@ arrays), ``predict`` (the next event of a body), ``collide`` (what an event does
 grid), ``prefetch``, and ``driver`` (the :class:`carom.engines.base.Engine` that a World runs).
 """
 
-from carom._jit import kernel_cache
+from carom.jit import kernel_cache
 
 with kernel_cache():
     from carom.engines.edmd import calendar, collide, loop, neighbours, predict  # noqa: F401

@@ -14,6 +14,7 @@ from numba import njit
 
 from carom.engines.edmd.codes import C_PAIR, C_REST, C_TC, C_WALL, S_KE_LOST, S_VIRIAL
 from carom.engines.edmd.predict import face_normal, set_support
+from carom.geometry.rotation import turn
 from carom.laws.kernels import LAW_SMOOTH, impulse_spheres
 
 
@@ -76,7 +77,7 @@ def collide_pair(
     x: np.ndarray,
     v: np.ndarray,
     acc: np.ndarray,
-    w: np.ndarray,
+    rot: tuple[np.ndarray, np.ndarray, np.ndarray],
     counter: np.ndarray,
     last_coll: np.ndarray,
     support: np.ndarray,
@@ -97,7 +98,10 @@ def collide_pair(
     sums: np.ndarray,
     logbuf: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
 ) -> None:
+    """Bodies ``i`` and ``j`` (both at time ``T``) meet: the impulse law, then the engine's
+    rules. ``rot`` is (spins (N, 3), orientations (N, 4), their clocks (N,))."""
     dim = x.shape[1]
+    w, orient, orient_t = rot
     # separation r = x_i - x_j (nearest image) and relative velocity, as three components
     r0 = r1 = r2 = 0.0
     dv0 = dv1 = dv2 = 0.0
@@ -183,6 +187,11 @@ def collide_pair(
         v[i, k] += jk * inv_i
         v[j, k] -= jk * inv_j
     if law != LAW_SMOOTH:
+        # the spins change: first turn both bodies to now at their old spins
+        turn(orient, i, w[i, 0], w[i, 1], w[i, 2], T - orient_t[i], dim)
+        turn(orient, j, w[j, 0], w[j, 1], w[j, 2], T - orient_t[j], dim)
+        orient_t[i] = T
+        orient_t[j] = T
         # w_i' = w_i - (n x J) / (q_i m_i a_i), the same sign for both bodies
         c0 = n1 * j2 - n2 * j1
         c1 = n2 * j0 - n0 * j2

@@ -62,6 +62,7 @@ from carom.engines.edmd.predict import (
     schedule_views,
 )
 from carom.engines.edmd.prefetch import prefetch_row
+from carom.geometry.rotation import turn
 from carom.geometry.toi import INF
 
 # compile without reference counting (see the module docstring); an internal Numba flag
@@ -94,7 +95,7 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
         s.cell,
         m.box,
         m.periodic,
-        m.delta,
+        m.shell_thickness,
         m.cell_size,
         m.ncell,
         s.nbr_mark,
@@ -123,7 +124,7 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
             m.box,
             m.inv_box,
             m.periodic,
-            m.delta,
+            m.shell_thickness,
             m.plane_point,
             m.plane_normal,
             s.ev_time,
@@ -148,6 +149,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     kin = s.kin
     x, v, t = kinematic_views(kin, m.box.shape[0])
     acc, w = s.acc, s.w
+    rot = (w, s.orient, s.orient_t)
     shell, support, last_coll = s.shell, s.support, s.last_coll
     nbr, nbr_count, nbr_mark, nbr_old = s.nbr, s.nbr_count, s.nbr_mark, s.nbr_old
     ev_time = s.ev_time
@@ -162,7 +164,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     radius, mass, inv_mass, q, mobile = m.radius, m.mass, m.inv_mass, m.q, m.mobile
     material, face_e = m.material, m.face_e
     pair_table = (m.pair_law, m.pair_e, m.pair_beta, m.pair_friction)
-    gravity, box, periodic, delta, t_c = m.gravity, m.box, m.periodic, m.delta, m.t_c
+    gravity, box, periodic, delta, t_c = m.gravity, m.box, m.periodic, m.shell_thickness, m.t_c
     accelerated = m.accelerated
     inv_box = m.inv_box
     plane_point, plane_normal = m.plane_point, m.plane_normal
@@ -209,7 +211,7 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
                     x,
                     v,
                     acc,
-                    w,
+                    rot,
                     counter,
                     last_coll,
                     support,
@@ -303,3 +305,14 @@ def positions_at(m, s, T: float, x_out: np.ndarray, v_out: np.ndarray) -> None: 
             v_out[i, k] = v[i, k] + a * dt
             if m.periodic:
                 x_out[i, k] -= m.box[k] * np.floor(x_out[i, k] / m.box[k])
+
+
+@njit(cache=True, error_model="numpy")
+def orientations_at(m, s, T: float, out: np.ndarray) -> None:  # type: ignore[no-untyped-def]
+    """Every body's orientation at time ``T`` (rows of ``out``: 2D angle in column 0, 3D
+    quaternion): spins are constant since each body's orientation clock."""
+    dim = m.box.shape[0]
+    for i in range(out.shape[0]):
+        for k in range(out.shape[1]):
+            out[i, k] = s.orient[i, k]
+        turn(out, i, s.w[i, 0], s.w[i, 1], s.w[i, 2], T - s.orient_t[i], dim)

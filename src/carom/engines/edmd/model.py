@@ -49,7 +49,7 @@ class Model(NamedTuple):
         A point on each static plane [m] and its unit normal, pointing into the free side.
     t_c : float
         TC-model time [s]: a collision within ``t_c`` of a body's previous one is elastic.
-    delta : float
+    shell_thickness : float
         Neighbour-shell thickness [m]: how far a body moves before its list is rebuilt.
     cell_size : (d,) float64
         Cell-grid spacing [m], at least one shell diameter.
@@ -76,7 +76,7 @@ class Model(NamedTuple):
     plane_point: NDArray[np.float64]
     plane_normal: NDArray[np.float64]
     t_c: float
-    delta: float
+    shell_thickness: float
     cell_size: NDArray[np.float64]
     ncell: NDArray[np.int64]
 

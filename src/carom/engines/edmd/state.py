@@ -58,6 +58,10 @@ class State(NamedTuple):
         Acceleration [m/s^2]: gravity, less the normal part a support bears; zero if static.
     w : (N, 3) float64
         Spin [rad/s] (2D: about z, in column 2).
+    orient : (N, 4) float64; orient_t : (N,) float64
+        Orientation as of the clock ``orient_t`` [s] (2D: angle [rad] in column 0; 3D: unit
+        quaternion ``w, x, y, z``): spins change only in rough or frictional collisions,
+        which bring it up to date first (:mod:`carom.geometry.rotation`).
     last_coll : (N,) float64
         Time of each body's last collision [s] (TC model).
     support : (N,) int64
@@ -92,6 +96,8 @@ class State(NamedTuple):
     kin: NDArray[np.float64]
     acc: NDArray[np.float64]
     w: NDArray[np.float64]
+    orient: NDArray[np.float64]
+    orient_t: NDArray[np.float64]
     last_coll: NDArray[np.float64]
     support: NDArray[np.int64]
     shell: NDArray[np.float64]
@@ -142,6 +148,7 @@ def allocate_state(
     v: NDArray[np.float64],
     acc: NDArray[np.float64],
     w: NDArray[np.float64],
+    orientation: NDArray[np.float64],
     radius: NDArray[np.float64],
     time: float,
     n_cells: int,
@@ -165,6 +172,8 @@ def allocate_state(
         kin=kin,
         acc=np.array(acc, dtype=np.float64),
         w=np.array(w, dtype=np.float64),
+        orient=_orient_records(orientation),
+        orient_t=np.full(n, time),
         last_coll=np.full(n, -np.inf),
         support=np.full(n, -1, np.int64),
         shell=shell,
@@ -197,3 +206,10 @@ def allocate_state(
         log_un=np.zeros((log_capacity, 2)),
         log_n=np.zeros(1, np.int64),
     )
+
+
+def _orient_records(orientation: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(N, 4) records from (N, 1) angles (2D, column 0) or (N, 4) quaternions (3D)."""
+    out = np.zeros((orientation.shape[0], 4))
+    out[:, : orientation.shape[1]] = orientation
+    return out

@@ -25,7 +25,7 @@ from typing import Any
 
 import numba
 
-__all__ = ["KERNEL_PACKAGES", "kernel_cache", "kernel_cache_dir"]
+__all__ = ["KERNEL_PACKAGES", "kernel_cache", "kernel_cache_dir", "kernel_tag", "kernels_cached"]
 
 #: the packages that hold Numba kernels, or constants and functions a kernel reads
 KERNEL_PACKAGES = ("engines", "geometry", "laws")
@@ -39,14 +39,19 @@ def kernel_sources(root: Path = _HERE) -> list[Path]:
     return sorted(p for name in KERNEL_PACKAGES for p in (root / name).rglob("*.py"))
 
 
-@cache
-def kernel_cache_dir(root: Path = _HERE) -> str:
-    """The cache directory for the kernels of the package at ``root`` (default: carom)."""
+def kernel_tag(root: Path = _HERE) -> str:
+    """A hash of every kernel source file of the package at ``root`` (16 hex digits)."""
     digest = hashlib.sha256()
     for path in kernel_sources(root):
         digest.update(path.relative_to(root).as_posix().encode())
         digest.update(path.read_bytes())
-    tag = digest.hexdigest()[:16]
+    return digest.hexdigest()[:16]
+
+
+@cache
+def kernel_cache_dir() -> str:
+    """The cache directory of carom's kernels (created if need be)."""
+    tag = kernel_tag()
     user = os.environ.get("NUMBA_CACHE_DIR")
     if user:
         candidates = [os.path.join(user, f"carom-{tag}")]
@@ -73,3 +78,9 @@ def kernel_cache() -> Iterator[None]:
         yield
     finally:
         _config.CACHE_DIR = previous
+
+
+def kernels_cached() -> bool:
+    """Whether the event loop's machine code is in the cache (else the first run compiles it,
+    which takes about a minute once per install)."""
+    return any(Path(kernel_cache_dir()).glob("*/loop.run-*.nbi"))

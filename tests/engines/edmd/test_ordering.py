@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from carom.world import spatial_order
+from carom.engines.edmd.ordering import spatial_order
 
 
 @pytest.mark.parametrize("dim", [2, 3])

@@ -1,0 +1,106 @@
+"""Interleaved A/B of the event-driven engine: this tree against another carom source tree.
+
+Each round measures both trees in fresh processes, one after the other (the order alternates
+from round to round), so that the machine's drift over minutes falls on both alike. The
+workload is benchmarks/edmd.py's: a periodic lattice gas (3D packing 0.3, 2D 0.5), melted,
+then timed for about 3e5 collisions, best of ``--repeats``. Only API that every carom since
+the first engine has is used, so any two commits can be compared.
+
+Run:  git worktree add /tmp/base REV     (or: git archive REV | tar -x -C /tmp/base)
+      python benchmarks/ab.py /tmp/base/src --rounds 3 --sizes 1000 10000
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+SRC = HERE.parent / "src"
+
+SNIPPET = """
+import json, sys, time
+try:
+    from carom.scene.layouts import lattice_gas
+except ImportError:
+    from carom.generators import lattice_gas
+dim, n, repeats = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
+packing = 0.3 if dim == 3 else 0.5
+world = lattice_gas(dim, round(n ** (1 / dim)), packing, seed=1)
+world.run(until=0.3, log=False)
+world.stats.reset()
+world.run(until=world.time + 0.5, log=False)
+span = max(300_000, 2 * world.n_bodies) / (max(world.stats.collisions, 1) / 0.5)
+best = 0.0
+for _ in range(repeats):
+    world.stats.reset()
+    start = time.perf_counter()
+    world.run(until=world.time + span, log=False)
+    best = max(best, world.stats.collisions / (time.perf_counter() - start))
+print(json.dumps({"collisions_per_s": best, "n": world.n_bodies}))
+"""
+
+
+def measure(src: Path, dim: int, n: int, repeats: int) -> float:
+    env = {**os.environ, "PYTHONPATH": str(src)}
+    proc = subprocess.run(
+        [sys.executable, "-c", SNIPPET, str(dim), str(n), str(repeats)],
+        capture_output=True,
+        text=True,
+        env=env,
+        check=True,
+    )
+    return float(json.loads(proc.stdout.strip().splitlines()[-1])["collisions_per_s"])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("other", type=Path, help="the other tree's src/ directory")
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--sizes", type=int, nargs="+", default=[1_000, 10_000])
+    parser.add_argument("--dims", type=int, nargs="+", default=[3, 2])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--record", action="store_true", help="append to benchmarks/RESULTS.md")
+    args = parser.parse_args()
+    for src in (SRC, args.other):  # compile (or load) each tree's kernels before timing
+        measure(src, 3, 1000, 1)
+        measure(src, 2, 1000, 1)
+    rows = []
+    for r in range(args.rounds):
+        for dim in args.dims:
+            for n in args.sizes:
+                order = [("this", SRC), ("other", args.other)]
+                if r % 2:
+                    order.reverse()
+                got = {name: measure(src, dim, n, args.repeats) for name, src in order}
+                ratio = got["this"] / got["other"]
+                rows.append((r + 1, dim, n, got["this"], got["other"], ratio))
+                print(
+                    f"round {r + 1}, {dim}D, N = {n}: this {got['this']:.3g}, other "
+                    f"{got['other']:.3g} collisions/s, ratio {ratio:.3f}",
+                    flush=True,
+                )
+    if args.record:
+        stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+        lines = [
+            f"\n## edmd interleaved A/B, {stamp}\n",
+            f"- command: `python benchmarks/ab.py {args.other} --rounds {args.rounds} "
+            f"--sizes {' '.join(map(str, args.sizes))} --dims {' '.join(map(str, args.dims))}`",
+            "- machine: see the entries above (same VM class)\n",
+            "| round | dim | N | this [coll/s] | other [coll/s] | this / other |",
+            "|---|---|---|---|---|---|",
+        ]
+        lines += [
+            f"| {r} | {d} | {n:,} | {a:.3g} | {b:.3g} | {q:.3f} |" for r, d, n, a, b, q in rows
+        ]
+        with (HERE / "RESULTS.md").open("a") as handle:
+            handle.write("\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    main()

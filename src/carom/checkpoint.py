@@ -1,0 +1,154 @@
+"""Checkpoints: a whole :class:`carom.World` in one ``.npz`` file, to continue bit for bit.
+
+The file holds the world's settings, materials and planes as JSON (``meta``), the body table,
+the engine's own arrays under ``engine.*`` (versioned per engine), and a caller's ``extra``
+arrays. It is written beside its path and renamed over it, so the path always holds a whole
+checkpoint. A checkpoint is read only by the format version that wrote it; an older or newer
+one is refused with a message that says so.
+"""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from collections.abc import Mapping
+from dataclasses import asdict
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from carom.engines.base import Counters
+from carom.errors import CaromError
+from carom.materials import Material
+
+if TYPE_CHECKING:
+    from carom.world import World
+
+__all__ = ["FORMAT", "VERSION", "load_world", "save_world"]
+
+FORMAT = "carom-checkpoint"
+#: bumped whenever the layout of the file or of an engine's arrays changes
+VERSION = 4
+BODY_FIELDS = (
+    "position",
+    "velocity",
+    "orientation",
+    "angular_velocity",
+    "shape",
+    "radius",
+    "mass",
+    "inertia_factor",
+    "material",
+)
+
+
+def save_world(world: World, path: Path, extra: Mapping[str, NDArray[Any]]) -> None:
+    """Write ``world`` (and ``extra`` arrays, by name) to ``path``, atomically."""
+    engine = world.engine
+    meta = {
+        "format": FORMAT,
+        "version": VERSION,
+        "engine": None if engine is None else engine.name,
+        "dim": world.dim,
+        "box": world.box.tolist(),
+        "boundary": world.boundary,
+        "gravity": world.gravity.tolist(),
+        "walls": [asdict(m) for m in world.walls],
+        "settings": asdict(world.settings),
+        "combine": world.combine,
+        "time": world.time,
+        "materials": [asdict(m) for m in world.materials],
+        "pair_overrides": [[a, b, e] for (a, b), e in world.pair_overrides.items()],
+        "planes": [[p.tolist(), q.tolist(), asdict(m)] for p, q, m in world.planes],
+        "counters_before": list(world.counters_before),
+        "collisions_dropped": world.collisions_dropped,
+    }
+    arrays: dict[str, Any] = {"meta": np.array(json.dumps(meta))}
+    for name in BODY_FIELDS:
+        arrays[f"body.{name}"] = getattr(world.bodies, name)
+    if engine is not None:
+        arrays |= {f"engine.{k}": v for k, v in engine.arrays().items()}
+    arrays["log"] = world.collisions
+    arrays |= {f"extra.{k}": v for k, v in extra.items()}
+    tmp = path.with_name(path.name + ".partial")
+    with tmp.open("wb") as handle:
+        np.savez(handle, **arrays)
+    tmp.replace(path)
+
+
+def load_world(path: Path) -> tuple[World, dict[str, NDArray[Any]]]:
+    """The world saved by :func:`save_world` at ``path``, and its ``extra`` arrays."""
+    try:
+        handle = path.open("rb")
+    except OSError as exc:
+        raise CaromError(f"cannot read checkpoint {path}: {exc.strerror}") from None
+    with handle:
+        try:
+            data = np.load(handle, allow_pickle=False)
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+            raise CaromError(f"cannot read checkpoint {path}: {exc}") from None
+        try:
+            with data:
+                return _read(path, data)
+        except CaromError:
+            raise
+        except (KeyError, ValueError, OSError, zipfile.BadZipFile, EOFError) as exc:
+            raise CaromError(
+                f"checkpoint {path} is damaged or incomplete ({type(exc).__name__}: {exc}); "
+                f"start the run again"
+            ) from None
+
+
+def _read(path: Path, data: Any) -> tuple[World, dict[str, NDArray[Any]]]:
+    from carom.world import World
+
+    meta = json.loads(str(data["meta"]))
+    _check_version(path, meta)
+    world = World(
+        meta["dim"],
+        meta["box"],
+        meta["boundary"],
+        meta["gravity"],
+        walls=[Material(**m) for m in meta["walls"]],
+        combine=meta["combine"],
+        **meta["settings"],
+    )
+    for m in meta["materials"]:
+        world.add_material(Material(**m))
+    for a, b, e in meta["pair_overrides"]:
+        world.set_pair(a, b, e)
+    for p, q, m in meta["planes"]:
+        world.add_plane(p, q, material=Material(**m))
+    for name in BODY_FIELDS:
+        setattr(world.bodies, name, data[f"body.{name}"])
+    engine = {k[len("engine.") :]: data[k] for k in data.files if k.startswith("engine.")}
+    world.restore(
+        meta["time"],
+        engine if meta["engine"] is not None else None,
+        Counters(*meta["counters_before"]),
+        data["log"],
+        meta["collisions_dropped"],
+    )
+    extra = {k[len("extra.") :]: data[k] for k in data.files if k.startswith("extra.")}
+    return world, extra
+
+
+def _check_version(path: Path, meta: dict[str, Any]) -> None:
+    if meta.get("format") == "carom-world":  # what carom wrote before version 4
+        raise CaromError(
+            f"checkpoint {path} was written by an older carom (format 'carom-world', version "
+            f"{meta.get('version')}); this carom reads {FORMAT} version {VERSION}: re-run the "
+            f"simulation, or load it with the carom that wrote it"
+        )
+    if meta.get("format") != FORMAT:
+        raise CaromError(f"{path} is not a carom checkpoint")
+    if meta.get("version") != VERSION:
+        raise CaromError(
+            f"checkpoint {path} has format version {meta.get('version')}, this carom reads "
+            f"version {VERSION}; re-run the simulation with this version, or load it with the "
+            f"carom that wrote it"
+        )
+    if meta.get("engine") not in (None, "edmd"):
+        raise CaromError(f"checkpoint {path} is of engine {meta['engine']!r}, unknown here")

@@ -1,0 +1,112 @@
+"""What every engine offers a :class:`carom.World`: the Engine protocol, the collision record
+and the running counters.
+
+A World owns the bodies, materials and boundaries (engine-neutral); an engine is built from
+them, advances to a time, samples the bodies' state, hands over the collisions it logged, and
+saves and restores its own arrays for checkpoints. Bodies are numbered as the caller added
+them in everything an engine returns.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, NamedTuple, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["COLLISION_DTYPE", "KIND_PAIR", "KIND_PLANE", "KIND_WALL", "Counters", "Engine", "Sink"]
+
+FloatArray = NDArray[np.float64]
+
+KIND_PAIR = 0  # partner is a body
+KIND_WALL = 1  # partner is a wall face: 2k lower, 2k + 1 upper wall of axis k
+KIND_PLANE = 2  # partner is a static plane, by index
+
+#: One logged collision: ``time`` [s]; ``body``; the ``kind`` of partner (``KIND_PAIR``,
+#: ``KIND_WALL``, ``KIND_PLANE``) and its index ``partner`` (a body, a wall face, a plane);
+#: the ``impulse`` on ``body`` [N s] (3 components, z = 0 in 2D); the normal relative speeds
+#: ``un_before`` and ``un_after`` [m/s] (negative: approaching).
+COLLISION_DTYPE = np.dtype(
+    [
+        ("time", np.float64),
+        ("body", np.int64),
+        ("kind", np.int8),
+        ("partner", np.int64),
+        ("impulse", np.float64, (3,)),
+        ("un_before", np.float64),
+        ("un_after", np.float64),
+    ]
+)
+
+#: Receives each block of collisions as the engine hands them over (a structured array of
+#: ``COLLISION_DTYPE``, time-ordered); it may keep, write or drop them.
+Sink = Callable[[NDArray[Any]], None]
+
+
+class Counters(NamedTuple):
+    """An engine's running totals since it was built (the World's :class:`carom.Stats` takes
+    differences of them).
+
+    Attributes
+    ----------
+    events : int
+        Events processed: collisions, and the engine's own bookkeeping events.
+    collisions, wall_collisions : int
+        Impacts between two bodies; of a body with a wall or plane.
+    tc_collisions : int
+        Impacts the TC model made elastic (event-driven engine).
+    rests : int
+        Bodies brought to rest on a wall or plane.
+    virial : float
+        Sum over impacts of ``J . r`` [J s] (pairs: ``r = x1 - x2``; walls: ``r = x``).
+    energy_lost : float
+        Kinetic energy dissipated by impacts [J].
+    """
+
+    events: int
+    collisions: int
+    wall_collisions: int
+    tc_collisions: int
+    rests: int
+    virial: float
+    energy_lost: float
+
+    def plus(self, other: Counters) -> Counters:
+        """These totals and ``other``'s, added."""
+        return Counters(*(a + b for a, b in zip(self, other, strict=True)))  # type: ignore[arg-type]
+
+    def minus(self, other: Counters) -> Counters:
+        """These totals less ``other``'s."""
+        return Counters(*(a - b for a, b in zip(self, other, strict=True)))  # type: ignore[arg-type]
+
+
+class Engine(Protocol):
+    """An engine that advances bodies in time."""
+
+    name: str
+    #: the engine's clock [s]
+    time: float
+
+    def advance(self, until: float, max_events: int, sink: Sink | None) -> None:
+        """Advance to ``until`` [s] (or by ``max_events`` events, for an event-driven engine);
+        logged collisions go to ``sink`` (None: none are logged)."""
+        ...
+
+    def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Positions (N, d) [m], velocities (N, d) [m/s], orientations ((N,) angles [rad] in
+        2D, (N, 4) unit quaternions ``w, x, y, z`` in 3D) and angular velocities (N, 3)
+        [rad/s], now."""
+        ...
+
+    def counters(self) -> Counters:
+        """The running totals."""
+        ...
+
+    def resting(self) -> NDArray[np.int64]:
+        """The wall face or plane each body rests on (-1: none), (N,)."""
+        ...
+
+    def arrays(self) -> dict[str, NDArray[Any]]:
+        """Everything needed to continue bit for bit, as named arrays (for checkpoints)."""
+        ...

@@ -1,0 +1,385 @@
+"""The event-driven engine as a :class:`carom.engines.base.Engine`: builds Model and State from
+the World's bodies, runs the loop, grows what overflows, and hands over the log.
+
+The engine numbers bodies along a space-filling curve (:mod:`carom.engines.edmd.ordering`):
+engine index ``e`` is body ``order[e]``; everything this class returns is in the caller's
+numbering.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from carom.bodies import Bodies
+from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, KIND_PLANE, KIND_WALL, Counters, Sink
+from carom.engines.edmd import codes, loop
+from carom.engines.edmd.model import Model
+from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
+from carom.engines.edmd.ordering import spatial_order
+from carom.engines.edmd.settings import SHELL_DEFAULT, EdmdSettings
+from carom.engines.edmd.state import State, aligned_records, allocate_state
+from carom.errors import CaromError
+from carom.materials import PairTable
+
+__all__ = ["OVERLAP_TOLERANCE", "EdmdEngine", "Environment"]
+
+FloatArray = NDArray[np.float64]
+LOG_CAPACITY = 1 << 16
+#: Overlaps and box excursions smaller than this fraction of the radii are round-off, not errors
+OVERLAP_TOLERANCE = 1e-12
+
+
+class Environment(NamedTuple):
+    """What surrounds the bodies: the box, gravity, the materials' pair table, and the static
+    faces (the box's walls, lower and upper per axis, then the planes)."""
+
+    box: FloatArray
+    periodic: bool
+    gravity: FloatArray
+    pairs: PairTable
+    face_e: FloatArray
+    plane_point: FloatArray
+    plane_normal: FloatArray
+
+    @property
+    def dim(self) -> int:
+        return int(self.box.shape[0])
+
+
+class EdmdEngine:
+    """Spheres or disks simulated exactly, event by event (docs/engine.md).
+
+    Parameters
+    ----------
+    bodies : Bodies
+        Their state at ``time``.
+    env : Environment
+        The box, gravity, materials and faces.
+    settings : EdmdSettings
+        ``t_c`` and the shell thickness.
+    time : float
+        The clock at the start [s].
+
+    Raises
+    ------
+    CaromError
+        Bodies that overlap, or a periodic box too small for them.
+    """
+
+    name = "edmd"
+
+    def __init__(
+        self,
+        bodies: Bodies,
+        env: Environment,
+        settings: EdmdSettings,
+        time: float,
+        *,
+        state: State | None = None,
+        order: NDArray[np.int64] | None = None,
+        capacity: int | None = None,
+        cell_capacity: int = 0,
+    ) -> None:
+        self.bodies = bodies
+        self.env = env
+        self.settings = settings
+        self.capacity = capacity if capacity is not None else (16 if env.dim == 2 else 32)
+        self.cell_capacity = cell_capacity
+        if state is not None:
+            assert order is not None
+            self.order = order
+            self.model = self._build_model(order)
+            self.state = state
+            return
+        x = bodies.position.copy()
+        if env.periodic:
+            x -= env.box * np.floor(x / env.box)
+        grid = self._build_model(np.arange(bodies.n))
+        order = spatial_order(x, grid.cell_size, grid.ncell)
+        model = self._build_model(order)
+        acc = np.where(model.mobile[:, None], model.gravity[None, :], 0.0)
+        cells = np.clip(np.floor(x / model.cell_size).astype(np.int64), 0, model.ncell - 1)
+        occupancy = np.unique(cells, axis=0, return_counts=True)[1].max()
+        self.cell_capacity = max(self.cell_capacity, 8, 2 * int(occupancy))
+        while True:
+            state = allocate_state(
+                x[order],
+                bodies.velocity[order],
+                acc,
+                bodies.angular_velocity[order],
+                bodies.orientation[order],
+                model.radius,
+                time,
+                int(np.prod(model.ncell)),
+                self.cell_capacity,
+                self.capacity,
+                LOG_CAPACITY,
+            )
+            status = loop.initialise(model, state)
+            if status == codes.DONE:
+                break
+            self._grow(status)
+        self.order = order
+        self.model, self.state = model, state
+        self._check_overlaps()
+
+    # -- building ---------------------------------------------------------------------------
+
+    def _build_model(self, order: NDArray[np.int64]) -> Model:
+        """The Model with bodies in engine order ``order``."""
+        b, env = self.bodies, self.env
+        mass = b.mass[order]
+        mobile = np.isfinite(mass)
+        radius = b.radius[order]
+        mean_diameter = 2.0 * float(np.mean(radius[mobile])) if mobile.any() else 1.0
+        thickness = self.settings.shell_thickness
+        delta = thickness if thickness is not None else SHELL_DEFAULT * mean_diameter
+        largest = float(radius.max()) if b.n else 0.0
+        shell_diameter = 2.0 * (largest + delta)
+        if env.periodic and np.any(env.box < 2.0 * shell_diameter):
+            raise CaromError(
+                f"the box is too small for periodic boundaries with spheres of radius "
+                f"{largest:g} m: each side must exceed 4 (radius + shell) = "
+                f"{2.0 * shell_diameter:g} m"
+            )
+        ncell = np.maximum(1, np.floor(env.box / shell_diameter)).astype(np.int64)
+        with np.errstate(divide="ignore"):
+            inv_mass = np.where(mobile, 1.0 / mass, 0.0)
+        return Model(
+            box=env.box.copy(),
+            inv_box=1.0 / env.box,
+            periodic=env.periodic,
+            gravity=env.gravity.copy(),
+            accelerated=bool(np.any(env.gravity != 0.0)),
+            mobile=mobile,
+            radius=radius,
+            mass=mass,
+            inv_mass=inv_mass,
+            q=b.inertia_factor[order],
+            material=b.material[order],
+            pair_law=env.pairs.law,
+            pair_e=env.pairs.e,
+            pair_beta=env.pairs.beta,
+            pair_friction=env.pairs.friction,
+            face_e=env.face_e,
+            plane_point=env.plane_point,
+            plane_normal=env.plane_normal,
+            t_c=self.settings.t_c,
+            shell_thickness=delta,
+            cell_size=env.box / ncell,
+            ncell=ncell,
+        )
+
+    def _check_overlaps(self) -> None:
+        """Refuse overlapping spheres: every overlapping pair shares a neighbour list.
+
+        Vectorised over the lists, a block of bodies at a time (bounded memory at 1e6 bodies).
+        """
+        model, state = self.model, self.state
+        x = state.kin[:, : self.env.dim]  # engine order, at the start time
+        n, capacity = state.nbr.shape
+        slots = np.arange(capacity)
+        block = max(1, 2_000_000 // max(capacity, 1))
+        for start in range(0, n, block):
+            stop = min(n, start + block)
+            used = (slots[None, :] < state.nbr_count[start:stop, None]) & model.mobile[
+                start:stop, None
+            ]
+            rows, cols = np.nonzero(used)
+            i = rows + start
+            j = state.nbr[i, cols].astype(np.int64)
+            d = x[i] - x[j]
+            if model.periodic:
+                d -= model.box * np.floor(d / model.box + 0.5)
+            dist = np.sqrt(np.sum(d * d, axis=1))
+            reach = model.radius[i] + model.radius[j]
+            overlap = reach - dist
+            bad = overlap > OVERLAP_TOLERANCE * reach
+            if bad.any():
+                k = int(np.argmax(bad))
+                a, b = sorted((int(self.order[i[k]]), int(self.order[j[k]])))
+                pos, rad = self.bodies.position, self.bodies.radius
+                raise CaromError(
+                    f"spheres {a} and {b} overlap by {overlap[k]:.3g} m at the start (centres "
+                    f"{pos[a].tolist()} and {pos[b].tolist()}, radii {rad[a]:g} and "
+                    f"{rad[b]:g}); place them at least the sum of their radii apart"
+                )
+
+    # -- running ----------------------------------------------------------------------------
+
+    @property
+    def time(self) -> float:
+        """The engine's clock [s]: the time of the last event, or where it was stopped."""
+        return float(self.state.clock[0])
+
+    def advance(self, until: float, max_events: int, sink: Sink | None) -> None:
+        """Process events in time order until ``until`` [s] (the clock then reads ``until``)
+        or ``max_events`` events; collisions go to ``sink`` if given (the log buffer is
+        emptied into it whenever it fills), and the lists grow whenever one overflows."""
+        remaining = max_events
+        while True:
+            before = int(self.state.counts[codes.C_EVENTS])
+            status = loop.run(self.model, self.state, until, remaining, sink is not None)
+            self._drain(sink)
+            remaining -= int(self.state.counts[codes.C_EVENTS]) - before
+            if status in (codes.DONE, codes.MAX_EVENTS):
+                return
+            if status in (codes.LISTS_FULL, codes.CELLS_FULL):
+                self._grow(status)
+                self.resize_grid(self.capacity, self.cell_capacity)
+
+    def _grow(self, status: int) -> None:
+        """Double the capacity that ran out: neighbour lists or cell rows."""
+        if status == codes.LISTS_FULL:
+            self.capacity *= 2
+        else:
+            self.cell_capacity *= 2
+
+    def resize_grid(self, capacity: int, cell_capacity: int) -> None:
+        """Rebuild every neighbour list and cell row with room for ``capacity`` neighbours and
+        ``cell_capacity`` bodies per cell (more if needed).
+
+        Lists only say which pairs to examine; every scheduled event stays valid.
+        """
+        model, state = self.model, self.state
+        while True:
+            state = state._replace(
+                nbr=np.zeros((state.kin.shape[0], capacity), np.int32),
+                nbr_old=np.zeros(capacity, np.int32),
+                cell_body=np.zeros((state.cell_count.shape[0], cell_capacity), np.int32),
+            )
+            status = build_all(
+                state.shell,
+                model.mobile,
+                state.nbr,
+                state.nbr_count,
+                state.cell_count,
+                state.cell_body,
+                state.slot,
+                state.cell,
+                model.box,
+                model.periodic,
+                model.shell_thickness,
+                model.cell_size,
+                model.ncell,
+                state.nbr_mark,
+            )
+            if status == FITS:
+                break
+            if status == LIST_FULL:
+                capacity *= 2
+            else:
+                cell_capacity *= 2
+        self.capacity, self.cell_capacity = capacity, cell_capacity
+        self.state = state
+
+    def _drain(self, sink: Sink | None) -> None:
+        """Hand the log buffer's collisions to ``sink``, in the caller's numbering."""
+        state = self.state
+        n = int(state.log_n[0])
+        if n == 0:
+            return
+        state.log_n[0] = 0
+        if sink is None:
+            return
+        record = np.empty(n, dtype=COLLISION_DTYPE)
+        record["time"] = state.log_time[:n]
+        record["body"] = self.order[state.log_a[:n]]
+        b = state.log_b[:n]
+        face = -1 - b
+        n_walls = 2 * self.env.dim
+        record["kind"] = np.where(
+            b >= 0, KIND_PAIR, np.where(face < n_walls, KIND_WALL, KIND_PLANE)
+        )
+        record["partner"] = np.where(
+            b >= 0, self.order[np.maximum(b, 0)], np.where(face < n_walls, face, face - n_walls)
+        )
+        record["impulse"] = state.log_impulse[:n]
+        record["un_before"] = state.log_un[:n, 0]
+        record["un_after"] = state.log_un[:n, 1]
+        sink(record)
+
+    # -- reading ----------------------------------------------------------------------------
+
+    def _to_user(self, rows: NDArray[Any]) -> NDArray[Any]:
+        """Engine-ordered rows in the caller's numbering."""
+        out = np.empty_like(rows)
+        out[self.order] = rows
+        return out
+
+    def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Positions (N, d), velocities (N, d), orientations ((N, 1) or (N, 4)) and angular
+        velocities (N, 3) at the engine's clock, in the caller's numbering."""
+        dim, n = self.env.dim, self.bodies.n
+        x, v = np.empty((n, dim)), np.empty((n, dim))
+        loop.positions_at(self.model, self.state, self.time, x, v)
+        orient = np.empty((n, 1 if dim == 2 else 4))
+        loop.orientations_at(self.model, self.state, self.time, orient)
+        return (
+            self._to_user(x),
+            self._to_user(v),
+            self._to_user(orient),
+            self._to_user(self.state.w),
+        )
+
+    def counters(self) -> Counters:
+        c, s = self.state.counts, self.state.sums
+        return Counters(
+            events=int(c[codes.C_EVENTS]),
+            collisions=int(c[codes.C_PAIR]),
+            wall_collisions=int(c[codes.C_WALL]),
+            tc_collisions=int(c[codes.C_TC]),
+            rests=int(c[codes.C_REST]),
+            virial=float(s[codes.S_VIRIAL]),
+            energy_lost=float(s[codes.S_KE_LOST]),
+        )
+
+    def resting(self) -> NDArray[np.int64]:
+        return self._to_user(self.state.support)
+
+    def neighbour_counts(self) -> NDArray[np.int64]:
+        """How many neighbours each body's list holds now, (N,) (diagnostics and tests)."""
+        return self._to_user(self.state.nbr_count)
+
+    def max_cell_occupancy(self) -> int:
+        """The most bodies in one cell now (diagnostics and tests)."""
+        return int(self.state.cell_count.max())
+
+    # -- checkpoints ------------------------------------------------------------------------
+
+    def arrays(self) -> dict[str, NDArray[Any]]:
+        arrays: dict[str, NDArray[Any]] = {
+            f"state.{name}": value for name, value in self.state._asdict().items()
+        }
+        arrays["order"] = self.order
+        arrays["capacity"] = np.array([self.capacity, self.cell_capacity])
+        return arrays
+
+    @classmethod
+    def restore(
+        cls,
+        bodies: Bodies,
+        env: Environment,
+        settings: EdmdSettings,
+        arrays: dict[str, NDArray[Any]],
+    ) -> EdmdEngine:
+        """The engine saved by :meth:`arrays`, continuing bit for bit."""
+        fields = {name: arrays[f"state.{name}"] for name in State._fields}
+        fields["kin"] = aligned_records(len(fields["kin"]), fields["kin"])
+        state = State(**fields)
+        capacity, cell_capacity = (int(c) for c in arrays["capacity"])
+        engine = cls(
+            bodies,
+            env,
+            settings,
+            float(state.clock[0]),
+            state=state,
+            order=arrays["order"],
+            capacity=capacity,
+            cell_capacity=cell_capacity,
+        )
+        bodies.set_state(*engine.sample())  # the table as of the checkpoint's clock
+        return engine

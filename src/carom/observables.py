@@ -1,0 +1,224 @@
+"""What is measured of a simulation: energies, momentum, temperatures, pressure, rates.
+
+Functions of a body table and its state (any engine's), and :class:`Stats`, the averages of a
+:class:`carom.World` over a window, from its engine's running counters. The formulas are those
+of PHYSICS.md section 6 (``k_B = 1``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from carom.bodies import Bodies
+from carom.engines.base import Counters
+
+if TYPE_CHECKING:
+    from carom.world import Frame, World
+
+__all__ = [
+    "RunHistory",
+    "Stats",
+    "kinetic_energy",
+    "momentum",
+    "potential_energy",
+    "rotational_temperature",
+    "temperature",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+def kinetic_energy(bodies: Bodies, velocities: FloatArray, angular_velocities: FloatArray) -> float:
+    """Kinetic energy [J], translation and rotation, of the moving bodies with these
+    velocities (N, d) [m/s] and angular velocities (N, 3) [rad/s]."""
+    m = bodies.mobile
+    v, mass, spin = velocities[m], bodies.mass[m], angular_velocities[m]
+    ke = 0.5 * np.sum(mass * np.sum(v * v, axis=1))
+    inertia = bodies.inertia_factor[m] * mass * bodies.radius[m] ** 2
+    ke += 0.5 * np.sum(inertia * np.sum(spin * spin, axis=1))
+    return float(ke)
+
+
+def momentum(bodies: Bodies, velocities: FloatArray) -> FloatArray:
+    """Total momentum (d,) [kg m/s] of the moving bodies with these velocities (N, d)."""
+    m = bodies.mobile
+    result: FloatArray = np.sum(bodies.mass[m, None] * velocities[m], axis=0)
+    return result
+
+
+def potential_energy(bodies: Bodies, positions: FloatArray, gravity: FloatArray) -> float:
+    """Gravitational potential energy ``-sum m g . x`` [J] of the moving bodies at these
+    positions (N, d) [m]; zero without gravity."""
+    if not np.any(gravity):
+        return 0.0
+    m = bodies.mobile
+    return float(-np.sum(bodies.mass[m] * (positions[m] @ gravity)))
+
+
+def temperature(bodies: Bodies, velocities: FloatArray) -> float:
+    """Translational granular temperature ``T = sum m |v - v_cm|^2 / (d N)`` [J] (``k_B = 1``)
+    of the moving bodies: velocities relative to their centre of mass, so a drifting gas
+    has the temperature of the same gas at rest."""
+    m = bodies.mobile
+    n = int(np.count_nonzero(m))
+    if n == 0:
+        return 0.0
+    return 2.0 * _peculiar_kinetic_energy(bodies, velocities) / (bodies.dim * n)
+
+
+def rotational_temperature(bodies: Bodies, angular_velocities: FloatArray) -> float:
+    """Rotational temperature ``sum I w^2 / (f N)`` [J] of the moving bodies, with ``f`` the
+    rotational degrees of freedom (3 in 3D, 1 in 2D); equal to :func:`temperature` in
+    equilibrium (equipartition)."""
+    m = bodies.mobile
+    n = int(np.count_nonzero(m))
+    if n == 0:
+        return 0.0
+    spin = angular_velocities[m] if bodies.dim == 3 else angular_velocities[m][:, 2:]
+    inertia = bodies.inertia_factor[m] * bodies.mass[m] * bodies.radius[m] ** 2
+    f = 3 if bodies.dim == 3 else 1
+    return float(np.sum(inertia * np.sum(spin * spin, axis=1)) / (f * n))
+
+
+def _peculiar_kinetic_energy(bodies: Bodies, velocities: FloatArray) -> float:
+    """``sum m |v - v_cm|^2 / 2`` [J] over the moving bodies: translation relative to the
+    centre of mass."""
+    m = bodies.mobile
+    v, mass = velocities[m], bodies.mass[m]
+    v_cm = np.sum(mass[:, None] * v, axis=0) / np.sum(mass)
+    dv = v - v_cm
+    return float(0.5 * np.sum(mass * np.sum(dv * dv, axis=1)))
+
+
+class Stats:
+    """Observables of a :class:`carom.World`; averages run since the last :meth:`reset`."""
+
+    def __init__(self, world: World) -> None:
+        self._world = world
+        self._t0 = world.time
+        self._start = world.counters()
+
+    def reset(self) -> None:
+        """Start a new averaging window now."""
+        self._t0 = self._world.time
+        self._start = self._world.counters()
+
+    def _since(self) -> Counters:
+        return self._world.counters().minus(self._start)
+
+    @property
+    def collisions(self) -> int:
+        """Collisions between two bodies since the last reset."""
+        return self._since().collisions
+
+    @property
+    def wall_collisions(self) -> int:
+        """Collisions with walls and planes since the last reset."""
+        return self._since().wall_collisions
+
+    @property
+    def events_processed(self) -> int:
+        """Events the engine processed since the last reset: collisions, and its own
+        bookkeeping (neighbour-shell rebuilds, stale predictions)."""
+        return self._since().events
+
+    @property
+    def tc_collisions(self) -> int:
+        """Collisions the TC model made elastic since the last reset."""
+        return self._since().tc_collisions
+
+    @property
+    def kinetic_energy(self) -> float:
+        """Total kinetic energy now, translation and rotation [J]."""
+        w = self._world
+        return kinetic_energy(w.bodies, w.velocities, w.angular_velocities)
+
+    @property
+    def momentum(self) -> FloatArray:
+        """Total momentum of the moving bodies now, (d,) [kg m/s]."""
+        return momentum(self._world.bodies, self._world.velocities)
+
+    @property
+    def temperature(self) -> float:
+        """Translational temperature now, relative to the centre of mass [J] (``k_B = 1``)."""
+        return temperature(self._world.bodies, self._world.velocities)
+
+    @property
+    def rotational_temperature(self) -> float:
+        """Rotational temperature now [J] (``k_B = 1``)."""
+        return rotational_temperature(self._world.bodies, self._world.angular_velocities)
+
+    @property
+    def pressure(self) -> float:
+        """Pressure from the collision virial over the window [Pa] (2D: [N/m]).
+
+        ``P = (2 K + sum J . r / dt) / (d V)`` with ``K`` the translational kinetic energy
+        relative to the centre of mass now (so neither spin nor a drift of the whole gas
+        counts; constant in elastic systems, not stationary in dissipative ones): pairs
+        contribute ``J . (x1 - x2)``, walls and planes ``J . x`` with ``x`` the sphere's
+        centre (PHYSICS.md section 6). In a periodic box this is the bulk pressure; in a box
+        with walls, the pressure of the fluid whose centres fill the box. NaN under gravity
+        or before any time has passed.
+        """
+        w = self._world
+        dt = w.time - self._t0
+        if dt <= 0.0 or np.any(w.gravity != 0.0):
+            return math.nan
+        volume = float(np.prod(w.box))
+        kinetic = _peculiar_kinetic_energy(w.bodies, w.velocities)
+        return (2.0 * kinetic + self._since().virial / dt) / (w.dim * volume)
+
+    @property
+    def mean_free_time(self) -> float:
+        """Mean time between collisions of a body with another [s]: ``N dt / (2 C)``."""
+        w = self._world
+        n = int(np.count_nonzero(w.bodies.mobile))
+        coll = self.collisions
+        dt = w.time - self._t0
+        return math.inf if coll == 0 else n * dt / (2.0 * coll)
+
+    @property
+    def energy_lost(self) -> float:
+        """Kinetic energy dissipated by collisions since the last reset [J]."""
+        return self._since().energy_lost
+
+
+@dataclass
+class RunHistory:
+    """A run's observables, recorded as it goes (for its plots and summary): time [s],
+    kinetic and potential energy [J], energy dissipated so far [J], total momentum
+    [kg m/s], and collisions so far (bodies and walls) [-]."""
+
+    time: list[float] = field(default_factory=list)
+    kinetic: list[float] = field(default_factory=list)
+    potential: list[float] = field(default_factory=list)
+    dissipated: list[float] = field(default_factory=list)
+    momentum: list[NDArray[np.float64]] = field(default_factory=list)
+    collisions: list[int] = field(default_factory=list)
+
+    def add(self, world: World, frame: Frame) -> None:
+        """Record ``frame`` of ``world`` (taken now: the dissipation so far is the world's)."""
+        b = world.bodies
+        self.time.append(frame.time)
+        self.kinetic.append(kinetic_energy(b, frame.velocities, frame.angular_velocities))
+        self.potential.append(potential_energy(b, frame.positions, world.gravity))
+        counters = world.counters()
+        self.dissipated.append(counters.energy_lost)
+        self.momentum.append(momentum(b, frame.velocities))
+        self.collisions.append(counters.collisions + counters.wall_collisions)
+
+    def arrays(self) -> dict[str, NDArray[np.float64]]:
+        """Every series as an array, by name (for checkpoints)."""
+        return {name: np.array(getattr(self, name)) for name in self.__dataclass_fields__}
+
+    @classmethod
+    def from_arrays(cls, arrays: dict[str, NDArray[np.float64]]) -> RunHistory:
+        """The history :meth:`arrays` saved."""
+        history = cls(**{name: arrays[name].tolist() for name in cls.__dataclass_fields__})
+        history.momentum = list(arrays["momentum"])
+        return history

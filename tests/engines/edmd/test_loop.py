@@ -1,0 +1,63 @@
+"""The event loop (carom.engines.edmd.loop.run) and its driver, tested directly: why it
+returns, the clock, the log buffer emptied whenever it fills, and events in time order."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from carom.engines.edmd import codes, driver, loop
+from carom.scene.layouts import lattice_gas
+
+
+def test_it_stops_after_max_events_and_at_t_stop() -> None:
+    world = lattice_gas(3, 5, 0.3, seed=1)
+    engine = world.build()
+    state = engine.state
+    assert loop.run(engine.model, state, np.inf, 7, False) == codes.MAX_EVENTS
+    assert engine.counters().events == 7
+    t = engine.time
+    assert loop.run(engine.model, state, t + 0.25, 10**9, False) == codes.DONE
+    assert engine.time == t + 0.25  # the clock reads t_stop exactly, whatever the last event
+
+
+def test_a_full_log_buffer_returns_and_the_driver_empties_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    def collisions(capacity: int) -> np.ndarray:
+        monkeypatch.setattr(driver, "LOG_CAPACITY", capacity)
+        world = lattice_gas(2, 8, 0.4, seed=2)
+        world.run(until=3.0, log=True)
+        assert world.engine is not None
+        assert world.engine.state.log_time.shape == (capacity,)
+        return world.collisions
+
+    small, roomy = collisions(4), collisions(1 << 16)
+    assert len(roomy) > 100  # the small buffer filled dozens of times
+    assert small.tobytes() == roomy.tobytes()  # and nothing was lost or reordered
+    assert np.all(np.diff(roomy["time"]) >= 0.0)  # processed in time order
+
+
+def test_a_full_buffer_is_reported_by_the_loop() -> None:
+    world = lattice_gas(2, 8, 0.4, seed=2)
+    engine = world.build()
+    engine.state = engine.state._replace(
+        log_time=np.zeros(2),
+        log_a=np.zeros(2, np.int64),
+        log_b=np.zeros(2, np.int64),
+        log_impulse=np.zeros((2, 3)),
+        log_un=np.zeros((2, 2)),
+    )
+    assert loop.run(engine.model, engine.state, 10.0, 10**9, True) == codes.LOG_FULL
+    assert int(engine.state.log_n[0]) == 2
+
+
+def test_stale_predictions_are_counted_not_processed() -> None:
+    # a dense gas: many predicted partners collide with someone else first
+    world = lattice_gas(3, 6, 0.4, seed=3)
+    world.run(until=2.0)
+    assert world.engine is not None
+    counts = world.engine.state.counts
+    assert counts[codes.C_STALE] > 0
+    processed = counts[codes.C_PAIR] + counts[codes.C_WALL] + counts[codes.C_SHELL]
+    assert counts[codes.C_EVENTS] == processed + counts[codes.C_STALE]

@@ -1,0 +1,71 @@
+"""The neighbour lists and cell grid (carom.engines.edmd.neighbours), tested directly against
+brute force: body i lists body j exactly when their shells overlap,
+|c_i - c_j| < a_i + a_j + 2 delta (nearest image when periodic), and static bodies list
+nobody (Smallenburg 2022, as the module docstring states)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from carom.engines.edmd.neighbours import CELL_FULL, FITS, LIST_FULL, build_all
+
+
+def _grid(
+    dim: int, n: int, periodic: bool, seed: int, capacity: int = 64, cell_capacity: int = 64
+) -> dict[str, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    box = np.full(dim, 10.0)
+    radius = rng.uniform(0.1, 0.4, n)
+    delta = 0.3
+    shell = np.zeros((n, 4))
+    shell[:, :dim] = rng.uniform(0.0, 10.0, (n, dim))
+    shell[:, 3] = radius
+    ncell = np.maximum(1, np.floor(box / (2 * (radius.max() + delta)))).astype(np.int64)
+    n_cells = int(np.prod(ncell))
+    return {
+        "shell": shell,
+        "mobile": rng.random(n) < 0.8,
+        "nbr": np.zeros((n, capacity), np.int32),
+        "count": np.zeros(n, np.int64),
+        "cell_count": np.zeros(n_cells, np.int64),
+        "cell_body": np.zeros((n_cells, cell_capacity), np.int32),
+        "slot": np.zeros(n, np.int64),
+        "cell": np.zeros(n, np.int64),
+        "box": box,
+        "periodic": np.bool_(periodic),
+        "delta": np.float64(delta),
+        "cell_size": box / ncell,
+        "ncell": ncell,
+        "mark": np.zeros(n, np.int64),
+    }
+
+
+def _build(g: dict[str, np.ndarray]) -> int:
+    return int(build_all(*(g[k] for k in g)))
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("periodic", [False, True])
+def test_lists_are_exactly_the_overlapping_shells(dim: int, periodic: bool) -> None:
+    g = _grid(dim, 300, periodic, seed=dim)
+    assert _build(g) == FITS
+    c, a = g["shell"][:, :dim], g["shell"][:, 3]
+    d = c[:, None, :] - c[None, :, :]
+    if periodic:
+        d -= g["box"] * np.floor(d / g["box"] + 0.5)
+    reach = a[:, None] + a[None, :] + 2 * g["delta"]
+    overlap = (np.sum(d * d, axis=2) < reach**2) & ~np.eye(len(a), dtype=bool)
+    for i in range(len(a)):
+        listed = set(g["nbr"][i, : g["count"][i]].tolist())
+        expected = set(np.flatnonzero(overlap[i]).tolist()) if g["mobile"][i] else set()
+        assert listed == expected, i
+    # every body sits in the cell of its centre, at its slot
+    for i in range(len(a)):
+        assert g["cell_body"][g["cell"][i], g["slot"][i]] == i
+
+
+def test_full_lists_and_full_cells_are_reported() -> None:
+    # (the engine then doubles the room and builds again: tests/physics, cramped worlds)
+    assert _build(_grid(3, 300, False, seed=1, capacity=1)) == LIST_FULL
+    assert _build(_grid(3, 300, False, seed=1, cell_capacity=1)) == CELL_FULL
