@@ -1,7 +1,10 @@
 """Interleaved A/B of the event-driven engine: this tree against another carom source tree.
 
 Each round measures both trees in fresh processes, one after the other (the order alternates
-from round to round), so that the machine's drift over minutes falls on both alike. The
+from round to round), so that the machine's drift over minutes falls on both alike; with
+``--concurrent``, at the same time, each pinned to its own core (swapped from round to round),
+so that both see the same seconds of a noisy virtual machine (on this VM class the ratio's
+spread fell from +-40% to +-5% this way). The
 workload is benchmarks/edmd.py's: a periodic lattice gas (3D packing 0.3, 2D 0.5), melted,
 then timed for about 3e5 collisions, best of ``--repeats``. Only API that every carom since
 the first engine has is used, so any two commits can be compared.
@@ -16,9 +19,12 @@ import argparse
 import datetime as dt
 import json
 import os
+import statistics
 import subprocess
 import sys
 from pathlib import Path
+
+from edmd import commit, machine  # benchmarks/edmd.py, beside this file
 
 HERE = Path(__file__).resolve().parent
 SRC = HERE.parent / "src"
@@ -46,16 +52,34 @@ print(json.dumps({"collisions_per_s": best, "n": world.n_bodies}))
 """
 
 
-def measure(src: Path, dim: int, n: int, repeats: int) -> float:
-    env = {**os.environ, "PYTHONPATH": str(src)}
-    proc = subprocess.run(
-        [sys.executable, "-c", SNIPPET, str(dim), str(n), str(repeats)],
-        capture_output=True,
+def _start(src: Path, dim: int, n: int, repeats: int, cpu: int | None) -> subprocess.Popen[str]:
+    pin = ["taskset", "-c", str(cpu)] if cpu is not None else []
+    return subprocess.Popen(
+        [*pin, sys.executable, "-c", SNIPPET, str(dim), str(n), str(repeats)],
+        stdout=subprocess.PIPE,
         text=True,
-        env=env,
-        check=True,
+        env={**os.environ, "PYTHONPATH": str(src)},
     )
-    return float(json.loads(proc.stdout.strip().splitlines()[-1])["collisions_per_s"])
+
+
+def _rate(proc: subprocess.Popen[str]) -> float:
+    out, _ = proc.communicate()
+    if proc.returncode:
+        raise SystemExit(f"a measurement failed (exit code {proc.returncode})")
+    return float(json.loads(out.strip().splitlines()[-1])["collisions_per_s"])
+
+
+def measure(src: Path, dim: int, n: int, repeats: int) -> float:
+    """Collisions per second of the tree at ``src``, alone."""
+    return _rate(_start(src, dim, n, repeats, None))
+
+
+def measure_together(
+    trees: list[tuple[str, Path]], dim: int, n: int, repeats: int
+) -> dict[str, float]:
+    """Both trees at once, the first on core 0 and the second on core 1."""
+    procs = [(name, _start(src, dim, n, repeats, cpu)) for cpu, (name, src) in enumerate(trees)]
+    return {name: _rate(proc) for name, proc in procs}
 
 
 def main() -> None:
@@ -65,6 +89,9 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[1_000, 10_000])
     parser.add_argument("--dims", type=int, nargs="+", default=[3, 2])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument(
+        "--concurrent", action="store_true", help="both trees at once, one per core (pinned)"
+    )
     parser.add_argument("--record", action="store_true", help="append to benchmarks/RESULTS.md")
     args = parser.parse_args()
     for src in (SRC, args.other):  # compile (or load) each tree's kernels before timing
@@ -77,7 +104,10 @@ def main() -> None:
                 order = [("this", SRC), ("other", args.other)]
                 if r % 2:
                     order.reverse()
-                got = {name: measure(src, dim, n, args.repeats) for name, src in order}
+                if args.concurrent:
+                    got = measure_together(order, dim, n, args.repeats)
+                else:
+                    got = {name: measure(src, dim, n, args.repeats) for name, src in order}
                 ratio = got["this"] / got["other"]
                 rows.append((r + 1, dim, n, got["this"], got["other"], ratio))
                 print(
@@ -85,19 +115,34 @@ def main() -> None:
                     f"{got['other']:.3g} collisions/s, ratio {ratio:.3f}",
                     flush=True,
                 )
+    summary = []
+    for dim in args.dims:
+        for n in args.sizes:
+            ratios = sorted(q for _, d, m, _, _, q in rows if (d, m) == (dim, n))
+            median = statistics.median(ratios)
+            summary.append((dim, n, median, ratios[0], ratios[-1]))
+            print(
+                f"{dim}D, N = {n}: median this / other {median:.3f} "
+                f"(from {ratios[0]:.3f} to {ratios[-1]:.3f} over {len(ratios)} rounds)"
+            )
     if args.record:
         stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
         lines = [
             f"\n## edmd interleaved A/B, {stamp}\n",
             f"- command: `python benchmarks/ab.py {args.other} --rounds {args.rounds} "
+            f"{'--concurrent ' if args.concurrent else ''}"
             f"--sizes {' '.join(map(str, args.sizes))} --dims {' '.join(map(str, args.dims))}`",
-            "- machine: see the entries above (same VM class)\n",
+            f"- machine: {machine()}",
+            f"- this: {SRC} at {commit()} (and any uncommitted change); other: {args.other}\n",
             "| round | dim | N | this [coll/s] | other [coll/s] | this / other |",
             "|---|---|---|---|---|---|",
         ]
         lines += [
             f"| {r} | {d} | {n:,} | {a:.3g} | {b:.3g} | {q:.3f} |" for r, d, n, a, b, q in rows
         ]
+        lines += ["", "| dim | N | median this / other | lowest | highest |"]
+        lines += ["|---|---|---|---|---|"]
+        lines += [f"| {d} | {n:,} | {m:.3f} | {a:.3f} | {b:.3f} |" for d, n, m, a, b in summary]
         with (HERE / "RESULTS.md").open("a") as handle:
             handle.write("\n".join(lines) + "\n")
 

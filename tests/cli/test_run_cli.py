@@ -16,7 +16,7 @@ import pytest
 
 from carom.run.runner import Outputs
 from tests.cli.helpers import carom
-from tests.test_scene import BAD_SCENES, GOOD
+from tests.scene.test_load import BAD_SCENES, GOOD
 
 
 def test_run_a_bouncing_ball_and_check_its_events(tmp_path: Path) -> None:

@@ -9,7 +9,7 @@ import pytest
 
 import carom
 from carom.engines.base import KIND_PAIR, KIND_PLANE, KIND_WALL
-from carom.scene.layouts import lattice_gas
+from tests.worlds import gas
 
 EPS = float(np.finfo(np.float64).eps)
 G = 9.81
@@ -135,26 +135,12 @@ def test_ball_lands_on_an_inclined_plane() -> None:
     )
 
 
-def _gas(
-    dim: int, n_side: int, phi: float, seed: int, boundary: str = "periodic", e: float = 1.0
-) -> carom.World:
-    """Spheres of unit diameter on a lattice with Gaussian velocities (zero momentum)."""
-    return lattice_gas(
-        dim,
-        n_side,
-        phi,
-        seed=seed,
-        boundary=boundary,  # type: ignore[arg-type]
-        restitution=e,
-    )
-
-
 @pytest.mark.needs_jit
 @pytest.mark.parametrize(("dim", "boundary"), [(3, "periodic"), (2, "walls")])
 def test_elastic_gas_keeps_energy_and_never_overlaps(dim: int, boundary: str) -> None:
     # Elastic collisions conserve kinetic energy exactly; each collision rounds it by a few eps,
     # a random walk: after C collisions about sqrt(C) * few eps (1e6: ~1e-13) << 1e-10.
-    world = _gas(dim, 10 if dim == 3 else 30, 0.3, seed=1, boundary=boundary)
+    world = gas(dim, 10 if dim == 3 else 30, 0.3, seed=1, boundary=boundary)
     ke0 = world.stats.kinetic_energy
     worst = 0.0
     collisions = 0
@@ -215,12 +201,12 @@ def test_energy_lost_is_the_kinetic_energy_that_went(
     # term by a few eps of its pair's energy, so the ledger closes to at worst n_collisions x
     # a few 1e-16 of the total: 1e-12 relative for the 1e3 to 5e3 collisions here (measured
     # about 1e-15).
-    gas = _gas(dim, 12 if dim == 2 else 6, 0.3, seed=5, boundary=boundary)
-    world = carom.World(dim, gas.box, boundary, walls=0.7)  # type: ignore[arg-type]
+    start = gas(dim, 12 if dim == 2 else 6, 0.3, seed=5, boundary=boundary)
+    world = carom.World(dim, start.box, boundary, walls=0.7)  # type: ignore[arg-type]
     rng = np.random.default_rng(2)
-    spins = rng.normal(size=(gas.n_bodies, 3)) if dim == 3 else None
+    spins = rng.normal(size=(start.n_bodies, 3)) if dim == 3 else None
     world.add_spheres(
-        gas.positions, gas.velocities, radius=0.5, material=material, angular_velocities=spins
+        start.positions, start.velocities, radius=0.5, material=material, angular_velocities=spins
     )
     ke0 = world.stats.kinetic_energy
     world.run(until=20.0, log=False)

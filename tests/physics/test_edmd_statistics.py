@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import carom
-from tests.physics.test_edmd_closed_forms import _gas
+from tests.worlds import gas
 
 pytestmark = [pytest.mark.slow, pytest.mark.needs_jit]
 
@@ -31,7 +31,7 @@ def test_equation_of_state_3d_and_enskog_identity() -> None:
     # Z = 1 + omega sigma sqrt(pi m / T) / (2 d), omega = 1 / mean free time, must agree with
     # the virial within 0.2%: pressure and collision rate come from the same collisions.
     phi = 0.3
-    world = _gas(3, 13, phi, seed=11)
+    world = gas(3, 13, phi, seed=11)
     world.run(until=20.0, log=False)  # melt the lattice
     n, volume, d = world.n_bodies, float(np.prod(world.box)), 3
     z_virial, z_rate = [], []
@@ -58,7 +58,7 @@ def test_speeds_relax_to_maxwell_boltzmann() -> None:
     # 100 snapshots for its standard error to be under 0.5%, which is checked. Snapshots are
     # one time unit apart, about ten collisions per sphere, so they are independent.
     for dim, n_side in ((3, 13), (2, 45)):
-        world = _gas(dim, n_side, 0.3, seed=4)
+        world = gas(dim, n_side, 0.3, seed=4)
         rng = np.random.default_rng(9)
         directions = rng.normal(size=(world.n_bodies, dim))
         directions /= np.linalg.norm(directions, axis=1)[:, None]
@@ -85,7 +85,7 @@ def test_haff_cooling_law_3d() -> None:
     # to T/T0 = 0.2, i.e. t = (sqrt(5) - 1) tau0. Haff holds to about 1% for e >= 0.9 before
     # clustering; 8000 spheres give a temperature noise of sqrt(2/(3N)) = 0.9% at most.
     phi, e = 0.05, 0.9
-    elastic = _gas(3, 20, phi, seed=3)
+    elastic = gas(3, 20, phi, seed=3)
     elastic.run(until=30.0, log=False)
     world = carom.World(3, elastic.box, "periodic")
     world.add_spheres(elastic.positions, elastic.velocities, radius=0.5, restitution=e)

@@ -151,6 +151,8 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "walls": (_walls, False, 1.0),
         "t_c": (_positive, False, 1e-6),
         "combine": (_choice(*COMBINE_RULES), False, "mean"),
+        # reserved: the rigid-body engine ("rigid") comes with the issues that build it
+        "engine": (_choice("event-driven"), False, "event-driven"),
     },
     "materials": {
         "name": (_text, True, None),
@@ -160,6 +162,8 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "beta0": (_number, False, None),
     },
     "bodies": {
+        # reserved: capsules, boxes, polygons and hulls come with the rigid-body engine
+        "shape": (_choice("sphere"), False, "sphere"),
         "positions": (_rows, True, None),
         "velocities": (_rows, False, None),
         "radius": (_positive_or_list, True, None),

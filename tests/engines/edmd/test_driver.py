@@ -7,27 +7,13 @@ from __future__ import annotations
 import numpy as np
 
 import carom
-from carom.scene.layouts import lattice_gas
-
-
-def _gas(
-    dim: int, n_side: int, phi: float, seed: int, boundary: str = "periodic", e: float = 1.0
-) -> carom.World:
-    """Spheres of unit diameter on a lattice with Gaussian velocities (zero momentum)."""
-    return lattice_gas(
-        dim,
-        n_side,
-        phi,
-        seed=seed,
-        boundary=boundary,  # type: ignore[arg-type]
-        restitution=e,
-    )
+from tests.worlds import gas
 
 
 def test_same_input_gives_bit_identical_results() -> None:
     runs = []
     for _ in range(2):
-        world = _gas(3, 6, 0.3, seed=5, e=0.9)
+        world = gas(3, 6, 0.3, seed=5, e=0.9)
         world.run(until=20.0, log=True)
         runs.append((world.positions, world.velocities, world.collisions))
     np.testing.assert_array_equal(runs[0][0], runs[1][0])
@@ -36,9 +22,9 @@ def test_same_input_gives_bit_identical_results() -> None:
 
 
 def test_checkpoint_resume_is_bit_identical(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    straight = _gas(2, 12, 0.4, seed=2, boundary="walls", e=0.95)
+    straight = gas(2, 12, 0.4, seed=2, boundary="walls", e=0.95)
     straight.run(until=30.0, log=True)
-    first = _gas(2, 12, 0.4, seed=2, boundary="walls", e=0.95)
+    first = gas(2, 12, 0.4, seed=2, boundary="walls", e=0.95)
     first.run(until=12.0, log=True)
     first.save(tmp_path / "mid.npz")
     resumed = carom.World.load(tmp_path / "mid.npz")
@@ -53,7 +39,7 @@ def test_checkpoint_resume_is_bit_identical(tmp_path) -> None:  # type: ignore[n
 
 
 def test_frames_are_at_exact_output_times() -> None:
-    world = _gas(2, 5, 0.2, seed=0)
+    world = gas(2, 5, 0.2, seed=0)
     seen: list[float] = []
     frames = world.run(until=1.0, frame_interval=0.25, callback=lambda f: seen.append(f.time))
     assert frames is not None
@@ -66,9 +52,9 @@ def test_neighbour_lists_grow_without_changing_the_physics() -> None:
     # Lists that start far too small overflow at once and again during the run; growing them
     # rebuilds every list but keeps the schedule, so the events are exactly those of a world
     # whose lists were large enough from the start.
-    roomy = _gas(3, 7, 0.45, seed=8, e=0.9)
+    roomy = gas(3, 7, 0.45, seed=8, e=0.9)
     roomy.run(until=5.0, log=True)
-    cramped = _gas(3, 7, 0.45, seed=8, e=0.9)
+    cramped = gas(3, 7, 0.45, seed=8, e=0.9)
     engine = cramped.build()
     tight = int(engine.neighbour_counts().max())
     engine.resize_grid(tight, engine.cell_capacity)  # the first denser neighbourhood overflows
@@ -81,9 +67,9 @@ def test_neighbour_lists_grow_without_changing_the_physics() -> None:
 def test_cell_rows_grow_without_changing_the_physics() -> None:
     # The same for the cell grid's rows: cells filled to the brim at the start overflow as a
     # dissipative gas clusters.
-    roomy = _gas(3, 10, 0.3, seed=8, e=0.8)
+    roomy = gas(3, 10, 0.3, seed=8, e=0.8)
     roomy.run(until=5.0, log=True)
-    cramped = _gas(3, 10, 0.3, seed=8, e=0.8)
+    cramped = gas(3, 10, 0.3, seed=8, e=0.8)
     engine = cramped.build()
     tight = engine.max_cell_occupancy()
     engine.resize_grid(engine.capacity, tight)

@@ -13,6 +13,7 @@ import numpy as np
 from numba import njit
 
 from carom.engines.edmd.codes import C_PAIR, C_REST, C_TC, C_WALL, S_KE_LOST, S_VIRIAL
+from carom.engines.edmd.hints import unlikely
 from carom.engines.edmd.predict import face_normal, set_support
 from carom.geometry.rotation import turn
 from carom.laws.kernels import LAW_SMOOTH, impulse_spheres
@@ -186,7 +187,7 @@ def collide_pair(
         jk = j0 if k == 0 else (j1 if k == 1 else j2)
         v[i, k] += jk * inv_i
         v[j, k] -= jk * inv_j
-    if law != LAW_SMOOTH:
+    if unlikely(law != LAW_SMOOTH):
         # the spins change: first turn both bodies to now at their old spins
         turn(orient, i, w[i, 0], w[i, 1], w[i, 2], T - orient_t[i], dim)
         turn(orient, j, w[j, 0], w[j, 1], w[j, 2], T - orient_t[j], dim)

@@ -78,6 +78,7 @@ def test_the_python_api_builds_the_same_scene(tmp_path: Path) -> None:
     np.testing.assert_array_equal(from_file.velocities, from_dict.velocities)
 
 
+TWICE = 'name = "rubber"\nrestitution = 0.8\n'
 #: (change to GOOD, the message it must get): each bad input the scene format refuses
 BAD_SCENES: list[tuple[tuple[str, str], str]] = [
     # unparsable TOML: tomllib's line and column
@@ -138,6 +139,24 @@ BAD_SCENES: list[tuple[tuple[str, str], str]] = [
         ("walls = 0.9", "walls = [0.9, 0.9, 0.9]"),
         r"\[world\] walls: must be one restitution or material name, or one per wall face",
     ),
+    # a key renamed since: the message names the new one
+    (
+        ("walls = 0.9", "wall_restitution = 0.9"),
+        r"scene\.toml:6: \[world\] wall_restitution: was renamed to walls; write walls = \.\.\.",
+    ),
+    # two materials of one name (the second silently won)
+    (
+        (TWICE, TWICE + '\n[[materials]]\nname = "rubber"\nrestitution = 0.3\n'),
+        r"\[\[materials\]\] #2 name: 'rubber' is defined twice \(also \[\[materials\]\] #1\)",
+    ),
+    # walls of a material no table defines
+    (("walls = 0.9", 'walls = "steel"'), r"\[world\] walls: names material 'steel'"),
+    # keys reserved for the rigid-body engine take only what the event-driven one does
+    (
+        ("radius = 0.1\n", 'radius = 0.1\nshape = "box"\n'),
+        r"\[\[bodies\]\] #1 shape: must be one of 'sphere', got 'box'",
+    ),
+    (("walls = 0.9", 'walls = 0.9\nengine = "rigid"'), r"\[world\] engine: must be one of"),
     # a gas that cannot fit
     (
         ("packing = 0.1", "packing = 0.001"),
@@ -155,6 +174,12 @@ def test_each_bad_scene_gets_one_clear_message(
     path = _write(tmp_path, GOOD.replace(old, new, 1))
     with pytest.raises(SceneError, match=message):
         load_scene(path).build()
+
+
+def test_walls_take_materials_by_name(tmp_path: Path) -> None:
+    scene = GOOD.replace("walls = 0.9", 'walls = ["rubber", 0.5, 1.0, 1.0]')
+    world = load_scene(_write(tmp_path, scene)).build()
+    assert [m.restitution for m in world.walls] == [0.8, 0.5, 1.0, 1.0]
 
 
 def test_a_missing_file_is_named(tmp_path: Path) -> None:
