@@ -45,6 +45,8 @@ def test_run_a_bouncing_ball_and_check_its_events(tmp_path: Path) -> None:
         2 * e * t1, rel=1e-12, abs=0.0
     )
     assert float(rows[0]["impulse_y_Ns"]) == pytest.approx((1 + e) * u1, rel=1e-12, abs=0.0)
+    # the contact point is on the floor, y = 0, to round-off of the 1.55 m drop (a few eps)
+    assert float(rows[0]["point_y_m"]) == pytest.approx(0.0, abs=8 * 2.2e-16 * 1.55)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["wall_collisions"] == len(rows)
     assert summary["simulated_time_s"] == 2.0

@@ -26,7 +26,8 @@ KIND_PLANE = 2  # partner is a static plane, by index
 #: One logged collision: ``time`` [s]; ``body``; the ``kind`` of partner (``KIND_PAIR``,
 #: ``KIND_WALL``, ``KIND_PLANE``) and its index ``partner`` (a body, a wall face, a plane);
 #: the ``impulse`` on ``body`` [N s] (3 components, z = 0 in 2D); the normal relative speeds
-#: ``un_before`` and ``un_after`` [m/s] (negative: approaching).
+#: ``un_before`` and ``un_after`` [m/s] (negative: approaching); the contact ``point`` [m] (3
+#: components; with the impulse it gives each body's angular impulse, ``(point - x) x J``).
 COLLISION_DTYPE = np.dtype(
     [
         ("time", np.float64),
@@ -36,6 +37,7 @@ COLLISION_DTYPE = np.dtype(
         ("impulse", np.float64, (3,)),
         ("un_before", np.float64),
         ("un_after", np.float64),
+        ("point", np.float64, (3,)),
     ]
 )
 

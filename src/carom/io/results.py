@@ -32,7 +32,8 @@ class EventsWriter:
     ``partner``, a number: the other body, the wall face (``2 k`` the lower and ``2 k + 1``
     the upper wall of axis ``k``: 0 is x-, 1 is x+, 2 is y-, ...), or the plane; the impulse
     on ``body`` per axis ``impulse_x_Ns`` ...; the normal relative speed before and after,
-    ``un_before_m_s`` and ``un_after_m_s`` (negative: approaching). Every number is written
+    ``un_before_m_s`` and ``un_after_m_s`` (negative: approaching); the contact point
+    ``point_x_m`` ... (periodic: in the box). Every number is written
     in full (``repr``), so the file reads back to the same bits.
 
     Parameters
@@ -51,6 +52,7 @@ class EventsWriter:
             axes = "xyz"[:dim]
             header = ["time_s", "body", "partner_kind", "partner"]
             header += [f"impulse_{a}_Ns" for a in axes] + ["un_before_m_s", "un_after_m_s"]
+            header += [f"point_{a}_m" for a in axes]
             csv.writer(self.file).writerow(header)
         else:
             self.file = path.open("r+", newline="")
@@ -71,6 +73,7 @@ class EventsWriter:
                     *(repr(float(j)) for j in e["impulse"][:d]),
                     repr(float(e["un_before"])),
                     repr(float(e["un_after"])),
+                    *(repr(float(p)) for p in e["point"][:d]),
                 ]
             )
 

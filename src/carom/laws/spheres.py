@@ -104,7 +104,7 @@ class CollisionResult:
     beta: FloatArray | None
     applied: Any
 
-    def _unbatched(self) -> CollisionResult:
+    def unbatched(self) -> CollisionResult:
         """The same result with the batch axis of length 1 removed."""
         values: dict[str, Any] = {}
         for f in fields(self):
@@ -270,7 +270,7 @@ def collide(
         q1=q1,
         q2=q2,
     )
-    return batch._unbatched() if inp.single else batch
+    return batch.unbatched() if inp.single else batch
 
 
 def read_pair(

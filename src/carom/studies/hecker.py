@@ -189,4 +189,4 @@ def collide(
         beta=None,
         applied=applied,
     )
-    return result._unbatched() if inp.single else result
+    return result.unbatched() if inp.single else result

@@ -5,9 +5,12 @@ grow without changing a bit of the physics."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import carom
 from tests.worlds import gas
+
+EPS = float(np.finfo(np.float64).eps)
 
 
 def test_same_input_gives_bit_identical_results() -> None:
@@ -77,3 +80,36 @@ def test_cell_rows_grow_without_changing_the_physics() -> None:
     assert engine.cell_capacity > tight
     assert cramped.collisions.tobytes() == roomy.collisions.tobytes()
     np.testing.assert_array_equal(cramped.positions, roomy.positions)
+
+
+def test_collisions_carry_the_contact_point() -> None:
+    # two spheres touch at the point on the line of centres a_j from j's centre (and a_i from
+    # i's): with the impulse, each body's angular impulse (p - x) x J; a wall contact is the
+    # sphere's centre less its radius along the wall's normal. Positions at the collision come
+    # from the log's time and the (straight) free flight, to round-off of the 1 m box.
+    world = carom.World(3, [1.0, 1.0, 1.0])
+    x0 = np.array([[0.3, 0.5, 0.5], [0.7, 0.55, 0.5]])
+    v0 = np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
+    world.add_spheres(x0, v0, radius=[0.1, 0.05])
+    world.run(until=1.0, log=True)  # (the pair meets at 0.125 s, then each reaches a wall)
+    pair = world.collisions[world.collisions["kind"] == 0][0]
+    t = pair["time"]
+    xi, xj = x0[pair["body"]] + v0[pair["body"]] * t, x0[pair["partner"]] + v0[pair["partner"]] * t
+    ai, aj = (0.1, 0.05) if pair["body"] == 0 else (0.05, 0.1)
+    n = (xi - xj) / np.linalg.norm(xi - xj)
+    np.testing.assert_allclose(pair["point"], xj + aj * n, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(pair["point"], xi - ai * n, rtol=0, atol=1e-15)
+    wall = world.collisions[world.collisions["kind"] == 1][0]
+    face = int(wall["partner"])  # 2 k + 1: the upper wall of axis k
+    axis = face // 2
+    # on the wall itself, to round-off of the 1 m box (the centre touches it to a few eps)
+    expected = 0.0 if face % 2 == 0 else 1.0
+    assert wall["point"][axis] == pytest.approx(expected, abs=8 * EPS)
+
+
+def test_periodic_contact_points_lie_in_the_box() -> None:
+    world = gas(2, 12, 0.4, seed=2)
+    world.run(until=5.0, log=True)
+    points = world.collisions["point"][:, :2]
+    assert len(points) > 1000
+    assert np.all((points >= 0.0) & (points < world.box))

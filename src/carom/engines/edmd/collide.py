@@ -18,10 +18,16 @@ from carom.engines.edmd.predict import face_normal, set_support
 from carom.geometry.rotation import turn
 from carom.laws.kernels import LAW_SMOOTH, impulse_spheres
 
+#: the log buffer's arrays: times, bodies, partners, impulses, normal speeds, contact points,
+#: and the count (State.log_*)
+LogBuffer = tuple[
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray
+]
+
 
 @njit(cache=True, error_model="numpy", inline="always")
 def log_event(
-    logbuf: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    logbuf: LogBuffer,
     T: float,
     a: int,
     b: int,
@@ -30,9 +36,18 @@ def log_event(
     j2: float,
     un_before: float,
     un_after: float,
+    p0: float,
+    p1: float,
+    p2: float,
 ) -> None:
-    log_time, log_a, log_b, log_impulse, log_un, log_n = logbuf
+    """Append one collision to the log: time, bodies (or face), impulse on ``a``, normal
+    speeds before and after, and the contact point ``p`` [m] (with the impulse, the angular
+    impulse about any centre: ``(p - x) x J``)."""
+    log_time, log_a, log_b, log_impulse, log_un, log_point, log_n = logbuf
     n = log_n[0]
+    log_point[n, 0] = p0
+    log_point[n, 1] = p1
+    log_point[n, 2] = p2
     log_time[n] = T
     log_a[n] = a
     log_b[n] = b
@@ -97,7 +112,7 @@ def collide_pair(
     t_c: float,
     counts: np.ndarray,
     sums: np.ndarray,
-    logbuf: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    logbuf: LogBuffer,
 ) -> None:
     """Bodies ``i`` and ``j`` (both at time ``T``) meet: the impulse law, then the engine's
     rules. ``rot`` is (spins (N, 3), orientations (N, 4), their clocks (N,))."""
@@ -226,6 +241,8 @@ def collide_pair(
     if support[j] >= 0:
         support_reaction(j, v, acc, support, face_e, gravity, plane_normal, mass, t_c, sums)
     if log_on:
+        # the contact point: on j's surface towards i (raw coordinates; periodic boxes wrap
+        # it when the log is read)
         log_event(
             logbuf,
             T,
@@ -236,6 +253,9 @@ def collide_pair(
             j2,
             un_before,
             un_after,
+            x[j, 0] + a_j * n0,
+            x[j, 1] + a_j * n1,
+            x[j, 2] + a_j * n2 if dim == 3 else 0.0,
         )
 
 
@@ -291,6 +311,7 @@ def collide_face(
     counter: np.ndarray,
     last_coll: np.ndarray,
     support: np.ndarray,
+    radius: np.ndarray,
     mass: np.ndarray,
     face_e: np.ndarray,
     gravity: np.ndarray,
@@ -298,7 +319,7 @@ def collide_face(
     t_c: float,
     counts: np.ndarray,
     sums: np.ndarray,
-    logbuf: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    logbuf: LogBuffer,
 ) -> None:
     """Body ``i`` (at time ``T``) meets wall or plane ``face`` (smooth: spins are kept)."""
     dim = x.shape[1]
@@ -351,4 +372,7 @@ def collide_face(
             jn * face_normal(plane_normal, dim, face, 2) if dim == 3 else 0.0,
             un,
             u_out,
+            x[i, 0] - radius[i] * face_normal(plane_normal, dim, face, 0),
+            x[i, 1] - radius[i] * face_normal(plane_normal, dim, face, 1),
+            x[i, 2] - radius[i] * face_normal(plane_normal, dim, face, 2) if dim == 3 else 0.0,
         )

@@ -300,6 +300,11 @@ class EdmdEngine:
         record["impulse"] = state.log_impulse[:n]
         record["un_before"] = state.log_un[:n, 0]
         record["un_after"] = state.log_un[:n, 1]
+        point = state.log_point[:n].copy()
+        if self.env.periodic:  # the kernel writes raw coordinates: wrap them into the box
+            dim = self.env.dim
+            point[:, :dim] -= self.env.box * np.floor(point[:, :dim] / self.env.box)
+        record["point"] = point
         sink(record)
 
     # -- reading ----------------------------------------------------------------------------

@@ -89,7 +89,7 @@ class State(NamedTuple):
         Simulation time [s].
     counts : (8,) int64; sums : (2,) float64
         Running statistics (:mod:`carom.engines.edmd.loop` names the slots).
-    log_time, log_a, log_b, log_impulse, log_un, log_n
+    log_time, log_a, log_b, log_impulse, log_un, log_point, log_n
         The event log buffer, emptied by :class:`carom.World` as it fills.
     """
 
@@ -128,6 +128,7 @@ class State(NamedTuple):
     log_b: NDArray[np.int64]
     log_impulse: NDArray[np.float64]
     log_un: NDArray[np.float64]
+    log_point: NDArray[np.float64]
     log_n: NDArray[np.int64]
 
 
@@ -204,6 +205,7 @@ def allocate_state(
         log_b=np.zeros(log_capacity, np.int64),
         log_impulse=np.zeros((log_capacity, 3)),
         log_un=np.zeros((log_capacity, 2)),
+        log_point=np.zeros((log_capacity, 3)),
         log_n=np.zeros(1, np.int64),
     )
 
