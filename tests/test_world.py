@@ -97,6 +97,9 @@ def test_periodic_box_too_small_and_bad_run_arguments() -> None:
     world.run(until=1.0)
     with pytest.raises(CaromError, match=r"until must be a finite time >= the current time"):
         world.run(until=0.5)
+    with pytest.raises(CaromError, match=r"until must be a finite time .* got '2'"):
+        world.run(until="2")  # type: ignore[arg-type]
+    world.run(until=np.int64(2))  # any real number is a time
     with pytest.raises(CaromError, match=r"frame_interval must be a positive time"):
         world.run(until=2.0, frame_interval=0.0)
     with pytest.raises(CaromError, match=r"callback needs frame_interval"):

@@ -474,10 +474,17 @@ class World:
 
         ``log`` and ``on_collisions`` as for :meth:`run`.
         """
-        if not isinstance(until, int | float) or not math.isfinite(until) or until < self._time:
-            raise CaromError(
-                f"until must be a finite time >= the current time {self._time} s; got {until!r}"
-            )
+        wrong = CaromError(
+            f"until must be a finite time >= the current time {self._time} s; got {until!r}"
+        )
+        if isinstance(until, str | bytes | bool):
+            raise wrong
+        try:
+            until = float(until)
+        except (TypeError, ValueError):
+            raise wrong from None
+        if not math.isfinite(until) or until < self._time:
+            raise wrong
         if frame_interval is not None and not (
             frame_interval > 0.0 and math.isfinite(frame_interval)
         ):
