@@ -39,3 +39,20 @@ def test_the_showcase_runs_what_the_issue_asks() -> None:
     # the seven cases, Newton's cradle, a billiards break and a 3D gas
     assert SHOWCASE_SCENES[:7] == tuple(f"case-{n}" for n in range(1, 8))
     assert {"newtons-cradle", "billiards-break", "hard-sphere-gas"} <= set(SHOWCASE_SCENES)
+
+
+def test_the_showcase_says_when_it_compiles_first(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # regression: the first make demo printed "case 1: 1 collisions in 33.11 s", a minute of
+    # compiling reported as the run; now it says so before, and times the runs apart
+    from carom.run import showcase
+
+    monkeypatch.setattr(showcase, "kernels_cached", lambda: False)
+    lines: list[str] = []
+    build_showcase(tmp_path / "out", scenes=("case-1",), say=lines.append)
+    compiling = [k for k, line in enumerate(lines) if "compiling the engine's kernels" in line]
+    case = [k for k, line in enumerate(lines) if "1 collision in" in line]
+    assert compiling
+    assert case
+    assert compiling[0] < case[0]

@@ -18,6 +18,7 @@ from typing import Any
 from carom import __version__
 from carom._text import plural
 from carom.io.outdir import check_output, staged_output
+from carom.jit import kernels_cached
 from carom.run.runner import run_scene
 from carom.run.study import write_case_study
 from carom.scene import find_scene, load_scene
@@ -69,6 +70,8 @@ def build_showcase(
         write_case_study(cases, records)
         say(f"the seven two-sphere cases: {len(records)} impacts -> {out / 'cases'}/")
         shown: list[tuple[str, Path, list[str]]] = []
+        if not kernels_cached():
+            say("compiling the engine's kernels (once per install; about a minute) ...")
         for scene in scenes:
             folder = staging / "scenes" / Path(scene).stem
             report = run_scene(scene, folder, progress=False)
