@@ -39,7 +39,11 @@ def test_dropped_ball_rebounds_to_e_squared_k_h0() -> None:
     assert floor["time"][0] == pytest.approx(math.sqrt(2 * h0 / G), rel=8 * EPS, abs=0)
     # the run ended: the ball came to rest on the floor in finitely many events
     assert world.resting[0] == 4  # on the floor (face 4: z-)
+    # at rest: the rest rule zeroes the normal speed and the ball never moved sideways; 1e-9
+    # m/s is far below the last bounce it cut short, at most g t_c / 2 = 5e-6 m/s
     np.testing.assert_allclose(world.velocities[0], 0.0, atol=1e-9)
+    # touching the floor: its centre at a, to round-off of 1 m (a few 1e-16 m); 1e-12 m is the
+    # highest bounce the rest rule cuts short, g (t_c / 2)^2 / 2 = 1.2e-12 m
     assert world.positions[0, 2] == pytest.approx(a, abs=1e-12)
     # total time to rest is finite: t_rest = sqrt(2 h0/g) (1 + e)/(1 - e) (geometric series).
     # The ball rests once a bounce would last less than t_c; the bounces left out sum to at
@@ -65,6 +69,8 @@ def test_newtons_cradle_passes_momentum_to_the_last_ball() -> None:
     np.testing.assert_allclose(velocities[4], [v, 0.0, 0.0], atol=8 * EPS * v)
     pair_events = world.collisions[world.collisions["kind"] == KIND_PAIR]
     assert len(pair_events) == 4
+    # the strike at 0.35 s (the gap and speed above, to round-off: a few 1e-16 s), and the
+    # three hand-overs at the same instant, between touching balls; 1e-12 s is generous
     assert pair_events["time"] == pytest.approx([0.35] * 4, abs=1e-12)
 
 
