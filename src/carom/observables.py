@@ -135,8 +135,8 @@ class Stats:
     @property
     def kinetic_energy(self) -> float:
         """Total kinetic energy now, translation and rotation [J]."""
-        w = self._world
-        return kinetic_energy(w.bodies, w.velocities, w.angular_velocities)
+        frame = self._world.frame()  # one sample of the engine for both
+        return kinetic_energy(self._world.bodies, frame.velocities, frame.angular_velocities)
 
     @property
     def momentum(self) -> FloatArray:

@@ -3,8 +3,10 @@
 ``if unlikely(c):`` tells LLVM that ``c`` is almost always false, so it lays the branch's code
 out of line and gives the other path the registers. The event loop's rough-and-frictional
 branch (spins, orientations: trigonometry and a quaternion product) is taken in no collision
-of a smooth gas; inlined without the hint, it raised the register pressure of the smooth path
-(measured: the loop 2 to 8% slower). The identity in plain Python (``NUMBA_DISABLE_JIT=1``).
+of a smooth gas, yet inlined it adds about 300 instructions to the loop's machine code
+(``inspect_asm``). Whether the hint changes the loop's speed could not be measured on the
+noisy machine it was written on (benchmarks/RESULTS.md, 2026-11-23). The identity in plain
+Python (``NUMBA_DISABLE_JIT=1``).
 """
 
 from __future__ import annotations
