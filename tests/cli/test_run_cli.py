@@ -38,6 +38,10 @@ def test_run_a_bouncing_ball_and_check_its_events(tmp_path: Path) -> None:
         0,
         2,
     )
+    # events.csv holds repr() of each float (an exact round trip); the engine reaches these
+    # numbers by a quadratic root and a few dozen float64 operations, each within half an ulp,
+    # so they are right to ~1e-15; 1e-12 leaves a wide margin and still fails any wrong
+    # formula (e, g or h0 off by a per cent shows at 1e-2)
     assert float(rows[0]["time_s"]) == pytest.approx(t1, rel=1e-12, abs=0.0)
     assert float(rows[0]["un_before_m_s"]) == pytest.approx(-u1, rel=1e-12, abs=0.0)
     assert float(rows[0]["un_after_m_s"]) == pytest.approx(e * u1, rel=1e-12, abs=0.0)

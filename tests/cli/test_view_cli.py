@@ -62,9 +62,14 @@ def test_the_recording_holds_the_run(tmp_path: Path, scene: str, dim: int) -> No
         cosine = np.sum(vectors[moving] * v[k][moving], axis=1) / (
             np.linalg.norm(vectors[moving], axis=1) * np.linalg.norm(v[k][moving], axis=1)
         )
+        # the arrows are float32 (6e-8 relative per component, so turned by ~1e-7 rad at most
+        # and their cosine is 1 to ~1e-14); 1e-5 is loose but fails any arrow turned by more
+        # than sqrt(2e-5) = 0.26 degrees
         np.testing.assert_allclose(cosine, 1.0, rtol=0, atol=1e-5)
+        # rerun keeps scalars as float64: the energy is the trajectory's to round-off
         assert data["/energy/kinetic"][k]["scalars"] == pytest.approx(ke[k], rel=1e-12, abs=0)
     half = data["/world/box"][-1]["half_sizes"]
+    # float32 again: half an ulp is 6e-8 relative, 1e-6 covers it
     np.testing.assert_allclose(np.ravel(half), box / 2, rtol=1e-6)
 
 

@@ -28,6 +28,8 @@ def test_two_sphere_scenes_give_the_study_answer(case):
         case.x1, case.v1, case.m1, case.x2, case.v2, case.m2, case.restitutions[0]
     )
     speed = math.dist(case.v1, case.v2)
+    # sqrt(u . u) against math.dist: one length rounded two ways, a few ulps apart at most
+    # (1e-15 is 4.5 eps)
     assert expected.speed == pytest.approx(speed, rel=1e-15, abs=0)
     assert check.velocities is not None
     error = np.abs(check.velocities - np.array([v1, v2])).max() / speed
@@ -108,11 +110,14 @@ def test_the_bouncing_ball_rebounds_to_e_squared_heights():
     assert expected.source.startswith("a ball dropped")
     g, h, r, e = 9.81, 1.5, 0.05, 0.8
     v1 = math.sqrt(2 * g * h)
+    # the same root from the scene's numbers (h = 1.55 - 0.05 rounds once): a few ulps
     assert expected.speed == pytest.approx(v1, rel=1e-15, abs=0)
     t = v1 / g
     assert len(expected.checks) == 3
     for k, check in enumerate(expected.checks, start=1):
         apex = t + e**k * v1 / g
+        # half a dozen float64 operations on both sides, each within half an ulp, summed
+        # differently: ~10 eps at most; 1e-14 is 45 eps
         assert check.time == pytest.approx(apex, rel=1e-14, abs=0)
         np.testing.assert_array_equal(check.velocities, [[0.0, 0.0]])
         # all energy potential at the apex: m g (r + e^(2k) h), m = 1 kg

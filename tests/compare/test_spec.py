@@ -33,6 +33,7 @@ def _two(restitutions, combine="mean", walls=1.0):
 def test_one_restitution_splits_into_square_roots():
     spec = peer_scene(_two([0.64, 0.64], walls=0.8), name="two")
     body, wall, _, exact = factor_restitution(spec, "pymunk")
+    # sqrt(0.64) rounds to within an ulp of 0.8 (1.4e-16 relative)
     np.testing.assert_allclose(body, [0.8, 0.8], rtol=1e-15)
     # the product rule then gives e_pair = 0.8^2 = 0.64 and e_wall = 0.8 x 1 = 0.8
     np.testing.assert_allclose(wall, [1.0] * 4, rtol=1e-15)

@@ -28,6 +28,7 @@ def test_a_quaternion_turns_by_the_angle_about_the_spin_axis() -> None:
     turn(orient, 0, *w, dt, 3)
     speed = float(np.linalg.norm(w))
     expected = [math.cos(speed * dt / 2), *(math.sin(speed * dt / 2) * w / speed)]
+    # libm's cos and sin are within an ulp, the product with the identity adds one rounding
     np.testing.assert_allclose(orient[0], expected, rtol=0, atol=4 * EPS)
 
 
@@ -38,6 +39,7 @@ def test_turns_about_one_axis_add_up() -> None:
     orient = np.array([[1.0, 0.0, 0.0, 0.0]])
     for _ in range(4):
         turn(orient, 0, *w, math.pi / 4, 3)  # four quarter-turns of pi/2 each
+    # four turns, each a few roundings (as above), and pi / 4 itself rounded: 16 eps
     np.testing.assert_allclose(orient[0], [-1.0, 0.0, 0.0, 0.0], rtol=0, atol=16 * EPS)
 
 
@@ -56,6 +58,7 @@ def test_orientation_through_a_spin_changing_collision_2d() -> None:
     t1 = float(hit["time"])
     w1 = float(world.angular_velocities[1, 2])
     assert w1 != 0.7  # the spin did change
+    # two products and a sum on angles under 2 rad, each rounded by an ulp (4.4e-16): 8 eps
     assert world.orientations[1] == pytest.approx(0.7 * t1 + w1 * (1.5 - t1), rel=0, abs=8 * EPS)
     assert world.orientations[0] == 0.0  # the peg never turns
 
@@ -76,4 +79,5 @@ def test_orientations_survive_a_checkpoint(tmp_path) -> None:  # type: ignore[no
     world.run(until=1.0)
     loaded.run(until=1.0)
     assert loaded.orientations.tobytes() == world.orientations.tobytes()
+    # every turn is a product with a unit quaternion, which keeps the norm to an ulp or so
     np.testing.assert_allclose(np.linalg.norm(world.orientations, axis=1), 1.0, atol=4 * EPS)

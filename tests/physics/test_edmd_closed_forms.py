@@ -116,8 +116,10 @@ def test_ball_falls_onto_a_static_peg() -> None:
     world.run(until=0.35, log=True)
     hit = world.collisions[0]
     t_hit = math.sqrt(2 * (h - a - peg) / G)
-    assert hit["time"] == pytest.approx(t_hit, rel=1e-13, abs=0)
-    assert hit["un_after"] == pytest.approx(G * t_hit, rel=1e-12, abs=0)
+    # the engine polishes the quartic's root to round-off (geometry/toi.py): both the time and
+    # the speed g t came out 1 eps off (measured); 16 eps leaves room for another libm
+    assert hit["time"] == pytest.approx(t_hit, rel=16 * EPS, abs=0)
+    assert hit["un_after"] == pytest.approx(G * t_hit, rel=16 * EPS, abs=0)
     assert world.positions[0].tolist()[0] == pytest.approx(0.5, abs=1e-15)  # straight up
 
 

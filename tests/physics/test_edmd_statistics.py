@@ -99,5 +99,7 @@ def test_haff_cooling_law_3d() -> None:
         world.run(until=float(t), log=False)
         haff = t0 / (1 + t * inv_tau0) ** 2
         worst = max(worst, abs(world.stats.temperature / haff - 1))
+    # Haff's 1% plus the noise, 0.9% at one sigma: 3% is about 2.2 sigma beyond the law's
+    # own error at the worst of 20 checks; the end point, 5% of 0.2, is looser still
     assert world.stats.temperature / t0 == pytest.approx(0.2, abs=0.01)
     assert worst < 0.03

@@ -61,6 +61,7 @@ def test_a_good_scene_builds_its_world(tmp_path: Path) -> None:
     assert np.all(x <= np.array([4.0, 2.0]) - 0.05)
     d = np.linalg.norm(x[:, None] - x[None], axis=-1) + np.eye(20)
     assert d.min() >= 0.1
+    # 20 velocities of order 1 m/s, their mean removed: the sum is zero to ~20 eps (4e-15)
     np.testing.assert_allclose(world.velocities[2:].sum(axis=0), 0.0, atol=1e-12)
     again = load_scene(_write(tmp_path, GOOD)).build()
     np.testing.assert_array_equal(again.positions, world.positions)
