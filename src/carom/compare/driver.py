@@ -13,7 +13,7 @@ from typing import Any
 from tqdm import tqdm
 
 from carom.compare.closed_form import Expectation, expectation
-from carom.compare.engines import ENGINES, Engine, engine
+from carom.compare.engines import ENGINES, EngineEntry, engine
 from carom.compare.monitor import Monitor
 from carom.compare.spec import PeerScene
 from carom.errors import CaromError
@@ -148,7 +148,7 @@ def compare(
     spec = scene if isinstance(scene, PeerScene) else peer_scene(scene, until)
     asked = engines is not None
     names = list(engines) if engines is not None else default_engines(spec.dim)
-    chosen: list[Engine] = []
+    chosen: list[EngineEntry] = []
     skipped: dict[str, str] = {}
     for name in names:
         e = engine(name)
@@ -167,7 +167,7 @@ def compare(
 
 
 def run_engine(
-    e: Engine, scene: PeerScene, expected: Expectation | None, progress: bool | None = False
+    e: EngineEntry, scene: PeerScene, expected: Expectation | None, progress: bool | None = False
 ) -> dict[str, Any]:
     """Set ``e`` up, step it to ``until`` with the monitor watching; time only the steps."""
     began = time.perf_counter()

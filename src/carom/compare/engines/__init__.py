@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from carom.compare.spec import PeerScene
 from carom.errors import CaromError
 
-__all__ = ["ENGINES", "Engine", "Simulation", "engine"]
+__all__ = ["ENGINES", "EngineEntry", "Simulation", "engine"]
 
 FloatArray = NDArray[np.float64]
 
@@ -48,7 +48,7 @@ class Simulation(Protocol):
 
 
 @dataclass(frozen=True)
-class Engine:
+class EngineEntry:
     """An engine ``carom compare`` can run.
 
     Attributes
@@ -93,18 +93,18 @@ class Engine:
         return starter(scene)
 
 
-ENGINES: dict[str, Engine] = {
+ENGINES: dict[str, EngineEntry] = {
     e.name: e
     for e in (
-        Engine("carom", "carom", (2, 3), "carom.compare.engines.carom_engine"),
-        Engine("pymunk", "pymunk", (2,), "carom.compare.engines.pymunk_engine"),
-        Engine("pybullet", "pybullet", (2, 3), "carom.compare.engines.pybullet_engine"),
-        Engine("mujoco", "mujoco", (2, 3), "carom.compare.engines.mujoco_engine"),
+        EngineEntry("carom", "carom", (2, 3), "carom.compare.engines.carom_engine"),
+        EngineEntry("pymunk", "pymunk", (2,), "carom.compare.engines.pymunk_engine"),
+        EngineEntry("pybullet", "pybullet", (2, 3), "carom.compare.engines.pybullet_engine"),
+        EngineEntry("mujoco", "mujoco", (2, 3), "carom.compare.engines.mujoco_engine"),
     )
 }
 
 
-def engine(name: str) -> Engine:
+def engine(name: str) -> EngineEntry:
     """The engine called ``name``; a CaromError lists the known ones otherwise."""
     try:
         return ENGINES[name]
