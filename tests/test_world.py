@@ -19,12 +19,12 @@ EPS = float(np.finfo(np.float64).eps)
 @pytest.mark.parametrize(
     ("build", "pattern"),
     [
-        (lambda: carom.World(4, [1, 1, 1, 1]), r"dim must be 2 or 3"),
-        (lambda: carom.World(2, [1.0, -1.0]), r"box must be 2 positive lengths"),
+        (lambda: carom.World(4, [1, 1, 1, 1]), r"dim must be the whole number 2 or 3"),
+        (lambda: carom.World(2, [1.0, -1.0]), r"box\[1\] = -1.0 must be positive"),
         (lambda: carom.World(2, [1, 1], "open"), r"boundary must be 'walls' or 'periodic'"),
         (lambda: carom.World(2, [1, 1], gravity=[0, 0, -9.8]), r"gravity must be 2 finite"),
         (lambda: carom.World(2, [1, 1], walls=1.5), r"restitution must lie"),
-        (lambda: carom.World(2, [1, 1], t_c=-1.0), r"t_c must be >= 0"),
+        (lambda: carom.World(2, [1, 1], t_c=-1.0), r"t_c must be a number of seconds >= 0"),
         (lambda: carom.World(2, [1, 1], combine="sum"), r"combine must be one of"),  # type: ignore[arg-type]
         (lambda: carom.Material(restitution=2.0), r"restitution must lie in \[0, 1\]"),
         (lambda: carom.Material(beta=0.2, friction=0.1), r"beta .* or friction"),

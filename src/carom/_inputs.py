@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from carom.errors import CaromError
+from carom.limits import check_magnitude, check_size
 
 FloatArray = NDArray[np.float64]
 
@@ -83,6 +84,7 @@ class PairInputs:
         bad = ~np.isfinite(arr)
         if bad.any():
             raise CaromError(f"{name} must be finite [{unit}]; got {_where(name, arr, bad, 1)}")
+        check_magnitude(name, arr, unit)
         if arr.ndim == 2:
             self.single = False
         self._vectors[name] = arr
@@ -105,6 +107,7 @@ class PairInputs:
         if bad.any():
             shown = _where(name, arr, bad, per_body_ndim)
             raise CaromError(f"{name} must be finite [rad/s]; got {shown}")
+        check_magnitude(name, arr, "rad/s")
         if arr.ndim == per_body_ndim + 1:
             self.single = False
         self._spins[name] = arr
@@ -140,6 +143,10 @@ class PairInputs:
             raise CaromError(
                 f"{name} must lie in {rng} [{unit}]{extra}; got {_where(name, arr, bad, 0)}"
             )
+        finite = np.where(np.isfinite(arr), arr, 1.0)  # inf, where allowed, is not overflow
+        check_magnitude(name, finite, unit)
+        if low_open and low == 0.0:  # a positive size: not so small that it underflows
+            check_size(name, finite, unit)
         if arr.ndim == 1:
             self.single = False
         self._scalars[name] = arr

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import sys
 import traceback
@@ -16,8 +15,9 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from carom import __version__
-from carom._text import plural
+from carom._text import plural, printable
 from carom.errors import CaromError
+from carom.limits import LARGEST, SMALLEST
 
 __all__ = ["main"]
 
@@ -204,8 +204,10 @@ def _build_parser() -> argparse.ArgumentParser:
 
 def _check_seconds(option: str, value: float | None) -> None:
     """Refuse an option that is given but is not a positive, finite number of seconds."""
-    if value is not None and not (value > 0 and math.isfinite(value)):
-        raise CaromError(f"{option} must be a positive number of seconds; got {value!r}")
+    if value is not None and not (SMALLEST <= value <= LARGEST):
+        raise CaromError(
+            f"{option} must be a number of seconds from {SMALLEST:g} to {LARGEST:g}; got {value!r}"
+        )
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
@@ -291,13 +293,32 @@ def _cmd_run(args: argparse.Namespace) -> int:
             progress=False if args.quiet else None,
             checkpoint_every=args.checkpoint_every,
         )
-    except RunInterrupted as stopped:
+    except KeyboardInterrupt:
+        from carom.run.runner import CHECKPOINT, work_directory
+
+        kept = (work_directory(Path(args.out)) / CHECKPOINT).is_file()
         print(
-            f"carom: {stopped}; nothing was written to {args.out}. Continue with: carom run "
-            f"{args.scene} --out {args.out} --resume",
+            printable(
+                f"carom: interrupted at once (a second Ctrl-C); nothing was written to "
+                f"{args.out}"
+                + (
+                    f"; its last checkpoint is kept: continue with: {_resume_command(args.argv)}"
+                    if kept
+                    else ""
+                )
+            ),
             file=sys.stderr,
         )
         return 130
+    except RunInterrupted as stopped:
+        print(
+            printable(
+                f"carom: {stopped}; nothing was written to {args.out}. Continue with: "
+                f"{_resume_command(args.argv)}"
+            ),
+            file=sys.stderr,
+        )
+        return 128 + stopped.signal
     rate = report.collisions / report.wall_seconds if report.wall_seconds > 0 else float("inf")
     resumed = "" if report.resumed_at is None else f" (resumed at {report.resumed_at:g} s)"
     prepared = (
@@ -313,6 +334,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
     )
     print(f"wrote {', '.join(report.written)} to {args.out}/")
     return 0
+
+
+def _resume_command(argv: Sequence[str]) -> str:
+    """The command line that continues an interrupted ``carom run argv``: the same options
+    (so that the run's until, outputs and scene match its checkpoint), ``--resume`` instead
+    of ``--force``, quoted for a POSIX shell."""
+    import shlex
+
+    kept = [a for a in argv if a not in ("--force", "--resume")]
+    return shlex.join(["carom", *kept, "--resume"])
 
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
@@ -379,20 +410,22 @@ def _have_matplotlib() -> bool:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the carom command; return the exit code."""
     parser = _build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
     try:
         args = parser.parse_args(argv)
     except SystemExit:
         _flush_stdout()  # --help and --version print, then exit: to a reader that may be gone
         raise
+    args.argv = argv
     try:
         code: int = args.handler(args)
     except CaromError as exc:
         if args.debug:
             traceback.print_exc()
-        print(f"carom: error: {exc}", file=sys.stderr)
+        print(printable(f"carom: error: {exc}"), file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("carom: interrupted; nothing was written", file=sys.stderr)
+        print("carom: interrupted at once (a second Ctrl-C); nothing was written", file=sys.stderr)
         return 130
     except BrokenPipeError:
         _reader_gone()

@@ -28,11 +28,19 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from carom._inputs import as_float_array
 from carom.bodies import Bodies
 from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, KIND_WALL, Counters
 from carom.engines.edmd.driver import OVERLAP_TOLERANCE, EdmdEngine, Environment
 from carom.engines.edmd.settings import EdmdSettings
 from carom.errors import CaromError, CaromWarning
+from carom.limits import (
+    MAX_BODIES,
+    RESOLUTION,
+    check_body_count,
+    check_magnitude,
+    check_size,
+)
 from carom.materials import COMBINE_RULES, CombineRule, Material, pair_table
 from carom.observables import Stats
 from carom.shapes import check_inertia_factor, default_inertia_factor
@@ -105,17 +113,17 @@ class World:
         combine: CombineRule = "mean",
         shell_thickness: float | None = None,
     ) -> None:
-        if isinstance(dim, bool) or dim not in (2, 3):
-            raise CaromError(f"dim must be 2 or 3; got {dim!r}")
+        if isinstance(dim, bool) or not isinstance(dim, int | np.integer) or dim not in (2, 3):
+            raise CaromError(f"dim must be the whole number 2 or 3; got {dim!r}")
         self.dim = int(dim)
-        self.box = _vector("box", box, self.dim, "m")
-        if np.any(self.box <= 0):
-            raise CaromError(f"box must be {dim} positive lengths [m]; got {box!r}")
+        self.box = check_size("box", _vector("box", box, self.dim, "m"), "m")
         if boundary not in ("walls", "periodic"):
             raise CaromError(f"boundary must be 'walls' or 'periodic'; got {boundary!r}")
         self.boundary = boundary
         self.gravity = (
-            np.zeros(dim) if gravity is None else _vector("gravity", gravity, dim, "m/s^2")
+            np.zeros(dim)
+            if gravity is None
+            else check_magnitude("gravity", _vector("gravity", gravity, dim, "m/s^2"), "m/s^2")
         )
         self.walls = self._wall_materials(walls)
         self.settings = EdmdSettings(t_c=t_c, shell_thickness=shell_thickness)
@@ -210,7 +218,7 @@ class World:
         q = check_inertia_factor(
             default_inertia_factor(self.dim) if inertia_factor is None else inertia_factor
         )
-        radii = self._per_body("radius", radius, n, "m")
+        radii = self._radii(radius, n)
         masses = self._per_body("mass", mass, n, "kg")
         self._invalidate()  # the bodies' state now, out of the engine; it is rebuilt on run
         return self.bodies.append_spheres(x, v, w, radii, masses, q, mat)
@@ -227,7 +235,7 @@ class World:
         x = self._rows("positions", positions)
         n = x.shape[0]
         mat = self._material_index(restitution, material)
-        radii = self._per_body("radius", radius, n, "m")
+        radii = self._radii(radius, n)
         self._invalidate()
         return self.bodies.append_spheres(
             x, np.zeros_like(x), np.zeros((n, 3)), radii, np.full(n, np.inf), 0.4, mat
@@ -245,8 +253,8 @@ class World:
 
         ``restitution`` is shorthand for ``material=Material(restitution)``; default 1.
         """
-        p = _vector("point", point, self.dim, "m")
-        nrm = _vector("normal", normal, self.dim, "-")
+        p = check_magnitude("point", _vector("point", point, self.dim, "m"), "m")
+        nrm = check_magnitude("normal", _vector("normal", normal, self.dim, "-"), "-")
         length = float(np.sqrt(nrm @ nrm))
         if not length > 0.0 or not math.isfinite(length):
             raise CaromError(f"the plane normal must be a non-zero vector; got {normal!r}")
@@ -262,11 +270,20 @@ class World:
         return len(self.planes) - 1
 
     def _rows(self, name: str, value: ArrayLike, n: int | None = None) -> FloatArray:
-        arr = np.asarray(value, dtype=np.float64)
+        unit = "m/s" if name == "velocities" else "m"
+        arr = as_float_array(name, value)
         if arr.ndim == 1:
             arr = arr[None, :] if n is None or n == 1 or arr.shape[0] == self.dim else arr
-        if arr.ndim == 1 or arr.shape[-1] != self.dim:
-            raise CaromError(f"{name} must have shape (n, {self.dim}); got {np.shape(value)}")
+        if arr.ndim != 2 or arr.shape[-1] != self.dim:
+            raise CaromError(
+                f"{name} must have shape (n, {self.dim}) or ({self.dim},) [{unit}]; got shape "
+                f"{arr.shape}"
+            )
+        if arr.shape[0] > MAX_BODIES:
+            raise CaromError(
+                f"{name} has {arr.shape[0]} rows; carom takes at most {MAX_BODIES:,} bodies "
+                f"(docs/scenes.md, Limits)"
+            )
         if n is not None:
             if arr.shape[0] == 1 and n > 1:
                 arr = np.repeat(arr, n, axis=0)
@@ -275,10 +292,10 @@ class World:
         if not np.all(np.isfinite(arr)):
             bad = int(np.argmax(~np.all(np.isfinite(arr), axis=1)))
             raise CaromError(f"{name}[{bad}] = {arr[bad].tolist()} is not finite")
-        return np.array(arr)
+        return np.array(check_magnitude(name, arr, unit))
 
     def _per_body(self, name: str, value: ArrayLike, n: int, unit: str) -> FloatArray:
-        arr = np.asarray(value, dtype=np.float64)
+        arr = as_float_array(name, value)
         try:
             arr = np.broadcast_to(arr, (n,))
         except ValueError:
@@ -291,13 +308,25 @@ class World:
             raise CaromError(
                 f"{name} must be positive and finite [{unit}]; got {name}[{i}] = {float(arr[i])!r}"
             )
-        return np.array(arr)
+        return np.array(check_size(name, arr, unit))
+
+    def _radii(self, value: ArrayLike, n: int) -> FloatArray:
+        radii = self._per_body("radius", value, n, "m")
+        smallest = RESOLUTION * float(self.box.max())
+        if np.any(radii < smallest):
+            i = int(np.argmax(radii < smallest))
+            raise CaromError(
+                f"radius[{i}] = {float(radii[i])!r} m is below {RESOLUTION:g} of the box "
+                f"({smallest:g} m): positions are rounded to 1e-16 of the box, so its contacts "
+                f"would be round-off; make it larger or the box smaller"
+            )
+        return radii
 
     def _angular(self, value: ArrayLike | None, n: int) -> FloatArray:
         w = np.zeros((n, 3))
         if value is None:
             return w
-        s = np.asarray(value, dtype=np.float64)
+        s = as_float_array("angular_velocities", value)
         try:
             if self.dim == 2:
                 w[:, 2] = np.broadcast_to(s.reshape(-1) if s.ndim else s, (n,))
@@ -311,7 +340,7 @@ class World:
         if not np.all(np.isfinite(w)):
             bad = int(np.argmax(~np.all(np.isfinite(w), axis=1)))
             raise CaromError(f"angular_velocities[{bad}] = {w[bad].tolist()} is not finite")
-        return w
+        return check_magnitude("angular_velocities", w, "rad/s")
 
     def _material_index(self, restitution: float | None, material: Material | int | None) -> int:
         if material is not None and restitution is not None:
@@ -364,6 +393,7 @@ class World:
         if self._engine is None:
             if self.bodies.n == 0:
                 raise CaromError("the world has no spheres; add some with add_spheres")
+            check_body_count(self.bodies.n, "the world")
             self._check_placement()
             self._engine = EdmdEngine(self.bodies, self._environment(), self.settings, self._time)
         return self._engine
@@ -428,6 +458,7 @@ class World:
         log: bool | ArrayLike = False,
         on_collisions: Callable[[NDArray[Any]], object] | None = None,
         callback: Callable[[Frame], object] | None = None,
+        stop: Callable[[], bool] | None = None,
     ) -> list[Frame] | None:
         """Advance to time ``until`` [s], exactly.
 
@@ -437,15 +468,22 @@ class World:
         :data:`LOG_LIMIT`; a list of body indices keeps only those involving one of them);
         ``on_collisions`` receives every block of them as they come (a structured array of
         :data:`carom.engines.base.COLLISION_DTYPE`), with memory flat however long the run.
+
+        ``stop`` is asked between blocks of events (a fraction of a second apart); when it
+        returns True the run ends early, at the last event processed (:attr:`time` says
+        when), and can be continued with another call. Ctrl-C likewise interrupts between
+        blocks and leaves the world consistent.
         """
         if frame_interval is None:
             if callback is not None:
                 raise CaromError("callback needs frame_interval: the time between frames [s]")
-            for _ in self.frames(until, None, log=log, on_collisions=on_collisions):
+            for _ in self.frames(until, None, log=log, on_collisions=on_collisions, stop=stop):
                 pass
             return None
         frames = []
-        for frame in self.frames(until, frame_interval, log=log, on_collisions=on_collisions):
+        for frame in self.frames(
+            until, frame_interval, log=log, on_collisions=on_collisions, stop=stop
+        ):
             if callback is not None:
                 callback(frame)
             frames.append(frame)
@@ -469,10 +507,12 @@ class World:
         *,
         log: bool | ArrayLike = False,
         on_collisions: Callable[[NDArray[Any]], object] | None = None,
+        stop: Callable[[], bool] | None = None,
     ) -> Iterator[Frame]:
         """Advance to ``until``, yielding a :class:`Frame` every ``frame_interval`` (lazily).
 
-        ``log`` and ``on_collisions`` as for :meth:`run`.
+        ``log``, ``on_collisions`` and ``stop`` as for :meth:`run` (a stopped run yields no
+        more frames).
         """
         wrong = CaromError(
             f"until must be a finite time >= the current time {self._time} s; got {until!r}"
@@ -495,8 +535,12 @@ class World:
         k = 1
         while True:
             target = until if frame_interval is None else min(until, start + k * frame_interval)
-            engine.advance(target, np.iinfo(np.int64).max, sink)
-            self._time = target
+            try:
+                reached = engine.advance(target, np.iinfo(np.int64).max, sink, stop)
+            finally:
+                self._time = engine.time  # the target, or the last event before a stop
+            if not reached:
+                return
             if frame_interval is not None:
                 yield self.frame()
             if target >= until:

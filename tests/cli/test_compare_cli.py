@@ -58,7 +58,7 @@ def test_every_installed_peer_runs_by_default(tmp_path):
         (["hard-sphere-gas"], "periodic box"),
         (["galton-board"], "static bodies"),
         (["gas-3d", "--engines", "pymunk"], "pymunk simulates 2D only"),
-        (["case-1", "--until", "-1"], "--until must be a positive number"),
+        (["case-1", "--until", "-1"], "--until must be a number of seconds from 1e-100"),
         (["no-such-scene"], "no-such-scene"),
     ],
 )

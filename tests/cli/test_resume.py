@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
 import signal
 import subprocess
 import sys
@@ -102,21 +103,29 @@ def test_resume_refuses_what_it_cannot_continue(
     assert (out / "summary.json").exists()
 
 
-def test_the_first_ctrl_c_asks_to_stop_and_the_second_interrupts() -> None:
-    with runner.stop_on_ctrl_c() as stop:
+@pytest.mark.parametrize("first", [signal.SIGINT, signal.SIGTERM])
+def test_the_first_signal_asks_to_stop_and_the_second_interrupts(first: int) -> None:
+    # Ctrl-C and SIGTERM (timeout, docker stop, batch schedulers) alike
+    before = signal.getsignal(signal.SIGTERM)
+    with runner.stop_on_signals() as stop:
         assert not stop
-        signal.raise_signal(signal.SIGINT)
-        assert stop  # the run will stop at the next frame, after a checkpoint
+        signal.raise_signal(first)
+        assert stop  # the run will stop within a block of events, after a checkpoint
+        assert stop.signal == first  # the exit code will say which (128 + signal)
         with pytest.raises(KeyboardInterrupt):
-            signal.raise_signal(signal.SIGINT)
+            signal.raise_signal(signal.SIGINT if first == signal.SIGTERM else signal.SIGTERM)
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    assert signal.getsignal(signal.SIGTERM) == before
 
 
 @pytest.mark.needs_jit
-def test_ctrl_c_on_the_command_line_then_resume(tmp_path: Path) -> None:
-    # A real SIGINT to a real run (2e6 collisions, only the summary written, so that the
-    # signal lands mid-run without gigabytes of output): exit 130, a message saying how to
-    # resume, no output directory, a checkpoint; then --resume finishes it.
+@pytest.mark.parametrize("sent", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_on_the_command_line_then_resume_as_told(tmp_path: Path, sent: int) -> None:
+    # A real SIGINT (Ctrl-C) or SIGTERM (timeout, docker stop) to a real run (2e6
+    # collisions, only the summary written, so that the signal lands mid-run without
+    # gigabytes of output): exit 128 + the signal, a message giving the whole command that
+    # resumes it (every option kept), no output directory, a checkpoint; then that command,
+    # run as printed, finishes it.
     out = tmp_path / "gas"
     work = work_directory(out)
     command = [sys.executable, "-m", "carom", "run", "hard-sphere-gas", "--out", str(out)]
@@ -130,17 +139,22 @@ def test_ctrl_c_on_the_command_line_then_resume(tmp_path: Path) -> None:
     while not work.exists() and time.monotonic() < deadline:
         time.sleep(0.02)
     time.sleep(0.5)
-    process.send_signal(signal.SIGINT)
+    process.send_signal(sent)
     stdout, stderr = process.communicate(timeout=240)
-    assert process.returncode == 130, stderr
+    assert process.returncode == 128 + sent, stderr
     assert stdout == ""  # no results reported
     assert "Traceback" not in stderr
-    assert f"Continue with: carom run hard-sphere-gas --out {out} --resume" in stderr
+    told = stderr.split("Continue with: ", 1)[1].strip()
+    assert shlex.split(told) == ["carom", *command[3:], "--resume"]
     assert not out.exists()
     world = carom.World.load(work / CHECKPOINT)
     assert 0 < world.time < 400
     done = subprocess.run(
-        [*command, "--resume"], capture_output=True, text=True, env=env, timeout=600
+        [sys.executable, "-m", *shlex.split(told)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
     )
     assert done.returncode == 0, done.stderr
     assert f"(resumed at {world.time:g} s)" in done.stdout

@@ -29,6 +29,7 @@ from typing import Any, Literal
 import numpy as np
 
 from carom.errors import CaromError
+from carom.limits import LARGEST, MAX_FRAMES, SMALLEST
 from carom.observables import RunHistory
 from carom.scene import Scene, find_scene, load_scene
 from carom.world import World
@@ -38,7 +39,7 @@ __all__ = [
     "RunInterrupted",
     "RunReport",
     "run_scene",
-    "stop_on_ctrl_c",
+    "stop_on_signals",
     "work_directory",
 ]
 
@@ -82,7 +83,14 @@ class RunReport:
 
 
 class RunInterrupted(Exception):  # noqa: N818 (it is not an error: the user asked to stop)
-    """The run was stopped (Ctrl-C); a checkpoint to resume from was written."""
+    """The run was stopped (Ctrl-C or SIGTERM); a checkpoint to resume from was written.
+
+    ``signal`` is the number of the signal that asked (``signal.SIGINT`` or ``SIGTERM``).
+    """
+
+    def __init__(self, message: str, signal: int) -> None:
+        super().__init__(message)
+        self.signal = signal
 
 
 def work_directory(out: Path) -> Path:
@@ -138,11 +146,18 @@ def run_scene(
     path = find_scene(scene_or_file)
     scene = load_scene(path)
     until = float(scene.run["until"] if until is None else until)
-    if not (until > 0 and math.isfinite(until)):
-        raise CaromError(f"until must be a positive number of seconds; got {until!r}")
+    if not (SMALLEST <= until <= LARGEST):
+        raise CaromError(
+            f"until must be a number of seconds from {SMALLEST:g} to {LARGEST:g}; got {until!r}"
+        )
     outputs = outputs or Outputs.of(scene)
     target = check_output(Path(out), force=force)
     work = work_directory(target)
+    if work.is_symlink() or (work.exists() and not work.is_dir()):
+        raise CaromError(
+            f"{work} is {'a symbolic link' if work.is_symlink() else 'not a directory'}; carom "
+            f"keeps a run's working files there and will not write through it: move it away"
+        )
     job = {
         "scene_sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
         "until": until,
@@ -163,6 +178,7 @@ def run_scene(
             )
         shutil.rmtree(work)
     _check_extras(outputs)
+    _check_size(scene, until, outputs, target)
     began = time.perf_counter()
     if resume:
         run = _Run.resume(work, job)
@@ -179,14 +195,26 @@ def run_scene(
     run.prepare_seconds = time.perf_counter() - began
     title = scene.scene.get("title") or path.stem
     try:
-        with stop_on_ctrl_c() as stop:
+        with stop_on_signals() as stop:
             run.simulate(
                 until, scene.run["frame_interval"], outputs, progress, stop, checkpoint_every
             )
-    finally:
+            # the run is complete: checkpoint it, so that a crash while the results are
+            # written (kill -9 during the animation) loses nothing; --resume finishes it
+            run.checkpoint()
+    except RunInterrupted:
         run.close()
-    written = run.finish(str(path), title, outputs)
-    publish(work, target)
+        raise
+    except BaseException as exc:
+        run.close()
+        _abandon(work, exc)
+        raise
+    run.close()
+    try:
+        written = run.finish(str(path), title, outputs)
+        publish(work, target)
+    except OSError as exc:
+        raise _write_failed(work, exc) from None
     world = run.world
     return RunReport(
         title=title,
@@ -199,6 +227,57 @@ def run_scene(
         resumed_at=run.resumed_at,
         prepare_seconds=run.prepare_seconds,
     )
+
+
+def _check_size(scene: Scene, until: float, outputs: Outputs, target: Path) -> None:
+    """Refuse a run whose trajectory would hold more than :data:`MAX_FRAMES` frames or more
+    bytes than the disk beside ``target`` has free, before anything runs."""
+    from carom.scene.build import count_bodies
+
+    interval = scene.run["frame_interval"]
+    if interval is None or not (outputs.trajectory or outputs.animation != "none"):
+        return
+    frames = math.floor(until / interval) + 2  # t = 0, every interval, and until
+    if frames > MAX_FRAMES:
+        raise CaromError(
+            f"until = {until:g} s with frame_interval = {interval:g} s makes {frames:,} frames, "
+            f"more than the {MAX_FRAMES:,} a trajectory may hold (docs/scenes.md, Limits); "
+            f"raise frame_interval or lower --until"
+        )
+    dim = scene.world["dimension"]
+    # per body and frame: position, velocity (d each), orientation (1 or 4), spin (3)
+    per_frame = count_bodies(scene) * (2 * dim + (1 if dim == 2 else 4) + 3) * 8
+    need = frames * per_frame
+    folder = target.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    free = shutil.disk_usage(folder).free
+    if need > free:
+        raise CaromError(
+            f"the trajectory would need about {need / 2**30:.3g} GiB ({frames:,} frames of "
+            f"{per_frame / 2**20:.3g} MiB), and {folder} has {free / 2**30:.3g} GiB free; raise "
+            f"frame_interval, lower --until, or pass --no-trajectory --animation none"
+        )
+
+
+def _abandon(work: Path, exc: BaseException) -> None:
+    """After a failure or a second Ctrl-C: keep ``work`` if a checkpoint there can resume the
+    run, remove it otherwise (nothing in it can be used)."""
+    if not (work / CHECKPOINT).is_file():
+        shutil.rmtree(work, ignore_errors=True)
+    if isinstance(exc, OSError):
+        raise _write_failed(work, exc) from None
+
+
+def _write_failed(work: Path, exc: OSError) -> CaromError:
+    """The message for a write that failed (a full disk): what, why, and what was kept."""
+    kept = (
+        f"the last checkpoint is kept in {work}: free some space and continue with --resume"
+        if (work / CHECKPOINT).is_file()
+        else "nothing was kept"
+    )
+    where = f" writing {exc.filename}" if exc.filename else ""
+    return CaromError(f"the run could not be written{where}: {exc.strerror or exc}; {kept}")
 
 
 def _make_directory(path: Path) -> None:
@@ -224,20 +303,28 @@ def _check_extras(outputs: Outputs) -> None:
 
 
 class Stop:
-    """Set by the first Ctrl-C; the run stops at the next frame, after a checkpoint."""
+    """Set by the first Ctrl-C or SIGTERM; the run stops within a fraction of a second, after
+    a checkpoint. ``signal`` is the number of the signal that asked."""
 
     def __init__(self) -> None:
         self.requested = False
+        self.signal = int(signal.SIGINT)
 
     def __bool__(self) -> bool:
         return self.requested
 
 
-@contextlib.contextmanager
-def stop_on_ctrl_c() -> Iterator[Stop]:
-    """Turn the first SIGINT into a request to stop cleanly (a second one interrupts at once).
+#: the signals that ask a run to stop: Ctrl-C, and what timeout, docker stop and batch
+#: schedulers send
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
-    Only the main thread can own signal handlers; elsewhere Ctrl-C keeps its usual meaning.
+
+@contextlib.contextmanager
+def stop_on_signals() -> Iterator[Stop]:
+    """Turn the first SIGINT or SIGTERM into a request to stop cleanly (a second one
+    interrupts at once, with KeyboardInterrupt).
+
+    Only the main thread can own signal handlers; elsewhere the signals keep their meaning.
     """
     stop = Stop()
     if threading.current_thread() is not threading.main_thread():
@@ -248,12 +335,14 @@ def stop_on_ctrl_c() -> Iterator[Stop]:
         if stop.requested:
             raise KeyboardInterrupt
         stop.requested = True
+        stop.signal = signum
 
-    previous = signal.signal(signal.SIGINT, handler)
+    previous = {s: signal.signal(s, handler) for s in STOP_SIGNALS}
     try:
         yield stop
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for s, old in previous.items():
+            signal.signal(s, old)
 
 
 class _Run:
@@ -382,7 +471,7 @@ class _Run:
         stream = self.events.write if self.events is not None else None
         span = until - self.t0
         step = frame_interval if frame_interval is not None else span / CHUNKS_WITHOUT_FRAMES
-        k = round((world.time - self.t0) / step) if world.time > self.t0 else 0
+        k = _frames_done(world.time, self.t0, step)
         bar = tqdm(
             total=span,
             initial=world.time - self.t0,
@@ -402,13 +491,16 @@ class _Run:
                 if stop:
                     self.checkpoint()
                     raise RunInterrupted(
-                        f"stopped at t = {world.time:.6g} s of {until:g} s; checkpoint written"
+                        f"stopped at t = {world.time:.6g} s of {until:g} s; checkpoint written",
+                        stop.signal,
                     )
-                k += 1
-                target = min(until, self.t0 + k * step)
+                target = min(until, self.t0 + (k + 1) * step)
                 mark = time.perf_counter()
-                world.run(until=target, on_collisions=stream)
+                world.run(until=target, on_collisions=stream, stop=stop.__bool__)
                 self.wall += time.perf_counter() - mark
+                if world.time < target:
+                    continue  # stopped between frames: checkpoint above
+                k += 1
                 self._record(frame_too=frame_interval is not None or target >= until)
                 elapsed = time.perf_counter() - began
                 bar.set_postfix_str(
@@ -462,6 +554,19 @@ class _Run:
             trajectory.unlink()
         (self.work / CHECKPOINT).unlink(missing_ok=True)
         return written
+
+
+def _frames_done(now: float, t0: float, step: float) -> int:
+    """How many frame intervals of ``step`` from ``t0`` lie at or before ``now``: the next
+    frame is at ``t0 + (k + 1) step``, computed as the uninterrupted run computes it."""
+    if now <= t0:
+        return 0
+    k = math.floor((now - t0) / step)
+    while t0 + (k + 1) * step <= now:  # the division rounded down past a frame time
+        k += 1
+    while k > 0 and t0 + k * step > now:  # or up past one
+        k -= 1
+    return k
 
 
 def with_overrides(outputs: Outputs, **changes: Any) -> Outputs:

@@ -10,18 +10,28 @@ from typing import Any
 import numpy as np
 
 from carom.errors import CaromError
+from carom.limits import check_body_count
 from carom.materials import Material
 from carom.scene import layouts
 from carom.scene.load import Scene
 from carom.scene.schema import GENERATORS, Locator, SceneError
 from carom.world import World
 
-__all__ = ["build_world"]
+__all__ = ["build_world", "count_bodies"]
+
+#: packing fractions at which random sequential addition jams (disks: Hinrichsen, Feder &
+#: Jullien 1986; spheres: Torquato, Uche & Stillinger 2006): a [[gas]] denser than this cannot
+#: be placed at random
+RSA_JAMMING = {2: 0.547, 3: 0.384}
 
 
 def build_world(scene: Scene) -> World:
     """The :class:`carom.World` ``scene`` describes (bodies placed, nothing run yet)."""
     where = Locator(scene.source, scene.text)
+    try:
+        check_body_count(count_bodies(scene))
+    except CaromError as exc:
+        raise SceneError(f"{scene.source}: {exc}") from None
     materials: dict[str, Material] = {}
     for index, m in enumerate(scene.materials):
         try:
@@ -74,6 +84,18 @@ def build_world(scene: Scene) -> World:
     except CaromError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
     return world
+
+
+def count_bodies(scene: Scene) -> int:
+    """How many bodies ``scene`` places, counted from its tables without placing them."""
+    n = sum(len(b["positions"]) for b in scene.bodies)
+    n += sum(r["count"] for r in scene.row)
+    n += sum(r["rows"] * (r["rows"] + 1) // 2 for r in scene.rack)
+    n += sum(math.prod(lattice["shape"]) for lattice in scene.lattice)
+    for p in scene.pegs:
+        rows = p["rows"]
+        n += rows * (rows + 1) // 2 if p["layout"] == "triangle" else rows * (p["columns"] or 1)
+    return int(n + sum(g["count"] for g in scene.gas))
 
 
 def _placed_bodies(scene: Scene) -> Iterator[tuple[str, int, dict[str, Any]]]:
@@ -141,6 +163,13 @@ def _add_gas(world: World, gas: Mapping[str, Any], material: Material | None) ->
             f"{count} spheres of radius {radius} need a packing of "
             f"{count * unit / volume:.4g}, more than packing = {packing}; enlarge the box, "
             f"or lower count or radius"
+        )
+    if count * unit > RSA_JAMMING[dim] * volume:
+        raise CaromError(
+            f"{count} spheres of radius {radius} need a packing of "
+            f"{count * unit / volume:.4g}, beyond {RSA_JAMMING[dim]}, where placing them at "
+            f"random jams; enlarge the box or lower count or radius (or place them on a "
+            f"[[lattice]])"
         )
     rng = np.random.default_rng(gas["seed"])
     region = gas["region"]

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import sys
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -229,6 +230,12 @@ def load_scene(path: str | Path) -> Scene:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: not valid TOML: {exc}; fix the syntax there") from None
+    except RecursionError:
+        raise SceneError(
+            f"{path}: nested too deeply for Python's TOML reader (arrays or tables inside "
+            f"each other about {sys.getrecursionlimit() // 4} levels or more); a scene needs "
+            f"at most three"
+        ) from None
     return Scene.from_dict(data, str(path), text)
 
 

@@ -8,7 +8,9 @@ import re
 from collections.abc import Callable
 from typing import Any
 
+from carom._text import printable
 from carom.errors import CaromError
+from carom.limits import LARGEST, MAX_BODIES, SMALLEST
 from carom.materials import COMBINE_RULES
 
 __all__ = ["ARRAYS", "GENERATORS", "RENAMED", "SCHEMA", "Locator", "SceneError"]
@@ -28,11 +30,16 @@ def _number(value: Any) -> str | None:
         return f"must be a number, got {_show(value)}"
     if not math.isfinite(value):
         return f"must be finite, got {value!r}"
+    if abs(value) > LARGEST:
+        return f"must be at most {LARGEST:g} in magnitude (docs/scenes.md, Limits), got {value!r}"
     return None
 
 
 def _positive(value: Any) -> str | None:
-    return _number(value) or (None if value > 0 else f"must be > 0, got {value!r}")
+    problem = _number(value) or (None if value > 0 else f"must be > 0, got {value!r}")
+    if problem is None and value < SMALLEST:
+        return f"must be at least {SMALLEST:g} (docs/scenes.md, Limits), got {value!r}"
+    return problem
 
 
 def _unit_interval(value: Any) -> str | None:
@@ -42,6 +49,12 @@ def _unit_interval(value: Any) -> str | None:
 def _integer(value: Any) -> str | None:
     if isinstance(value, bool) or not isinstance(value, int):
         return f"must be an integer, got {_show(value)}"
+    return None
+
+
+def _seed(value: Any) -> str | None:
+    if _integer(value) or not 0 <= value < 2**64:
+        return f"must be a whole number from 0 to 2^64 - 1, got {_show(value)}"
     return None
 
 
@@ -80,8 +93,9 @@ def _rows(value: Any) -> str | None:
     if not isinstance(value, list) or not value:
         return f"must be a list of [x, y(, z)] rows, got {_show(value)}"
     for row in value:
-        if _vector(row):
-            return f"must be a list of [x, y(, z)] rows of numbers, got {_show(row)}"
+        problem = _vector(row)
+        if problem:
+            return f"must be a list of [x, y(, z)] rows of numbers: a row {problem}"
     return None
 
 
@@ -103,8 +117,11 @@ def _positive_or_list(value: Any) -> str | None:
         problem = _vector(value)
         if problem:
             return problem
-        bad = [v for v in value if not v > 0]
-        return f"must be > 0, got {bad[0]!r}" if bad else None
+        for v in value:
+            problem = _positive(v)
+            if problem:
+                return problem
+        return None
     return _positive(value)
 
 
@@ -119,12 +136,20 @@ def _boolean(value: Any) -> str | None:
 
 
 def _count(value: Any) -> str | None:
-    return _integer(value) or (None if value >= 1 else f"must be >= 1, got {value!r}")
+    problem = _integer(value) or (None if value >= 1 else f"must be >= 1, got {value!r}")
+    if problem is None and value > MAX_BODIES:
+        return f"must be at most {MAX_BODIES:,} (docs/scenes.md, Limits), got {value:,}"
+    return problem
 
 
 def _counts(value: Any) -> str | None:
     if not isinstance(value, list) or not value or any(_count(v) for v in value):
         return f"must be a list of whole numbers >= 1, got {_show(value)}"
+    if math.prod(value) > MAX_BODIES:
+        return (
+            f"places {math.prod(value):,} bodies, more than the {MAX_BODIES:,} carom takes "
+            f"(docs/scenes.md, Limits)"
+        )
     return None
 
 
@@ -199,7 +224,7 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "mass": (_positive, False, 1.0),
         "velocity": (_vector, False, None),
         "temperature": (_not_negative, False, 0.0),
-        "seed": (_integer, False, 0),
+        "seed": (_seed, False, 0),
         "material": (_text, False, None),
     },
     "pegs": {
@@ -217,7 +242,7 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "radius": (_positive, True, None),
         "mass": (_positive, False, 1.0),
         "temperature": (_positive, False, 1.0),
-        "seed": (_integer, False, 0),
+        "seed": (_seed, False, 0),
         "material": (_text, False, None),
         "region": (_region, False, None),
         "drift": (_vector, False, None),
@@ -284,4 +309,4 @@ class Locator:
             name += f" {path[1]}"
         line = self.line_of(path, index)
         where = f"{self.source}:{line}" if line is not None else self.source
-        return SceneError(f"{where}: {name}: {problem}" + (f"; {fix}" if fix else ""))
+        return SceneError(printable(f"{where}: {name}: {problem}" + (f"; {fix}" if fix else "")))

@@ -8,13 +8,22 @@ numbering.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from carom.bodies import Bodies
-from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, KIND_PLANE, KIND_WALL, Counters, Sink
+from carom.engines.base import (
+    COLLISION_DTYPE,
+    KIND_PAIR,
+    KIND_PLANE,
+    KIND_WALL,
+    STOP_CHECK_EVENTS,
+    Counters,
+    Sink,
+)
 from carom.engines.edmd import codes, loop
 from carom.engines.edmd.model import Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
@@ -24,12 +33,48 @@ from carom.engines.edmd.state import State, aligned_records, allocate_state
 from carom.errors import CaromError
 from carom.materials import PairTable
 
-__all__ = ["OVERLAP_TOLERANCE", "EdmdEngine", "Environment"]
+__all__ = ["OVERLAP_TOLERANCE", "EdmdEngine", "Environment", "grid_cells"]
 
 FloatArray = NDArray[np.float64]
 LOG_CAPACITY = 1 << 16
 #: Overlaps and box excursions smaller than this fraction of the radii are round-off, not errors
 OVERLAP_TOLERANCE = 1e-12
+
+
+#: The cell grid holds at most this many cells per body (and at least MIN_CELLS in all)
+CELLS_PER_BODY = 16
+MIN_CELLS = 4096
+
+
+def grid_cells(box: FloatArray, reach: float, n: int) -> NDArray[np.int64]:
+    """How many cells of the neighbour grid lie along each axis.
+
+    Cells are at least ``reach`` wide, so that bodies whose shells touch are in adjacent
+    cells; as many as fit, but no more than ``max(MIN_CELLS, CELLS_PER_BODY n)`` in all: a
+    sparse scene (two 1 cm spheres in a 1 km box) or a huge box then gets wider cells, not a
+    grid of 1e13 cells, and the count never overflows (a box of 1e300 m). Wider cells are
+    always correct; they only put more bodies in each.
+
+    Parameters
+    ----------
+    box : (d,) float64
+        Box sides [m].
+    reach : float
+        The smallest cell side [m]: the largest shell diameter.
+    n : int
+        Number of bodies.
+
+    Returns
+    -------
+    (d,) int64
+        Cells along each axis, each at least 1.
+    """
+    limit = float(max(MIN_CELLS, CELLS_PER_BODY * n))
+    cells = np.maximum(1.0, np.floor(np.minimum(box / reach, limit)))  # in float: no overflow
+    total = float(np.prod(cells))
+    if total > limit:
+        cells = np.maximum(1.0, np.floor(cells * (limit / total) ** (1.0 / box.shape[0])))
+    return cells.astype(np.int64)
 
 
 class Environment(NamedTuple):
@@ -145,7 +190,7 @@ class EdmdEngine:
                 f"{largest:g} m: each side must exceed 4 (radius + shell) = "
                 f"{2.0 * shell_diameter:g} m"
             )
-        ncell = np.maximum(1, np.floor(env.box / shell_diameter)).astype(np.int64)
+        ncell = grid_cells(env.box, shell_diameter, b.n)
         with np.errstate(divide="ignore"):
             inv_mass = np.where(mobile, 1.0 / mass, 0.0)
         return Model(
@@ -215,18 +260,35 @@ class EdmdEngine:
         """The engine's clock [s]: the time of the last event, or where it was stopped."""
         return float(self.state.clock[0])
 
-    def advance(self, until: float, max_events: int, sink: Sink | None) -> None:
+    def advance(
+        self,
+        until: float,
+        max_events: int,
+        sink: Sink | None,
+        stop: Callable[[], bool] | None = None,
+    ) -> bool:
         """Process events in time order until ``until`` [s] (the clock then reads ``until``)
         or ``max_events`` events; collisions go to ``sink`` if given (the log buffer is
-        emptied into it whenever it fills), and the lists grow whenever one overflows."""
+        emptied into it whenever it fills), and the lists grow whenever one overflows.
+
+        The loop runs in blocks of :data:`STOP_CHECK_EVENTS` events, so Python's signal
+        handlers run between them (Ctrl-C is seen within a fraction of a second) and ``stop``
+        is asked; if it says True, the clock stays at the last event and False is returned.
+        Blocks change no bit: the loop ends and resumes between two events.
+        """
         remaining = max_events
         while True:
             before = int(self.state.counts[codes.C_EVENTS])
-            status = loop.run(self.model, self.state, until, remaining, sink is not None)
+            block = min(remaining, STOP_CHECK_EVENTS)
+            status = loop.run(self.model, self.state, until, block, sink is not None)
             self._drain(sink)
             remaining -= int(self.state.counts[codes.C_EVENTS]) - before
-            if status in (codes.DONE, codes.MAX_EVENTS):
-                return
+            if status == codes.DONE or (status == codes.MAX_EVENTS and remaining <= 0):
+                return True
+            if stop is not None and stop():
+                return False
+            if status == codes.MAX_EVENTS:
+                continue
             if status in (codes.LISTS_FULL, codes.CELLS_FULL):
                 self._grow(status)
                 self.resize_grid(self.capacity, self.cell_capacity)

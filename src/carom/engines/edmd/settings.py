@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from carom.errors import CaromError
+from carom.limits import LARGEST, SMALLEST
 
 __all__ = ["SHELL_DEFAULT", "EdmdSettings"]
 
@@ -34,8 +36,15 @@ class EdmdSettings:
     shell_thickness: float | None = None
 
     def __post_init__(self) -> None:
-        if not (self.t_c >= 0.0 and math.isfinite(self.t_c)):
-            raise CaromError(f"t_c must be >= 0 and finite [s]; got {self.t_c!r}")
+        t_c = self.t_c
+        if not (_real(t_c) and t_c >= 0.0 and t_c <= LARGEST):
+            raise CaromError(f"t_c must be a number of seconds >= 0 and finite; got {t_c!r}")
         s = self.shell_thickness
-        if s is not None and not (s > 0.0 and math.isfinite(s)):
-            raise CaromError(f"shell_thickness must be > 0 and finite [m]; got {s!r}")
+        if s is not None and not (_real(s) and SMALLEST <= s <= LARGEST):
+            raise CaromError(
+                f"shell_thickness must be a length from {SMALLEST:g} to {LARGEST:g} m; got {s!r}"
+            )
+
+
+def _real(x: object) -> bool:
+    return isinstance(x, int | float | np.integer | np.floating) and not isinstance(x, bool)
