@@ -423,6 +423,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.debug:
             traceback.print_exc()
         print(printable(f"carom: error: {exc}"), file=sys.stderr)
+        _end_if_hdf5_is_broken(2)
         return 2
     except KeyboardInterrupt:
         print("carom: interrupted at once (a second Ctrl-C); nothing was written", file=sys.stderr)
@@ -432,6 +433,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     _flush_stdout()
     return code
+
+
+def _end_if_hdf5_is_broken(code: int) -> None:
+    """After a trajectory write failed (a full disk), HDF5 cannot close the file and crashes
+    when the interpreter exits; the message is out, so end the process here, cleanly."""
+    h5md = sys.modules.get("carom.io.h5md")
+    if h5md is not None and h5md.write_failed():
+        _flush_stdout()
+        sys.stderr.flush()
+        os._exit(code)
 
 
 def _flush_stdout() -> None:

@@ -23,6 +23,10 @@ angular velocity and shape elements are carom's own (H5MD lets a program add ele
 
 from __future__ import annotations
 
+import errno
+import os
+import shutil
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 from types import TracebackType
@@ -35,7 +39,77 @@ from carom.errors import CaromError
 from carom.shapes import SHAPE_NAMES
 from carom.world import Frame, World
 
-__all__ = ["ELEMENTS", "ENERGIES", "H5MDWriter", "check_trajectory", "need_h5py"]
+__all__ = [
+    "ELEMENTS",
+    "ENERGIES",
+    "H5MDWriter",
+    "check_trajectory",
+    "need_h5py",
+    "write_failed",
+]
+
+#: the writers whose file could not be written (a full disk): HDF5 then cannot close the file,
+#: its objects print errors when freed and its library crashes when the interpreter exits
+#: (segfault); they are kept here, never freed, and the command line ends the process itself
+#: after its message (see :func:`carom.cli.main`)
+_FAILED: list[H5MDWriter] = []
+
+
+def _mark_failed(writer: H5MDWriter) -> None:
+    """Keep ``writer`` alive (never freed: freeing its objects makes HDF5 fail again)."""
+    if writer not in _FAILED:
+        _FAILED.append(writer)
+
+
+def _from_h5py_dealloc(tb: TracebackType | None) -> bool:
+    while tb is not None:
+        if "h5py" in tb.tb_frame.f_code.co_filename and "_dealloc" in tb.tb_frame.f_code.co_name:
+            return True
+        tb = tb.tb_next
+    return False
+
+
+_WRITERS: list[H5MDWriter] = []
+
+
+def _quiet_h5py_dealloc(writer: H5MDWriter) -> None:
+    """Once a file cannot be written, h5py prints a traceback for every HDF5 object it frees
+    (hundreds: "Can't decrement id ref count"), through ``sys.excepthook`` and
+    ``sys.unraisablehook``, before any write raises to carom. While a writer exists these
+    hooks drop those (the failure is reported once, by the write that raises) and mark the
+    open writers failed."""
+    _WRITERS.append(writer)
+    if len(_WRITERS) > 1:
+        return
+    unraisable_hook, except_hook = sys.unraisablehook, sys.excepthook
+
+    def on_unraisable(unraisable: Any) -> None:
+        if _from_h5py_dealloc(unraisable.exc_traceback):
+            for w in _WRITERS:
+                _mark_failed(w)
+            return
+        unraisable_hook(unraisable)
+
+    def on_exception(kind: Any, value: Any, tb: TracebackType | None) -> None:
+        if _from_h5py_dealloc(tb):
+            for w in _WRITERS:
+                _mark_failed(w)
+            return
+        except_hook(kind, value, tb)
+
+    sys.unraisablehook, sys.excepthook = on_unraisable, on_exception
+
+
+def write_failed() -> bool:
+    """Whether a trajectory write failed in this process (HDF5 is then not safe to shut
+    down: end the process with ``os._exit`` once the message is out)."""
+    return bool(_FAILED)
+
+
+#: free space kept on the disk beyond the next frame, for HDF5's metadata when the file is
+#: closed; a run stops with a message before it goes below this (HDF5 fails, and crashes at
+#: exit, when a write finds the disk full) [bytes]
+DISK_MARGIN = 16 * 2**20
 
 #: the observables written with every frame, in joules
 ENERGIES = ("kinetic_energy", "potential_energy", "dissipated_energy")
@@ -68,7 +142,9 @@ class H5MDWriter:
 
     def __init__(self, path: Path, world: World) -> None:
         h5py = need_h5py()
+        self.path = path
         self.file = h5py.File(path, "w")
+        _quiet_h5py_dealloc(self)
         self.dim = world.dim
         self.n = world.n_bodies
         self.frames = 0
@@ -109,8 +185,10 @@ class H5MDWriter:
         ``frames`` frames (those its checkpoint knows) and dropping any written after."""
         h5py = need_h5py()
         self = cls.__new__(cls)
+        self.path = path
         try:
             self.file = h5py.File(path, "r+")
+            _quiet_h5py_dealloc(self)
             self.groups = {
                 **{name: self.file[f"particles/all/{name}"] for name in ELEMENTS},
                 **{name: self.file[f"observables/{name}"] for name in ENERGIES},
@@ -136,7 +214,11 @@ class H5MDWriter:
 
     def flush(self) -> None:
         """Push everything written so far to the file (before a checkpoint names it)."""
-        self.file.flush()
+        try:
+            self.file.flush()
+        except OSError:
+            _mark_failed(self)
+            raise
 
     @staticmethod
     def _element(parent: Any, name: str, shape: tuple[int, ...], unit: str) -> Any:
@@ -158,7 +240,30 @@ class H5MDWriter:
 
     def write(self, frame: Frame, energies: Mapping[str, float]) -> None:
         """Append one frame and its energies [J] (``kinetic_energy``, ``potential_energy``,
-        ``dissipated_energy``)."""
+        ``dissipated_energy``).
+
+        Raises
+        ------
+        OSError
+            The disk has less than the frame plus :data:`DISK_MARGIN` free (checked first, so
+            that the file can still be closed), or the write failed.
+        """
+        free = shutil.disk_usage(self.path.parent).free
+        size = 8 * (2 * frame.positions.size + frame.orientations.size + 3 * self.n + 3)
+        if free < size + DISK_MARGIN:
+            raise OSError(
+                errno.ENOSPC,
+                f"{os.strerror(errno.ENOSPC)} (less than {DISK_MARGIN // 2**20} MiB free, kept "
+                f"for closing the trajectory)",
+                str(self.path),
+            )
+        try:
+            self._append(frame, energies)
+        except OSError:
+            _mark_failed(self)
+            raise
+
+    def _append(self, frame: Frame, energies: Mapping[str, float]) -> None:
         k = self.frames
         values = [
             ("position", frame.positions),
@@ -176,7 +281,16 @@ class H5MDWriter:
         self.frames = k + 1
 
     def close(self) -> None:
-        self.file.close()
+        """Close the file; after a failed write, as far as HDF5 can (the failure was
+        reported where it happened)."""
+        try:
+            self.file.close()
+        except OSError:
+            if not _FAILED:
+                _mark_failed(self)
+                raise
+        if self not in _FAILED and self in _WRITERS:
+            _WRITERS.remove(self)
 
     def __enter__(self) -> H5MDWriter:
         return self

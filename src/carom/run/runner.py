@@ -206,7 +206,7 @@ def run_scene(
         run.close()
         raise
     except BaseException as exc:
-        run.close()
+        run.close(failed=True)
         _abandon(work, exc)
         raise
     run.close()
@@ -512,11 +512,17 @@ class _Run:
                     self.checkpoint()
                     saved = time.perf_counter()
 
-    def close(self) -> None:
-        if self.writer is not None:
-            self.writer.close()
-        if self.events is not None:
-            self.events.close()
+    def close(self, *, failed: bool = False) -> None:
+        """Close the trajectory and the events file; after a failure (``failed``), as far as
+        they can be: a write that fails again (the disk is still full) was reported already."""
+        for handle in (self.writer, self.events):
+            if handle is None:
+                continue
+            try:
+                handle.close()
+            except OSError:
+                if not failed:
+                    raise
 
     def finish(self, scene: str, title: str, outputs: Outputs) -> list[str]:
         """Write everything else in the working directory; return the file names."""
