@@ -252,3 +252,43 @@ def test_a_working_folder_that_is_a_symlink_is_not_followed(tmp_path: Path) -> N
     assert "Traceback" not in done.stderr
     assert ".out.carom-run is a symbolic link" in done.stderr
     assert list(elsewhere.iterdir()) == []
+
+
+@pytest.mark.parametrize("damage", ["not-hdf5", "empty-hdf5"])
+def test_carom_view_on_a_damaged_trajectory_is_one_message(tmp_path: Path, damage: str) -> None:
+    # once: an h5py OSError traceback
+    h5py = pytest.importorskip("h5py")
+    pytest.importorskip("rerun")
+    folder = tmp_path / "run"
+    folder.mkdir()
+    if damage == "not-hdf5":
+        (folder / "trajectory.h5").write_text("garbage")
+    else:
+        h5py.File(folder / "trajectory.h5", "w").close()
+    done = carom_command("view", folder, CI="true")
+    assert done.returncode == 2
+    assert "Traceback" not in done.stderr
+    assert "trajectory.h5 is not a readable trajectory" in done.stderr or (
+        "trajectory.h5 lacks part of a carom trajectory" in done.stderr
+    )
+    assert sorted(p.name for p in folder.iterdir()) == ["trajectory.h5"]  # nothing added
+
+
+def test_resume_from_a_truncated_checkpoint_is_one_message(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # once: a BadZipFile traceback
+    from tests.cli.test_resume import _stop_after
+
+    out = tmp_path / "out"
+    _stop_after(monkeypatch, 3)
+    with pytest.raises(RunInterrupted):
+        run_scene("newtons-cradle", out, outputs=NO_FILM, progress=False)
+    monkeypatch.undo()
+    checkpoint = work_directory(out) / CHECKPOINT
+    checkpoint.write_bytes(checkpoint.read_bytes()[:100])
+    assert main(["run", "newtons-cradle", "--out", str(out), "--resume", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("carom: error: ")
+    assert "checkpoint" in err
+    assert len(err.splitlines()) == 1

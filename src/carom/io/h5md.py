@@ -27,7 +27,8 @@ import errno
 import os
 import shutil
 import sys
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -45,6 +46,7 @@ __all__ = [
     "H5MDWriter",
     "check_trajectory",
     "need_h5py",
+    "read_trajectory",
     "write_failed",
 ]
 
@@ -302,6 +304,34 @@ class H5MDWriter:
         traceback: TracebackType | None,
     ) -> None:
         self.close()
+
+
+@contextmanager
+def read_trajectory(path: Path) -> Iterator[Any]:
+    """Open a trajectory to read; a file that is damaged or not carom's (not HDF5, or without
+    the H5MD groups carom writes) is a :class:`CaromError` naming it, not an h5py traceback.
+
+    Yields
+    ------
+    h5py.File
+        Open read-only; closed when the block ends.
+    """
+    h5py = need_h5py()
+    try:
+        handle = h5py.File(path, "r")
+    except OSError as exc:
+        raise CaromError(
+            f"{path} is not a readable trajectory ({exc}); it is damaged or was not written by "
+            f"carom: run the scene again"
+        ) from None
+    with handle:
+        try:
+            yield handle
+        except KeyError as exc:
+            raise CaromError(
+                f"{path} lacks part of a carom trajectory ({exc}); it is damaged or was not "
+                f"written by carom: run the scene again"
+            ) from None
 
 
 def check_trajectory(path: Path, world: World, frames: int) -> None:

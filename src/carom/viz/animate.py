@@ -84,10 +84,9 @@ def write_animation(
     require_matplotlib()
     fmt = out.suffix.lstrip(".").lower()
     need_encoder(fmt)
-    from carom.io.h5md import need_h5py
+    from carom.io.h5md import read_trajectory
 
-    h5py = need_h5py()
-    with h5py.File(trajectory, "r") as f:
+    with read_trajectory(trajectory) as f:
         scene = TrajectoryScene.read(f)
         times = f["particles/all/position/time"][:]
         positions = f["particles/all/position/value"]

@@ -60,7 +60,7 @@ def write_recording(folder: Path, out: Path | None = None) -> Path:
     CaromError
         No trajectory in ``folder``, or rerun (or h5py) missing.
     """
-    from carom.io.h5md import ENERGIES, need_h5py
+    from carom.io.h5md import ENERGIES, read_trajectory
 
     trajectory = folder / "trajectory.h5"
     if not trajectory.is_file():
@@ -69,13 +69,12 @@ def write_recording(folder: Path, out: Path | None = None) -> Path:
             f"first (without --no-trajectory)"
         )
     rr = need_rerun()
-    h5py = need_h5py()
     out = out or folder / RECORDING
     partial = out.with_name(out.name + ".partial")
     stream = rr.RecordingStream("carom", recording_id=f"carom:{folder.resolve().name}")
     stream.save(partial)
     try:
-        with h5py.File(trajectory, "r") as f:
+        with read_trajectory(trajectory) as f:
             _log_all(rr, stream, f, ENERGIES)
         stream.flush()
         stream.disconnect()
