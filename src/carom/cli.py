@@ -203,7 +203,7 @@ def _build_parser() -> argparse.ArgumentParser:
 
 
 def _check_seconds(option: str, value: float | None) -> None:
-    """Refuse an option that is given but is not a positive, finite number of seconds."""
+    """Refuse an option that is given but is not a number of seconds within the limits."""
     if value is not None and not (SMALLEST <= value <= LARGEST):
         raise CaromError(
             f"{option} must be a number of seconds from {SMALLEST:g} to {LARGEST:g}; got {value!r}"
@@ -426,7 +426,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         _end_if_hdf5_is_broken(2)
         return 2
     except KeyboardInterrupt:
-        print("carom: interrupted at once (a second Ctrl-C); nothing was written", file=sys.stderr)
+        print("carom: interrupted; nothing was written", file=sys.stderr)
         return 130
     except BrokenPipeError:
         _reader_gone()

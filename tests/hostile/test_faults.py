@@ -114,20 +114,26 @@ def test_a_run_stopped_between_frames_resumes_bit_for_bit(
     assert stopped * 20 % 1 != 0  # not at one of the frames, 0.05 s apart
 
 
-def test_a_second_ctrl_c_before_any_checkpoint_leaves_nothing(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    # once: two quick Ctrl-Cs said "nothing was written" and left a 17 MB working folder
+def _second_ctrl_c_at_run(monkeypatch: pytest.MonkeyPatch, call: int) -> None:
+    """Make the ``call``-th World.run of the run raise KeyboardInterrupt, as a second Ctrl-C
+    does (the first one's request is not seen before it)."""
     calls = {"n": 0}
     run = carom.World.run
 
     def second_ctrl_c(self: carom.World, *args: object, **kwargs: object) -> object:
         calls["n"] += 1
-        if calls["n"] == 3:
+        if calls["n"] == call:
             raise KeyboardInterrupt
         return run(self, *args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(carom.World, "run", second_ctrl_c)
+
+
+def test_a_second_ctrl_c_before_any_checkpoint_leaves_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # once: two quick Ctrl-Cs said "nothing was written" and left a 17 MB working folder
+    _second_ctrl_c_at_run(monkeypatch, 3)
     out = tmp_path / "out"
     with pytest.raises(KeyboardInterrupt):
         run_scene("newtons-cradle", out, outputs=NO_FILM, progress=False)
@@ -137,16 +143,7 @@ def test_a_second_ctrl_c_before_any_checkpoint_leaves_nothing(
 def test_a_second_ctrl_c_after_a_checkpoint_keeps_it(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    calls = {"n": 0}
-    run = carom.World.run
-
-    def second_ctrl_c(self: carom.World, *args: object, **kwargs: object) -> object:
-        calls["n"] += 1
-        if calls["n"] == 5:
-            raise KeyboardInterrupt
-        return run(self, *args, **kwargs)  # type: ignore[arg-type]
-
-    monkeypatch.setattr(carom.World, "run", second_ctrl_c)
+    _second_ctrl_c_at_run(monkeypatch, 5)
     out = tmp_path / "out"
     argv = ["run", "newtons-cradle", "--out", str(out), "--quiet", "--checkpoint-every", "1e-9"]
     argv += ["--animation", "none"]

@@ -71,35 +71,47 @@ def _from_h5py_dealloc(tb: TracebackType | None) -> bool:
     return False
 
 
+#: the writers open now (and those that failed), and whether the hooks below are installed
 _WRITERS: list[H5MDWriter] = []
+_HOOKED = False
 
 
 def _quiet_h5py_dealloc(writer: H5MDWriter) -> None:
     """Once a file cannot be written, h5py prints a traceback for every HDF5 object it frees
     (hundreds: "Can't decrement id ref count"), through ``sys.excepthook`` and
-    ``sys.unraisablehook``, before any write raises to carom. While a writer exists these
+    ``sys.unraisablehook``, before any write raises to carom. From the first writer on, these
     hooks drop those (the failure is reported once, by the write that raises) and mark the
-    open writers failed."""
+    open writers failed; everything else goes to the hooks that were there before."""
+    global _HOOKED
     _WRITERS.append(writer)
-    if len(_WRITERS) > 1:
+    if _HOOKED:
         return
+    _HOOKED = True
     unraisable_hook, except_hook = sys.unraisablehook, sys.excepthook
 
+    def dropped(tb: TracebackType | None) -> bool:
+        if not _from_h5py_dealloc(tb):
+            return False
+        for w in _WRITERS:
+            _mark_failed(w)
+        return True
+
     def on_unraisable(unraisable: Any) -> None:
-        if _from_h5py_dealloc(unraisable.exc_traceback):
-            for w in _WRITERS:
-                _mark_failed(w)
-            return
-        unraisable_hook(unraisable)
+        if not dropped(unraisable.exc_traceback):
+            unraisable_hook(unraisable)
 
     def on_exception(kind: Any, value: Any, tb: TracebackType | None) -> None:
-        if _from_h5py_dealloc(tb):
-            for w in _WRITERS:
-                _mark_failed(w)
-            return
-        except_hook(kind, value, tb)
+        if not dropped(tb):
+            except_hook(kind, value, tb)
 
     sys.unraisablehook, sys.excepthook = on_unraisable, on_exception
+
+
+def frame_bytes(n: int, dim: int) -> int:
+    """Bytes one frame of ``n`` bodies adds to a trajectory: position and velocity (``dim``
+    each), orientation (1 in 2D, 4 in 3D) and angular velocity (3) per body, and the three
+    energies, all float64."""
+    return 8 * (n * (2 * dim + (1 if dim == 2 else 4) + 3) + len(ENERGIES))
 
 
 def write_failed() -> bool:
@@ -251,8 +263,7 @@ class H5MDWriter:
             that the file can still be closed), or the write failed.
         """
         free = shutil.disk_usage(self.path.parent).free
-        size = 8 * (2 * frame.positions.size + frame.orientations.size + 3 * self.n + 3)
-        if free < size + DISK_MARGIN:
+        if free < frame_bytes(self.n, self.dim) + DISK_MARGIN:
             raise OSError(
                 errno.ENOSPC,
                 f"{os.strerror(errno.ENOSPC)} (less than {DISK_MARGIN // 2**20} MiB free, kept "

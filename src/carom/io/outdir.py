@@ -11,7 +11,7 @@ from pathlib import Path
 
 from carom.errors import CaromError
 
-__all__ = ["check_output", "publish", "staged_output"]
+__all__ = ["check_output", "existing_folder", "publish", "staged_output"]
 
 
 def check_output(path: str | os.PathLike[str], *, force: bool = False) -> Path:
@@ -30,14 +30,14 @@ def check_output(path: str | os.PathLike[str], *, force: bool = False) -> Path:
             f"--out {text} is the current directory or contains it; results go to a new "
             f"directory that is put in place when the run is done: name one, e.g. --out results"
         )
-    longest = len(os.fsencode(target.name)) + len(".partial-") + 9  # the names made beside it
+    length = len(os.fsencode(target.name))
+    extra = len(".partial-") + 9  # the longest working name made beside it, less the name
     limit = _name_max(target.parent)
-    if longest > limit:
+    if length + extra > limit:
         raise CaromError(
-            f"--out {target.name[:40]}... is {len(os.fsencode(target.name))} bytes long; the "
-            f"file system allows {limit} per name and carom makes working names beside it "
-            f"{longest - len(os.fsencode(target.name))} bytes longer: use a name of at most "
-            f"{limit - (longest - len(os.fsencode(target.name)))} bytes"
+            f"--out {target.name[:40]}... is {length} bytes long; the file system allows "
+            f"{limit} per name and carom makes working names beside it {extra} bytes longer: "
+            f"use a name of at most {limit - extra} bytes"
         )
     if target.exists() and not target.is_dir():
         raise CaromError(f"{target} exists and is not a directory; choose another --out")
@@ -49,13 +49,19 @@ def check_output(path: str | os.PathLike[str], *, force: bool = False) -> Path:
     return target
 
 
+def existing_folder(path: Path) -> Path:
+    """``path`` or its nearest ancestor that exists: where a folder yet to be made will live
+    (for the file system's limits and free space)."""
+    while not path.exists() and path != path.parent:
+        path = path.parent
+    return path
+
+
 def _name_max(folder: Path) -> int:
     """The longest file name the file system holding ``folder`` takes [bytes] (255 where it
-    does not say, or ``folder`` does not exist yet)."""
-    while not folder.exists() and folder != folder.parent:
-        folder = folder.parent
+    does not say)."""
     try:
-        return int(os.pathconf(folder, "PC_NAME_MAX"))
+        return int(os.pathconf(existing_folder(folder), "PC_NAME_MAX"))
     except (AttributeError, OSError, ValueError):
         return 255
 

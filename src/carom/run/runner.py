@@ -206,8 +206,12 @@ def run_scene(
         run.close()
         raise
     except BaseException as exc:
+        # a failure or a second Ctrl-C: keep the work only if a checkpoint can resume it
         run.close(failed=True)
-        _abandon(work, exc)
+        if not (work / CHECKPOINT).is_file():
+            shutil.rmtree(work, ignore_errors=True)
+        if isinstance(exc, OSError):
+            raise _write_failed(work, exc) from None
         raise
     run.close()
     try:
@@ -232,6 +236,8 @@ def run_scene(
 def _check_size(scene: Scene, until: float, outputs: Outputs, target: Path) -> None:
     """Refuse a run whose trajectory would hold more than :data:`MAX_FRAMES` frames or more
     bytes than the disk beside ``target`` has free, before anything runs."""
+    from carom.io.h5md import frame_bytes
+    from carom.io.outdir import existing_folder
     from carom.scene.build import count_bodies
 
     interval = scene.run["frame_interval"]
@@ -244,13 +250,9 @@ def _check_size(scene: Scene, until: float, outputs: Outputs, target: Path) -> N
             f"more than the {MAX_FRAMES:,} a trajectory may hold (docs/scenes.md, Limits); "
             f"raise frame_interval or lower --until"
         )
-    dim = scene.world["dimension"]
-    # per body and frame: position, velocity (d each), orientation (1 or 4), spin (3)
-    per_frame = count_bodies(scene) * (2 * dim + (1 if dim == 2 else 4) + 3) * 8
+    per_frame = frame_bytes(count_bodies(scene), scene.world["dimension"])
     need = frames * per_frame
-    folder = target.parent
-    while not folder.exists() and folder != folder.parent:
-        folder = folder.parent
+    folder = existing_folder(target.parent)
     free = shutil.disk_usage(folder).free
     if need > free:
         raise CaromError(
@@ -258,15 +260,6 @@ def _check_size(scene: Scene, until: float, outputs: Outputs, target: Path) -> N
             f"{per_frame / 2**20:.3g} MiB), and {folder} has {free / 2**30:.3g} GiB free; raise "
             f"frame_interval, lower --until, or pass --no-trajectory --animation none"
         )
-
-
-def _abandon(work: Path, exc: BaseException) -> None:
-    """After a failure or a second Ctrl-C: keep ``work`` if a checkpoint there can resume the
-    run, remove it otherwise (nothing in it can be used)."""
-    if not (work / CHECKPOINT).is_file():
-        shutil.rmtree(work, ignore_errors=True)
-    if isinstance(exc, OSError):
-        raise _write_failed(work, exc) from None
 
 
 def _write_failed(work: Path, exc: OSError) -> CaromError:
