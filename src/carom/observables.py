@@ -133,6 +133,12 @@ class Stats:
         return self._since().tc_collisions
 
     @property
+    def floor_collisions(self) -> int:
+        """Collisions since the last reset whose parting speed the engine raised to its floor
+        (``docs/engine.md``, "Minimum parting speed")."""
+        return self._since().floor_collisions
+
+    @property
     def kinetic_energy(self) -> float:
         """Total kinetic energy now, translation and rotation [J]."""
         frame = self._world.frame()  # one sample of the engine for both
@@ -184,20 +190,29 @@ class Stats:
 
     @property
     def energy_lost(self) -> float:
-        """Kinetic energy dissipated by collisions since the last reset [J]."""
+        """Kinetic energy dissipated by collisions since the last reset [J] (the impact laws'
+        part: it never decreases)."""
         return self._since().energy_lost
+
+    @property
+    def energy_given(self) -> float:
+        """Kinetic energy the parting-speed floor gave since the last reset [J]; the ledger
+        closes as ``E0 = E + energy_lost - energy_given``."""
+        return self._since().energy_given
 
 
 @dataclass
 class RunHistory:
     """A run's observables, recorded as it goes (for its plots and summary): time [s],
-    kinetic and potential energy [J], energy dissipated so far [J], total momentum
-    [kg m/s], and collisions so far (bodies and walls) [-]."""
+    kinetic and potential energy [J], energy dissipated so far [J], energy the parting-speed
+    floor gave so far [J], total momentum [kg m/s], and collisions so far (bodies and walls)
+    [-]."""
 
     time: list[float] = field(default_factory=list)
     kinetic: list[float] = field(default_factory=list)
     potential: list[float] = field(default_factory=list)
     dissipated: list[float] = field(default_factory=list)
+    given: list[float] = field(default_factory=list)
     momentum: list[NDArray[np.float64]] = field(default_factory=list)
     collisions: list[int] = field(default_factory=list)
 
@@ -209,6 +224,7 @@ class RunHistory:
         self.potential.append(potential_energy(b, frame.positions, world.gravity))
         counters = world.counters()
         self.dissipated.append(counters.energy_lost)
+        self.given.append(counters.energy_given)
         self.momentum.append(momentum(b, frame.velocities))
         self.collisions.append(counters.collisions + counters.wall_collisions)
 

@@ -140,7 +140,7 @@ class World:
         self._logged = 0
         self.collisions_dropped = 0
         # totals of the engines dropped so far (adding bodies or materials rebuilds it)
-        self._counters_before = Counters(0, 0, 0, 0, 0, 0.0, 0.0)
+        self._counters_before = Counters(0, 0, 0, 0, 0, 0.0, 0.0, 0, 0.0)
         self.stats = Stats(self)
 
     def _wall_materials(

@@ -59,6 +59,24 @@ def test_run_a_bouncing_ball_and_check_its_events(tmp_path: Path) -> None:
     assert summary["energy"]["dissipated_J"] > 0
 
 
+def test_two_runs_of_a_scene_agree_on_everything_but_the_wall_clock(tmp_path: Path) -> None:
+    # same input and seed, bit-identical results: summary.json differs only in its
+    # "performance" block (wall time and rates), kept apart for this; a pile (galton-board,
+    # the parting floor at work) and a gas (random start from a seed)
+    for scene in ("galton-board", "gas-2d"):
+        runs = [tmp_path / f"{scene}-{k}" for k in range(2)]
+        for out in runs:
+            done = carom(
+                "run", scene, "--out", out, "--until", "0.5", "--no-plots", "--animation", "none"
+            )
+            assert done.returncode == 0, done.stderr
+        first, second = (json.loads((out / "summary.json").read_text()) for out in runs)
+        assert first.pop("performance") != second.pop("performance")  # wall time moved
+        assert first == second
+        assert first["simulated_time_s"] == 0.5
+        assert (runs[0] / "events.csv").read_bytes() == (runs[1] / "events.csv").read_bytes()
+
+
 def test_run_newtons_cradle_keeps_energy_and_momentum(tmp_path: Path) -> None:
     out = tmp_path / "gas"
     done = carom("run", "newtons-cradle", "--out", out, "--until", "0.6")
@@ -66,6 +84,9 @@ def test_run_newtons_cradle_keeps_energy_and_momentum(tmp_path: Path) -> None:
     summary = json.loads((out / "summary.json").read_text())
     assert summary["collisions"] == 4  # the strike and three hand-overs
     assert summary["energy"]["dissipated_J"] == 0.0
+    # head-on impacts part at their approach speed: the parting floor never acts
+    assert summary["parting_floor_collisions"] == 0
+    assert summary["energy"]["given_by_parting_floor_J"] == 0.0
     assert summary["energy"]["kinetic_end_J"] == pytest.approx(0.5, rel=1e-12, abs=0.0)
     assert summary["momentum"]["end_kg_m_s"] == pytest.approx([1.0, 0.0], rel=1e-12, abs=1e-12)
 

@@ -222,4 +222,5 @@ def test_energy_lost_is_the_kinetic_energy_that_went(
     assert world.stats.collisions > 1000
     lost = world.stats.energy_lost
     assert lost > 0.05 * ke0  # the test means something: a good part of the energy went
-    assert lost == pytest.approx(ke0 - world.stats.kinetic_energy, rel=1e-12, abs=0.0)
+    given = world.stats.energy_given  # by the parting floor (grazing impacts): ~1e-30 J here
+    assert lost - given == pytest.approx(ke0 - world.stats.kinetic_energy, rel=1e-12, abs=0.0)

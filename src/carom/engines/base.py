@@ -76,7 +76,13 @@ class Counters(NamedTuple):
     virial : float
         Sum over impacts of ``J . r`` [J s] (pairs: ``r = x1 - x2``; walls: ``r = x``).
     energy_lost : float
-        Kinetic energy dissipated by impacts [J].
+        Kinetic energy dissipated by the impact laws [J] (never decreases).
+    floor_collisions : int
+        Impacts whose parting speed the engine raised to a floor so that the bodies part
+        (event-driven engine; ``docs/physics.md``, "The parting-speed floor").
+    energy_given : float
+        Kinetic energy those raised speeds gave [J]: the energy ledger closes as
+        ``E0 = E + energy_lost - energy_given``.
     """
 
     events: int
@@ -86,6 +92,8 @@ class Counters(NamedTuple):
     rests: int
     virial: float
     energy_lost: float
+    floor_collisions: int = 0
+    energy_given: float = 0.0
 
     def plus(self, other: Counters) -> Counters:
         """These totals and ``other``'s, added."""

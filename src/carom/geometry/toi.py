@@ -139,10 +139,38 @@ def first_root_quartic(
 
 
 @njit(cache=True, error_model="numpy")
+def _root_bound(c4: float, c3: float, c2: float, c1: float, c0: float) -> float:
+    """Twice Cauchy's bound ``1 + max |c_k / c_lead|`` on the roots' magnitudes: beyond it the
+    polynomial is at least half its leading term in size, so no round-off flips its sign
+    (INF for a constant)."""
+    if c4 != 0.0:
+        largest = max(abs(c3), abs(c2), abs(c1), abs(c0)) / abs(c4)
+    elif c3 != 0.0:
+        largest = max(abs(c2), abs(c1), abs(c0)) / abs(c3)
+    elif c2 != 0.0:
+        largest = max(abs(c1), abs(c0)) / abs(c2)
+    elif c1 != 0.0:
+        largest = abs(c0) / abs(c1)
+    else:
+        return INF
+    return 2.0 * (1.0 + largest)
+
+
+@njit(cache=True, error_model="numpy")
 def _first_fall(c4: float, c3: float, c2: float, c1: float, c0: float, t_max: float) -> float:
-    """First time in (0, t_max] where the quartic, positive at 0 (``c0 > 0``), falls to zero."""
+    """First time in (0, t_max] where the quartic, positive at 0 (``c0 > 0``), falls to zero.
+
+    ``t_max`` may be infinite (a body at rest on a floor has no shell to leave); the search
+    then ends at twice Cauchy's bound on the roots, beyond which the polynomial keeps its
+    leading coefficient's sign. (Bisecting towards infinity found nothing: a ball pulled back
+    onto one resting below it was never scheduled by the resting one, and sank into it.)
+    """
     if not t_max > 0.0:
         return INF
+    if t_max == INF:
+        t_max = _root_bound(c4, c3, c2, c1, c0)
+        if t_max == INF:
+            return INF  # constant: positive for ever
     # critical points of f': roots of f'' = 12 c4 t^2 + 6 c3 t + 2 c2
     s1, s2 = _quadratic_roots(12.0 * c4, 6.0 * c3, 2.0 * c2)
     cuts = [0.0, t_max]

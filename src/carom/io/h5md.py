@@ -16,6 +16,8 @@ Layout written (de Buyl et al., Comput. Phys. Commun. 185, 1546, 2014; nongnu.or
     /observables/kinetic_energy      step, time, value (F,) [J]
     /observables/potential_energy    same (gravity; zero without it) [J]
     /observables/dissipated_energy   same: lost in collisions since the start [J]
+    /observables/given_energy        same: given by the parting-speed floor since the start
+                              [J] (E0 = kinetic + potential + dissipated - given)
 
 Frames are appended as the run produces them (chunked, resizable datasets). The orientation,
 angular velocity and shape elements are carom's own (H5MD lets a program add elements).
@@ -126,7 +128,7 @@ def write_failed() -> bool:
 DISK_MARGIN = 16 * 2**20
 
 #: the observables written with every frame, in joules
-ENERGIES = ("kinetic_energy", "potential_energy", "dissipated_energy")
+ENERGIES = ("kinetic_energy", "potential_energy", "dissipated_energy", "given_energy")
 #: the per-body elements written with every frame
 ELEMENTS = ("position", "velocity", "orientation", "angular_velocity")
 

@@ -96,15 +96,16 @@ def summary(
     """The run's observables, conservation errors, counts and speed, as plain JSON data.
 
     ``start`` holds ``kinetic_energy`` [J], ``potential_energy`` [J] and ``momentum`` [kg m/s]
-    taken before the run. The energy balance is ``E0 - E - dissipated`` over ``E0`` (kinetic
-    plus gravitational potential energy): round-off when the physics is right.
+    taken before the run. The energy balance is ``E0 - E - dissipated + given`` over ``E0``
+    (kinetic plus gravitational potential energy; ``given`` by the parting-speed floor):
+    round-off when the physics is right.
     """
     stats = world.stats
     now = world.frame()
     ke = kinetic_energy(world.bodies, now.velocities, now.angular_velocities)
     pe = potential_energy(world.bodies, now.positions, world.gravity)
     e0 = start["kinetic_energy"] + start["potential_energy"]
-    balance = (e0 - (ke + pe) - stats.energy_lost) / e0 if e0 else 0.0
+    balance = (e0 - (ke + pe) - stats.energy_lost + stats.energy_given) / e0 if e0 else 0.0
     events = stats.events_processed
     data: dict[str, Any] = {
         "scene": scene,
@@ -114,6 +115,7 @@ def summary(
         "simulated_time_s": world.time,
         "collisions": stats.collisions,
         "wall_collisions": stats.wall_collisions,
+        "parting_floor_collisions": stats.floor_collisions,
         "events": events,
         "energy": {
             "kinetic_start_J": start["kinetic_energy"],
@@ -121,6 +123,7 @@ def summary(
             "potential_start_J": start["potential_energy"],
             "potential_end_J": pe,
             "dissipated_J": stats.energy_lost,
+            "given_by_parting_floor_J": stats.energy_given,
             "balance_error_relative": balance,
         },
         "momentum": {

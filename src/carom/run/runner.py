@@ -423,6 +423,7 @@ class _Run:
                 "kinetic_energy": h.kinetic[-1],
                 "potential_energy": h.potential[-1],
                 "dissipated_energy": h.dissipated[-1],
+                "given_energy": h.given[-1],
             }
             self.writer.write(frame, energies)
             self.frames = self.writer.frames

@@ -198,6 +198,7 @@ def _scene_section(root: Path, scene: str, folder: Path, written: list[str]) -> 
         ("simulated time [s]", summary["simulated_time_s"]),
         ("collisions (pairs, walls)", f"{summary['collisions']}, {summary['wall_collisions']}"),
         ("energy dissipated [J]", f"{energy['dissipated_J']:.6g}"),
+        ("energy given by the parting floor [J]", f"{energy['given_by_parting_floor_J']:.3g}"),
         ("energy balance error (relative)", f"{energy['balance_error_relative']:.2e}"),
         ("wall time [s]", f"{summary['performance']['wall_time_s']:.3g}"),
     ]

@@ -26,17 +26,20 @@ def write_run_plots(folder: Path, world: World, history: RunHistory) -> list[str
     written = []
     t = np.array(history.time)
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
-    ke, pe, lost = (
+    ke, pe, lost, given = (
         np.array(history.kinetic),
         np.array(history.potential),
         np.array(history.dissipated),
+        np.array(history.given),
     )
     top.plot(t, ke, label="kinetic")
     if np.any(pe):
         top.plot(t, pe, label="potential (gravity)")
     if np.any(lost):
         top.plot(t, lost, label="dissipated")
-    top.plot(t, ke + pe + lost, "k--", lw=1, label="total (conserved)")
+    if np.any(given):
+        top.plot(t, given, label="given (parting floor)")
+    top.plot(t, ke + pe + lost - given, "k--", lw=1, label="total (conserved)")
     top.set_ylabel("energy [J]")
     top.legend(loc="best", fontsize=8)
     p = np.array(history.momentum)

@@ -25,6 +25,8 @@ C_SHELL = 3
 C_STALE = 4
 C_TC = 5  # collisions made elastic by the TC model
 C_REST = 6  # bodies brought to rest on a wall or plane
+C_FLOOR = 7  # pair collisions whose parting speed the floor raised (collide_pair)
 # sums[]
 S_VIRIAL = 0  # sum over collisions of J . r  [J s] (pairs: r = x1 - x2; walls: r = x)
-S_KE_LOST = 1  # kinetic energy dissipated [J]
+S_KE_LOST = 1  # kinetic energy dissipated by the impact laws [J]
+S_KE_GIVEN = 2  # kinetic energy given by the parting-speed floor [J] (collide_pair)

@@ -402,6 +402,8 @@ class EdmdEngine:
             rests=int(c[codes.C_REST]),
             virial=float(s[codes.S_VIRIAL]),
             energy_lost=float(s[codes.S_KE_LOST]),
+            floor_collisions=int(c[codes.C_FLOOR]),
+            energy_given=float(s[codes.S_KE_GIVEN]),
         )
 
     def resting(self) -> NDArray[np.int64]:
