@@ -79,7 +79,7 @@ class Counters(NamedTuple):
         Kinetic energy dissipated by the impact laws [J] (never decreases).
     floor_collisions : int
         Impacts whose parting speed the engine raised to a floor so that the bodies part
-        (event-driven engine; ``docs/physics.md``, "The parting-speed floor").
+        (event-driven engine; ``docs/engine.md``, "Minimum parting speed").
     energy_given : float
         Kinetic energy those raised speeds gave [J]: the energy ledger closes as
         ``E0 = E + energy_lost - energy_given``.
@@ -92,8 +92,8 @@ class Counters(NamedTuple):
     rests: int
     virial: float
     energy_lost: float
-    floor_collisions: int = 0
-    energy_given: float = 0.0
+    floor_collisions: int
+    energy_given: float
 
     def plus(self, other: Counters) -> Counters:
         """These totals and ``other``'s, added."""

@@ -210,11 +210,9 @@ def collide_pair(
         push = jn + extra
         ci = held_cosine(i, push, n0, n1, n2, support, inv_i, face_e, gravity, plane_normal, t_c)
         cj = held_cosine(j, -push, n0, n1, n2, support, inv_j, face_e, gravity, plane_normal, t_c)
-        held_i = not math.isnan(ci)
-        held_j = not math.isnan(cj)
-        k_held = inv_i * (1.0 - ci * ci if held_i else 1.0) + inv_j * (
-            1.0 - cj * cj if held_j else 1.0
-        )
+        held_i = ci != 0.0
+        held_j = cj != 0.0
+        k_held = inv_i * (1.0 - ci * ci) + inv_j * (1.0 - cj * cj)
         if (held_i or held_j) and k_held > 2.0**-20 * inv_sum:
             scale = inv_sum / k_held
             j0 *= scale
@@ -229,6 +227,7 @@ def collide_pair(
         j1 += extra * n1
         j2 += extra * n2
         counts[C_FLOOR] += 1
+        sums[S_KE_GIVEN] += given
     if j0 == 0.0 and j1 == 0.0 and j2 == 0.0:
         return  # at rest relative to each other, and nothing pulls them together
     un_before = dv0 * n0 + dv1 * n1 + dv2 * n2
@@ -268,7 +267,6 @@ def collide_pair(
     # bodies (exact, and free of the cancellation of KE_before - KE_after); the law's part
     # is that plus what the floor gave
     sums[S_KE_LOST] += given - 0.5 * (j0 * (g0 + h0) + j1 * (g1 + h1) + j2 * (g2 + h2))
-    sums[S_KE_GIVEN] += given
     counter[i] += 1
     counter[j] += 1
     last_coll[i] = T
@@ -335,10 +333,11 @@ def held_cosine(
     """Whether body ``b``'s support holds it against an impulse ``push n`` on it [N s]: the
     cosine ``n . f`` of ``n`` and the support's normal ``f`` if ``b`` rests on a support, the
     impulse presses it in, and bounced off with the support's restitution it would be back
-    within ``t_c`` (support_reaction keeps it resting); NaN otherwise."""
+    within ``t_c`` (support_reaction keeps it resting); 0 otherwise (a held body's cosine is
+    never 0: an impulse along the face presses nothing in)."""
     face = support[b]
     if face < 0:
-        return math.nan
+        return 0.0
     dim = gravity.shape[0]
     c = 0.0
     g_n = 0.0
@@ -349,7 +348,7 @@ def held_cosine(
     un = push * c * inv_b  # its speed along f after the impulse (it rests: zero before)
     if un < 0.0 and -2.0 * face_e[face] * un < -g_n * t_c:
         return c
-    return math.nan
+    return 0.0
 
 
 @njit(cache=True, error_model="numpy", inline="always")
