@@ -1,31 +1,72 @@
 """Shapes: what a body is, as data only (no position, no engine).
 
-Today carom simulates spheres (disks in 2D) with the event-driven engine; the rigid-body engine
-adds capsules, boxes, polygons, hulls and compounds here. A shape is stored per body in the
-body table by its code (:data:`SHAPE_CODES`), with its parameters in the table's columns.
+:class:`Sphere` is the event-driven engine's ball (a disk in 2D). The 2D rigid-body engine
+takes :class:`Circle`, :class:`Capsule`, :class:`Box`, :class:`Polygon` (convex, optionally
+rounded), :class:`Compound` (several convex pieces on one rigid body: a concave body) and, for
+static terrain, :class:`Segment` and :class:`Chain`. Each of these is a list of *rounded
+convex polygons* (:class:`ConvexPiece`: a core of 1, 2 or more corners and a radius), so one
+set of contact functions and one set of mass formulas serves them all.
+
+Mass properties are exact (:mod:`carom.geometry.outline`): in 2D a density is per area
+[kg/m^2] and a moment of inertia is about the z axis through the centre of mass [kg m^2].
 
 >>> Sphere(0.1).moment_of_inertia(mass=2.0)  # 2/5 m a^2 [kg m^2]
 0.008000000000000002
+>>> Box(0.3, 0.4).mass_properties(mass=2.0).inertia  # m (w^2 + h^2)/12 [kg m^2]
+0.04166666666666667
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from carom.errors import CaromError
+from carom.geometry.outline import (
+    MassIntegrals,
+    convex_outline,
+    hull,
+    outward_normals,
+    rounded_polygon_integrals,
+)
 from carom.laws.spheres import default_inertia_factor
 
 __all__ = [
     "SHAPE_CODES",
     "SHAPE_NAMES",
+    "Box",
+    "Capsule",
+    "Chain",
+    "Circle",
+    "Compound",
+    "ConvexPiece",
+    "MassProperties",
+    "Polygon",
+    "Segment",
+    "Shape2D",
     "Sphere",
     "check_inertia_factor",
     "default_inertia_factor",
 ]
 
+FloatArray = NDArray[np.float64]
+
 #: shape codes, as stored per body (H5MD ``particles/all/shape`` holds these names)
-SHAPE_CODES = {"sphere": 0}
+SHAPE_CODES = {
+    "sphere": 0,
+    "circle": 1,
+    "capsule": 2,
+    "box": 3,
+    "polygon": 4,
+    "compound": 5,
+    "segment": 6,
+    "chain": 7,
+}
 SHAPE_NAMES = {code: name for name, code in SHAPE_CODES.items()}
 
 
@@ -65,3 +106,387 @@ class Sphere:
         """``q m a^2`` about any axis through the centre [kg m^2]."""
         q = self.inertia_factor if self.inertia_factor is not None else default_inertia_factor(dim)
         return q * mass * self.radius**2
+
+
+def _finite_positive(name: str, value: object, unit: str, *, zero: bool = False) -> float:
+    """``value`` as a float if it is finite and positive (or zero when allowed)."""
+    ok = (
+        not isinstance(value, bool)
+        and isinstance(value, int | float | np.floating | np.integer)
+        and math.isfinite(float(value))
+        and (float(value) >= 0.0 if zero else float(value) > 0.0)
+    )
+    if not ok:
+        what = "zero or positive" if zero else "positive"
+        raise CaromError(f"{name} must be {what} and finite [{unit}]; got {value!r}")
+    return float(value)  # type: ignore[arg-type]
+
+
+def _points(name: str, value: ArrayLike, count: int | None = None) -> FloatArray:
+    """``value`` as finite (k, 2) float64 points, else a CaromError naming the bad entry."""
+    try:
+        points = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise CaromError(f"{name} must be a list of [x, y] points [m]; got {value!r}") from None
+    if count is not None and points.shape == (2,) and count == 1:
+        points = points[None, :]
+    if points.ndim != 2 or points.shape[1] != 2 or (count is not None and points.shape[0] != count):
+        want = f"{count} " if count is not None else ""
+        raise CaromError(
+            f"{name} must be {want}[x, y] points (shape ({count or 'k'}, 2)) [m]; "
+            f"got shape {points.shape}"
+        )
+    bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
+    if bad.size:
+        i = int(bad[0])
+        raise CaromError(f"{name}[{i}] = {points[i].tolist()} is not finite; give numbers [m]")
+    return points
+
+
+@dataclass(frozen=True)
+class MassProperties:
+    """Mass, centre of mass and moment of inertia of a 2D body.
+
+    Attributes
+    ----------
+    mass : float
+        [kg].
+    centroid : (2,) float64
+        Centre of mass in the shape's frame [m].
+    inertia : float
+        Moment of inertia about the z axis through the centre of mass [kg m^2].
+    """
+
+    mass: float
+    centroid: FloatArray
+    inertia: float
+
+
+@dataclass(frozen=True, eq=False)
+class ConvexPiece:
+    """A rounded convex polygon: the points within ``radius`` of the core polygon.
+
+    Parameters
+    ----------
+    vertices : (k, 2) float64
+        The core's corners, counter-clockwise [m]: one for a circle, two for a capsule or a
+        segment, three or more for a polygon.
+    radius : float
+        Rounding radius [m], >= 0 (positive when k < 3, except a static segment).
+    """
+
+    vertices: FloatArray
+    radius: float
+
+    @property
+    def normals(self) -> FloatArray:
+        """Unit outward normal of each core edge ``i -> i+1``, (k, 2); empty for a circle."""
+        if self.vertices.shape[0] < 2:
+            return np.zeros((0, 2))
+        return outward_normals(self.vertices)
+
+    def moved(self, offset: FloatArray, angle: float) -> ConvexPiece:
+        """The piece turned by ``angle`` [rad] about the origin, then moved by ``offset`` [m]."""
+        c, s = math.cos(angle), math.sin(angle)
+        turned = self.vertices @ np.array([[c, s], [-s, c]])
+        return ConvexPiece(turned + offset, self.radius)
+
+    def integrals(self) -> MassIntegrals:
+        """Area and moments about the frame's origin (per unit density)."""
+        return rounded_polygon_integrals(self.vertices, self.radius)
+
+
+class Shape2D:
+    """A 2D shape for the rigid-body engine: a list of rounded convex pieces in its own frame.
+
+    A body's position is its centre of mass; the engine places the pieces relative to the
+    shape's :attr:`centroid`.
+    """
+
+    kind: str = ""
+
+    def pieces(self) -> tuple[ConvexPiece, ...]:
+        """The convex pieces in the shape's frame."""
+        raise NotImplementedError
+
+    def integrals(self) -> MassIntegrals:
+        """Area [m^2], first [m^3] and second [m^4] moments about the shape's origin."""
+        total = MassIntegrals(0.0, np.zeros(2), 0.0)
+        for piece in self.pieces():
+            total = total + piece.integrals()
+        return total
+
+    @property
+    def area(self) -> float:
+        """[m^2]."""
+        return self.integrals().area
+
+    @property
+    def centroid(self) -> FloatArray:
+        """Centre of the area in the shape's frame [m], (2,)."""
+        integrals = self.integrals()
+        if integrals.area <= 0.0:
+            return np.zeros(2)
+        return integrals.centroid
+
+    def mass_properties(
+        self, density: float | None = None, *, mass: float | None = None
+    ) -> MassProperties:
+        """Exact mass, centre of mass and moment of inertia, from a density or a mass.
+
+        Parameters
+        ----------
+        density : float, optional
+            Mass per area [kg/m^2].
+        mass : float, optional
+            Total mass [kg]; give this or ``density``, not both.
+
+        Returns
+        -------
+        MassProperties
+            ``inertia = density * int |x - c|^2 dA`` about the centroid ``c`` [kg m^2].
+        """
+        if (density is None) == (mass is None):
+            raise CaromError("give density [kg/m^2] or mass [kg] (one of them)")
+        integrals = self.integrals()
+        if not integrals.area > 0.0:
+            raise CaromError(
+                f"a {self.kind} with no area has no mass: give it a radius, or make the body "
+                'kind="static"'
+            )
+        if density is not None:
+            rho = _finite_positive("density", density, "kg/m^2")
+        else:
+            rho = _finite_positive("mass", mass, "kg") / integrals.area
+        return MassProperties(
+            rho * integrals.area, integrals.centroid, rho * integrals.second_about_centroid
+        )
+
+
+@dataclass(frozen=True)
+class Circle(Shape2D):
+    """A disk of ``radius`` [m]: ``I = m r^2/2``."""
+
+    radius: float
+    kind = "circle"
+
+    def __post_init__(self) -> None:
+        _finite_positive("Circle radius", self.radius, "m")
+
+    def pieces(self) -> tuple[ConvexPiece, ...]:
+        return (ConvexPiece(np.zeros((1, 2)), float(self.radius)),)
+
+
+@dataclass(frozen=True)
+class Capsule(Shape2D):
+    """A stadium: the points within ``radius`` of a segment of ``length`` along the x axis.
+
+    Parameters
+    ----------
+    length : float
+        Distance between the two cap centres [m], > 0 (the capsule is ``length + 2 radius``
+        long overall).
+    radius : float
+        [m], > 0.
+    """
+
+    length: float
+    radius: float
+    kind = "capsule"
+
+    def __post_init__(self) -> None:
+        _finite_positive("Capsule length", self.length, "m")
+        _finite_positive("Capsule radius", self.radius, "m")
+
+    def pieces(self) -> tuple[ConvexPiece, ...]:
+        h = float(self.length) / 2.0
+        return (ConvexPiece(np.array([[-h, 0.0], [h, 0.0]]), float(self.radius)),)
+
+
+@dataclass(frozen=True)
+class Box(Shape2D):
+    """A ``width`` x ``height`` rectangle centred on the origin [m], optionally rounded.
+
+    With ``radius`` the corners are rounded and the box grows by ``radius`` on every side.
+    ``I = m (w^2 + h^2)/12`` when sharp.
+    """
+
+    width: float
+    height: float
+    radius: float = 0.0
+    kind = "box"
+
+    def __post_init__(self) -> None:
+        _finite_positive("Box width", self.width, "m")
+        _finite_positive("Box height", self.height, "m")
+        _finite_positive("Box radius", self.radius, "m", zero=True)
+
+    def pieces(self) -> tuple[ConvexPiece, ...]:
+        w, h = float(self.width) / 2.0, float(self.height) / 2.0
+        corners = np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
+        return (ConvexPiece(corners, float(self.radius)),)
+
+
+@dataclass(frozen=True, eq=False)
+class Polygon(Shape2D):
+    """A convex polygon through ``vertices``, optionally rounded by ``radius``.
+
+    The outline may run either way round; points along an edge and repeats are dropped.
+    A concave outline, one that crosses itself, or one with no area is refused with a message
+    (build concave bodies as a :class:`Compound`).
+
+    Parameters
+    ----------
+    vertices : (k, 2) array_like
+        The outline [m], k >= 3, any number of vertices.
+    radius : float, default 0
+        Rounding radius [m].
+    """
+
+    vertices: Any
+    radius: float = 0.0
+    corners: FloatArray = field(init=False, repr=False)
+    kind = "polygon"
+
+    def __post_init__(self) -> None:
+        points = _points("Polygon vertices", self.vertices)
+        _finite_positive("Polygon radius", self.radius, "m", zero=True)
+        object.__setattr__(self, "corners", convex_outline(points, "Polygon vertices"))
+
+    @classmethod
+    def regular(cls, sides: int, circumradius: float, radius: float = 0.0) -> Polygon:
+        """A regular polygon with a corner on the +x axis, centred on the origin."""
+        if isinstance(sides, bool) or not isinstance(sides, int) or sides < 3:
+            raise CaromError(f"sides must be an integer >= 3; got {sides!r}")
+        _finite_positive("circumradius", circumradius, "m")
+        phi = 2.0 * np.pi * np.arange(sides) / sides
+        return cls(circumradius * np.stack([np.cos(phi), np.sin(phi)], axis=1), radius)
+
+    @classmethod
+    def hull_of(cls, points: ArrayLike, radius: float = 0.0) -> Polygon:
+        """The convex hull of any points (their order and inner points do not matter)."""
+        cloud = _points("points", points)
+        return cls(cloud[hull(cloud)], radius)
+
+    def pieces(self) -> tuple[ConvexPiece, ...]:
+        return (ConvexPiece(self.corners, float(self.radius)),)
+
+
+@dataclass(frozen=True, eq=False)
+class Compound(Shape2D):
+    """Several convex pieces on one rigid body: an L, a cup, a gear, a concave hull.
+
+    Parameters
+    ----------
+    parts : sequence of shape, (shape, offset) or (shape, offset, angle)
+        Each part is placed by turning it by ``angle`` [rad] about its own origin, then moving
+        it by ``offset`` [m]. Parts may touch but should not overlap: overlapping area counts
+        twice in the mass.
+    """
+
+    parts: Sequence[Any]
+    placed: tuple[ConvexPiece, ...] = field(init=False, repr=False)
+    kind = "compound"
+
+    def __post_init__(self) -> None:
+        parts = self.parts
+        if isinstance(parts, Shape2D) or not isinstance(parts, Sequence) or not parts:
+            raise CaromError(
+                "Compound takes a non-empty list of parts: shape, (shape, offset) or "
+                f"(shape, offset, angle); got {self.parts!r}"
+            )
+        placed: list[ConvexPiece] = []
+        for i, part in enumerate(self.parts):
+            shape, offset, angle = _part(i, part)
+            if isinstance(shape, Segment | Chain):
+                raise CaromError(
+                    f"Compound part {i}: a {shape.kind} has no area; it can only be a static "
+                    "body of its own"
+                )
+            placed.extend(piece.moved(offset, angle) for piece in shape.pieces())
+        object.__setattr__(self, "placed", tuple(placed))
+
+    def pieces(self) -> tuple[ConvexPiece, ...]:
+        return self.placed
+
+
+def _part(i: int, part: Any) -> tuple[Shape2D, FloatArray, float]:
+    """A Compound part as (shape, offset, angle), or a CaromError naming part ``i``."""
+    if isinstance(part, Shape2D):
+        return part, np.zeros(2), 0.0
+    if isinstance(part, tuple | list) and len(part) in (2, 3) and isinstance(part[0], Shape2D):
+        offset = _points(f"Compound part {i} offset", part[1], count=1)[0]
+        angle = float(part[2]) if len(part) == 3 else 0.0
+        if not math.isfinite(angle):
+            raise CaromError(f"Compound part {i} angle must be finite [rad]; got {part[2]!r}")
+        return part[0], offset, angle
+    raise CaromError(
+        f"Compound part {i} must be a shape, (shape, offset) or (shape, offset, angle); "
+        f"got {part!r}"
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class Segment(Shape2D):
+    """A static line segment from ``p1`` to ``p2`` [m], thickened by ``radius`` (default 0).
+
+    With no radius a segment has no area: it can only be a static body (terrain, a wall).
+    """
+
+    p1: Any
+    p2: Any
+    radius: float = 0.0
+    ends: FloatArray = field(init=False, repr=False)
+    kind = "segment"
+
+    def __post_init__(self) -> None:
+        ends = np.concatenate(
+            [_points("Segment p1", self.p1, count=1), _points("Segment p2", self.p2, count=1)]
+        )
+        if np.array_equal(ends[0], ends[1]):
+            raise CaromError(f"Segment p1 and p2 are the same point {ends[0].tolist()}; move one")
+        _finite_positive("Segment radius", self.radius, "m", zero=True)
+        object.__setattr__(self, "ends", ends)
+
+    def pieces(self) -> tuple[ConvexPiece, ...]:
+        return (ConvexPiece(self.ends, float(self.radius)),)
+
+
+@dataclass(frozen=True, eq=False)
+class Chain(Shape2D):
+    """Static terrain: the segments joining ``points`` in order (closed when ``loop``).
+
+    A chain may be concave (a valley, a bowl, the inside of a tumbler); bodies meet its
+    segments from either side.
+    """
+
+    points: Any
+    loop: bool = False
+    radius: float = 0.0
+    vertices: FloatArray = field(init=False, repr=False)
+    kind = "chain"
+
+    def __post_init__(self) -> None:
+        points = _points("Chain points", self.points)
+        need = 3 if self.loop else 2
+        if points.shape[0] < need:
+            raise CaromError(
+                f"a {'closed ' if self.loop else ''}Chain needs at least {need} points; "
+                f"got {points.shape[0]}"
+            )
+        same = np.flatnonzero(np.all(points == np.roll(points, -1, axis=0), axis=1))
+        same = same[same < points.shape[0] - (0 if self.loop else 1)]
+        if same.size:
+            i = int(same[0])
+            raise CaromError(
+                f"Chain points[{i}] and points[{(i + 1) % points.shape[0]}] are the same point "
+                f"{points[i].tolist()}; drop one"
+            )
+        _finite_positive("Chain radius", self.radius, "m", zero=True)
+        object.__setattr__(self, "vertices", points)
+
+    def pieces(self) -> tuple[ConvexPiece, ...]:
+        k = self.vertices.shape[0]
+        count = k if self.loop else k - 1
+        ends = [np.array([self.vertices[i], self.vertices[(i + 1) % k]]) for i in range(count)]
+        return tuple(ConvexPiece(pair, float(self.radius)) for pair in ends)
