@@ -29,7 +29,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["collide", "core_distance", "segment_closest"]
+__all__ = ["collide", "core_distance", "core_witness", "segment_closest"]
 
 #: a tie on separation within this fraction of the slop keeps A's face (no flip-flop)
 _TIE = 0.1
@@ -584,7 +584,17 @@ def collide(
 def core_distance(
     vertices: np.ndarray, normals: np.ndarray, sa: int, ka: int, sb: int, kb: int
 ) -> float:
-    """Exact distance between two convex cores [m]; 0 when they touch or overlap.
+    """Exact distance between two convex cores [m]; 0 when they touch or overlap
+    (:func:`core_witness`)."""
+    return core_witness(vertices, normals, sa, ka, sb, kb)[0]
+
+
+@njit(cache=True)
+def core_witness(
+    vertices: np.ndarray, normals: np.ndarray, sa: int, ka: int, sb: int, kb: int
+) -> tuple[float, float, float]:
+    """Exact distance between two convex cores [m] and the unit vector from B's closest point
+    to A's; ``(0, 0, 0)`` when they touch or overlap.
 
     The distance between disjoint convex polygons is attained between a corner of one and an
     edge (or corner) of the other, so the smallest corner-to-edge distance is exact. Overlap
@@ -595,32 +605,25 @@ def core_distance(
         sep_a, _ = _max_separation(vertices, normals, sa, ka, sb, kb)
         sep_b, _ = _max_separation(vertices, normals, sb, kb, sa, ka)
         if sep_a <= 0.0 and sep_b <= 0.0:
-            return 0.0
+            return 0.0, 0.0, 0.0
+    elif (ka == 2 and kb >= 3) or (kb == 2 and ka >= 3):
+        # a segment through a polygon: no face of either separates them
+        sp, kp, ss = (sb, kb, sa) if ka == 2 else (sa, ka, sb)
+        sep_p, _ = _max_separation(vertices, normals, sp, kp, ss, 2)
+        sep_s, _ = _max_separation(vertices, normals, ss, 2, sp, kp)
+        if sep_p <= 0.0 and sep_s <= 0.0:
+            return 0.0, 0.0, 0.0
+    elif (ka == 1 and kb >= 3) or (kb == 1 and ka >= 3):
+        sp, kp, sc = (sb, kb, sa) if ka == 1 else (sa, ka, sb)
+        sep, _ = _max_separation(vertices, normals, sp, kp, sc, 1)
+        if sep <= 0.0:
+            return 0.0, 0.0, 0.0
     best = np.inf
-    for side in range(2):
-        s1, k1, s2, k2 = (sa, ka, sb, kb) if side == 0 else (sb, kb, sa, ka)
-        edges = k2 if k2 >= 3 else (1 if k2 == 2 else 0)
-        for i in range(k1):
-            px = vertices[s1 + i, 0]
-            py = vertices[s1 + i, 1]
-            if edges == 0:
-                d2 = (px - vertices[s2, 0]) ** 2 + (py - vertices[s2, 1]) ** 2
-                best = min(best, d2)
-                continue
-            for j in range(edges):
-                ax = vertices[s2 + j, 0]
-                ay = vertices[s2 + j, 1]
-                bx = vertices[s2 + (j + 1) % k2, 0]
-                by = vertices[s2 + (j + 1) % k2, 1]
-                ex = bx - ax
-                ey = by - ay
-                t = ((px - ax) * ex + (py - ay) * ey) / (ex * ex + ey * ey)
-                t = min(max(t, 0.0), 1.0)
-                d2 = (px - ax - t * ex) ** 2 + (py - ay - t * ey) ** 2
-                best = min(best, d2)
+    wx = 0.0
+    wy = 0.0
     if ka == 2 and kb == 2:
-        # two segments may cross with every end away from the other segment
-        _, _, d2 = segment_closest(
+        # two segments: the closest points directly (they may cross with both ends apart)
+        f1, f2, best = segment_closest(
             vertices[sa, 0],
             vertices[sa, 1],
             vertices[sa + 1, 0],
@@ -630,17 +633,44 @@ def core_distance(
             vertices[sb + 1, 0],
             vertices[sb + 1, 1],
         )
-        best = min(best, d2)
-    elif (ka == 2 and kb >= 3) or (kb == 2 and ka >= 3):
-        # a segment through a polygon: inside when no polygon face separates it
-        sp, kp, ss = (sb, kb, sa) if ka == 2 else (sa, ka, sb)
-        sep_p, _ = _max_separation(vertices, normals, sp, kp, ss, 2)
-        sep_s, _ = _max_separation(vertices, normals, ss, 2, sp, kp)
-        if sep_p <= 0.0 and sep_s <= 0.0:
-            return 0.0
-    elif (ka == 1 and kb >= 3) or (kb == 1 and ka >= 3):
-        sp, kp, sc = (sb, kb, sa) if ka == 1 else (sa, ka, sb)
-        sep, _ = _max_separation(vertices, normals, sp, kp, sc, 1)
-        if sep <= 0.0:
-            return 0.0
-    return math.sqrt(best)
+        wx = (vertices[sa, 0] + f1 * (vertices[sa + 1, 0] - vertices[sa, 0])) - (
+            vertices[sb, 0] + f2 * (vertices[sb + 1, 0] - vertices[sb, 0])
+        )
+        wy = (vertices[sa, 1] + f1 * (vertices[sa + 1, 1] - vertices[sa, 1])) - (
+            vertices[sb, 1] + f2 * (vertices[sb + 1, 1] - vertices[sb, 1])
+        )
+    else:
+        for side in range(2):
+            s1, k1, s2, k2 = (sa, ka, sb, kb) if side == 0 else (sb, kb, sa, ka)
+            sign = 1.0 if side == 0 else -1.0
+            edges = k2 if k2 >= 3 else (1 if k2 == 2 else 0)
+            for i in range(k1):
+                px = vertices[s1 + i, 0]
+                py = vertices[s1 + i, 1]
+                if edges == 0:
+                    qx = px - vertices[s2, 0]
+                    qy = py - vertices[s2, 1]
+                    d2 = qx * qx + qy * qy
+                    if d2 < best:
+                        best = d2
+                        wx = sign * qx
+                        wy = sign * qy
+                    continue
+                for j in range(edges):
+                    ax = vertices[s2 + j, 0]
+                    ay = vertices[s2 + j, 1]
+                    ex = vertices[s2 + (j + 1) % k2, 0] - ax
+                    ey = vertices[s2 + (j + 1) % k2, 1] - ay
+                    t = ((px - ax) * ex + (py - ay) * ey) / (ex * ex + ey * ey)
+                    t = min(max(t, 0.0), 1.0)
+                    qx = px - ax - t * ex
+                    qy = py - ay - t * ey
+                    d2 = qx * qx + qy * qy
+                    if d2 < best:
+                        best = d2
+                        wx = sign * qx
+                        wy = sign * qy
+    distance = math.sqrt(best)
+    if distance == 0.0:
+        return 0.0, 0.0, 0.0
+    return distance, wx / distance, wy / distance

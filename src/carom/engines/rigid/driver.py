@@ -1,0 +1,352 @@
+"""RigidEngine: the time-stepped rigid-body engine behind a World (2D).
+
+One step (``dt = 1/rate``) runs these stages, in this order (docs/rigid.md):
+
+1. **place**: the awake bodies' pieces in the world;
+2. **broad phase**: pairs of pieces whose swept boxes overlap (:mod:`.broadphase`);
+3. **narrow phase**: their manifolds, warm-started from the last step (:mod:`.contacts`);
+   an awake body touching a sleeping island wakes it, and the two phases run again;
+4. **islands**: each body's role: free flight, an isolated impact, or the solver
+   (:mod:`.islands`);
+5. **exact impacts**: isolated pairs advanced through the step with their impacts solved at
+   the time of impact (:mod:`.impacts`);
+6. **free flight**: bodies with no contact, exactly (:mod:`.motion`);
+7. **solve**: the soft step over the remaining contacts (:mod:`.solver`);
+8. **store** the impulses for the next step, and **sleep** the islands at rest.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, Counters, Sink
+from carom.engines.rigid import broadphase, contacts, impacts, islands, motion, solver
+from carom.engines.rigid.model import RigidModel, RigidState, grid_cell
+from carom.engines.rigid.settings import RigidSettings
+
+__all__ = ["RigidEngine"]
+
+FloatArray = NDArray[np.float64]
+
+#: steps between looks at a run's stop request
+STOP_CHECK_STEPS = 64
+
+
+class RigidEngine:
+    """The time-stepped engine for 2D rigid bodies with rotation.
+
+    Parameters
+    ----------
+    model : RigidModel
+        The constants.
+    state : RigidState
+        The state at ``time``; the engine advances it in place.
+    settings : RigidSettings
+    time : float
+        The clock at ``state`` [s].
+    """
+
+    name = "rigid"
+
+    def __init__(
+        self, model: RigidModel, state: RigidState, settings: RigidSettings, time: float = 0.0
+    ) -> None:
+        self.model = model
+        self.state = state
+        self.settings = settings
+        self.start = float(time)
+        self.steps = 0
+        self.dt = settings.dt
+        n = model.kind.shape[0]
+        self.cell = grid_cell(model)
+        self._pairs = np.zeros((max(64, 4 * n), 2), np.int64)
+        self._cf = np.zeros((max(64, 2 * n), contacts.CONTACT_FLOATS))
+        self._ci = np.zeros((max(64, 2 * n), contacts.CONTACT_INTS), np.int64)
+        self._boxes = np.zeros((model.piece_start.shape[0], 4))
+        self._parent = np.zeros(n, np.int64)
+        self._role = np.zeros(n, np.int64)
+        self._dynamic = model.kind == islands.KIND_DYNAMIC
+        self._kinematic = model.kind == islands.KIND_KINEMATIC
+        self._accel = np.zeros((n, 2))
+        self._accel[self._dynamic] = model.gravity
+        self._g = float(np.hypot(*model.gravity))
+        self.n_contacts = 0
+        self._collisions = 0
+        self._energy_lost = 0.0
+        self._virial = 0.0
+        # place everything once: static pieces never move again
+        motion.place_pieces(
+            state.x,
+            state.angle,
+            np.ones(n, np.bool_),
+            model.body_pieces,
+            model.piece_start,
+            model.piece_count,
+            model.local_vertices,
+            model.local_normals,
+            state.vertices,
+            state.normals,
+        )
+
+    # -- the Engine protocol --------------------------------------------------------------
+
+    @property
+    def time(self) -> float:
+        """The clock [s]: the start plus whole steps."""
+        return self.start + self.steps * self.dt
+
+    def advance(
+        self,
+        until: float,
+        max_events: int,
+        sink: Sink | None,
+        stop: Callable[[], bool] | None = None,
+    ) -> bool:
+        """Step until the clock reaches ``until`` [s] (to within a millionth of a step);
+        ``max_events`` bounds the steps. Impacts solved exactly go to ``sink``."""
+        target = math.floor((until - self.start) / self.dt + 1e-6)
+        todo = min(max(target - self.steps, 0), max_events)
+        for k in range(todo):
+            self.step(sink)
+            if stop is not None and (k + 1) % STOP_CHECK_STEPS == 0 and stop():
+                return False
+        return True
+
+    def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        s = self.state
+        w = np.zeros((s.omega.shape[0], 3))
+        w[:, 2] = s.omega
+        return s.x.copy(), s.v.copy(), s.angle.reshape(-1, 1).copy(), w
+
+    def counters(self) -> Counters:
+        return Counters(
+            self.steps, self._collisions, 0, 0, 0, self._virial, self._energy_lost, 0, 0.0
+        )
+
+    def resting(self) -> NDArray[np.int64]:
+        return np.full(self.model.kind.shape[0], -1, np.int64)
+
+    def arrays(self) -> dict[str, NDArray[Any]]:
+        s = self.state
+        return {name: np.array(value) for name, value in s._asdict().items()} | {
+            "steps": np.array([self.steps]),
+            "start": np.array([self.start]),
+        }
+
+    # -- one step -------------------------------------------------------------------------
+
+    def _contacts(self) -> int:
+        """Stages 1 to 3: the contacts at the start of the step (waking what they touch)."""
+        m, s, st = self.model, self.state, self.settings
+        moving = (self._dynamic & s.awake) | self._kinematic
+        motion.place_pieces(
+            s.x,
+            s.angle,
+            moving,
+            m.body_pieces,
+            m.piece_start,
+            m.piece_count,
+            m.local_vertices,
+            m.local_normals,
+            s.vertices,
+            s.normals,
+        )
+        speculative = 4.0 * st.linear_slop
+        broadphase.piece_boxes(
+            s.vertices,
+            m.piece_start,
+            m.piece_count,
+            m.piece_radius,
+            m.piece_reach,
+            m.piece_body,
+            s.v,
+            s.omega,
+            moving,
+            self._dynamic,
+            float(m.gravity[0]),
+            float(m.gravity[1]),
+            self.dt,
+            speculative,
+            self._boxes,
+        )
+        while True:
+            n_pairs = broadphase.find_pairs(
+                self._boxes, m.piece_body, moving, self._dynamic, self.cell, self._pairs
+            )
+            if n_pairs >= 0:
+                break
+            self._pairs = np.zeros((2 * -n_pairs, 2), np.int64)
+        while True:
+            nc = contacts.narrow_phase(
+                self._pairs,
+                n_pairs,
+                s.vertices,
+                s.normals,
+                m.piece_start,
+                m.piece_count,
+                m.piece_radius,
+                m.piece_reach,
+                m.piece_body,
+                m.material,
+                m.e_table,
+                m.mu_table,
+                s.x,
+                s.v,
+                s.omega,
+                self._dynamic,
+                self._g,
+                self.dt,
+                speculative,
+                st.linear_slop,
+                s.cache_keys,
+                s.cache_ids,
+                s.cache_impulses,
+                int(s.cache_count[0]),
+                self._cf,
+                self._ci,
+            )
+            if nc >= 0:
+                break
+            size = 2 * -nc
+            self._cf = np.zeros((size, contacts.CONTACT_FLOATS))
+            self._ci = np.zeros((size, contacts.CONTACT_INTS), np.int64)
+        return nc
+
+    def step(self, sink: Sink | None = None) -> None:
+        """Advance one step of ``dt`` [s]."""
+        m, s, st = self.model, self.state, self.settings
+        dt = self.dt
+        nc = self._contacts()
+        if st.sleep and islands.wake(
+            self._ci, nc, m.kind, s.awake, s.v, s.omega, s.clock, s.island
+        ):
+            nc = self._contacts()
+        isolated = np.zeros(max(nc, 1), np.int64)
+        n_iso = islands.plan(
+            self._ci,
+            self._cf,
+            nc,
+            m.kind,
+            s.awake,
+            st.exact_impacts,
+            0.1 * st.linear_slop,
+            self._parent,
+            self._role,
+            isolated,
+        )
+        if n_iso:
+            rows = isolated[:n_iso]
+            ba = self._ci[rows, contacts.I_BODY_A]
+            bb = self._ci[rows, contacts.I_BODY_B]
+            log = np.zeros((n_iso * impacts.MAX_IMPACTS, impacts.IMPACT_FIELDS))
+            logged = impacts.exact_impacts(
+                isolated,
+                n_iso,
+                self._ci,
+                s.x,
+                s.angle,
+                s.v,
+                s.omega,
+                self._accel,
+                self._dynamic,
+                m.inv_mass,
+                m.inv_inertia,
+                m.mass,
+                m.inertia,
+                m.e_table[m.material[ba], m.material[bb]],
+                m.mu_table[m.material[ba], m.material[bb]],
+                m.piece_start,
+                m.piece_count,
+                m.piece_radius,
+                m.piece_reach,
+                m.local_vertices,
+                m.local_normals,
+                s.vertices,
+                s.normals,
+                dt,
+                1e-3 * st.linear_slop,
+                log,
+            )
+            if logged:
+                self._book(log[:logged], sink)
+        free = np.flatnonzero(self._role == islands.ROLE_FREE)
+        for i in free.tolist():
+            motion.fly(i, dt, s.x, s.angle, s.v, s.omega, self._accel[i, 0], self._accel[i, 1])
+        bodies = np.flatnonzero(self._role == islands.ROLE_SOLVER)
+        solver.solve_step(
+            self._cf,
+            self._ci,
+            nc,
+            bodies,
+            m.inv_mass,
+            m.inv_inertia,
+            self._dynamic,
+            s.x,
+            s.angle,
+            s.v,
+            s.omega,
+            float(m.gravity[0]),
+            float(m.gravity[1]),
+            dt,
+            st.substeps,
+            st.contact_hertz,
+            st.damping_ratio,
+            st.push_speed,
+            st.restitution_threshold,
+        )
+        if s.cache_keys.shape[0] < nc:
+            size = max(nc, 2 * s.cache_keys.shape[0])
+            self.state = s = s._replace(
+                cache_keys=np.zeros(size, np.int64),
+                cache_ids=np.zeros((size, 2), np.int64),
+                cache_impulses=np.zeros((size, 4)),
+            )
+        s.cache_count[0] = contacts.store_impulses(
+            self._cf,
+            self._ci,
+            nc,
+            m.piece_start.shape[0],
+            s.cache_keys,
+            s.cache_ids,
+            s.cache_impulses,
+        )
+        if st.sleep:
+            islands.settle(
+                self._ci,
+                nc,
+                m.kind,
+                self._parent,
+                s.awake,
+                s.v,
+                s.omega,
+                m.reach,
+                s.clock,
+                s.island,
+                dt,
+                st.sleep_speed,
+                st.sleep_time,
+            )
+        self.n_contacts = nc
+        self.steps += 1
+
+    def _book(self, log: FloatArray, sink: Sink | None) -> None:
+        """Count the exact impacts and hand them to ``sink`` as collision records."""
+        self._collisions += log.shape[0]
+        self._energy_lost += float(np.sum(log[:, 9]))
+        if sink is None:
+            return
+        records = np.zeros(log.shape[0], COLLISION_DTYPE)
+        records["time"] = self.time + log[:, 0]
+        records["body"] = log[:, 1].astype(np.int64)
+        records["kind"] = KIND_PAIR
+        records["partner"] = log[:, 2].astype(np.int64)
+        records["impulse"][:, :2] = log[:, 3:5]
+        records["un_before"] = log[:, 5]
+        records["un_after"] = log[:, 6]
+        records["point"][:, :2] = log[:, 7:9]
+        sink(records)

@@ -1,0 +1,576 @@
+"""Isolated impacts, solved exactly: the step split at the time of impact.
+
+An isolated pair is two bodies (or a body and a static or kinematic one) joined by one
+contact and nothing else, still apart at the start of the step. Between impacts both fly
+freely (:func:`carom.engines.rigid.motion.fly`, exact); the time of impact is found by
+conservative advancement (Mirtich 1996): from a gap ``d`` the pair cannot touch sooner than
+``d / s``, where ``s`` bounds the speed at which the gap closes (the centres' relative speed
+along the closest points' direction, plus ``|omega| reach`` for each body, plus the relative
+gravity over what is left of the step). Steps of ``d / s`` converge on the contact from the
+safe side; a step that overshoots (a rotation the bound did not cover) is bisected back.
+
+At the contact the impulse is Newton's restitution at the contact point with the bodies'
+inertia (Hecker's formula; :mod:`carom.laws.point_impulse`), with Coulomb friction:
+
+- one point: the impulse that makes the normal velocity ``-e un`` and stops the slip, if it
+  lies in the friction cone (sticking); else the one that slides with ``|jt| = mu jn`` in the
+  direction opposing the slip (sliding). Should that ever gain energy (the couplings of
+  Kane's paradox), the normal impulse alone, then friction clamped to the cone.
+- two points touching together (a face landing flat): the normal impulses solve the 2x2
+  linear complementarity problem of Newton's law at both points exactly; friction follows
+  per point, clamped.
+
+The pair then flies on to the end of the step, and may meet again within it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from carom.engines.rigid.contacts import I_BODY_A, I_BODY_B, I_FLAGS, I_PIECE_A, I_PIECE_B
+from carom.engines.rigid.motion import fly
+from carom.engines.rigid.solver import FLAG_EXACT
+from carom.geometry.manifold2d import collide, core_witness
+
+__all__ = ["IMPACT_FIELDS", "exact_impacts"]
+
+#: conservative-advancement iterations before giving up on a time of impact (then the pair
+#: flies on and the solver meets it at the next step)
+MAX_ITERATIONS = 200
+#: impacts of one pair within one step
+MAX_IMPACTS = 8
+#: columns of a logged impact: time into the step, body A, body B, impulse on A (x, y),
+#: normal speeds before and after (the deepest point), the point (x, y), energy lost
+IMPACT_FIELDS = 10
+
+
+@njit(cache=True)
+def _place(
+    p: int,
+    px: float,
+    py: float,
+    angle: float,
+    piece_start: np.ndarray,
+    piece_count: np.ndarray,
+    local_vertices: np.ndarray,
+    local_normals: np.ndarray,
+    vertices: np.ndarray,
+    normals: np.ndarray,
+) -> None:
+    c = math.cos(angle)
+    s = math.sin(angle)
+    for k in range(piece_start[p], piece_start[p] + piece_count[p]):
+        lx = local_vertices[k, 0]
+        ly = local_vertices[k, 1]
+        vertices[k, 0] = px + (c * lx - s * ly)
+        vertices[k, 1] = py + (s * lx + c * ly)
+        nx = local_normals[k, 0]
+        ny = local_normals[k, 1]
+        normals[k, 0] = c * nx - s * ny
+        normals[k, 1] = s * nx + c * ny
+
+
+@njit(cache=True)
+def _gap(
+    pa: int,
+    pb: int,
+    a: int,
+    b: int,
+    tau: float,
+    x: np.ndarray,
+    angle: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    accel: np.ndarray,
+    piece_start: np.ndarray,
+    piece_count: np.ndarray,
+    piece_radius: np.ndarray,
+    local_vertices: np.ndarray,
+    local_normals: np.ndarray,
+    vertices: np.ndarray,
+    normals: np.ndarray,
+    out: np.ndarray,
+    ids: np.ndarray,
+) -> tuple[float, float, float]:
+    """Signed gap [m] between pieces pa (of body a) and pb (of b) after flying ``tau`` [s],
+    and the unit direction from B to A along which it is measured."""
+    for body, piece in ((a, pa), (b, pb)):
+        px = x[body, 0] + (v[body, 0] + 0.5 * accel[body, 0] * tau) * tau
+        py = x[body, 1] + (v[body, 1] + 0.5 * accel[body, 1] * tau) * tau
+        _place(
+            piece,
+            px,
+            py,
+            angle[body] + omega[body] * tau,
+            piece_start,
+            piece_count,
+            local_vertices,
+            local_normals,
+            vertices,
+            normals,
+        )
+    sa = piece_start[pa]
+    sb = piece_start[pb]
+    ka = piece_count[pa]
+    kb = piece_count[pb]
+    d, wx, wy = core_witness(vertices, normals, sa, ka, sb, kb)
+    if d > 0.0:
+        return d - piece_radius[pa] - piece_radius[pb], wx, wy
+    # the cores touch or overlap: the manifold's deepest point says by how much
+    count = collide(
+        vertices,
+        normals,
+        sa,
+        ka,
+        piece_radius[pa],
+        sb,
+        kb,
+        piece_radius[pb],
+        np.inf,
+        0.0,
+        out,
+        ids,
+    )
+    deepest = 0.0
+    for j in range(count):
+        deepest = min(deepest, out[4 + 3 * j])
+    return deepest, out[0], out[1]
+
+
+@njit(cache=True)
+def time_of_impact(
+    pa: int,
+    pb: int,
+    a: int,
+    b: int,
+    horizon: float,
+    tol: float,
+    parting: bool,
+    x: np.ndarray,
+    angle: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    accel: np.ndarray,
+    piece_start: np.ndarray,
+    piece_count: np.ndarray,
+    piece_radius: np.ndarray,
+    piece_reach: np.ndarray,
+    local_vertices: np.ndarray,
+    local_normals: np.ndarray,
+    vertices: np.ndarray,
+    normals: np.ndarray,
+    out: np.ndarray,
+    ids: np.ndarray,
+) -> float:
+    """First time in ``[0, horizon]`` [s] at which the pieces come within ``tol`` [m] of
+    touching, by conservative advancement; -1 if they do not (or it fails to converge).
+
+    ``parting``: the pair has just been hit apart; the contact it starts in is not a new
+    impact, so the search first lets the gap open beyond ``tol``."""
+    spin = abs(omega[a]) * piece_reach[pa] + abs(omega[b]) * piece_reach[pb]
+    gx = accel[a, 0] - accel[b, 0]
+    gy = accel[a, 1] - accel[b, 1]
+    g_rel = math.sqrt(gx * gx + gy * gy)
+    t = 0.0
+    safe = 0.0
+    for _ in range(MAX_ITERATIONS):
+        d, wx, wy = _gap(
+            pa,
+            pb,
+            a,
+            b,
+            t,
+            x,
+            angle,
+            v,
+            omega,
+            accel,
+            piece_start,
+            piece_count,
+            piece_radius,
+            local_vertices,
+            local_normals,
+            vertices,
+            normals,
+            out,
+            ids,
+        )
+        if d < -tol:
+            # overshot (the bound missed a turn): bisect back between safe and t
+            lo = safe
+            hi = t
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                d, wx, wy = _gap(
+                    pa,
+                    pb,
+                    a,
+                    b,
+                    mid,
+                    x,
+                    angle,
+                    v,
+                    omega,
+                    accel,
+                    piece_start,
+                    piece_count,
+                    piece_radius,
+                    local_vertices,
+                    local_normals,
+                    vertices,
+                    normals,
+                    out,
+                    ids,
+                )
+                if d < -tol:
+                    hi = mid
+                elif d > tol:
+                    lo = mid
+                else:
+                    return mid
+            return lo
+        if d <= tol and not parting:
+            return t
+        if d > tol:
+            parting = False
+        # how fast the gap can close from now to the horizon
+        ux = (v[a, 0] + accel[a, 0] * t) - (v[b, 0] + accel[b, 0] * t)
+        uy = (v[a, 1] + accel[a, 1] * t) - (v[b, 1] + accel[b, 1] * t)
+        closing = -(ux * wx + uy * wy) + spin + g_rel * (horizon - t)
+        if closing <= 0.0:
+            return -1.0
+        safe = t
+        t += max(d, tol) / closing
+        if t > horizon:
+            return -1.0
+    return -1.0
+
+
+@njit(cache=True)
+def _solve_two(k11: float, k12: float, k22: float, b1: float, b2: float) -> tuple[float, float]:
+    """Impulses ``l >= 0`` with ``w = K l - b >= 0`` and ``l . w = 0`` (2x2 LCP, by cases)."""
+    det = k11 * k22 - k12 * k12
+    if det > 1e-14 * k11 * k22:
+        l1 = (k22 * b1 - k12 * b2) / det
+        l2 = (k11 * b2 - k12 * b1) / det
+        if l1 >= 0.0 and l2 >= 0.0:
+            return l1, l2
+    l1 = max(b1 / k11, 0.0)
+    if l1 > 0.0 and k12 * l1 - b2 >= 0.0:
+        return l1, 0.0
+    l2 = max(b2 / k22, 0.0)
+    if l2 > 0.0 and k12 * l2 - b1 >= 0.0:
+        return 0.0, l2
+    if b1 <= 0.0 and b2 <= 0.0:
+        return 0.0, 0.0
+    # degenerate (parallel rows): share the larger single-point impulse
+    if l1 >= l2:
+        return l1, 0.0
+    return 0.0, l2
+
+
+@njit(cache=True)
+def _point_impulse(
+    un: float, ut: float, knn: float, knt: float, ktt: float, e: float, mu: float
+) -> tuple[float, float]:
+    """Normal and tangent impulse [N s] of one contact point (module docstring)."""
+    if un >= 0.0:
+        return 0.0, 0.0
+    target = -(1.0 + e) * un
+    if mu > 0.0:
+        det = knn * ktt - knt * knt
+        if det > 0.0:
+            jn = (ktt * target + knt * ut) / det
+            jt = (-knn * ut - knt * target) / det
+            if jn >= 0.0 and abs(jt) <= mu * jn:
+                gain = (
+                    jn * un + jt * ut + 0.5 * (knn * jn * jn + 2.0 * knt * jn * jt + ktt * jt * jt)
+                )
+                if gain <= 0.0:
+                    return jn, jt
+        slip = ut if ut != 0.0 else -(-knn * ut - knt * target)
+        direction = 1.0 if slip > 0.0 else -1.0
+        denom = knn - mu * direction * knt
+        if denom > 0.0:
+            jn = target / denom
+            jt = -mu * direction * jn
+            gain = jn * un + jt * ut + 0.5 * (knn * jn * jn + 2.0 * knt * jn * jt + ktt * jt * jt)
+            if jn >= 0.0 and gain <= 0.0:
+                return jn, jt
+    jn = target / knn
+    if mu == 0.0:
+        return jn, 0.0
+    # the normal impulse alone, then friction clamped: never gains energy (the friction is
+    # the energy-minimising tangent impulse for that normal impulse, moved into the cone)
+    jt = min(max(-(ut + knt * jn) / ktt, -mu * jn), mu * jn)
+    return jn, jt
+
+
+@njit(cache=True)
+def _impact(
+    a: int,
+    b: int,
+    count: int,
+    out: np.ndarray,
+    touch: float,
+    e: float,
+    mu: float,
+    x: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    inv_mass: np.ndarray,
+    inv_inertia: np.ndarray,
+    mass: np.ndarray,
+    inertia: np.ndarray,
+    record: np.ndarray,
+) -> bool:
+    """Apply the exact impulse of the touching points of manifold ``out``; fill ``record``.
+    Returns False when no touching point approaches (nothing done)."""
+    nx = out[0]
+    ny = out[1]
+    tx = ny
+    ty = -nx
+    deepest = np.inf
+    for j in range(count):
+        deepest = min(deepest, out[4 + 3 * j])
+    rax = np.empty(2)
+    ray = np.empty(2)
+    rbx = np.empty(2)
+    rby = np.empty(2)
+    un = np.empty(2)
+    ut = np.empty(2)
+    used = 0
+    for j in range(count):
+        if out[4 + 3 * j] > deepest + touch:
+            continue
+        # each body's own surface point: the manifold's point lies halfway across the gap
+        # (at most the advancement's tolerance), so the lever arms are exact
+        half = 0.5 * out[4 + 3 * j]
+        px = out[2 + 3 * j]
+        py = out[3 + 3 * j]
+        rax[used] = px + half * nx - x[a, 0]
+        ray[used] = py + half * ny - x[a, 1]
+        rbx[used] = px - half * nx - x[b, 0]
+        rby[used] = py - half * ny - x[b, 1]
+        ux = (v[a, 0] - omega[a] * ray[used]) - (v[b, 0] - omega[b] * rby[used])
+        uy = (v[a, 1] + omega[a] * rax[used]) - (v[b, 1] + omega[b] * rbx[used])
+        un[used] = ux * nx + uy * ny
+        ut[used] = ux * tx + uy * ty
+        used += 1
+    approaching = False
+    for j in range(used):
+        if un[j] < 0.0:
+            approaching = True
+    if not approaching:
+        return False
+    ma = inv_mass[a]
+    mb = inv_mass[b]
+    ia = inv_inertia[a]
+    ib = inv_inertia[b]
+    energy = 0.0
+    for body in (a, b):
+        if inv_mass[body] > 0.0:
+            energy += 0.5 * mass[body] * (v[body, 0] ** 2 + v[body, 1] ** 2)
+            energy += 0.5 * inertia[body] * omega[body] ** 2
+    jn = np.zeros(2)
+    jt = np.zeros(2)
+    if used == 1:
+        rna = rax[0] * ny - ray[0] * nx
+        rnb = rbx[0] * ny - rby[0] * nx
+        rta = rax[0] * ty - ray[0] * tx
+        rtb = rbx[0] * ty - rby[0] * tx
+        knn = ma + mb + ia * rna * rna + ib * rnb * rnb
+        ktt = ma + mb + ia * rta * rta + ib * rtb * rtb
+        knt = ia * rna * rta + ib * rnb * rtb
+        jn[0], jt[0] = _point_impulse(un[0], ut[0], knn, knt, ktt, e, mu)
+    else:
+        rn1a = rax[0] * ny - ray[0] * nx
+        rn1b = rbx[0] * ny - rby[0] * nx
+        rn2a = rax[1] * ny - ray[1] * nx
+        rn2b = rbx[1] * ny - rby[1] * nx
+        k11 = ma + mb + ia * rn1a * rn1a + ib * rn1b * rn1b
+        k22 = ma + mb + ia * rn2a * rn2a + ib * rn2b * rn2b
+        k12 = ma + mb + ia * rn1a * rn2a + ib * rn1b * rn2b
+        jn[0], jn[1] = _solve_two(k11, k12, k22, -(1.0 + e) * un[0], -(1.0 + e) * un[1])
+    # apply the normal impulses, then friction point by point (clamped to each cone)
+    for j in range(used):
+        px = jn[j] * nx + jt[j] * tx
+        py = jn[j] * ny + jt[j] * ty
+        v[a, 0] += ma * px
+        v[a, 1] += ma * py
+        omega[a] += ia * (rax[j] * py - ray[j] * px)
+        v[b, 0] -= mb * px
+        v[b, 1] -= mb * py
+        omega[b] -= ib * (rbx[j] * py - rby[j] * px)
+    if used == 2 and mu > 0.0:
+        for j in range(2):
+            ux = (v[a, 0] - omega[a] * ray[j]) - (v[b, 0] - omega[b] * rby[j])
+            uy = (v[a, 1] + omega[a] * rax[j]) - (v[b, 1] + omega[b] * rbx[j])
+            rta = rax[j] * ty - ray[j] * tx
+            rtb = rbx[j] * ty - rby[j] * tx
+            ktt = ma + mb + ia * rta * rta + ib * rtb * rtb
+            dj = min(max(-(ux * tx + uy * ty) / ktt, -mu * jn[j]), mu * jn[j])
+            jt[j] = dj
+            v[a, 0] += ma * dj * tx
+            v[a, 1] += ma * dj * ty
+            omega[a] += ia * (rax[j] * dj * ty - ray[j] * dj * tx)
+            v[b, 0] -= mb * dj * tx
+            v[b, 1] -= mb * dj * ty
+            omega[b] -= ib * (rbx[j] * dj * ty - rby[j] * dj * tx)
+    after = 0.0
+    for body in (a, b):
+        if inv_mass[body] > 0.0:
+            after += 0.5 * mass[body] * (v[body, 0] ** 2 + v[body, 1] ** 2)
+            after += 0.5 * inertia[body] * omega[body] ** 2
+    # the record: the deepest touching point's speeds, the total impulse on A
+    j0 = 0
+    ux = (v[a, 0] - omega[a] * ray[j0]) - (v[b, 0] - omega[b] * rby[j0])
+    uy = (v[a, 1] + omega[a] * rax[j0]) - (v[b, 1] + omega[b] * rbx[j0])
+    record[1] = a
+    record[2] = b
+    record[3] = (jn[0] + jn[1]) * nx + (jt[0] + jt[1]) * tx
+    record[4] = (jn[0] + jn[1]) * ny + (jt[0] + jt[1]) * ty
+    record[5] = un[j0]
+    record[6] = ux * nx + uy * ny
+    record[7] = x[a, 0] + rax[j0]
+    record[8] = x[a, 1] + ray[j0]
+    record[9] = energy - after
+    return True
+
+
+@njit(cache=True)
+def exact_impacts(
+    isolated: np.ndarray,
+    n_isolated: int,
+    ci: np.ndarray,
+    x: np.ndarray,
+    angle: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    accel: np.ndarray,
+    moves: np.ndarray,
+    inv_mass: np.ndarray,
+    inv_inertia: np.ndarray,
+    mass: np.ndarray,
+    inertia: np.ndarray,
+    e_pair: np.ndarray,
+    mu_pair: np.ndarray,
+    piece_start: np.ndarray,
+    piece_count: np.ndarray,
+    piece_radius: np.ndarray,
+    piece_reach: np.ndarray,
+    local_vertices: np.ndarray,
+    local_normals: np.ndarray,
+    vertices: np.ndarray,
+    normals: np.ndarray,
+    dt: float,
+    touch: float,
+    log: np.ndarray,
+) -> int:
+    """Advance each isolated contact's two bodies through the step, impacts solved exactly.
+
+    ``isolated[:n_isolated]`` are contact rows; ``e_pair``, ``mu_pair`` their coefficients;
+    ``accel`` (N, 2) each body's free acceleration (gravity, or zero); ``moves[i]`` whether
+    body i moves at all (not static). Flags the contacts exact; returns the number of impacts
+    written to ``log`` (rows of :data:`IMPACT_FIELDS`; the caller makes room for
+    ``MAX_IMPACTS`` per contact).
+    """
+    out = np.empty(8)
+    ids = np.empty(2, np.int64)
+    logged = 0
+    for k in range(n_isolated):
+        m = isolated[k]
+        a = ci[m, I_BODY_A]
+        b = ci[m, I_BODY_B]
+        pa = ci[m, I_PIECE_A]
+        pb = ci[m, I_PIECE_B]
+        ci[m, I_FLAGS] |= FLAG_EXACT
+        tol = 1e-9 * (piece_reach[pa] + piece_reach[pb])
+        now = 0.0
+        for impact in range(MAX_IMPACTS):
+            hit = time_of_impact(
+                pa,
+                pb,
+                a,
+                b,
+                dt - now,
+                tol,
+                impact > 0,
+                x,
+                angle,
+                v,
+                omega,
+                accel,
+                piece_start,
+                piece_count,
+                piece_radius,
+                piece_reach,
+                local_vertices,
+                local_normals,
+                vertices,
+                normals,
+                out,
+                ids,
+            )
+            if hit < 0.0:
+                break
+            for body in (a, b):
+                if moves[body]:
+                    fly(body, hit, x, angle, v, omega, accel[body, 0], accel[body, 1])
+            now += hit
+            for body, piece in ((a, pa), (b, pb)):
+                _place(
+                    piece,
+                    x[body, 0],
+                    x[body, 1],
+                    angle[body],
+                    piece_start,
+                    piece_count,
+                    local_vertices,
+                    local_normals,
+                    vertices,
+                    normals,
+                )
+            count = collide(
+                vertices,
+                normals,
+                piece_start[pa],
+                piece_count[pa],
+                piece_radius[pa],
+                piece_start[pb],
+                piece_count[pb],
+                piece_radius[pb],
+                2.0 * tol + touch,
+                0.0,
+                out,
+                ids,
+            )
+            if count == 0:
+                break
+            if not _impact(
+                a,
+                b,
+                count,
+                out,
+                touch,
+                e_pair[k],
+                mu_pair[k],
+                x,
+                v,
+                omega,
+                inv_mass,
+                inv_inertia,
+                mass,
+                inertia,
+                log[logged],
+            ):
+                break
+            log[logged, 0] = now
+            logged += 1
+        for body in (a, b):
+            if moves[body]:
+                fly(body, dt - now, x, angle, v, omega, accel[body, 0], accel[body, 1])
+    return logged

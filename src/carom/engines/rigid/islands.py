@@ -1,0 +1,222 @@
+"""Islands: bodies joined by contacts. Who goes to the exact impact path, who to the solver,
+who flies free; who falls asleep and who wakes.
+
+Dynamic bodies touching (or about to touch) are joined by union-find (Tarjan 1975, path
+halving); static and kinematic bodies join nothing, so the ground does not make one island of
+everything on it. An island of one contact that is still apart at the start of the step is
+an isolated impact (:mod:`carom.engines.rigid.impacts`); an island with no contact flies
+free; the rest go to the solver. An island whose bodies all stayed slower than the sleep
+speed for the sleep time sleeps: it is skipped until an awake body touches one of its bodies,
+which wakes the whole island.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from carom.engines.rigid.contacts import (
+    I_BODY_A,
+    I_BODY_B,
+    I_COUNT,
+    P_SEP,
+    point_offset,
+)
+
+__all__ = ["KIND_DYNAMIC", "KIND_KINEMATIC", "KIND_STATIC", "plan", "settle", "wake"]
+
+KIND_DYNAMIC = 0
+KIND_STATIC = 1
+KIND_KINEMATIC = 2
+
+ROLE_ASLEEP = 0  # skipped
+ROLE_FREE = 1  # no contact: exact free flight
+ROLE_EXACT = 2  # one isolated impact this step
+ROLE_SOLVER = 3  # in the soft-step solver
+
+
+@njit(cache=True, inline="always")
+def _root(parent: np.ndarray, i: int) -> int:
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@njit(cache=True)
+def plan(
+    ci: np.ndarray,
+    cf: np.ndarray,
+    nc: int,
+    kind: np.ndarray,
+    awake: np.ndarray,
+    exact: bool,
+    apart: float,
+    parent: np.ndarray,
+    role: np.ndarray,
+    isolated: np.ndarray,
+) -> int:
+    """Join the islands and give every body a role; return the number of isolated contacts,
+    whose rows are written to ``isolated``.
+
+    Parameters
+    ----------
+    ci, cf : contact rows; ``nc`` of them.
+    kind : (N,) int64
+        KIND_DYNAMIC, KIND_STATIC or KIND_KINEMATIC.
+    awake : (N,) bool
+        Awake dynamic bodies (others are ignored).
+    exact : bool
+        Whether isolated impacts are solved exactly (else everything goes to the solver).
+    apart : float
+        A contact whose every point is further apart than this [m] at the start of the step
+        is an impact still to happen, not a resting contact.
+    parent : (N,) int64
+        Written: each body's island root (itself for non-dynamic bodies).
+    role : (N,) int64
+        Written: ROLE_* of each body.
+    isolated : (capacity,) int64
+        Written: the isolated contacts' rows.
+    """
+    n = kind.shape[0]
+    for i in range(n):
+        parent[i] = i
+    for m in range(nc):
+        a = ci[m, I_BODY_A]
+        b = ci[m, I_BODY_B]
+        if kind[a] == KIND_DYNAMIC and kind[b] == KIND_DYNAMIC:
+            ra = _root(parent, a)
+            rb = _root(parent, b)
+            if ra != rb:
+                # the smaller index becomes the root: the same islands every run
+                if ra < rb:
+                    parent[rb] = ra
+                else:
+                    parent[ra] = rb
+    contacts = np.zeros(n, np.int64)
+    first = np.full(n, -1, np.int64)
+    for m in range(nc):
+        a = ci[m, I_BODY_A]
+        b = ci[m, I_BODY_B]
+        owner = a if kind[a] == KIND_DYNAMIC else b
+        r = _root(parent, owner)
+        contacts[r] += 1
+        if first[r] < 0:
+            first[r] = m
+    for i in range(n):
+        parent[i] = _root(parent, i)
+    count = 0
+    for i in range(n):
+        if kind[i] != KIND_DYNAMIC:
+            role[i] = ROLE_SOLVER if kind[i] == KIND_KINEMATIC else ROLE_ASLEEP
+        elif not awake[i]:
+            role[i] = ROLE_ASLEEP
+        else:
+            role[i] = ROLE_FREE if contacts[parent[i]] == 0 else ROLE_SOLVER
+    if not exact:
+        return 0
+    for r in range(n):
+        if contacts[r] != 1 or kind[r] != KIND_DYNAMIC or not awake[r]:
+            continue
+        m = first[r]
+        a = ci[m, I_BODY_A]
+        b = ci[m, I_BODY_B]
+        if kind[a] == KIND_KINEMATIC or kind[b] == KIND_KINEMATIC:
+            continue
+        closest = np.inf
+        for j in range(ci[m, I_COUNT]):
+            closest = min(closest, cf[m, point_offset(j) + P_SEP])
+        if closest <= apart:
+            continue
+        isolated[count] = m
+        count += 1
+        role[a] = ROLE_EXACT if kind[a] == KIND_DYNAMIC else role[a]
+        role[b] = ROLE_EXACT if kind[b] == KIND_DYNAMIC else role[b]
+    return count
+
+
+@njit(cache=True)
+def settle(
+    ci: np.ndarray,
+    nc: int,
+    kind: np.ndarray,
+    parent: np.ndarray,
+    awake: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    reach: np.ndarray,
+    clock: np.ndarray,
+    island: np.ndarray,
+    dt: float,
+    speed: float,
+    time: float,
+) -> int:
+    """Run the sleep clocks and put to sleep every island that stayed slow for ``time`` [s];
+    return how many bodies fell asleep. ``island[i]`` is set to the island's root."""
+    n = kind.shape[0]
+    slowest = np.full(n, np.inf)
+    for i in range(n):
+        if kind[i] != KIND_DYNAMIC or not awake[i]:
+            continue
+        fast = np.sqrt(v[i, 0] ** 2 + v[i, 1] ** 2) + abs(omega[i]) * reach[i]
+        if fast > speed:
+            clock[i] = 0.0
+        else:
+            clock[i] += dt
+        r = parent[i]
+        slowest[r] = min(slowest[r], clock[i])
+    # an island touching a moving kinematic body stays awake
+    for m in range(nc):
+        a = ci[m, I_BODY_A]
+        b = ci[m, I_BODY_B]
+        for body, other in ((a, b), (b, a)):
+            moving = v[other, 0] != 0.0 or v[other, 1] != 0.0 or omega[other] != 0.0
+            if kind[body] == KIND_DYNAMIC and kind[other] == KIND_KINEMATIC and moving:
+                slowest[parent[body]] = 0.0
+    fell = 0
+    for i in range(n):
+        if kind[i] == KIND_DYNAMIC and awake[i] and slowest[parent[i]] >= time:
+            awake[i] = False
+            island[i] = parent[i]
+            fell += 1
+    return fell
+
+
+@njit(cache=True)
+def wake(
+    ci: np.ndarray,
+    nc: int,
+    kind: np.ndarray,
+    awake: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    clock: np.ndarray,
+    island: np.ndarray,
+) -> int:
+    """Wake every sleeping island that a contact joins to an awake body or a moving
+    kinematic one; return how many bodies woke (the caller then finds contacts again)."""
+    n = kind.shape[0]
+    rouse = np.zeros(n, np.bool_)
+    any_island = False
+    for m in range(nc):
+        a = ci[m, I_BODY_A]
+        b = ci[m, I_BODY_B]
+        for body, other in ((a, b), (b, a)):
+            if kind[body] != KIND_DYNAMIC or awake[body]:
+                continue
+            moving = (kind[other] == KIND_DYNAMIC and awake[other]) or (
+                kind[other] == KIND_KINEMATIC
+                and (v[other, 0] != 0.0 or v[other, 1] != 0.0 or omega[other] != 0.0)
+            )
+            if moving:
+                rouse[island[body]] = True
+                any_island = True
+    if not any_island:
+        return 0
+    woke = 0
+    for i in range(n):
+        if kind[i] == KIND_DYNAMIC and not awake[i] and rouse[island[i]]:
+            awake[i] = True
+            clock[i] = 0.0
+            woke += 1
+    return woke

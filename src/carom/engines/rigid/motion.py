@@ -1,0 +1,96 @@
+"""Where bodies and their pieces are: placing pieces in the world, and free flight.
+
+A body's pose is its centre of mass ``x`` [m] and angle ``theta`` [rad]; its pieces' corners
+and edge normals are stored in the body's frame (centred on the centre of mass) and placed in
+the world by ``x + R(theta) v``. Free flight under uniform gravity ``g`` is exact:
+``x(t) = x + v t + g t^2/2``, ``theta(t) = theta + omega t``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = ["fly", "place_body", "place_pieces"]
+
+
+@njit(cache=True)
+def place_body(
+    b: int,
+    x: np.ndarray,
+    angle: np.ndarray,
+    body_pieces: np.ndarray,
+    piece_start: np.ndarray,
+    piece_count: np.ndarray,
+    local_vertices: np.ndarray,
+    local_normals: np.ndarray,
+    vertices: np.ndarray,
+    normals: np.ndarray,
+) -> None:
+    """Place body ``b``'s pieces at its pose: corners into ``vertices``, normals into
+    ``normals`` (rows as in ``local_vertices``)."""
+    c = math.cos(angle[b])
+    s = math.sin(angle[b])
+    px = x[b, 0]
+    py = x[b, 1]
+    for p in range(body_pieces[b], body_pieces[b + 1]):
+        for k in range(piece_start[p], piece_start[p] + piece_count[p]):
+            lx = local_vertices[k, 0]
+            ly = local_vertices[k, 1]
+            vertices[k, 0] = px + (c * lx - s * ly)
+            vertices[k, 1] = py + (s * lx + c * ly)
+            nx = local_normals[k, 0]
+            ny = local_normals[k, 1]
+            normals[k, 0] = c * nx - s * ny
+            normals[k, 1] = s * nx + c * ny
+
+
+@njit(cache=True)
+def place_pieces(
+    x: np.ndarray,
+    angle: np.ndarray,
+    which: np.ndarray,
+    body_pieces: np.ndarray,
+    piece_start: np.ndarray,
+    piece_count: np.ndarray,
+    local_vertices: np.ndarray,
+    local_normals: np.ndarray,
+    vertices: np.ndarray,
+    normals: np.ndarray,
+) -> None:
+    """Place the pieces of every body with ``which[b]`` true."""
+    for b in range(x.shape[0]):
+        if which[b]:
+            place_body(
+                b,
+                x,
+                angle,
+                body_pieces,
+                piece_start,
+                piece_count,
+                local_vertices,
+                local_normals,
+                vertices,
+                normals,
+            )
+
+
+@njit(cache=True, inline="always")
+def fly(
+    b: int,
+    t: float,
+    x: np.ndarray,
+    angle: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    gx: float,
+    gy: float,
+) -> None:
+    """Move body ``b`` in free flight for ``t`` [s] under acceleration ``(gx, gy)``, exactly."""
+    x[b, 0] += (v[b, 0] + 0.5 * gx * t) * t
+    x[b, 1] += (v[b, 1] + 0.5 * gy * t) * t
+    v[b, 0] += gx * t
+    v[b, 1] += gy * t
+    angle[b] += omega[b] * t
