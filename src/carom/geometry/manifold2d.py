@@ -45,6 +45,38 @@ def _point(
     ids[j] = fid
 
 
+@njit(cache=True, inline="always")
+def _one_point(
+    c1x: float,
+    c1y: float,
+    c2x: float,
+    c2y: float,
+    nx: float,
+    ny: float,
+    r1: float,
+    r2: float,
+    separation: float,
+    fid: int,
+    out: np.ndarray,
+    ids: np.ndarray,
+) -> int:
+    """One point joining core point ``c1`` (of A, radius r1) to ``c2`` (of B, radius r2)
+    along the unit normal ``n`` from A to B: halfway between the surfaces ``c1 + r1 n`` and
+    ``c2 - r2 n``."""
+    out[0] = nx
+    out[1] = ny
+    _point(
+        out,
+        ids,
+        0,
+        0.5 * ((c1x + r1 * nx) + (c2x - r2 * nx)),
+        0.5 * ((c1y + r1 * ny) + (c2y - r2 * ny)),
+        separation,
+        fid,
+    )
+    return 1
+
+
 @njit(cache=True)
 def _circles(
     ax: float,
@@ -70,13 +102,7 @@ def _circles(
     else:  # concentric: any normal is as good; up
         nx = 0.0
         ny = 1.0
-    out[0] = nx
-    out[1] = ny
-    # halfway between A's surface point a + ra n and B's b - rb n
-    px = 0.5 * ((ax + ra * nx) + (bx - rb * nx))
-    py = 0.5 * ((ay + ra * ny) + (by - rb * ny))
-    _point(out, ids, 0, px, py, separation, 0)
-    return 1
+    return _one_point(ax, ay, bx, by, nx, ny, ra, rb, separation, 0, out, ids)
 
 
 @njit(cache=True)
@@ -122,15 +148,10 @@ def _polygon_circle(
         separation = dist - radius
         if separation > margin:
             return 0
-        nx = dx / dist
-        ny = dy / dist
-        out[0] = nx
-        out[1] = ny
-        px = 0.5 * ((vx + ra * nx) + (cx - rb * nx))
-        py = 0.5 * ((vy + ra * ny) + (cy - rb * ny))
         corner = face if u1 < 0.0 else (face + 1) % ka
-        _point(out, ids, 0, px, py, separation, corner << 8)
-        return 1
+        return _one_point(
+            vx, vy, cx, cy, dx / dist, dy / dist, ra, rb, separation, corner << 8, out, ids
+        )
     nx = normals[i1, 0]
     ny = normals[i1, 1]
     out[0] = nx
@@ -373,17 +394,68 @@ def _polygons(
         c1y = vertices[i11, 1] + f1 * (vertices[i12, 1] - vertices[i11, 1])
         c2x = vertices[i21, 0] + f2 * (vertices[i22, 0] - vertices[i21, 0])
         c2y = vertices[i21, 1] + f2 * (vertices[i22, 1] - vertices[i21, 1])
-        nx = (c2x - c1x) / distance
-        ny = (c2y - c1y) / distance
-        out[0] = nx
-        out[1] = ny
-        px = 0.5 * ((c1x + ra * nx) + (c2x - rb * nx))
-        py = 0.5 * ((c1y + ra * ny) + (c2y - rb * ny))
         fa = edge_a if f1 == 0.0 else (edge_a + 1) % ka
         fb = edge_b if f2 == 0.0 else (edge_b + 1) % kb
-        _point(out, ids, 0, px, py, distance - radius, (fa << 8) | fb)
-        return 1
+        nx = (c2x - c1x) / distance
+        ny = (c2y - c1y) / distance
+        return _one_point(
+            c1x, c1y, c2x, c2y, nx, ny, ra, rb, distance - radius, (fa << 8) | fb, out, ids
+        )
     return count
+
+
+@njit(cache=True)
+def _facing(
+    ox: float,
+    oy: float,
+    nx: float,
+    ny: float,
+    length: float,
+    px: float,
+    py: float,
+    qx: float,
+    qy: float,
+    lo: float,
+    hi: float,
+    r_ref: float,
+    r_inc: float,
+    sign: float,
+    distance: float,
+    slop: float,
+    fid: int,
+    out: np.ndarray,
+    ids: np.ndarray,
+) -> int:
+    """Two points of a reference segment (from ``o``, ``length`` long, side normal ``n``)
+    facing an incident segment ``p q`` whose ends lie at ``lo``, ``hi`` along it: the incident
+    segment clipped to ``[0, length]``. Written with normal ``sign n`` and ids ``fid``,
+    ``fid + 1`` unless the nearer clipped point lies clearly beyond the closest-point
+    ``distance`` (then 0: the caller's one point at the closest points is the contact)."""
+    cpx, cpy, cqx, cqy = px, py, qx, qy
+    if lo < 0.0 < hi:
+        t = -lo / (hi - lo)
+        cpx, cpy = px + t * (qx - px), py + t * (qy - py)
+    elif hi < 0.0 < lo:
+        t = -hi / (lo - hi)
+        cqx, cqy = qx + t * (px - qx), qy + t * (py - qy)
+    if lo > length > hi:
+        t = (lo - length) / (lo - hi)
+        cpx, cpy = px + t * (qx - px), py + t * (qy - py)
+    elif hi > length > lo:
+        t = (hi - length) / (hi - lo)
+        cqx, cqy = qx + t * (px - qx), qy + t * (py - qy)
+    sp = nx * (cpx - ox) + ny * (cpy - oy)
+    sq = nx * (cqx - ox) + ny * (cqy - oy)
+    if min(sp, sq) > distance + _TIE * slop:
+        return 0
+    radius = r_ref + r_inc
+    out[0] = sign * nx
+    out[1] = sign * ny
+    h = 0.5 * (r_ref - r_inc - sp)
+    _point(out, ids, 0, cpx + h * nx, cpy + h * ny, sp - radius, fid)
+    h = 0.5 * (r_ref - r_inc - sq)
+    _point(out, ids, 1, cqx + h * nx, cqy + h * ny, sq - radius, fid + 1)
+    return 2
 
 
 @njit(cache=True)
@@ -438,57 +510,53 @@ def _segments(
             nbx, nby = -nbx, -nby
         sep_b = max(min(s1, s2), min(-s1, -s2))
         if sep_a + _TIE * slop >= sep_b:
-            # reference A: clip B's segment to A's extent [0, len1] along u1
-            cpx, cpy, cqx, cqy = p2x, p2y, q2x, q2y
-            lo, hi = fp2, fq2
-            if lo < 0.0 < hi:
-                t = -lo / (hi - lo)
-                cpx, cpy = p2x + t * (q2x - p2x), p2y + t * (q2y - p2y)
-            elif hi < 0.0 < lo:
-                t = -hi / (lo - hi)
-                cqx, cqy = q2x + t * (p2x - q2x), q2y + t * (p2y - q2y)
-            if lo > len1 > hi:
-                t = (lo - len1) / (lo - hi)
-                cpx, cpy = p2x + t * (q2x - p2x), p2y + t * (q2y - p2y)
-            elif hi > len1 > lo:
-                t = (hi - len1) / (hi - lo)
-                cqx, cqy = q2x + t * (p2x - q2x), q2y + t * (p2y - q2y)
-            sp = nax * (cpx - p1x) + nay * (cpy - p1y)
-            sq = nax * (cqx - p1x) + nay * (cqy - p1y)
-            if min(sp, sq) <= distance + _TIE * slop:
-                out[0] = nax
-                out[1] = nay
-                h = 0.5 * (ra - rb - sp)
-                _point(out, ids, 0, cpx + h * nax, cpy + h * nay, sp - radius, 0)
-                h = 0.5 * (ra - rb - sq)
-                _point(out, ids, 1, cqx + h * nax, cqy + h * nay, sq - radius, 1)
-                return 2
+            # reference A: B's segment clipped to A's extent; the normal from A to B is n_a
+            count = _facing(
+                p1x,
+                p1y,
+                nax,
+                nay,
+                len1,
+                p2x,
+                p2y,
+                q2x,
+                q2y,
+                fp2,
+                fq2,
+                ra,
+                rb,
+                1.0,
+                distance,
+                slop,
+                0,
+                out,
+                ids,
+            )
         else:
-            # reference B: clip A's segment to B's extent along u2; normal from A to B is -nb
-            cpx, cpy, cqx, cqy = p1x, p1y, q1x, q1y
-            lo, hi = fp1, fq1
-            if lo < 0.0 < hi:
-                t = -lo / (hi - lo)
-                cpx, cpy = p1x + t * (q1x - p1x), p1y + t * (q1y - p1y)
-            elif hi < 0.0 < lo:
-                t = -hi / (lo - hi)
-                cqx, cqy = q1x + t * (p1x - q1x), q1y + t * (p1y - q1y)
-            if lo > len2 > hi:
-                t = (lo - len2) / (lo - hi)
-                cpx, cpy = p1x + t * (q1x - p1x), p1y + t * (q1y - p1y)
-            elif hi > len2 > lo:
-                t = (hi - len2) / (hi - lo)
-                cqx, cqy = q1x + t * (p1x - q1x), q1y + t * (p1y - q1y)
-            sp = nbx * (cpx - p2x) + nby * (cpy - p2y)
-            sq = nbx * (cqx - p2x) + nby * (cqy - p2y)
-            if min(sp, sq) <= distance + _TIE * slop:
-                out[0] = -nbx
-                out[1] = -nby
-                h = 0.5 * (rb - ra - sp)
-                _point(out, ids, 0, cpx + h * nbx, cpy + h * nby, sp - radius, 256)
-                h = 0.5 * (rb - ra - sq)
-                _point(out, ids, 1, cqx + h * nbx, cqy + h * nby, sq - radius, 257)
-                return 2
+            # reference B: A's segment clipped to B's extent; the normal from A to B is -n_b
+            count = _facing(
+                p2x,
+                p2y,
+                nbx,
+                nby,
+                len2,
+                p1x,
+                p1y,
+                q1x,
+                q1y,
+                fp1,
+                fq1,
+                rb,
+                ra,
+                -1.0,
+                distance,
+                slop,
+                256,
+                out,
+                ids,
+            )
+        if count:
+            return count
     c1x = p1x + f1 * (q1x - p1x)
     c1y = p1y + f1 * (q1y - p1y)
     c2x = p2x + f2 * (q2x - p2x)
@@ -498,13 +566,8 @@ def _segments(
         ny = (c2y - c1y) / distance
     else:  # crossing cores: A's left side
         nx, ny = -u1y, u1x
-    out[0] = nx
-    out[1] = ny
-    px = 0.5 * ((c1x + ra * nx) + (c2x - rb * nx))
-    py = 0.5 * ((c1y + ra * ny) + (c2y - rb * ny))
     fid = ((0 if f1 == 0.0 else 1) << 8) | (0 if f2 == 0.0 else 1)
-    _point(out, ids, 0, px, py, distance - radius, fid)
-    return 1
+    return _one_point(c1x, c1y, c2x, c2y, nx, ny, ra, rb, distance - radius, fid, out, ids)
 
 
 @njit(cache=True)

@@ -112,6 +112,30 @@ def _wanted(
     return wanted
 
 
+@njit(cache=True, inline="always")
+def _buckets(boxes: np.ndarray, p: int, inv: float, mask: int, mine: np.ndarray) -> int:
+    """The distinct buckets of the cells piece ``p``'s box covers, into ``mine``; return how
+    many, or -1 when the box covers more than MAX_CELLS cells (a big piece)."""
+    x0 = math.floor(boxes[p, 0] * inv)
+    y0 = math.floor(boxes[p, 1] * inv)
+    x1 = math.floor(boxes[p, 2] * inv)
+    y1 = math.floor(boxes[p, 3] * inv)
+    if (x1 - x0 + 1) * (y1 - y0 + 1) > MAX_CELLS:
+        return -1
+    used = 0
+    for cx in range(x0, x1 + 1):
+        for cy in range(y0, y1 + 1):
+            h = _bucket(cx, cy, mask)
+            seen = False
+            for k in range(used):
+                if mine[k] == h:
+                    seen = True
+            if not seen:
+                mine[used] = h
+                used += 1
+    return used
+
+
 @njit(cache=True)
 def find_pairs(
     boxes: np.ndarray,
@@ -149,52 +173,23 @@ def find_pairs(
     big = np.zeros(n, np.bool_)
     start = np.zeros(size + 1, np.int64)
     mine = np.empty(MAX_CELLS, np.int64)
-    # a piece that touches no active body and whose body is not dynamic (static, kinematic
-    # at rest...) still goes in the grid: an active body may run into it
+    # every piece goes in the grid, even one of a body that does not move (static, asleep,
+    # kinematic at rest): an active body may run into it
     for p in range(n):
-        x0 = math.floor(boxes[p, 0] * inv)
-        y0 = math.floor(boxes[p, 1] * inv)
-        x1 = math.floor(boxes[p, 2] * inv)
-        y1 = math.floor(boxes[p, 3] * inv)
-        if (x1 - x0 + 1) * (y1 - y0 + 1) > MAX_CELLS:
+        used = _buckets(boxes, p, inv, mask, mine)
+        if used < 0:
             big[p] = True
-            continue
-        used = 0
-        for cx in range(x0, x1 + 1):
-            for cy in range(y0, y1 + 1):
-                h = _bucket(cx, cy, mask)
-                seen = False
-                for k in range(used):
-                    if mine[k] == h:
-                        seen = True
-                if not seen:
-                    mine[used] = h
-                    used += 1
-                    start[h + 1] += 1
+        for k in range(used):
+            start[mine[k] + 1] += 1
     for h in range(size):
         start[h + 1] += start[h]
     fill = start[:-1].copy()
     entries = np.empty(start[size], np.int64)
     for p in range(n):
-        if big[p]:
-            continue
-        x0 = math.floor(boxes[p, 0] * inv)
-        y0 = math.floor(boxes[p, 1] * inv)
-        x1 = math.floor(boxes[p, 2] * inv)
-        y1 = math.floor(boxes[p, 3] * inv)
-        used = 0
-        for cx in range(x0, x1 + 1):
-            for cy in range(y0, y1 + 1):
-                h = _bucket(cx, cy, mask)
-                seen = False
-                for k in range(used):
-                    if mine[k] == h:
-                        seen = True
-                if not seen:
-                    mine[used] = h
-                    used += 1
-                    entries[fill[h]] = p
-                    fill[h] += 1
+        for k in range(_buckets(boxes, p, inv, mask, mine)):
+            h = mine[k]
+            entries[fill[h]] = p
+            fill[h] += 1
     count = 0
     capacity = pairs.shape[0]
     for h in range(size):

@@ -18,6 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.engines.rigid.motion import relative_velocity
 from carom.geometry.manifold2d import collide
 
 __all__ = ["CONTACT_FLOATS", "CONTACT_INTS", "narrow_phase", "point_offset"]
@@ -163,8 +164,7 @@ def narrow_phase(
             rbx = px - x[bb, 0]
             rby = py - x[bb, 1]
             # relative velocity of the contact points, A's less B's
-            ux = (v[ba, 0] - omega[ba] * ray) - (v[bb, 0] - omega[bb] * rby)
-            uy = (v[ba, 1] + omega[ba] * rax) - (v[bb, 1] + omega[bb] * rbx)
+            ux, uy = relative_velocity(ba, bb, rax, ray, rbx, rby, v, omega)
             un = ux * nx + uy * ny
             approach = max(0.0, -un)
             if gravity_on[ba] != gravity_on[bb]:

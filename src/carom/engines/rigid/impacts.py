@@ -31,7 +31,7 @@ import numpy as np
 from numba import njit
 
 from carom.engines.rigid.contacts import I_BODY_A, I_BODY_B, I_FLAGS, I_PIECE_A, I_PIECE_B
-from carom.engines.rigid.motion import fly
+from carom.engines.rigid.motion import apply_impulse, fly, place_piece, relative_velocity
 from carom.engines.rigid.solver import FLAG_EXACT
 from carom.geometry.manifold2d import collide, core_witness
 
@@ -45,32 +45,6 @@ MAX_IMPACTS = 8
 #: columns of a logged impact: time into the step, body A, body B, impulse on A (x, y),
 #: normal speeds before and after (the deepest point), the point (x, y), energy lost
 IMPACT_FIELDS = 10
-
-
-@njit(cache=True)
-def _place(
-    p: int,
-    px: float,
-    py: float,
-    angle: float,
-    piece_start: np.ndarray,
-    piece_count: np.ndarray,
-    local_vertices: np.ndarray,
-    local_normals: np.ndarray,
-    vertices: np.ndarray,
-    normals: np.ndarray,
-) -> None:
-    c = math.cos(angle)
-    s = math.sin(angle)
-    for k in range(piece_start[p], piece_start[p] + piece_count[p]):
-        lx = local_vertices[k, 0]
-        ly = local_vertices[k, 1]
-        vertices[k, 0] = px + (c * lx - s * ly)
-        vertices[k, 1] = py + (s * lx + c * ly)
-        nx = local_normals[k, 0]
-        ny = local_normals[k, 1]
-        normals[k, 0] = c * nx - s * ny
-        normals[k, 1] = s * nx + c * ny
 
 
 @njit(cache=True)
@@ -100,7 +74,7 @@ def _gap(
     for body, piece in ((a, pa), (b, pb)):
         px = x[body, 0] + (v[body, 0] + 0.5 * accel[body, 0] * tau) * tau
         py = x[body, 1] + (v[body, 1] + 0.5 * accel[body, 1] * tau) * tau
-        _place(
+        place_piece(
             piece,
             px,
             py,
@@ -309,6 +283,25 @@ def _point_impulse(
     return jn, jt
 
 
+@njit(cache=True, inline="always")
+def _kinetic(
+    a: int,
+    b: int,
+    v: np.ndarray,
+    omega: np.ndarray,
+    inv_mass: np.ndarray,
+    mass: np.ndarray,
+    inertia: np.ndarray,
+) -> float:
+    """Kinetic energy of bodies a and b [J], those that move (finite mass) only."""
+    energy = 0.0
+    for body in (a, b):
+        if inv_mass[body] > 0.0:
+            energy += 0.5 * mass[body] * (v[body, 0] ** 2 + v[body, 1] ** 2)
+            energy += 0.5 * inertia[body] * omega[body] ** 2
+    return energy
+
+
 @njit(cache=True)
 def _impact(
     a: int,
@@ -355,8 +348,7 @@ def _impact(
         ray[used] = py + half * ny - x[a, 1]
         rbx[used] = px - half * nx - x[b, 0]
         rby[used] = py - half * ny - x[b, 1]
-        ux = (v[a, 0] - omega[a] * ray[used]) - (v[b, 0] - omega[b] * rby[used])
-        uy = (v[a, 1] + omega[a] * rax[used]) - (v[b, 1] + omega[b] * rbx[used])
+        ux, uy = relative_velocity(a, b, rax[used], ray[used], rbx[used], rby[used], v, omega)
         un[used] = ux * nx + uy * ny
         ut[used] = ux * tx + uy * ty
         used += 1
@@ -370,11 +362,7 @@ def _impact(
     mb = inv_mass[b]
     ia = inv_inertia[a]
     ib = inv_inertia[b]
-    energy = 0.0
-    for body in (a, b):
-        if inv_mass[body] > 0.0:
-            energy += 0.5 * mass[body] * (v[body, 0] ** 2 + v[body, 1] ** 2)
-            energy += 0.5 * inertia[body] * omega[body] ** 2
+    energy = _kinetic(a, b, v, omega, inv_mass, mass, inertia)
     jn = np.zeros(2)
     jt = np.zeros(2)
     if used == 1:
@@ -399,36 +387,33 @@ def _impact(
     for j in range(used):
         px = jn[j] * nx + jt[j] * tx
         py = jn[j] * ny + jt[j] * ty
-        v[a, 0] += ma * px
-        v[a, 1] += ma * py
-        omega[a] += ia * (rax[j] * py - ray[j] * px)
-        v[b, 0] -= mb * px
-        v[b, 1] -= mb * py
-        omega[b] -= ib * (rbx[j] * py - rby[j] * px)
+        apply_impulse(a, b, px, py, rax[j], ray[j], rbx[j], rby[j], inv_mass, inv_inertia, v, omega)
     if used == 2 and mu > 0.0:
         for j in range(2):
-            ux = (v[a, 0] - omega[a] * ray[j]) - (v[b, 0] - omega[b] * rby[j])
-            uy = (v[a, 1] + omega[a] * rax[j]) - (v[b, 1] + omega[b] * rbx[j])
+            ux, uy = relative_velocity(a, b, rax[j], ray[j], rbx[j], rby[j], v, omega)
             rta = rax[j] * ty - ray[j] * tx
             rtb = rbx[j] * ty - rby[j] * tx
             ktt = ma + mb + ia * rta * rta + ib * rtb * rtb
             dj = min(max(-(ux * tx + uy * ty) / ktt, -mu * jn[j]), mu * jn[j])
             jt[j] = dj
-            v[a, 0] += ma * dj * tx
-            v[a, 1] += ma * dj * ty
-            omega[a] += ia * (rax[j] * dj * ty - ray[j] * dj * tx)
-            v[b, 0] -= mb * dj * tx
-            v[b, 1] -= mb * dj * ty
-            omega[b] -= ib * (rbx[j] * dj * ty - rby[j] * dj * tx)
-    after = 0.0
-    for body in (a, b):
-        if inv_mass[body] > 0.0:
-            after += 0.5 * mass[body] * (v[body, 0] ** 2 + v[body, 1] ** 2)
-            after += 0.5 * inertia[body] * omega[body] ** 2
-    # the record: the deepest touching point's speeds, the total impulse on A
+            apply_impulse(
+                a,
+                b,
+                dj * tx,
+                dj * ty,
+                rax[j],
+                ray[j],
+                rbx[j],
+                rby[j],
+                inv_mass,
+                inv_inertia,
+                v,
+                omega,
+            )
+    after = _kinetic(a, b, v, omega, inv_mass, mass, inertia)
+    # the record: the first touching point's speeds, the total impulse on A
     j0 = 0
-    ux = (v[a, 0] - omega[a] * ray[j0]) - (v[b, 0] - omega[b] * rby[j0])
-    uy = (v[a, 1] + omega[a] * rax[j0]) - (v[b, 1] + omega[b] * rbx[j0])
+    ux, uy = relative_velocity(a, b, rax[j0], ray[j0], rbx[j0], rby[j0], v, omega)
     record[1] = a
     record[2] = b
     record[3] = (jn[0] + jn[1]) * nx + (jt[0] + jt[1]) * tx
@@ -522,7 +507,7 @@ def exact_impacts(
                     fly(body, hit, x, angle, v, omega, accel[body, 0], accel[body, 1])
             now += hit
             for body, piece in ((a, pa), (b, pb)):
-                _place(
+                place_piece(
                     piece,
                     x[body, 0],
                     x[body, 1],

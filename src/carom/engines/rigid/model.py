@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from carom.engines.rigid.islands import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.shapes import ConvexPiece
 
-__all__ = ["KINDS", "RigidModel", "RigidState", "build_model"]
+__all__ = ["KINDS", "RigidModel", "RigidState", "build_model", "grid_cell", "new_state"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

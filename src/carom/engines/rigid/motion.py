@@ -13,15 +13,15 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["fly", "place_body", "place_pieces"]
+__all__ = ["apply_impulse", "fly", "place_piece", "place_pieces", "relative_velocity"]
 
 
 @njit(cache=True)
-def place_body(
-    b: int,
-    x: np.ndarray,
-    angle: np.ndarray,
-    body_pieces: np.ndarray,
+def place_piece(
+    p: int,
+    px: float,
+    py: float,
+    angle: float,
     piece_start: np.ndarray,
     piece_count: np.ndarray,
     local_vertices: np.ndarray,
@@ -29,22 +29,19 @@ def place_body(
     vertices: np.ndarray,
     normals: np.ndarray,
 ) -> None:
-    """Place body ``b``'s pieces at its pose: corners into ``vertices``, normals into
-    ``normals`` (rows as in ``local_vertices``)."""
-    c = math.cos(angle[b])
-    s = math.sin(angle[b])
-    px = x[b, 0]
-    py = x[b, 1]
-    for p in range(body_pieces[b], body_pieces[b + 1]):
-        for k in range(piece_start[p], piece_start[p] + piece_count[p]):
-            lx = local_vertices[k, 0]
-            ly = local_vertices[k, 1]
-            vertices[k, 0] = px + (c * lx - s * ly)
-            vertices[k, 1] = py + (s * lx + c * ly)
-            nx = local_normals[k, 0]
-            ny = local_normals[k, 1]
-            normals[k, 0] = c * nx - s * ny
-            normals[k, 1] = s * nx + c * ny
+    """Place piece ``p`` of a body at ``(px, py)`` [m] turned by ``angle`` [rad]: its corners
+    into ``vertices``, its normals into ``normals`` (rows as in ``local_vertices``)."""
+    c = math.cos(angle)
+    s = math.sin(angle)
+    for k in range(piece_start[p], piece_start[p] + piece_count[p]):
+        lx = local_vertices[k, 0]
+        ly = local_vertices[k, 1]
+        vertices[k, 0] = px + (c * lx - s * ly)
+        vertices[k, 1] = py + (s * lx + c * ly)
+        nx = local_normals[k, 0]
+        ny = local_normals[k, 1]
+        normals[k, 0] = c * nx - s * ny
+        normals[k, 1] = s * nx + c * ny
 
 
 @njit(cache=True)
@@ -60,21 +57,66 @@ def place_pieces(
     vertices: np.ndarray,
     normals: np.ndarray,
 ) -> None:
-    """Place the pieces of every body with ``which[b]`` true."""
+    """Place the pieces of every body with ``which[b]`` true at its pose."""
     for b in range(x.shape[0]):
         if which[b]:
-            place_body(
-                b,
-                x,
-                angle,
-                body_pieces,
-                piece_start,
-                piece_count,
-                local_vertices,
-                local_normals,
-                vertices,
-                normals,
-            )
+            for p in range(body_pieces[b], body_pieces[b + 1]):
+                place_piece(
+                    p,
+                    x[b, 0],
+                    x[b, 1],
+                    angle[b],
+                    piece_start,
+                    piece_count,
+                    local_vertices,
+                    local_normals,
+                    vertices,
+                    normals,
+                )
+
+
+@njit(cache=True, inline="always")
+def relative_velocity(
+    a: int,
+    b: int,
+    rax: float,
+    ray: float,
+    rbx: float,
+    rby: float,
+    v: np.ndarray,
+    omega: np.ndarray,
+) -> tuple[float, float]:
+    """Velocity of body A's point at ``r_A`` less body B's at ``r_B`` [m/s]
+    (``v + omega x r``, 2D)."""
+    ux = (v[a, 0] - omega[a] * ray) - (v[b, 0] - omega[b] * rby)
+    uy = (v[a, 1] + omega[a] * rax) - (v[b, 1] + omega[b] * rbx)
+    return ux, uy
+
+
+@njit(cache=True, inline="always")
+def apply_impulse(
+    a: int,
+    b: int,
+    px: float,
+    py: float,
+    rax: float,
+    ray: float,
+    rbx: float,
+    rby: float,
+    inv_mass: np.ndarray,
+    inv_inertia: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+) -> None:
+    """Impulse ``P`` [N s] on A at ``r_A`` and ``-P`` on B at ``r_B``."""
+    ma = inv_mass[a]
+    mb = inv_mass[b]
+    v[a, 0] += ma * px
+    v[a, 1] += ma * py
+    omega[a] += inv_inertia[a] * (rax * py - ray * px)
+    v[b, 0] -= mb * px
+    v[b, 1] -= mb * py
+    omega[b] -= inv_inertia[b] * (rbx * py - rby * px)
 
 
 @njit(cache=True, inline="always")

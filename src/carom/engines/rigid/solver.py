@@ -48,11 +48,11 @@ from carom.engines.rigid.contacts import (
     P_VREL,
     point_offset,
 )
+from carom.engines.rigid.motion import apply_impulse, relative_velocity
 
 __all__ = ["softness", "solve_step"]
 
 FLAG_EXACT = 1  # the contact was solved exactly this step (an isolated impact)
-LEAK = 1.0
 
 
 @njit(cache=True)
@@ -63,49 +63,6 @@ def softness(hertz: float, zeta: float, h: float) -> tuple[float, float, float]:
     a2 = h * omega * a1
     a3 = 1.0 / (1.0 + a2)
     return omega / a1, a2 * a3, a3
-
-
-@njit(cache=True, inline="always")
-def _apply(
-    a: int,
-    b: int,
-    px: float,
-    py: float,
-    rax: float,
-    ray: float,
-    rbx: float,
-    rby: float,
-    inv_mass: np.ndarray,
-    inv_inertia: np.ndarray,
-    v: np.ndarray,
-    omega: np.ndarray,
-) -> None:
-    """Impulse ``P`` on A at ``r_A`` and ``-P`` on B at ``r_B``."""
-    ma = inv_mass[a]
-    mb = inv_mass[b]
-    v[a, 0] += ma * px
-    v[a, 1] += ma * py
-    omega[a] += inv_inertia[a] * (rax * py - ray * px)
-    v[b, 0] -= mb * px
-    v[b, 1] -= mb * py
-    omega[b] -= inv_inertia[b] * (rbx * py - rby * px)
-
-
-@njit(cache=True, inline="always")
-def _relative(
-    a: int,
-    b: int,
-    rax: float,
-    ray: float,
-    rbx: float,
-    rby: float,
-    v: np.ndarray,
-    omega: np.ndarray,
-) -> tuple[float, float]:
-    """Velocity of A's contact point less B's [m/s]."""
-    ux = (v[a, 0] - omega[a] * ray) - (v[b, 0] - omega[b] * rby)
-    uy = (v[a, 1] + omega[a] * rax) - (v[b, 1] + omega[b] * rbx)
-    return ux, uy
 
 
 @njit(cache=True)
@@ -163,7 +120,7 @@ def _warm_start(
             px = jn * nx + jt * ny
             py = jn * ny - jt * nx
             cf[m, o + P_TOTAL] += jn
-            _apply(
+            apply_impulse(
                 a,
                 b,
                 px,
@@ -189,14 +146,15 @@ def _solve(
     v: np.ndarray,
     omega: np.ndarray,
     dx: np.ndarray,
-    dtheta: np.ndarray,
+    turn: np.ndarray,
     inv_h: float,
     use_bias: bool,
     soft_moving: tuple[float, float, float],
     soft_fixed: tuple[float, float, float],
     push_speed: float,
 ) -> None:
-    """One Gauss-Seidel pass over the contacts: normal impulses, then friction."""
+    """One Gauss-Seidel pass over the contacts: normal impulses, then friction. ``dx`` (N, 2)
+    and ``turn`` (N, 2: cos, sin) are each body's move and turn since the step began."""
     for m in range(nc):
         if ci[m, I_FLAGS] & FLAG_EXACT:
             continue
@@ -206,10 +164,10 @@ def _solve(
         ny = cf[m, F_NY]
         fixed = inv_mass[a] == 0.0 or inv_mass[b] == 0.0
         rate, mass_scale, impulse_scale = soft_fixed if fixed else soft_moving
-        ca = math.cos(dtheta[a])
-        sa = math.sin(dtheta[a])
-        cb = math.cos(dtheta[b])
-        sb = math.sin(dtheta[b])
+        ca = turn[a, 0]
+        sa = turn[a, 1]
+        cb = turn[b, 0]
+        sb = turn[b, 1]
         ddx = dx[a, 0] - dx[b, 0]
         ddy = dx[a, 1] - dx[b, 1]
         count = ci[m, I_COUNT]
@@ -231,8 +189,8 @@ def _solve(
             elif use_bias:
                 bias = max(mass_scale * rate * s, -push_speed)
                 ms = mass_scale
-                isc = impulse_scale * LEAK
-            ux, uy = _relative(a, b, rax, ray, rbx, rby, v, omega)
+                isc = impulse_scale
+            ux, uy = relative_velocity(a, b, rax, ray, rbx, rby, v, omega)
             un = ux * nx + uy * ny
             jn = cf[m, o + P_JN]
             dj = -cf[m, o + P_NMASS] * (ms * un + bias) - isc * jn
@@ -240,7 +198,9 @@ def _solve(
             dj = new - jn
             cf[m, o + P_JN] = new
             cf[m, o + P_TOTAL] += dj
-            _apply(a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega)
+            apply_impulse(
+                a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega
+            )
         mu = cf[m, F_MU]
         if mu == 0.0:
             continue
@@ -252,14 +212,16 @@ def _solve(
             ray = cf[m, o + P_RAY]
             rbx = cf[m, o + P_RBX]
             rby = cf[m, o + P_RBY]
-            ux, uy = _relative(a, b, rax, ray, rbx, rby, v, omega)
+            ux, uy = relative_velocity(a, b, rax, ray, rbx, rby, v, omega)
             ut = ux * tx + uy * ty
             jt = cf[m, o + P_JT]
             limit = mu * cf[m, o + P_JN]
             new = min(max(jt - cf[m, o + P_TMASS] * ut, -limit), limit)
             dj = new - jt
             cf[m, o + P_JT] = new
-            _apply(a, b, dj * tx, dj * ty, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega)
+            apply_impulse(
+                a, b, dj * tx, dj * ty, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega
+            )
 
 
 @njit(cache=True)
@@ -293,7 +255,7 @@ def _restitution(
             ray = cf[m, o + P_RAY]
             rbx = cf[m, o + P_RBX]
             rby = cf[m, o + P_RBY]
-            ux, uy = _relative(a, b, rax, ray, rbx, rby, v, omega)
+            ux, uy = relative_velocity(a, b, rax, ray, rbx, rby, v, omega)
             un = ux * nx + uy * ny
             jn = cf[m, o + P_JN]
             dj = -cf[m, o + P_NMASS] * (un + e * cf[m, o + P_VREL])
@@ -301,7 +263,9 @@ def _restitution(
             dj = new - jn
             cf[m, o + P_JN] = new
             cf[m, o + P_TOTAL] += dj
-            _apply(a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega)
+            apply_impulse(
+                a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega
+            )
 
 
 @njit(cache=True)
@@ -338,6 +302,8 @@ def solve_step(
     n = x.shape[0]
     dx = np.zeros((n, 2))
     dtheta = np.zeros(n)
+    turn = np.zeros((n, 2))
+    turn[:, 0] = 1.0
     _prepare(cf, ci, nc, inv_mass, inv_inertia)
     for _ in range(substeps):
         for i in bodies:
@@ -354,7 +320,7 @@ def solve_step(
             v,
             omega,
             dx,
-            dtheta,
+            turn,
             1.0 / h,
             True,
             soft_moving,
@@ -368,6 +334,9 @@ def solve_step(
             dx[i, 0] += h * v[i, 0]
             dx[i, 1] += h * v[i, 1]
             dtheta[i] += h * omega[i]
+            # each body's turn since the step began, once per substep (not per contact)
+            turn[i, 0] = math.cos(dtheta[i])
+            turn[i, 1] = math.sin(dtheta[i])
         _solve(
             cf,
             ci,
@@ -377,7 +346,7 @@ def solve_step(
             v,
             omega,
             dx,
-            dtheta,
+            turn,
             1.0 / h,
             False,
             soft_moving,
