@@ -21,7 +21,7 @@ EPS = float(np.finfo(np.float64).eps)
     [
         (lambda: carom.World(4, [1, 1, 1, 1]), r"dim must be the whole number 2 or 3"),
         (lambda: carom.World(2, [1.0, -1.0]), r"box\[1\] = -1.0 must be positive"),
-        (lambda: carom.World(2, [1, 1], "open"), r"boundary must be 'walls' or 'periodic'"),
+        (lambda: carom.World(2, [1, 1], "torus"), r"boundary must be 'walls', 'periodic' or"),
         (lambda: carom.World(2, [1, 1], gravity=[0, 0, -9.8]), r"gravity must be 2 finite"),
         (lambda: carom.World(2, [1, 1], walls=1.5), r"restitution must lie"),
         (lambda: carom.World(2, [1, 1], t_c=-1.0), r"t_c must be a number of seconds >= 0"),
@@ -90,7 +90,7 @@ def test_periodic_box_too_small_and_bad_run_arguments() -> None:
     with pytest.raises(CaromError, match=r"box is too small for periodic boundaries"):
         tiny.run(until=1.0)
     world = carom.World(2, [1.0, 1.0])
-    with pytest.raises(CaromError, match=r"no spheres"):
+    with pytest.raises(CaromError, match=r"no bodies"):
         world.run(until=1.0)
     world.add_spheres([[0.5, 0.5]], [[1.0, 0.0]], radius=0.1)
     world.run(until=1.0)

@@ -2,19 +2,36 @@
 structure-of-arrays, numbered as the caller added them.
 
 A :class:`carom.World` keeps its bodies here; an engine is built from the table and hands the
-bodies' state back in the same numbering. Static bodies have infinite mass.
+bodies' state back in the same numbering. Static and kinematic bodies have infinite mass.
+Spheres are described by their radius; other shapes (:mod:`carom.shapes`) by their rounded
+convex pieces in the body's frame, centred on its centre of mass.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.shapes import SHAPE_CODES
+from carom.shapes import SHAPE_CODES, ConvexPiece
 
-__all__ = ["Bodies", "identity_orientations"]
+__all__ = [
+    "BODY_KINDS",
+    "KIND_DYNAMIC",
+    "KIND_KINEMATIC",
+    "KIND_STATIC",
+    "Bodies",
+    "identity_orientations",
+]
 
 FloatArray = NDArray[np.float64]
+
+KIND_DYNAMIC = 0  # moved by gravity and impulses
+KIND_STATIC = 1  # never moves
+KIND_KINEMATIC = 2  # moves at its own velocity and spin, unmoved by impulses
+#: body kinds by name (``World.add_body(kind=...)``)
+BODY_KINDS = {"dynamic": KIND_DYNAMIC, "static": KIND_STATIC, "kinematic": KIND_KINEMATIC}
 
 
 def identity_orientations(n: int, dim: int) -> FloatArray:
@@ -42,13 +59,18 @@ class Bodies:
     shape : (N,) int8
         Shape code (:data:`carom.shapes.SHAPE_CODES`).
     radius : (N,) float64
-        Sphere radius [m].
+        Sphere radius; for other shapes the farthest reach of the body from its centre of
+        mass [m].
     mass : (N,) float64
-        [kg]; inf for static bodies.
+        [kg]; inf for static and kinematic bodies.
     inertia_factor : (N,) float64
-        ``q`` in ``I = q m a^2`` [-].
+        ``q`` in ``I = q m a^2`` [-] (other shapes: their exact inertia over ``m a^2``).
     material : (N,) int64
         Index of the body's material in the World's list.
+    kind : (N,) int8
+        ``KIND_DYNAMIC``, ``KIND_STATIC`` or ``KIND_KINEMATIC``.
+    pieces : list of N tuples of ConvexPiece
+        Each body's pieces in its frame, centred on its centre of mass [m] (spheres: none).
     """
 
     def __init__(self, dim: int) -> None:
@@ -62,6 +84,8 @@ class Bodies:
         self.mass = np.zeros(0)
         self.inertia_factor = np.zeros(0)
         self.material = np.zeros(0, np.int64)
+        self.kind = np.zeros(0, np.int8)
+        self.pieces: list[tuple[ConvexPiece, ...]] = []
 
     @property
     def n(self) -> int:
@@ -71,6 +95,20 @@ class Bodies:
     def mobile(self) -> NDArray[np.bool_]:
         """False for static bodies (infinite mass), (N,)."""
         return np.isfinite(self.mass)
+
+    @property
+    def inertia(self) -> FloatArray:
+        """Moment of inertia about the centre of mass [kg m^2] (2D: about z), (N,); inf for
+        static and kinematic bodies."""
+        with np.errstate(invalid="ignore"):
+            moment = self.inertia_factor * self.mass * self.radius**2
+        result: FloatArray = np.where(self.mobile, moment, np.inf)
+        return result
+
+    @property
+    def spheres_only(self) -> bool:
+        """True when every body is a sphere (disk in 2D): the event-driven engine's world."""
+        return bool(np.all(self.shape == SHAPE_CODES["sphere"]))
 
     def append_spheres(
         self,
@@ -93,7 +131,45 @@ class Bodies:
         self.mass = np.concatenate([self.mass, mass])
         self.inertia_factor = np.concatenate([self.inertia_factor, np.full(n, inertia_factor)])
         self.material = np.concatenate([self.material, np.full(n, material, np.int64)])
+        kind = np.where(np.isfinite(mass), KIND_DYNAMIC, KIND_STATIC).astype(np.int8)
+        self.kind = np.concatenate([self.kind, kind])
+        self.pieces.extend(() for _ in range(n))
         return np.arange(start, self.n)
+
+    def append_body(
+        self,
+        position: FloatArray,
+        velocity: FloatArray,
+        angle: float,
+        angular_velocity: float,
+        pieces: tuple[ConvexPiece, ...],
+        shape: int,
+        mass: float,
+        inertia: float,
+        kind: int,
+        material: int,
+    ) -> int:
+        """Add one 2D body of any shape (checked by the caller): centre of mass ``position``
+        (2,) [m], ``pieces`` about it; infinite ``mass`` and ``inertia`` unless dynamic.
+        Return its index."""
+        reach = max(
+            float(np.max(np.hypot(p.vertices[:, 0], p.vertices[:, 1]))) + p.radius for p in pieces
+        )
+        w = np.zeros((1, 3))
+        w[0, 2] = angular_velocity
+        self.position = np.concatenate([self.position, position.reshape(1, 2)])
+        self.velocity = np.concatenate([self.velocity, velocity.reshape(1, 2)])
+        self.orientation = np.concatenate([self.orientation, [[angle]]])
+        self.angular_velocity = np.concatenate([self.angular_velocity, w])
+        self.shape = np.concatenate([self.shape, np.array([shape], np.int8)])
+        self.radius = np.concatenate([self.radius, [reach]])
+        self.mass = np.concatenate([self.mass, [mass]])
+        q = inertia / (mass * reach**2) if math.isfinite(mass) else 0.0
+        self.inertia_factor = np.concatenate([self.inertia_factor, [q]])
+        self.material = np.concatenate([self.material, np.array([material], np.int64)])
+        self.kind = np.concatenate([self.kind, np.array([kind], np.int8)])
+        self.pieces.append(pieces)
+        return self.n - 1
 
     def set_state(
         self,

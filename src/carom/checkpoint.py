@@ -20,8 +20,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from carom.engines.base import Counters
+from carom.engines.rigid.settings import RigidSettings
 from carom.errors import CaromError
 from carom.materials import Material
+from carom.shapes import ConvexPiece
 
 if TYPE_CHECKING:
     from carom.world import World
@@ -30,7 +32,7 @@ __all__ = ["FORMAT", "VERSION", "load_world", "save_world"]
 
 FORMAT = "carom-checkpoint"
 #: bumped whenever the layout of the file or of an engine's arrays changes
-VERSION = 5
+VERSION = 6
 BODY_FIELDS = (
     "position",
     "velocity",
@@ -41,6 +43,7 @@ BODY_FIELDS = (
     "mass",
     "inertia_factor",
     "material",
+    "kind",
 )
 
 
@@ -57,6 +60,8 @@ def save_world(world: World, path: Path, extra: Mapping[str, NDArray[Any]]) -> N
         "gravity": world.gravity.tolist(),
         "walls": [asdict(m) for m in world.walls],
         "settings": asdict(world.settings),
+        "engine_choice": world.engine_choice,
+        "rigid": asdict(world.rigid_settings),
         "combine": world.combine,
         "time": world.time,
         "materials": [asdict(m) for m in world.materials],
@@ -68,6 +73,7 @@ def save_world(world: World, path: Path, extra: Mapping[str, NDArray[Any]]) -> N
     arrays: dict[str, Any] = {"meta": np.array(json.dumps(meta))}
     for name in BODY_FIELDS:
         arrays[f"body.{name}"] = getattr(world.bodies, name)
+    arrays |= _pieces_arrays(world.bodies.pieces)
     if engine is not None:
         arrays |= {f"engine.{k}": v for k, v in engine.arrays().items()}
     arrays["log"] = world.collisions
@@ -76,6 +82,37 @@ def save_world(world: World, path: Path, extra: Mapping[str, NDArray[Any]]) -> N
     with tmp.open("wb") as handle:
         np.savez(handle, **arrays)
     tmp.replace(path)
+
+
+def _pieces_arrays(pieces: list[tuple[ConvexPiece, ...]]) -> dict[str, NDArray[Any]]:
+    """Every body's convex pieces as flat arrays: ``owner`` and ``radius`` per piece, its
+    ``corners`` count, and all ``vertices`` (V, 2) in order."""
+    owner, radius, corners, vertices = [], [], [], [np.zeros((0, 2))]
+    for i, body in enumerate(pieces):
+        for piece in body:
+            owner.append(i)
+            radius.append(piece.radius)
+            corners.append(piece.vertices.shape[0])
+            vertices.append(piece.vertices)
+    return {
+        "pieces.owner": np.array(owner, np.int64),
+        "pieces.radius": np.array(radius, np.float64),
+        "pieces.corners": np.array(corners, np.int64),
+        "pieces.vertices": np.concatenate(vertices),
+    }
+
+
+def _pieces_from(data: Any, n: int) -> list[tuple[ConvexPiece, ...]]:
+    """The bodies' pieces written by :func:`_pieces_arrays`."""
+    bodies: list[list[ConvexPiece]] = [[] for _ in range(n)]
+    vertices = data["pieces.vertices"]
+    row = 0
+    for owner, radius, count in zip(
+        data["pieces.owner"], data["pieces.radius"], data["pieces.corners"], strict=True
+    ):
+        bodies[int(owner)].append(ConvexPiece(vertices[row : row + count], float(radius)))
+        row += int(count)
+    return [tuple(body) for body in bodies]
 
 
 def load_world(path: Path) -> tuple[World, dict[str, NDArray[Any]]]:
@@ -113,6 +150,8 @@ def _read(path: Path, data: Any) -> tuple[World, dict[str, NDArray[Any]]]:
         meta["gravity"],
         walls=[Material(**m) for m in meta["walls"]],
         combine=meta["combine"],
+        engine=meta["engine_choice"],
+        rigid=RigidSettings(**meta["rigid"]),
         **meta["settings"],
     )
     for m in meta["materials"]:
@@ -123,6 +162,7 @@ def _read(path: Path, data: Any) -> tuple[World, dict[str, NDArray[Any]]]:
         world.add_plane(p, q, material=Material(**m))
     for name in BODY_FIELDS:
         setattr(world.bodies, name, data[f"body.{name}"])
+    world.bodies.pieces = _pieces_from(data, world.bodies.n)
     engine = {k[len("engine.") :]: data[k] for k in data.files if k.startswith("engine.")}
     world.restore(
         meta["time"],
@@ -150,5 +190,5 @@ def _check_version(path: Path, meta: dict[str, Any]) -> None:
             f"version {VERSION}; re-run the simulation with this version, or load it with the "
             f"carom that wrote it"
         )
-    if meta.get("engine") not in (None, "edmd"):
+    if meta.get("engine") not in (None, "edmd", "rigid"):
         raise CaromError(f"checkpoint {path} is of engine {meta['engine']!r}, unknown here")

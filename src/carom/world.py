@@ -2,9 +2,11 @@
 
 A World holds what a simulation is made of, engine-neutral: the body table
 (:class:`carom.bodies.Bodies`), materials (:mod:`carom.materials`), the box, its walls and
-planes, gravity. Running it builds an engine (today the exact event-driven one,
-:mod:`carom.engines.edmd`) and advances it; frames, collisions and observables read the
-engine's state in the caller's numbering of bodies.
+planes, gravity. Running it builds an engine and advances it: the exact event-driven one
+(:mod:`carom.engines.edmd`) for spheres and disks, the time-stepped rigid-body one
+(:mod:`carom.engines.rigid`) once a body of another shape is added with :meth:`World.add_body`.
+Frames, collisions and observables read the engine's state in the caller's numbering of
+bodies.
 
 >>> import carom
 >>> world = carom.World(2, box=[1.0, 1.0])
@@ -29,10 +31,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from carom._inputs import as_float_array
-from carom.bodies import Bodies
+from carom.bodies import BODY_KINDS, KIND_DYNAMIC, Bodies
 from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, KIND_WALL, Counters
 from carom.engines.edmd.driver import OVERLAP_TOLERANCE, EdmdEngine, Environment
 from carom.engines.edmd.settings import EdmdSettings
+from carom.engines.rigid.assemble import assemble
+from carom.engines.rigid.driver import RigidEngine
+from carom.engines.rigid.settings import RigidSettings
 from carom.errors import CaromError, CaromWarning
 from carom.limits import (
     MAX_BODIES,
@@ -43,11 +48,13 @@ from carom.limits import (
 )
 from carom.materials import COMBINE_RULES, CombineRule, Material, pair_table
 from carom.observables import Stats
-from carom.shapes import check_inertia_factor, default_inertia_factor
+from carom.shapes import SHAPE_CODES, Shape2D, check_inertia_factor, default_inertia_factor
 
 __all__ = ["LOG_LIMIT", "Frame", "Material", "World"]
 
 FloatArray = NDArray[np.float64]
+#: the engines a World can run: "auto" picks "edmd" for spheres alone, "rigid" otherwise
+ENGINES = ("auto", "edmd", "rigid")
 #: collisions a World keeps in memory with ``log=True`` (64 bytes each: 64 MB); more are
 #: counted in ``World.collisions_dropped``: stream them with ``on_collisions`` instead
 LOG_LIMIT = 1_000_000
@@ -77,7 +84,8 @@ class Frame:
 
 
 class World:
-    """Spheres (3D) or disks (2D) in a box, simulated exactly, event by event.
+    """Bodies in a box: spheres (3D) or disks (2D) simulated exactly, event by event, or 2D
+    rigid bodies of any shape, step by step.
 
     Parameters
     ----------
@@ -85,8 +93,9 @@ class World:
         Dimension.
     box : (d,) array_like
         Box side lengths [m]; the box spans ``[0, box[k]]``.
-    boundary : {"walls", "periodic"}, default "walls"
-        Reflecting walls, or periodic boundaries.
+    boundary : {"walls", "periodic", "open"}, default "walls"
+        Reflecting walls, periodic boundaries, or none ("open", rigid-body engine only: the
+        box then only frames the pictures).
     gravity : (d,) array_like, optional
         Uniform acceleration [m/s^2], e.g. ``[0, -9.81]``.
     walls : Material, float, or a sequence of 2 d of them, default 1.0
@@ -99,27 +108,42 @@ class World:
         How two materials' coefficients combine; :meth:`set_pair` overrides a pair.
     shell_thickness : float, optional
         Neighbour-shell thickness [m] (:class:`carom.engines.edmd.settings.EdmdSettings`).
+    engine : {"auto", "edmd", "rigid"}, default "auto"
+        The event-driven engine for spheres and disks ("edmd"), the time-stepped rigid-body
+        engine ("rigid", 2D), or "auto": "rigid" once :meth:`add_body` adds a body, or when
+        the boundary is "open"; "edmd" otherwise.
+    rigid : RigidSettings, optional
+        The rigid-body engine's step and solver settings
+        (:class:`carom.engines.rigid.settings.RigidSettings`).
     """
 
     def __init__(
         self,
         dim: int,
         box: ArrayLike,
-        boundary: Literal["walls", "periodic"] = "walls",
+        boundary: Literal["walls", "periodic", "open"] = "walls",
         gravity: ArrayLike | None = None,
         *,
         walls: Material | float | Sequence[Material | float] = 1.0,
         t_c: float = 1e-6,
         combine: CombineRule = "mean",
         shell_thickness: float | None = None,
+        engine: Literal["auto", "edmd", "rigid"] = "auto",
+        rigid: RigidSettings | None = None,
     ) -> None:
         if isinstance(dim, bool) or not isinstance(dim, int | np.integer) or dim not in (2, 3):
             raise CaromError(f"dim must be the whole number 2 or 3; got {dim!r}")
         self.dim = int(dim)
         self.box = check_size("box", _vector("box", box, self.dim, "m"), "m")
-        if boundary not in ("walls", "periodic"):
-            raise CaromError(f"boundary must be 'walls' or 'periodic'; got {boundary!r}")
+        if boundary not in ("walls", "periodic", "open"):
+            raise CaromError(f"boundary must be 'walls', 'periodic' or 'open'; got {boundary!r}")
         self.boundary = boundary
+        if engine not in ENGINES:
+            raise CaromError(f"engine must be one of {ENGINES}; got {engine!r}")
+        self.engine_choice = engine
+        if rigid is not None and not isinstance(rigid, RigidSettings):
+            raise CaromError(f"rigid must be a carom RigidSettings; got {rigid!r}")
+        self.rigid_settings = rigid if rigid is not None else RigidSettings()
         self.gravity = (
             np.zeros(dim)
             if gravity is None
@@ -134,7 +158,7 @@ class World:
         self._pair_overrides: dict[tuple[int, int], float] = {}
         self.planes: list[tuple[FloatArray, FloatArray, Material]] = []
         self.bodies = Bodies(self.dim)
-        self._engine: EdmdEngine | None = None
+        self._engine: EdmdEngine | RigidEngine | None = None
         self._time = 0.0
         self._log: list[NDArray[Any]] = []
         self._logged = 0
@@ -239,6 +263,103 @@ class World:
         self._invalidate()
         return self.bodies.append_spheres(
             x, np.zeros_like(x), np.zeros((n, 3)), radii, np.full(n, np.inf), 0.4, mat
+        )
+
+    def add_body(
+        self,
+        shape: Shape2D,
+        position: ArrayLike,
+        *,
+        velocity: ArrayLike | None = None,
+        angle: float = 0.0,
+        angular_velocity: float = 0.0,
+        density: float | None = None,
+        mass: float | None = None,
+        restitution: float | None = None,
+        material: Material | int | None = None,
+        kind: Literal["dynamic", "static", "kinematic"] = "dynamic",
+    ) -> int:
+        """Add one rigid body of any 2D shape (:mod:`carom.shapes`); return its index.
+
+        Parameters
+        ----------
+        shape : Shape2D
+            Circle, Capsule, Box, Polygon, Compound; Segment and Chain (static only).
+        position : (2,) array_like
+            Where the shape's origin goes [m]. The body's position as the World reports it
+            (:attr:`positions`, frames) is its centre of mass, which is the origin for every
+            shape centred on it (all but a Polygon or Compound drawn off-centre).
+        velocity : (2,) array_like, optional
+            Of the centre of mass [m/s]; default at rest.
+        angle : float, default 0
+            The shape's turn about its origin [rad], anticlockwise.
+        angular_velocity : float, default 0
+            [rad/s], anticlockwise.
+        density, mass : float, optional
+            [kg/m^2] or [kg], one of them for a dynamic body (default density 1); neither for
+            a static or kinematic body, which is not moved by impacts.
+        restitution, material
+            As for :meth:`add_spheres`; give the material ``friction=`` for Coulomb friction.
+        kind : {"dynamic", "static", "kinematic"}, default "dynamic"
+            Dynamic bodies fall and collide; static ones never move; kinematic ones move at
+            their own ``velocity`` and ``angular_velocity`` whatever they meet (a paddle, a
+            turning tumbler).
+
+        Notes
+        -----
+        A world with a body added here runs the time-stepped rigid-body engine when
+        ``engine="auto"`` (2D only); disks added with :meth:`add_spheres` join it as circles.
+        """
+        if self.dim != 2:
+            raise CaromError(
+                "add_body takes 2D shapes; 3D rigid bodies are not in carom yet (spheres: "
+                "add_spheres)"
+            )
+        if not isinstance(shape, Shape2D):
+            raise CaromError(
+                f"shape must be a carom.shapes shape (Circle, Capsule, Box, Polygon, Compound, "
+                f"Segment, Chain); got {shape!r}"
+            )
+        if kind not in BODY_KINDS:
+            raise CaromError(f"kind must be one of {tuple(BODY_KINDS)}; got {kind!r}")
+        code = BODY_KINDS[kind]
+        origin = self._rows("position", position, 1)[0]
+        v = np.zeros(2) if velocity is None else self._rows("velocity", velocity, 1)[0]
+        turn = _angle_value("angle", angle, "rad")
+        spin = _angle_value("angular_velocity", angular_velocity, "rad/s")
+        if code == KIND_DYNAMIC:
+            props = shape.mass_properties(
+                1.0 if density is None and mass is None else density, mass=mass
+            )
+            body_mass, inertia, centroid = props.mass, props.inertia, props.centroid
+        else:
+            if density is not None or mass is not None:
+                raise CaromError(
+                    f"a {kind} body is not moved by impacts and has no mass; drop density= "
+                    f"and mass=, or make it dynamic"
+                )
+            if code != BODY_KINDS["kinematic"] and (np.any(v) or spin):
+                raise CaromError(
+                    "a static body never moves; drop velocity= and angular_velocity=, or "
+                    'make it kind="kinematic"'
+                )
+            body_mass, inertia, centroid = math.inf, math.inf, shape.centroid
+        c, s = math.cos(turn), math.sin(turn)
+        centre = origin + np.array([[c, -s], [s, c]]) @ centroid
+        pieces = tuple(piece.moved(-centroid, 0.0) for piece in shape.pieces())
+        mat = self._material_index(restitution, material)
+        self._invalidate()
+        return self.bodies.append_body(
+            centre,
+            v,
+            turn,
+            spin,
+            pieces,
+            SHAPE_CODES[shape.kind],
+            body_mass,
+            inertia,
+            code,
+            mat,
         )
 
     def add_plane(
@@ -387,16 +508,85 @@ class World:
             plane_normal=planes_n,
         )
 
-    def build(self) -> EdmdEngine:
+    @property
+    def engine_name(self) -> str:
+        """The engine this world runs: "edmd" or "rigid" (``engine="auto"`` resolved)."""
+        if self.engine_choice != "auto":
+            return self.engine_choice
+        event_driven = self.bodies.spheres_only and self.boundary != "open"
+        return "edmd" if event_driven else "rigid"
+
+    def build(self) -> EdmdEngine | RigidEngine:
         """Build the engine now (running does it when needed), refusing bodies outside the
         box, on the wrong side of a plane, or overlapping; return it."""
         if self._engine is None:
             if self.bodies.n == 0:
-                raise CaromError("the world has no spheres; add some with add_spheres")
+                raise CaromError("the world has no bodies; add some with add_spheres or add_body")
             check_body_count(self.bodies.n, "the world")
-            self._check_placement()
-            self._engine = EdmdEngine(self.bodies, self._environment(), self.settings, self._time)
+            if self.engine_name == "rigid":
+                self._engine = self._build_rigid()
+            else:
+                self._check_edmd()
+                self._check_placement()
+                self._engine = EdmdEngine(
+                    self.bodies, self._environment(), self.settings, self._time
+                )
         return self._engine
+
+    def _check_edmd(self) -> None:
+        """Refuse what the event-driven engine cannot run."""
+        if not self.bodies.spheres_only:
+            i = int(np.argmax(self.bodies.shape != SHAPE_CODES["sphere"]))
+            raise CaromError(
+                f"body {i} is not a sphere: the event-driven engine (engine='edmd') runs "
+                f"spheres and disks only; use engine='rigid' or 'auto'"
+            )
+        if self.boundary == "open":
+            raise CaromError(
+                "boundary 'open' (no walls) is the rigid-body engine's; the event-driven "
+                "engine needs 'walls' or 'periodic'"
+            )
+
+    def _rigid_parts(self) -> tuple[Any, Any, Any]:
+        """The rigid engine's model, state and partner map for this world."""
+        if self.dim != 2:
+            raise CaromError(
+                "the rigid-body engine is 2D; 3D rigid bodies are not in carom yet (3D "
+                "spheres: engine='edmd')"
+            )
+        if self.boundary == "periodic":
+            raise CaromError(
+                "the rigid-body engine has no periodic boundary; use boundary='walls' or 'open'"
+            )
+        return assemble(
+            self.bodies,
+            self.box,
+            self.boundary == "walls",
+            self.walls,
+            self.planes,
+            self.gravity,
+            self.materials,
+            self.combine,
+            self._pair_overrides,
+        )
+
+    def _build_rigid(self) -> RigidEngine:
+        """The rigid engine, once no dynamic body starts overlapping another body, a wall or
+        a plane deeper than the linear slop (the solver would throw them apart)."""
+        model, state, partners = self._rigid_parts()
+        engine = RigidEngine(model, state, self.rigid_settings, self._time, partners)
+        a, b, depth = engine.deepest_overlap()
+        slop = self.rigid_settings.linear_slop
+        if depth > slop:
+            names = []
+            for body in (a, b):
+                kind, index = int(partners.kind[body]), int(partners.number[body])
+                names.append(self.describe_partner(kind, index))
+            raise CaromError(
+                f"{names[0]} and {names[1]} overlap by {depth:.3g} m at the start (more than "
+                f"the linear slop, {slop:g} m): move them apart"
+            )
+        return engine
 
     def prepare(self) -> None:
         """Build the engine and compile its kernels now (or load them from the cache), so
@@ -406,7 +596,7 @@ class World:
         self.frame()
 
     @property
-    def engine(self) -> EdmdEngine | None:
+    def engine(self) -> EdmdEngine | RigidEngine | None:
         """The engine, once built (:meth:`build`); None before."""
         return self._engine
 
@@ -724,7 +914,12 @@ class World:
         self._log = [log] if log.size else []
         self._logged = int(log.size)
         self.collisions_dropped = collisions_dropped
-        if engine_arrays is not None:
+        if engine_arrays is None:
+            return
+        if self.engine_name == "rigid":
+            model, _, partners = self._rigid_parts()
+            self._engine = RigidEngine.restore(model, self.rigid_settings, partners, engine_arrays)
+        else:
             self._engine = EdmdEngine.restore(
                 self.bodies, self._environment(), self.settings, engine_arrays
             )
@@ -739,6 +934,15 @@ def _vector(name: str, value: ArrayLike, dim: int, unit: str) -> FloatArray:
     if arr.shape != (dim,) or not np.all(np.isfinite(arr)):
         raise CaromError(f"{name} must be {dim} finite numbers [{unit}]; got {value!r}")
     return arr
+
+
+def _angle_value(name: str, value: float, unit: str) -> float:
+    """``value`` as one finite number, or a CaromError naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise CaromError(f"{name} must be one number [{unit}]; got {value!r}")
+    if not math.isfinite(value):
+        raise CaromError(f"{name} must be finite [{unit}]; got {value!r}")
+    return float(value)
 
 
 def _as_material(name: str, value: Material | float) -> Material:

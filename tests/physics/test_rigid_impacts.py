@@ -23,8 +23,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from carom.bodies import BODY_KINDS
 from carom.engines.rigid.driver import RigidEngine
-from carom.engines.rigid.model import KINDS, build_model, new_state
+from carom.engines.rigid.model import build_model, new_state
 from carom.engines.rigid.settings import RigidSettings
 from carom.shapes import Box, Circle, Polygon, Shape2D
 
@@ -46,7 +47,7 @@ def engine(
     pieces, kinds, masses, inertias, x, v, angle, omega = [], [], [], [], [], [], [], []
     for shape, kind, mass, position, velocity, theta, spin in bodies:
         pieces.append(shape.pieces())
-        kinds.append(KINDS[kind])
+        kinds.append(BODY_KINDS[kind])
         if kind == "dynamic":
             props = shape.mass_properties(mass=mass)
             masses.append(props.mass)

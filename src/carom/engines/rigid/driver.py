@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, Counters, Sink
 from carom.engines.rigid import broadphase, contacts, impacts, islands, motion, solver
+from carom.engines.rigid.assemble import Partners
 from carom.engines.rigid.model import RigidModel, RigidState, grid_cell
 from carom.engines.rigid.settings import RigidSettings
 
@@ -49,12 +50,28 @@ class RigidEngine:
     settings : RigidSettings
     time : float
         The clock at ``state`` [s].
+    partners : Partners, optional
+        What each body is to a collision record; the caller's bodies are those of kind
+        ``KIND_PAIR`` (the first ones), walls and planes follow. Default: all bodies are the
+        caller's.
+
+    Notes
+    -----
+    The counters keep the energy ledger: ``energy_lost`` is what the impacts solved exactly
+    and the solver took out of the bodies' kinetic and potential energy, ``energy_given`` what
+    the solver put in (pushing overlaps apart, a kinematic body's work), step by step, so that
+    ``E0 = E + energy_lost - energy_given``.
     """
 
     name = "rigid"
 
     def __init__(
-        self, model: RigidModel, state: RigidState, settings: RigidSettings, time: float = 0.0
+        self,
+        model: RigidModel,
+        state: RigidState,
+        settings: RigidSettings,
+        time: float = 0.0,
+        partners: Partners | None = None,
     ) -> None:
         self.model = model
         self.state = state
@@ -63,6 +80,11 @@ class RigidEngine:
         self.steps = 0
         self.dt = settings.dt
         n = model.kind.shape[0]
+        if partners is None:
+            partners = Partners(np.zeros(n, np.int8), np.arange(n, dtype=np.int64))
+        self.partners = partners
+        #: the caller's bodies: the first ``n_bodies``
+        self.n_bodies = int(np.count_nonzero(partners.kind == KIND_PAIR))
         self.cell = grid_cell(model)
         self._pairs = np.zeros((max(64, 4 * n), 2), np.int64)
         self._cf = np.zeros((max(64, 2 * n), contacts.CONTACT_FLOATS))
@@ -77,7 +99,9 @@ class RigidEngine:
         self._g = float(np.hypot(*model.gravity))
         self.n_contacts = 0
         self._collisions = 0
+        self._wall_collisions = 0
         self._energy_lost = 0.0
+        self._energy_given = 0.0
         self._virial = 0.0
         # place everything once: static pieces never move again
         motion.place_pieces(
@@ -118,25 +142,69 @@ class RigidEngine:
         return True
 
     def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        s = self.state
-        w = np.zeros((s.omega.shape[0], 3))
-        w[:, 2] = s.omega
-        return s.x.copy(), s.v.copy(), s.angle.reshape(-1, 1).copy(), w
+        s, n = self.state, self.n_bodies
+        w = np.zeros((n, 3))
+        w[:, 2] = s.omega[:n]
+        return s.x[:n].copy(), s.v[:n].copy(), s.angle[:n].reshape(-1, 1).copy(), w
 
     def counters(self) -> Counters:
         return Counters(
-            self.steps, self._collisions, 0, 0, 0, self._virial, self._energy_lost, 0, 0.0
+            self.steps,
+            self._collisions,
+            self._wall_collisions,
+            0,
+            0,
+            self._virial,
+            self._energy_lost,
+            0,
+            self._energy_given,
         )
 
     def resting(self) -> NDArray[np.int64]:
-        return np.full(self.model.kind.shape[0], -1, np.int64)
+        return np.full(self.n_bodies, -1, np.int64)
 
     def arrays(self) -> dict[str, NDArray[Any]]:
         s = self.state
         return {name: np.array(value) for name, value in s._asdict().items()} | {
             "steps": np.array([self.steps]),
             "start": np.array([self.start]),
+            "totals": np.array(
+                [self._collisions, self._wall_collisions, self._energy_lost, self._energy_given]
+            ),
         }
+
+    @classmethod
+    def restore(
+        cls,
+        model: RigidModel,
+        settings: RigidSettings,
+        partners: Partners,
+        arrays: dict[str, NDArray[Any]],
+    ) -> RigidEngine:
+        """The engine that wrote ``arrays`` (:meth:`arrays`), to continue bit for bit."""
+        state = RigidState(*(np.array(arrays[name]) for name in RigidState._fields))
+        start = float(arrays["start"][0])
+        engine = cls(model, state, settings, start, partners)
+        engine.steps = int(arrays["steps"][0])
+        collisions, walls, lost, given = (float(t) for t in arrays["totals"])
+        engine._collisions, engine._wall_collisions = int(collisions), int(walls)
+        engine._energy_lost, engine._energy_given = lost, given
+        return engine
+
+    def deepest_overlap(self) -> tuple[int, int, float]:
+        """The two bodies that overlap most now, with at least one of them dynamic, and
+        the depth [m] (positive; ``(-1, -1, 0.0)`` when nothing overlaps)."""
+        nc = self._contacts()
+        worst = (-1, -1, 0.0)
+        for row in range(nc):
+            a, b = int(self._ci[row, contacts.I_BODY_A]), int(self._ci[row, contacts.I_BODY_B])
+            if not (self._dynamic[a] or self._dynamic[b]):
+                continue
+            for j in range(int(self._ci[row, contacts.I_COUNT])):
+                depth = -float(self._cf[row, contacts.point_offset(j) + contacts.P_SEP])
+                if depth > worst[2]:
+                    worst = (a, b, depth)
+        return worst
 
     # -- one step -------------------------------------------------------------------------
 
@@ -235,6 +303,7 @@ class RigidEngine:
             s.awake,
             st.exact_impacts,
             0.1 * st.linear_slop,
+            st.restitution_threshold,
             self._parent,
             self._role,
             isolated,
@@ -278,6 +347,7 @@ class RigidEngine:
         for i in free.tolist():
             motion.fly(i, dt, s.x, s.angle, s.v, s.omega, self._accel[i, 0], self._accel[i, 1])
         bodies = np.flatnonzero(self._role == islands.ROLE_SOLVER)
+        before = self._energy(bodies)
         solver.solve_step(
             self._cf,
             self._ci,
@@ -299,6 +369,11 @@ class RigidEngine:
             st.push_speed,
             st.restitution_threshold,
         )
+        change = self._energy(bodies) - before
+        if change < 0.0:
+            self._energy_lost -= change
+        else:
+            self._energy_given += change
         if s.cache_keys.shape[0] < nc:
             size = max(nc, 2 * s.cache_keys.shape[0])
             self.state = s = s._replace(
@@ -334,17 +409,30 @@ class RigidEngine:
         self.n_contacts = nc
         self.steps += 1
 
+    def _energy(self, rows: NDArray[np.int64]) -> float:
+        """Kinetic and gravitational potential energy of the dynamic bodies among ``rows``
+        [J]."""
+        m, s = self.model, self.state
+        rows = rows[self._dynamic[rows]]
+        v, w = s.v[rows], s.omega[rows]
+        mass = m.mass[rows]
+        kinetic = 0.5 * (mass @ np.sum(v * v, axis=1) + m.inertia[rows] @ (w * w))
+        return float(kinetic - mass @ (s.x[rows] @ m.gravity))
+
     def _book(self, log: FloatArray, sink: Sink | None) -> None:
         """Count the exact impacts and hand them to ``sink`` as collision records."""
-        self._collisions += log.shape[0]
+        partner = log[:, 2].astype(np.int64)
+        against = self.partners.kind[partner]
+        self._wall_collisions += int(np.count_nonzero(against != KIND_PAIR))
+        self._collisions += int(np.count_nonzero(against == KIND_PAIR))
         self._energy_lost += float(np.sum(log[:, 9]))
         if sink is None:
             return
         records = np.zeros(log.shape[0], COLLISION_DTYPE)
         records["time"] = self.time + log[:, 0]
         records["body"] = log[:, 1].astype(np.int64)
-        records["kind"] = KIND_PAIR
-        records["partner"] = log[:, 2].astype(np.int64)
+        records["kind"] = against
+        records["partner"] = self.partners.number[partner]
         records["impulse"][:, :2] = log[:, 3:5]
         records["un_before"] = log[:, 5]
         records["un_after"] = log[:, 6]

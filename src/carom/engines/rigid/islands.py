@@ -3,11 +3,12 @@ who flies free; who falls asleep and who wakes.
 
 Dynamic bodies touching (or about to touch) are joined by union-find (Tarjan 1975, path
 halving); static and kinematic bodies join nothing, so the ground does not make one island of
-everything on it. An island of one contact that is still apart at the start of the step is
-an isolated impact (:mod:`carom.engines.rigid.impacts`); an island with no contact flies
-free; the rest go to the solver. An island whose bodies all stayed slower than the sleep
-speed for the sleep time sleeps: it is skipped until an awake body touches one of its bodies,
-which wakes the whole island.
+everything on it. An island of one contact that is still apart at the start of the step (or
+touching and closing faster than the restitution threshold) is an isolated impact
+(:mod:`carom.engines.rigid.impacts`); an island with no contact flies free; the rest go to the
+solver. An island whose bodies all stayed slower than the sleep speed for the sleep time
+sleeps: it is skipped until an awake body touches one of its bodies, which wakes the whole
+island.
 """
 
 from __future__ import annotations
@@ -15,19 +16,18 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from carom.bodies import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.engines.rigid.contacts import (
     I_BODY_A,
     I_BODY_B,
     I_COUNT,
     P_SEP,
+    P_VREL,
     point_offset,
 )
 
 __all__ = ["KIND_DYNAMIC", "KIND_KINEMATIC", "KIND_STATIC", "plan", "settle", "wake"]
 
-KIND_DYNAMIC = 0
-KIND_STATIC = 1
-KIND_KINEMATIC = 2
 
 ROLE_ASLEEP = 0  # skipped
 ROLE_FREE = 1  # no contact: exact free flight
@@ -52,6 +52,7 @@ def plan(
     awake: np.ndarray,
     exact: bool,
     apart: float,
+    fast: float,
     parent: np.ndarray,
     role: np.ndarray,
     isolated: np.ndarray,
@@ -71,6 +72,9 @@ def plan(
     apart : float
         A contact whose every point is further apart than this [m] at the start of the step
         is an impact still to happen, not a resting contact.
+    fast : float
+        So is a touching contact closing faster than this [m/s] (the restitution threshold):
+        the impact happens at the very start of the step.
     parent : (N,) int64
         Written: each body's island root (itself for non-dynamic bodies).
     role : (N,) int64
@@ -124,9 +128,11 @@ def plan(
         if kind[a] == KIND_KINEMATIC or kind[b] == KIND_KINEMATIC:
             continue
         closest = np.inf
+        closing = np.inf
         for j in range(ci[m, I_COUNT]):
             closest = min(closest, cf[m, point_offset(j) + P_SEP])
-        if closest <= apart:
+            closing = min(closing, cf[m, point_offset(j) + P_VREL])
+        if closest <= apart and closing >= -fast:
             continue
         isolated[count] = m
         count += 1

@@ -15,16 +15,13 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.rigid.islands import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
+from carom.bodies import KIND_DYNAMIC
 from carom.shapes import ConvexPiece
 
-__all__ = ["KINDS", "RigidModel", "RigidState", "build_model", "grid_cell", "new_state"]
+__all__ = ["RigidModel", "RigidState", "build_model", "grid_cell", "new_state"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-#: body kinds by name
-KINDS = {"dynamic": KIND_DYNAMIC, "static": KIND_STATIC, "kinematic": KIND_KINEMATIC}
 
 
 class RigidModel(NamedTuple):
