@@ -10,6 +10,8 @@ convex pieces in the body's frame, centred on its centre of mass.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,8 +23,11 @@ __all__ = [
     "KIND_DYNAMIC",
     "KIND_KINEMATIC",
     "KIND_STATIC",
+    "PIECE_ARRAYS",
     "Bodies",
     "identity_orientations",
+    "pieces_from_arrays",
+    "pieces_to_arrays",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -32,6 +37,42 @@ KIND_STATIC = 1  # never moves
 KIND_KINEMATIC = 2  # moves at its own velocity and spin, unmoved by impulses
 #: body kinds by name (``World.add_body(kind=...)``)
 BODY_KINDS = {"dynamic": KIND_DYNAMIC, "static": KIND_STATIC, "kinematic": KIND_KINEMATIC}
+
+
+#: the flat arrays that hold every body's pieces (checkpoints, trajectories)
+PIECE_ARRAYS = ("owner", "radius", "corners", "vertices")
+
+
+def pieces_to_arrays(pieces: list[tuple[ConvexPiece, ...]]) -> dict[str, NDArray[Any]]:
+    """Every body's convex pieces as flat arrays: per piece its ``owner`` body (P,) int64,
+    ``radius`` (P,) [m] and number of ``corners`` (P,) int64; all ``vertices`` (V, 2) [m] in
+    order, in the bodies' frames (spheres have none)."""
+    owner, radius, corners, vertices = [], [], [], [np.zeros((0, 2))]
+    for i, body in enumerate(pieces):
+        for piece in body:
+            owner.append(i)
+            radius.append(piece.radius)
+            corners.append(piece.vertices.shape[0])
+            vertices.append(piece.vertices)
+    return {
+        "owner": np.array(owner, np.int64),
+        "radius": np.array(radius, np.float64),
+        "corners": np.array(corners, np.int64),
+        "vertices": np.concatenate(vertices),
+    }
+
+
+def pieces_from_arrays(arrays: Mapping[str, Any], n: int) -> list[tuple[ConvexPiece, ...]]:
+    """The ``n`` bodies' pieces from the arrays :func:`pieces_to_arrays` wrote."""
+    bodies: list[list[ConvexPiece]] = [[] for _ in range(n)]
+    vertices = np.asarray(arrays["vertices"], np.float64)
+    row = 0
+    for owner, radius, count in zip(
+        arrays["owner"], arrays["radius"], arrays["corners"], strict=True
+    ):
+        bodies[int(owner)].append(ConvexPiece(vertices[row : row + count], float(radius)))
+        row += int(count)
+    return [tuple(body) for body in bodies]
 
 
 def identity_orientations(n: int, dim: int) -> FloatArray:
@@ -136,40 +177,43 @@ class Bodies:
         self.pieces.extend(() for _ in range(n))
         return np.arange(start, self.n)
 
-    def append_body(
+    def append_bodies(
         self,
         position: FloatArray,
         velocity: FloatArray,
-        angle: float,
-        angular_velocity: float,
+        angle: FloatArray,
+        angular_velocity: FloatArray,
         pieces: tuple[ConvexPiece, ...],
         shape: int,
         mass: float,
         inertia: float,
         kind: int,
         material: int,
-    ) -> int:
-        """Add one 2D body of any shape (checked by the caller): centre of mass ``position``
-        (2,) [m], ``pieces`` about it; infinite ``mass`` and ``inertia`` unless dynamic.
-        Return its index."""
+    ) -> NDArray[np.int64]:
+        """Add n 2D bodies of one shape (checked by the caller): centres of mass ``position``
+        (n, 2) [m], velocities (n, 2) [m/s], ``angle`` and ``angular_velocity`` (n,) [rad],
+        [rad/s]; ``pieces`` about the centre of mass; infinite ``mass`` and ``inertia``
+        unless dynamic. Return their indices."""
+        n = position.shape[0]
+        start = self.n
         reach = max(
             float(np.max(np.hypot(p.vertices[:, 0], p.vertices[:, 1]))) + p.radius for p in pieces
         )
-        w = np.zeros((1, 3))
-        w[0, 2] = angular_velocity
-        self.position = np.concatenate([self.position, position.reshape(1, 2)])
-        self.velocity = np.concatenate([self.velocity, velocity.reshape(1, 2)])
-        self.orientation = np.concatenate([self.orientation, [[angle]]])
+        w = np.zeros((n, 3))
+        w[:, 2] = angular_velocity
+        self.position = np.concatenate([self.position, position])
+        self.velocity = np.concatenate([self.velocity, velocity])
+        self.orientation = np.concatenate([self.orientation, angle.reshape(n, 1)])
         self.angular_velocity = np.concatenate([self.angular_velocity, w])
-        self.shape = np.concatenate([self.shape, np.array([shape], np.int8)])
-        self.radius = np.concatenate([self.radius, [reach]])
-        self.mass = np.concatenate([self.mass, [mass]])
+        self.shape = np.concatenate([self.shape, np.full(n, shape, np.int8)])
+        self.radius = np.concatenate([self.radius, np.full(n, reach)])
+        self.mass = np.concatenate([self.mass, np.full(n, mass)])
         q = inertia / (mass * reach**2) if math.isfinite(mass) else 0.0
-        self.inertia_factor = np.concatenate([self.inertia_factor, [q]])
-        self.material = np.concatenate([self.material, np.array([material], np.int64)])
-        self.kind = np.concatenate([self.kind, np.array([kind], np.int8)])
-        self.pieces.append(pieces)
-        return self.n - 1
+        self.inertia_factor = np.concatenate([self.inertia_factor, np.full(n, q)])
+        self.material = np.concatenate([self.material, np.full(n, material, np.int64)])
+        self.kind = np.concatenate([self.kind, np.full(n, kind, np.int8)])
+        self.pieces.extend(pieces for _ in range(n))
+        return np.arange(start, self.n)
 
     def set_state(
         self,

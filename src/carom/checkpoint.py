@@ -19,11 +19,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from carom.bodies import PIECE_ARRAYS, pieces_from_arrays, pieces_to_arrays
 from carom.engines.base import Counters
 from carom.engines.rigid.settings import RigidSettings
 from carom.errors import CaromError
 from carom.materials import Material
-from carom.shapes import ConvexPiece
 
 if TYPE_CHECKING:
     from carom.world import World
@@ -73,7 +73,7 @@ def save_world(world: World, path: Path, extra: Mapping[str, NDArray[Any]]) -> N
     arrays: dict[str, Any] = {"meta": np.array(json.dumps(meta))}
     for name in BODY_FIELDS:
         arrays[f"body.{name}"] = getattr(world.bodies, name)
-    arrays |= _pieces_arrays(world.bodies.pieces)
+    arrays |= {f"pieces.{k}": v for k, v in pieces_to_arrays(world.bodies.pieces).items()}
     if engine is not None:
         arrays |= {f"engine.{k}": v for k, v in engine.arrays().items()}
     arrays["log"] = world.collisions
@@ -82,37 +82,6 @@ def save_world(world: World, path: Path, extra: Mapping[str, NDArray[Any]]) -> N
     with tmp.open("wb") as handle:
         np.savez(handle, **arrays)
     tmp.replace(path)
-
-
-def _pieces_arrays(pieces: list[tuple[ConvexPiece, ...]]) -> dict[str, NDArray[Any]]:
-    """Every body's convex pieces as flat arrays: ``owner`` and ``radius`` per piece, its
-    ``corners`` count, and all ``vertices`` (V, 2) in order."""
-    owner, radius, corners, vertices = [], [], [], [np.zeros((0, 2))]
-    for i, body in enumerate(pieces):
-        for piece in body:
-            owner.append(i)
-            radius.append(piece.radius)
-            corners.append(piece.vertices.shape[0])
-            vertices.append(piece.vertices)
-    return {
-        "pieces.owner": np.array(owner, np.int64),
-        "pieces.radius": np.array(radius, np.float64),
-        "pieces.corners": np.array(corners, np.int64),
-        "pieces.vertices": np.concatenate(vertices),
-    }
-
-
-def _pieces_from(data: Any, n: int) -> list[tuple[ConvexPiece, ...]]:
-    """The bodies' pieces written by :func:`_pieces_arrays`."""
-    bodies: list[list[ConvexPiece]] = [[] for _ in range(n)]
-    vertices = data["pieces.vertices"]
-    row = 0
-    for owner, radius, count in zip(
-        data["pieces.owner"], data["pieces.radius"], data["pieces.corners"], strict=True
-    ):
-        bodies[int(owner)].append(ConvexPiece(vertices[row : row + count], float(radius)))
-        row += int(count)
-    return [tuple(body) for body in bodies]
 
 
 def load_world(path: Path) -> tuple[World, dict[str, NDArray[Any]]]:
@@ -162,7 +131,9 @@ def _read(path: Path, data: Any) -> tuple[World, dict[str, NDArray[Any]]]:
         world.add_plane(p, q, material=Material(**m))
     for name in BODY_FIELDS:
         setattr(world.bodies, name, data[f"body.{name}"])
-    world.bodies.pieces = _pieces_from(data, world.bodies.n)
+    world.bodies.pieces = pieces_from_arrays(
+        {k: data[f"pieces.{k}"] for k in PIECE_ARRAYS}, world.bodies.n
+    )
     engine = {k[len("engine.") :]: data[k] for k in data.files if k.startswith("engine.")}
     world.restore(
         meta["time"],

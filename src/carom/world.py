@@ -280,6 +280,7 @@ class World:
         kind: Literal["dynamic", "static", "kinematic"] = "dynamic",
     ) -> int:
         """Add one rigid body of any 2D shape (:mod:`carom.shapes`); return its index.
+        (:meth:`add_bodies` adds many of one shape at once.)
 
         Parameters
         ----------
@@ -310,6 +311,53 @@ class World:
         A world with a body added here runs the time-stepped rigid-body engine when
         ``engine="auto"`` (2D only); disks added with :meth:`add_spheres` join it as circles.
         """
+        if self.dim == 2:
+            angle = _angle_value("angle", angle, "rad")
+            angular_velocity = _angle_value("angular_velocity", angular_velocity, "rad/s")
+        return int(
+            self.add_bodies(
+                shape,
+                position,
+                velocity,
+                angles=angle,
+                angular_velocities=angular_velocity,
+                density=density,
+                mass=mass,
+                restitution=restitution,
+                material=material,
+                kind=kind,
+            )[0]
+        )
+
+    def add_bodies(
+        self,
+        shape: Shape2D,
+        positions: ArrayLike,
+        velocities: ArrayLike | None = None,
+        *,
+        angles: ArrayLike = 0.0,
+        angular_velocities: ArrayLike = 0.0,
+        density: float | None = None,
+        mass: float | None = None,
+        restitution: float | None = None,
+        material: Material | int | None = None,
+        kind: Literal["dynamic", "static", "kinematic"] = "dynamic",
+    ) -> NDArray[np.int64]:
+        """Add rigid bodies of one 2D shape; return their indices.
+
+        Parameters
+        ----------
+        shape : Shape2D
+            As for :meth:`add_body`.
+        positions : (n, 2) or (2,) array_like
+            Where each body's shape origin goes [m].
+        velocities : (n, 2) or (2,) array_like, optional
+            [m/s]; default at rest.
+        angles, angular_velocities : float or (n,) array_like
+            [rad] and [rad/s], anticlockwise; default 0.
+        density, mass, restitution, material, kind
+            As for :meth:`add_body`, the same for every body.
+        """
         if self.dim != 2:
             raise CaromError(
                 "add_body takes 2D shapes; 3D rigid bodies are not in carom yet (spheres: "
@@ -323,10 +371,11 @@ class World:
         if kind not in BODY_KINDS:
             raise CaromError(f"kind must be one of {tuple(BODY_KINDS)}; got {kind!r}")
         code = BODY_KINDS[kind]
-        origin = self._rows("position", position, 1)[0]
-        v = np.zeros(2) if velocity is None else self._rows("velocity", velocity, 1)[0]
-        turn = _angle_value("angle", angle, "rad")
-        spin = _angle_value("angular_velocity", angular_velocity, "rad/s")
+        origin = self._rows("position", positions)
+        n = origin.shape[0]
+        v = np.zeros_like(origin) if velocities is None else self._rows("velocity", velocities, n)
+        turn = self._per_value("angle", angles, n, "rad")
+        spin = self._per_value("angular_velocity", angular_velocities, n, "rad/s")
         if code == KIND_DYNAMIC:
             props = shape.mass_properties(
                 1.0 if density is None and mass is None else density, mass=mass
@@ -338,18 +387,20 @@ class World:
                     f"a {kind} body is not moved by impacts and has no mass; drop density= "
                     f"and mass=, or make it dynamic"
                 )
-            if code != BODY_KINDS["kinematic"] and (np.any(v) or spin):
+            if code != BODY_KINDS["kinematic"] and (np.any(v) or np.any(spin)):
                 raise CaromError(
                     "a static body never moves; drop velocity= and angular_velocity=, or "
                     'make it kind="kinematic"'
                 )
             body_mass, inertia, centroid = math.inf, math.inf, shape.centroid
-        c, s = math.cos(turn), math.sin(turn)
-        centre = origin + np.array([[c, -s], [s, c]]) @ centroid
+        c, s = np.cos(turn), np.sin(turn)
+        centre = origin + np.stack(
+            [c * centroid[0] - s * centroid[1], s * centroid[0] + c * centroid[1]], axis=1
+        )
         pieces = tuple(piece.moved(-centroid, 0.0) for piece in shape.pieces())
         mat = self._material_index(restitution, material)
         self._invalidate()
-        return self.bodies.append_body(
+        return self.bodies.append_bodies(
             centre,
             v,
             turn,
@@ -430,6 +481,20 @@ class World:
                 f"{name} must be positive and finite [{unit}]; got {name}[{i}] = {float(arr[i])!r}"
             )
         return np.array(check_size(name, arr, unit))
+
+    def _per_value(self, name: str, value: ArrayLike, n: int, unit: str) -> FloatArray:
+        """One finite number per body (a scalar for all), or a CaromError naming ``name``."""
+        arr = as_float_array(name, value)
+        try:
+            arr = np.array(np.broadcast_to(arr.reshape(-1) if arr.ndim else arr, (n,)))
+        except ValueError:
+            raise CaromError(
+                f"{name} must be one number or {n} of them [{unit}]; got shape {arr.shape}"
+            ) from None
+        if not np.all(np.isfinite(arr)):
+            i = int(np.argmax(~np.isfinite(arr)))
+            raise CaromError(f"{name} must be finite [{unit}]; got {name}[{i}] = {arr[i]!r}")
+        return check_magnitude(name, arr, unit)
 
     def _radii(self, value: ArrayLike, n: int) -> FloatArray:
         radii = self._per_body("radius", value, n, "m")

@@ -26,10 +26,12 @@ EXPECTED = CASE_SCENES | {
     "newtons-cradle",
     "rain-3d",
 }
+#: the rigid-body scenes (tests/scene/test_rigid_scenes.py runs them)
+RIGID = {"dominoes", "large-pyramid", "many-pyramids", "tumbler"}
 
 
 def test_the_built_in_scenes_are_all_there() -> None:
-    assert set(builtin_scenes()) == EXPECTED
+    assert set(builtin_scenes()) == EXPECTED | RIGID
 
 
 @pytest.mark.parametrize("name", sorted(EXPECTED))

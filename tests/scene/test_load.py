@@ -152,12 +152,12 @@ BAD_SCENES: list[tuple[tuple[str, str], str]] = [
     ),
     # walls of a material no table defines
     (("walls = 0.9", 'walls = "steel"'), r"\[world\] walls: names material 'steel'"),
-    # keys reserved for the rigid-body engine take only what the event-driven one does
+    # a rigid body's shape needs its own keys
     (
         ("radius = 0.1\n", 'radius = 0.1\nshape = "box"\n'),
-        r"\[\[bodies\]\] #1 shape: must be one of 'sphere', got 'box'",
+        r"\[\[bodies\]\] #1: a box needs size = \[width, height\] \[m\]",
     ),
-    (("walls = 0.9", 'walls = 0.9\nengine = "rigid"'), r"\[world\] engine: must be one of"),
+    (("walls = 0.9", 'walls = 0.9\nengine = "warp"'), r"\[world\] engine: must be one of"),
     # a gas that cannot fit
     (
         ("packing = 0.1", "packing = 0.001"),

@@ -10,7 +10,10 @@ Layout written (de Buyl et al., Comput. Phys. Commun. 185, 1546, 2014; nongnu.or
     /particles/all/orientation       same, value (F, N) [rad] in 2D (angle about z), (F, N, 4)
                               in 3D (unit quaternion w, x, y, z, body to world)
     /particles/all/angular_velocity  same, value (F, N, 3) [rad s-1] (2D: about z, column 2)
-    /particles/all/shape      (N,) strings ("sphere")   time-independent
+    /particles/all/shape      (N,) strings ("sphere", "box", ...)   time-independent
+    /particles/all/pieces     the rigid bodies' rounded convex pieces, time-independent:
+                              owner (P,) body, radius (P,) [m], corners (P,), vertices
+                              (V, 2) [m] in the body's frame about its centre of mass
     /particles/all/radius     (N,) [m]    time-independent
     /particles/all/mass       (N,) [kg]   (inf for static bodies)
     /observables/kinetic_energy      step, time, value (F,) [J]
@@ -20,7 +23,7 @@ Layout written (de Buyl et al., Comput. Phys. Commun. 185, 1546, 2014; nongnu.or
                               [J] (E0 = kinetic + potential + dissipated - given)
 
 Frames are appended as the run produces them (chunked, resizable datasets). The orientation,
-angular velocity and shape elements are carom's own (H5MD lets a program add elements).
+angular velocity, shape and pieces elements are carom's own (H5MD lets a program add elements).
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from carom import __version__
+from carom.bodies import pieces_to_arrays
 from carom.errors import CaromError
 from carom.shapes import SHAPE_NAMES
 from carom.world import Frame, World
@@ -181,6 +185,10 @@ class H5MDWriter:
         particles.create_dataset("mass", data=world.masses).attrs["unit"] = "kg"
         shapes = [SHAPE_NAMES[int(code)] for code in world.bodies.shape]
         particles.create_dataset("shape", data=np.array(shapes, dtype=h5py.string_dtype()))
+        pieces = particles.create_group("pieces")
+        for name, value in pieces_to_arrays(world.bodies.pieces).items():
+            pieces.create_dataset(name, data=value)
+        pieces["radius"].attrs["unit"] = pieces["vertices"].attrs["unit"] = "m"
         orientation = (self.n,) if self.dim == 2 else (self.n, 4)
         observables = self.file.require_group("observables")
         self.groups = {

@@ -185,6 +185,7 @@ def run_scene(
         run.world.prepare()
     else:
         world = scene.build()  # refuses a bad scene before anything is written
+        _check_steps(world, until, scene.run["frame_interval"])
         world.prepare()  # compiled (or loaded) apart from the run's own time
         _make_directory(work)
         try:
@@ -231,6 +232,25 @@ def run_scene(
         resumed_at=run.resumed_at,
         prepare_seconds=run.prepare_seconds,
     )
+
+
+def _check_steps(world: World, until: float, interval: float | None) -> None:
+    """A time-stepped engine stops on its steps: refuse a run length or frame interval that
+    is not a whole number of them, naming the nearest that is."""
+    if world.engine_name != "rigid":
+        return
+    dt = world.rigid_settings.dt
+    for name, value in (("until", until), ("frame_interval", interval)):
+        if value is None:
+            continue
+        steps = value / dt
+        if abs(steps - round(steps)) > 1e-6 * max(1.0, steps) or round(steps) < 1:
+            near = max(1, round(steps)) * dt
+            raise CaromError(
+                f"{name} = {value:g} s is not a whole number of the rigid engine's steps "
+                f"(1/{world.rigid_settings.rate:g} s): frames and the end fall on steps; use "
+                f"{near:.6g} s ({max(1, round(steps))} steps), or change [rigid] rate"
+            )
 
 
 def _check_size(scene: Scene, until: float, outputs: Outputs, target: Path) -> None:
@@ -481,7 +501,8 @@ class _Run:
         events0 = world.counters().events
         began = time.perf_counter()
         with bar:
-            while world.time < until:
+            done = world.time >= until
+            while not done:
                 if stop:
                     self.checkpoint()
                     raise RunInterrupted(
@@ -492,17 +513,20 @@ class _Run:
                 mark = time.perf_counter()
                 world.run(until=target, on_collisions=stream, stop=stop.__bool__)
                 self.wall += time.perf_counter() - mark
-                if world.time < target:
+                if stop:
                     continue  # stopped between frames: checkpoint above
+                # (a time-stepped engine stops on the step nearest the target: the target
+                # counts as reached, whatever the round-off of the clock)
                 k += 1
-                self._record(frame_too=frame_interval is not None or target >= until)
+                done = target >= until
+                self._record(frame_too=frame_interval is not None or done)
                 elapsed = time.perf_counter() - began
                 bar.set_postfix_str(
                     f", {(world.counters().events - events0) / max(elapsed, 1e-9):.3g} events/s",
                     refresh=False,
                 )
                 bar.update(world.time - self.t0 - bar.n)
-                if time.perf_counter() - saved > checkpoint_every and world.time < until:
+                if time.perf_counter() - saved > checkpoint_every and not done:
                     self.checkpoint()
                     saved = time.perf_counter()
 
@@ -561,10 +585,11 @@ def _frames_done(now: float, t0: float, step: float) -> int:
     frame is at ``t0 + (k + 1) step``, computed as the uninterrupted run computes it."""
     if now <= t0:
         return 0
+    slack = 1e-9 * step  # a time-stepped engine's clock is the sum of its steps
     k = math.floor((now - t0) / step)
-    while t0 + (k + 1) * step <= now:  # the division rounded down past a frame time
+    while t0 + (k + 1) * step <= now + slack:  # the division rounded down past a frame time
         k += 1
-    while k > 0 and t0 + k * step > now:  # or up past one
+    while k > 0 and t0 + k * step > now + slack:  # or up past one
         k -= 1
     return k
 

@@ -1,14 +1,17 @@
 """Building a :class:`carom.World` from a checked :class:`carom.scene.Scene`: materials, bodies
-from ``[[bodies]]``, the generators and ``[[gas]]``, in that order."""
+from ``[[bodies]]``, the generators and ``[[gas]]``, in that order; rigid bodies' shapes from
+their ``shape`` keys."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Mapping
-from typing import Any
+from typing import Any, Literal, cast
 
 import numpy as np
 
+from carom import shapes
+from carom.engines.rigid.settings import RigidSettings
 from carom.errors import CaromError
 from carom.limits import check_body_count
 from carom.materials import Material
@@ -42,6 +45,10 @@ def build_world(scene: Scene) -> World:
             raise where.error(["materials"], str(exc), "", index) from None
     w = scene.world
     try:
+        rigid = RigidSettings(**scene.rigid)
+    except CaromError as exc:
+        raise where.error(["rigid"], str(exc), "") from None
+    try:
         world = World(
             w["dimension"],
             w["box"],
@@ -50,20 +57,26 @@ def build_world(scene: Scene) -> World:
             walls=_walls(w["walls"], materials),
             t_c=w["t_c"],
             combine=w["combine"],
+            engine="edmd" if w["engine"] == "event-driven" else w["engine"],
+            rigid=rigid,
         )
     except CaromError as exc:
         raise where.error(["world"], str(exc), "") from None
     for table, index, b in _placed_bodies(scene):
         material = materials.get(b["material"]) if b["material"] else None
         try:
-            if b["static"]:
+            if b.get("shape", "sphere") != "sphere":
+                _add_shaped(world, b, material)
+            elif b["radius"] is None:
+                raise CaromError("radius is required for spheres: add radius = ... [m]")
+            elif b["static"] or b.get("kind") == "static":
                 world.add_static_spheres(b["positions"], radius=b["radius"], material=material)
             else:
                 world.add_spheres(
                     b["positions"],
                     b["velocities"],
                     radius=b["radius"],
-                    mass=b["mass"],
+                    mass=1.0 if b["mass"] is None else b["mass"],
                     material=material,
                 )
         except CaromError as exc:
@@ -86,6 +99,107 @@ def build_world(scene: Scene) -> World:
     return world
 
 
+def shape_of(entry: Mapping[str, Any]) -> shapes.Shape2D:
+    """The 2D shape a ``[[bodies]]`` entry (or a compound's piece) describes, from its
+    ``shape`` and ``size``, ``radius``, ``vertices``, ``loop`` and ``pieces`` keys."""
+    kind = entry["shape"]
+    size = entry.get("size")
+    radius = entry.get("radius")
+    vertices = entry.get("vertices")
+    sizes = [] if size is None else size if isinstance(size, list) else [size]
+
+    def need(key: str, value: Any, example: str) -> Any:
+        if value is None:
+            raise CaromError(f"a {kind} needs {key} = {example}")
+        return value
+
+    rounding = 0.0 if radius is None else _one("radius", radius)
+    if kind == "circle":
+        return shapes.Circle(_one("radius", need("radius", radius, "... [m]")))
+    if kind == "capsule":
+        length = need("size", size, "the length between the caps' centres [m]")
+        if len(sizes) != 1:
+            raise CaromError(f"a capsule's size is one length [m]; got {length!r}")
+        return shapes.Capsule(sizes[0], _one("radius", need("radius", radius, "... [m]")))
+    if kind == "box":
+        need("size", size, "[width, height] [m]")
+        if len(sizes) != 2:
+            raise CaromError(f"a box's size is [width, height] [m]; got {size!r}")
+        return shapes.Box(sizes[0], sizes[1], rounding)
+    if kind == "polygon":
+        return shapes.Polygon(need("vertices", vertices, "[[x, y], ...] [m]"), rounding)
+    if kind == "segment":
+        ends = need("vertices", vertices, "[[x1, y1], [x2, y2]] [m]")
+        if len(ends) != 2:
+            raise CaromError(f"a segment has vertices = [[x1, y1], [x2, y2]]; got {ends!r}")
+        return shapes.Segment(ends[0], ends[1], rounding)
+    if kind == "chain":
+        points = need("vertices", vertices, "[[x, y], ...] [m]")
+        return shapes.Chain(points, loop=bool(entry.get("loop", False)), radius=rounding)
+    assert kind == "compound"
+    parts: list[Any] = []
+    for k, piece in enumerate(need("pieces", entry.get("pieces"), "[{shape = ...}, ...]")):
+        try:
+            part = shape_of(piece)
+        except CaromError as exc:
+            raise CaromError(f"piece {k + 1}: {exc}") from None
+        parts.append((part, piece.get("offset", [0.0, 0.0]), piece.get("angle", 0.0)))
+    return shapes.Compound(parts)
+
+
+def _one(key: str, value: Any) -> float:
+    if isinstance(value, list):
+        raise CaromError(f"{key} must be one number for a body of this shape; got {value!r}")
+    return float(value)
+
+
+def _add_shaped(world: World, b: Mapping[str, Any], material: Material | None) -> None:
+    """Add the rigid bodies of a ``[[bodies]]`` entry of a shape other than a sphere."""
+    shape = shape_of(b)
+    kind = b.get("kind") or ("static" if b["static"] else "dynamic")
+    positions = b["positions"]
+    n = len(positions)
+    velocities = [[0.0, 0.0]] * n if b["velocities"] is None else b["velocities"]
+    angles = _per_body("angles", b.get("angles", 0.0), n)
+    spins = _per_body("angular_velocities", b.get("angular_velocities", 0.0), n)
+    masses = _per_body("mass", b["mass"], n) if b["mass"] is not None else [None] * n
+    density = b.get("density")
+    if kind == "dynamic" and density is None and b["mass"] is None:
+        density = 1.0
+    if b["mass"] is None or not isinstance(b["mass"], list):
+        world.add_bodies(
+            shape,
+            positions,
+            None if kind == "static" else velocities,
+            angles=angles,
+            angular_velocities=spins,
+            density=density,
+            mass=b["mass"],
+            material=material,
+            kind=cast("Literal['dynamic', 'static', 'kinematic']", kind),
+        )
+        return
+    for i in range(n):  # a mass per body
+        world.add_body(
+            shape,
+            positions[i],
+            velocity=velocities[i],
+            angle=angles[i],
+            angular_velocity=spins[i],
+            mass=masses[i],
+            material=material,
+            kind=cast("Literal['dynamic', 'static', 'kinematic']", kind),
+        )
+
+
+def _per_body(key: str, value: Any, n: int) -> list[Any]:
+    if isinstance(value, list):
+        if len(value) != n:
+            raise CaromError(f"{key} has {len(value)} values for {n} positions; give one or {n}")
+        return list(value)
+    return [value] * n
+
+
 def count_bodies(scene: Scene) -> int:
     """How many bodies ``scene`` places, counted from its tables without placing them."""
     n = sum(len(b["positions"]) for b in scene.bodies)
@@ -95,6 +209,8 @@ def count_bodies(scene: Scene) -> int:
     for p in scene.pegs:
         rows = p["rows"]
         n += rows * (rows + 1) // 2 if p["layout"] == "triangle" else rows * (p["columns"] or 1)
+    for p in scene.pyramid:
+        n += p["rows"] * (p["rows"] + 1) // 2 * math.prod(p["repeat"])
     return int(n + sum(g["count"] for g in scene.gas))
 
 
@@ -104,7 +220,11 @@ def _placed_bodies(scene: Scene) -> Iterator[tuple[str, int, dict[str, Any]]]:
     dim = scene.world["dimension"]
     for index, entry in enumerate(scene.bodies):
         yield "bodies", index, entry
+    for index, entry in enumerate(scene.pyramid):
+        yield "pyramid", index, _pyramid(entry)
     for table in GENERATORS:
+        if table == "pyramid":
+            continue
         for index, entry in enumerate(getattr(scene, table)):
             positions = _generated_positions(table, entry, dim)
             count = len(positions)
@@ -117,18 +237,57 @@ def _placed_bodies(scene: Scene) -> Iterator[tuple[str, int, dict[str, Any]]]:
                 velocities += layouts.maxwell_velocities(
                     rng, count, dim, entry["temperature"], entry["mass"]
                 )
-            yield (
-                table,
-                index,
-                {
-                    "positions": positions,
-                    "velocities": velocities,
-                    "radius": entry["radius"],
-                    "mass": entry.get("mass", 1.0),
-                    "material": entry["material"],
-                    "static": table == "pegs",
-                },
-            )
+            placed = {
+                "positions": positions,
+                "velocities": velocities,
+                "radius": entry["radius"],
+                "mass": entry.get("mass", 1.0),
+                "material": entry["material"],
+                "static": table == "pegs",
+            }
+            if entry.get("body") is not None:  # a lattice of rigid bodies
+                body = entry["body"]
+                placed |= {"radius": body.get("radius"), "size": body.get("size")}
+                placed |= {"shape": body["shape"], "vertices": body.get("vertices")}
+            yield table, index, placed
+
+
+def _pyramid(entry: Mapping[str, Any]) -> dict[str, Any]:
+    """A ``[[pyramid]]`` as a ``[[bodies]]`` entry of boxes: ``rows`` rows of boxes standing on
+    the line through ``base`` (the bottom row's centre, on the ground), ``rows - i`` boxes in
+    row ``i``, ``gap`` apart; repeated ``repeat = [nx, ny]`` times, ``pitch`` apart."""
+    size = entry["size"] if isinstance(entry["size"], list) else [entry["size"]]
+    w, h = float(size[0]), float(size[-1])  # one number: a square
+    rows, gap = int(entry["rows"]), float(entry["gap"])
+    repeat = entry["repeat"]
+    if len(repeat) > 2:
+        raise CaromError(f"repeat must be [nx] or [nx, ny]; got {repeat!r}")
+    nx, ny = int(repeat[0]), int(repeat[-1]) if len(repeat) == 2 else 1
+    pitch = entry["pitch"] or [(rows + 1) * (w + gap), (rows + 1) * h]
+    if len(pitch) != 2:
+        raise CaromError(f"pitch must be [dx, dy] [m]; got {pitch!r}")
+    one = np.array(
+        [
+            [(j - (rows - i - 1) / 2.0) * (w + gap), (i + 0.5) * h]
+            for i in range(rows)
+            for j in range(rows - i)
+        ]
+    )
+    copies = np.array([[cx * pitch[0], cy * pitch[1]] for cy in range(ny) for cx in range(nx)])
+    positions = (np.asarray(entry["base"], float) + copies[:, None, :] + one[None, :, :]).reshape(
+        -1, 2
+    )
+    return {
+        "shape": "box",
+        "size": [w, h],
+        "radius": entry["radius"],
+        "positions": positions.tolist(),
+        "velocities": None,
+        "mass": None,
+        "density": entry["density"],
+        "material": entry["material"],
+        "static": False,
+    }
 
 
 def _generated_positions(table: str, entry: Mapping[str, Any], dim: int) -> np.ndarray:

@@ -28,9 +28,12 @@ class Scene:
         The optional ``[scene]`` table: ``title`` and ``description``.
     world : dict
         The ``[world]`` table, defaults filled in.
-    materials, bodies, row, rack, lattice, pegs, gas : list of dict
+    materials, bodies, row, rack, lattice, pegs, pyramid, gas : list of dict
         The ``[[materials]]``, ``[[bodies]]``, generator (``[[row]]``, ``[[rack]]``,
-        ``[[lattice]]``, ``[[pegs]]``) and ``[[gas]]`` tables, defaults filled in.
+        ``[[lattice]]``, ``[[pegs]]``, ``[[pyramid]]``) and ``[[gas]]`` tables, defaults
+        filled in.
+    rigid : dict
+        The ``[rigid]`` table: the rigid-body engine's step and solver settings.
     run : dict
         The ``[run]`` table: ``until`` [s] and ``frame_interval`` [s] (None: no frames).
     outputs : dict
@@ -47,8 +50,10 @@ class Scene:
     rack: list[dict[str, Any]] = field(default_factory=list)
     lattice: list[dict[str, Any]] = field(default_factory=list)
     pegs: list[dict[str, Any]] = field(default_factory=list)
+    pyramid: list[dict[str, Any]] = field(default_factory=list)
     gas: list[dict[str, Any]] = field(default_factory=list)
     run: dict[str, Any] = field(default_factory=dict)
+    rigid: dict[str, Any] = field(default_factory=dict)
     outputs: dict[str, Any] = field(default_factory=dict)
     source: str = "<dict>"
     text: str = ""
@@ -142,6 +147,7 @@ class Scene:
             "rack": ("apex", "direction", "velocity"),
             "lattice": ("origin", "velocity", "shape"),
             "pegs": ("top",),
+            "pyramid": ("base",),
         }
         for table, keys in vectors.items():
             for index, entry in enumerate(getattr(self, table)):
@@ -174,7 +180,28 @@ class Scene:
                     "add columns = ... (pegs per row)",
                     index,
                 )
+        for index, entry in enumerate(self.lattice):
+            if (entry["radius"] is None) == (entry["body"] is None):
+                raise where.error(
+                    ["lattice"],
+                    "needs radius = ... (spheres) or body = {shape = ...} (rigid bodies), "
+                    "one of them",
+                    "",
+                    index,
+                )
+        for index in range(len(self.pyramid)):
+            if dim != 2:
+                raise where.error(
+                    ["pyramid"], "stacks boxes, which are 2D", "use it in a 2D world", index
+                )
         for index, entry in enumerate(self.bodies):
+            if entry["shape"] != "sphere" and dim != 2:
+                raise where.error(
+                    ["bodies", "shape"],
+                    f"{entry['shape']!r} is a 2D shape; 3D worlds take spheres only",
+                    'use shape = "sphere", or a 2D world',
+                    index,
+                )
             for key in ("positions", "velocities"):
                 rows = entry[key]
                 if rows is not None and any(len(row) != dim for row in rows):

@@ -157,11 +157,66 @@ def _not_negative(value: Any) -> str | None:
     return _number(value) or (None if value >= 0 else f"must be >= 0, got {value!r}")
 
 
+def _number_or_list(value: Any) -> str | None:
+    return _vector(value) if isinstance(value, list) else _number(value)
+
+
+def _size(value: Any) -> str | None:
+    items = value if isinstance(value, list) else [value]
+    if not items or len(items) > 2:
+        return f"must be a length or [width, height], got {_show(value)}"
+    for item in items:
+        problem = _positive(item)
+        if problem:
+            return f"must be positive lengths: an entry {problem}"
+    return None
+
+
+def _pieces(value: Any) -> str | None:
+    if not isinstance(value, list) or not value or not all(isinstance(v, dict) for v in value):
+        return (
+            'must be a list of inline tables, e.g. [{shape = "box", size = [1, 0.2], '
+            f"offset = [0, 0.5]}}], got {_show(value)}"
+        )
+    for k, piece in enumerate(value):
+        for key, item in piece.items():
+            if key not in PIECE_KEYS:
+                known = ", ".join(PIECE_KEYS)
+                return f"piece {k + 1}: {key!r} is not a known key; use one of {known}"
+            problem = PIECE_KEYS[key](item)
+            if problem:
+                return f"piece {k + 1}: {key} {problem}"
+        if "shape" not in piece:
+            return f"piece {k + 1}: shape is required (one of {', '.join(PIECE_SHAPES)})"
+    return None
+
+
+def _body(value: Any) -> str | None:
+    if not isinstance(value, dict):
+        example = '{shape = "box", size = [0.25, 0.25]}'
+        return f"must be an inline table, e.g. {example}, got {_show(value)}"
+    problem = _pieces([value])
+    return problem.replace("piece 1: ", "") if problem else None
+
+
 def _region(value: Any) -> str | None:
     if not isinstance(value, list) or len(value) != 2 or any(_vector(c) for c in value):
         return f"must be [[low corner], [high corner]], got {_show(value)}"
     return None
 
+
+#: shapes of [[bodies]] (docs/scenes.md): spheres for either engine, the rest rigid bodies
+SHAPES = ("sphere", "circle", "capsule", "box", "polygon", "compound", "segment", "chain")
+#: shapes a compound's pieces may have, and their keys
+PIECE_SHAPES = ("circle", "capsule", "box", "polygon")
+PIECE_KEYS: dict[str, Check] = {
+    "shape": _choice(*PIECE_SHAPES),
+    "size": _size,
+    "radius": _not_negative,
+    "vertices": _rows,
+    "offset": _vector,
+    "angle": _number,
+}
 
 SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
     "scene": {
@@ -171,13 +226,19 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
     "world": {
         "dimension": (_dimension, True, None),
         "box": (_vector, True, None),
-        "boundary": (_choice("walls", "periodic"), False, "walls"),
+        "boundary": (_choice("walls", "periodic", "open"), False, "walls"),
         "gravity": (_vector, False, None),
         "walls": (_walls, False, 1.0),
         "t_c": (_positive, False, 1e-6),
         "combine": (_choice(*COMBINE_RULES), False, "mean"),
-        # reserved: the rigid-body engine ("rigid") comes with the issues that build it
-        "engine": (_choice("event-driven"), False, "event-driven"),
+        "engine": (_choice("auto", "event-driven", "rigid"), False, "auto"),
+    },
+    "rigid": {
+        "rate": (_positive, False, 60.0),
+        "substeps": (_count, False, 4),
+        "contact_hertz": (_positive, False, 30.0),
+        "damping_ratio": (_not_negative, False, 10.0),
+        "sleep": (_boolean, False, True),
     },
     "materials": {
         "name": (_text, True, None),
@@ -187,14 +248,21 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "beta0": (_number, False, None),
     },
     "bodies": {
-        # reserved: capsules, boxes, polygons and hulls come with the rigid-body engine
-        "shape": (_choice("sphere"), False, "sphere"),
+        "shape": (_choice(*SHAPES), False, "sphere"),
         "positions": (_rows, True, None),
         "velocities": (_rows, False, None),
-        "radius": (_positive_or_list, True, None),
-        "mass": (_positive_or_list, False, 1.0),
+        "radius": (_positive_or_list, False, None),
+        "mass": (_positive_or_list, False, None),
         "material": (_text, False, None),
         "static": (_boolean, False, False),
+        "kind": (_choice("dynamic", "static", "kinematic"), False, None),
+        "size": (_size, False, None),
+        "vertices": (_rows, False, None),
+        "pieces": (_pieces, False, None),
+        "loop": (_boolean, False, False),
+        "density": (_positive, False, None),
+        "angles": (_number_or_list, False, 0.0),
+        "angular_velocities": (_number_or_list, False, 0.0),
     },
     "row": {
         "count": (_count, True, None),
@@ -220,7 +288,8 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "shape": (_counts, True, None),
         "origin": (_vector, True, None),
         "spacing": (_positive, True, None),
-        "radius": (_positive, True, None),
+        "radius": (_positive, False, None),
+        "body": (_body, False, None),
         "mass": (_positive, False, 1.0),
         "velocity": (_vector, False, None),
         "temperature": (_not_negative, False, 0.0),
@@ -234,6 +303,17 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "layout": (_choice("triangle", "staggered"), False, "triangle"),
         "columns": (_count, False, None),
         "radius": (_positive, True, None),
+        "material": (_text, False, None),
+    },
+    "pyramid": {
+        "rows": (_count, True, None),
+        "base": (_vector, True, None),
+        "size": (_size, False, [1.0, 1.0]),
+        "gap": (_not_negative, False, 0.0),
+        "radius": (_not_negative, False, 0.0),
+        "density": (_positive, False, 1.0),
+        "repeat": (_counts, False, [1, 1]),
+        "pitch": (_vector, False, None),
         "material": (_text, False, None),
     },
     "gas": {
@@ -260,7 +340,7 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
 }
 #: tables that may repeat ([[name]]); the generators place bodies in this order, after
 #: [[bodies]] and before [[gas]] (which avoids everything placed before it)
-GENERATORS = ("row", "rack", "lattice", "pegs")
+GENERATORS = ("row", "rack", "lattice", "pegs", "pyramid")
 #: keys that carom once read under another name: table -> old key -> new key
 RENAMED = {"world": {"wall_restitution": "walls", "tc": "t_c"}}
 ARRAYS = ("materials", "bodies", *GENERATORS, "gas")

@@ -3,7 +3,9 @@
 Frames are drawn with matplotlib from an H5MD trajectory (``carom run`` writes one) and
 handed to the encoder one by one, so memory stays flat for MP4 however long the run. Every
 body is a shaded disk: seven nested disks, each smaller, brighter and shifted towards the
-light, which reads as a lit sphere at a glance. Colour is speed (one scale for the whole
+light, which reads as a lit sphere at a glance; a rigid body of another shape is its outline
+(rounded corners drawn as arcs), turned by its angle, with a lighter inset towards the light.
+Colour is speed (one scale for the whole
 film, shown by the colour bar); static bodies are grey. In 3D the camera looks at the box
 from above and in front, in perspective: bodies are drawn far to near, scaled by their
 distance, and dimmed with it; the box's back edges are drawn behind them, the others in
@@ -20,7 +22,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from carom.bodies import PIECE_ARRAYS, pieces_from_arrays
 from carom.errors import CaromError
+from carom.shapes import ConvexPiece
 from carom.viz import require_matplotlib
 
 __all__ = ["need_encoder", "write_animation"]
@@ -91,6 +95,7 @@ def write_animation(
         times = f["particles/all/position/time"][:]
         positions = f["particles/all/position/value"]
         velocities = f["particles/all/velocity/value"]
+        angles = f["particles/all/orientation/value"] if scene.dim == 2 else None
         if fps is None:
             dt = float(np.median(np.diff(times))) if len(times) > 1 else 1.0
             fps = min(25.0 if fmt == "gif" else 60.0, max(10.0, 1.0 / dt if dt > 0 else 10.0))
@@ -98,7 +103,12 @@ def write_animation(
         painter = _Painter(scene, title, _PIXELS[fmt])
         try:
             frames = (
-                painter.draw(float(times[k]), positions[k], velocities[k])
+                painter.draw(
+                    float(times[k]),
+                    positions[k],
+                    velocities[k],
+                    None if angles is None else angles[k],
+                )
                 for k in range(len(times))
             )
             if fmt == "mp4":
@@ -170,12 +180,22 @@ class TrajectoryScene:
     """What the drawing needs from the trajectory: box, bodies and how to look at them."""
 
     def __init__(
-        self, dim: int, box: FloatArray, periodic: bool, radius: FloatArray, mass: FloatArray
+        self,
+        dim: int,
+        box: FloatArray,
+        periodic: bool,
+        radius: FloatArray,
+        mass: FloatArray,
+        pieces: list[tuple[ConvexPiece, ...]] | None = None,
     ) -> None:
         self.dim, self.box, self.periodic = dim, box, periodic
         self.radius = radius
         self.moving = np.isfinite(mass)
         self.speed_scale = 1.0
+        pieces = pieces or [() for _ in range(len(radius))]
+        #: bodies drawn as shaded disks (spheres), and the outlines of the others
+        self.round = np.array([not body for body in pieces], dtype=bool)
+        self.outlines = Outlines(pieces)
 
     @classmethod
     def read(cls, f: Any) -> TrajectoryScene:
@@ -184,13 +204,91 @@ class TrajectoryScene:
         boundary = [
             str(b, "utf-8") if isinstance(b, bytes) else str(b) for b in box.attrs["boundary"]
         ]
+        radius = np.asarray(f["particles/all/radius"][:], dtype=float)
+        stored = f["particles/all"].get("pieces")
+        pieces = (
+            None
+            if stored is None
+            else pieces_from_arrays({k: stored[k][:] for k in PIECE_ARRAYS}, len(radius))
+        )
         return cls(
             int(box.attrs["dimension"]),
             np.asarray(box["edges"][:], dtype=float),
             boundary[0] == "periodic",
-            np.asarray(f["particles/all/radius"][:], dtype=float),
+            radius,
             np.asarray(f["particles/all/mass"][:], dtype=float),
+            pieces,
         )
+
+
+class Outlines:
+    """The outlines of the rigid bodies' pieces, in their frames, ready to be turned and
+    moved: a circle as a 32-gon, a rounded corner as an arc of 6 segments.
+
+    Attributes
+    ----------
+    points : (M, 2) float64
+        Every outline point in its body's frame [m], polygon after polygon.
+    owner : (M,) int64
+        Each point's body.
+    inset : (M, 2) float64
+        The points of the lighter inset (towards the piece's middle) [m].
+    body : (K,) int64
+        Each polygon's body.
+    splits : (K - 1,) int64
+        Where each polygon after the first starts in ``points``.
+    """
+
+    def __init__(self, pieces: list[tuple[ConvexPiece, ...]]) -> None:
+        points: list[FloatArray] = [np.zeros((0, 2))]
+        insets: list[FloatArray] = [np.zeros((0, 2))]
+        owner: list[int] = []
+        body: list[int] = []
+        for i, shapes in enumerate(pieces):
+            for piece in shapes:
+                ring = _outline(piece.vertices, piece.radius)
+                middle = ring.mean(axis=0)
+                points.append(ring)
+                insets.append(middle + 0.72 * (ring - middle))
+                owner.extend([i] * len(ring))
+                body.append(i)
+        self.points = np.concatenate(points)
+        self.inset = np.concatenate(insets)
+        self.owner = np.array(owner, np.int64)
+        self.body = np.array(body, np.int64)
+        sizes = np.bincount(np.repeat(np.arange(len(body)), [len(p) for p in points[1:]]))
+        self.splits = np.cumsum(sizes)[:-1] if len(body) else np.zeros(0, np.int64)
+
+    def placed(
+        self, local: FloatArray, positions: FloatArray, angles: FloatArray
+    ) -> list[FloatArray]:
+        """The polygons of ``local`` outline points (M, 2) in the world, bodies at
+        ``positions`` (N, 2) [m] turned by ``angles`` (N,) [rad]."""
+        theta = angles[self.owner]
+        c, s = np.cos(theta), np.sin(theta)
+        x = positions[self.owner, 0] + c * local[:, 0] - s * local[:, 1]
+        y = positions[self.owner, 1] + s * local[:, 0] + c * local[:, 1]
+        return np.split(np.stack([x, y], axis=1), self.splits)
+
+
+def _outline(core: FloatArray, radius: float) -> FloatArray:
+    """The outline of a rounded convex piece: its core's corners (k, 2), each replaced by an
+    arc of ``radius`` [m] between its edges' normals; a circle when k = 1."""
+    if len(core) == 1:
+        a = np.linspace(0.0, 2.0 * math.pi, 32, endpoint=False)
+        circle: FloatArray = core[0] + radius * np.stack([np.cos(a), np.sin(a)], axis=1)
+        return circle
+    if radius <= 0.0:
+        return np.asarray(core, float)
+    edges = np.roll(core, -1, axis=0) - core
+    normal_angle = np.arctan2(-edges[:, 0], edges[:, 1])  # outward: the edge turned clockwise
+    ring = []
+    for i in range(len(core)):
+        start = normal_angle[i - 1]
+        sweep = (normal_angle[i] - start) % (2.0 * math.pi)
+        a = start + np.linspace(0.0, sweep, 7)
+        ring.append(core[i] + radius * np.stack([np.cos(a), np.sin(a)], axis=1))
+    return np.concatenate(ring)
 
 
 class _Camera:
@@ -261,7 +359,7 @@ class _Painter:
         pad = 0.04 * float(np.max(high - low))
         self.ax.set_xlim(low[0] - pad, high[0] + pad)
         self.ax.set_ylim(low[1] - pad, high[1] + pad)
-        n = len(scene.radius) * len(_LAYER_SIZE)
+        n = int(np.count_nonzero(scene.round)) * len(_LAYER_SIZE)
         self.disks = EllipseCollection(
             np.ones(n),
             np.ones(n),
@@ -273,6 +371,12 @@ class _Painter:
             zorder=2,
         )
         self.ax.add_collection(self.disks)
+        from matplotlib.collections import PolyCollection
+
+        self.shapes: Any = PolyCollection([], linewidths=0.4, zorder=2)
+        self.insets: Any = PolyCollection([], linewidths=0, zorder=2)
+        self.ax.add_collection(self.shapes)
+        self.ax.add_collection(self.insets)
         self.stamp = self.fig.text(0.04, 0.93, "", family="monospace", fontsize=13)
         self.fig.text(0.04, 0.965, title, fontsize=13, weight="bold")
         bar_ax = self.fig.add_axes((0.88, 0.15, 0.025, 0.6))
@@ -282,17 +386,36 @@ class _Painter:
         self.fig.colorbar(mappable, cax=bar_ax, label="speed [m/s]")
         self.plt = plt
 
-    def draw(self, t: float, positions: FloatArray, velocities: FloatArray) -> NDArray[np.uint8]:
+    def draw(
+        self,
+        t: float,
+        positions: FloatArray,
+        velocities: FloatArray,
+        angles: FloatArray | None = None,
+    ) -> NDArray[np.uint8]:
         """The picture at time ``t`` [s]: (height, width, 3) RGB bytes."""
         scene = self.scene
-        base = speed_colours(velocities, scene.moving, scene.speed_scale)
+        every = speed_colours(velocities, scene.moving, scene.speed_scale)
+        outlines = scene.outlines
+        if len(outlines.body):
+            turn = np.zeros(len(positions)) if angles is None else np.asarray(angles, float)
+            colour = every[outlines.body]
+            shift = 0.04 * float(np.median(scene.radius[outlines.body])) * _LIGHT
+            self.shapes.set_verts(outlines.placed(outlines.points, positions, turn))
+            self.shapes.set_facecolor(colour * 0.72)
+            self.shapes.set_edgecolor(colour * 0.45)
+            self.insets.set_verts(outlines.placed(outlines.inset + shift, positions, turn))
+            self.insets.set_facecolor(colour + (1.0 - colour) * 0.12)
+        positions, velocities = positions[scene.round], velocities[scene.round]
+        base = every[scene.round]
+        radius = scene.radius[scene.round]
         if self.camera is None:
-            centre, size = positions[:, :2], scene.radius.copy()
+            centre, size = positions[:, :2], radius.copy()
             order = np.arange(len(size))
             shade = np.ones(len(size))
         else:
             centre, depth = self.camera.project(positions)
-            size = scene.radius / depth
+            size = radius / depth
             order = np.argsort(-depth, kind="stable")  # far first: near bodies cover them
             near, far = self.depth_range
             shade = 1.0 - 0.4 * np.clip((depth - near) / (far - near), 0.0, 1.0)
