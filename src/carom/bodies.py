@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.shapes import SHAPE_CODES, ConvexPiece
 
 __all__ = [
@@ -32,9 +33,6 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
-KIND_DYNAMIC = 0  # moved by gravity and impulses
-KIND_STATIC = 1  # never moves
-KIND_KINEMATIC = 2  # moves at its own velocity and spin, unmoved by impulses
 #: body kinds by name (``World.add_body(kind=...)``)
 BODY_KINDS = {"dynamic": KIND_DYNAMIC, "static": KIND_STATIC, "kinematic": KIND_KINEMATIC}
 

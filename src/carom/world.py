@@ -163,6 +163,8 @@ class World:
         self._log: list[NDArray[Any]] = []
         self._logged = 0
         self.collisions_dropped = 0
+        #: whether the last run got to its target (False: its stop request ended it early)
+        self.reached = True
         # totals of the engines dropped so far (adding bodies or materials rebuilds it)
         self._counters_before = Counters(0, 0, 0, 0, 0, 0.0, 0.0, 0, 0.0)
         self.stats = Stats(self)
@@ -794,6 +796,7 @@ class World:
                 reached = engine.advance(target, np.iinfo(np.int64).max, sink, stop)
             finally:
                 self._time = engine.time  # the target, or the last event before a stop
+            self.reached = reached
             if not reached:
                 return
             if frame_interval is not None:

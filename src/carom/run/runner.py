@@ -513,7 +513,7 @@ class _Run:
                 mark = time.perf_counter()
                 world.run(until=target, on_collisions=stream, stop=stop.__bool__)
                 self.wall += time.perf_counter() - mark
-                if stop:
+                if not world.reached:
                     continue  # stopped between frames: checkpoint above
                 # (a time-stepped engine stops on the step nearest the target: the target
                 # counts as reached, whatever the round-off of the clock)

@@ -16,7 +16,6 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from carom.bodies import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.engines.rigid.contacts import (
     I_BODY_A,
     I_BODY_B,
@@ -25,6 +24,7 @@ from carom.engines.rigid.contacts import (
     P_VREL,
     point_offset,
 )
+from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 
 __all__ = ["KIND_DYNAMIC", "KIND_KINEMATIC", "KIND_STATIC", "plan", "settle", "wake"]
 

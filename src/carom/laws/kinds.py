@@ -1,0 +1,6 @@
+"""Body kinds: how a body answers an impulse, as the body table and the kernels store it
+(codes kept with the laws, so that a kernel reading them is rebuilt when they change)."""
+
+KIND_DYNAMIC = 0  # moved by gravity and impulses
+KIND_STATIC = 1  # never moves
+KIND_KINEMATIC = 2  # moves at its own velocity and spin, unmoved by impulses
