@@ -194,9 +194,7 @@ class Bodies:
         unless dynamic. Return their indices."""
         n = position.shape[0]
         start = self.n
-        reach = max(
-            float(np.max(np.hypot(p.vertices[:, 0], p.vertices[:, 1]))) + p.radius for p in pieces
-        )
+        reach = max(piece.reach for piece in pieces)
         w = np.zeros((n, 3))
         w[:, 2] = angular_velocity
         self.position = np.concatenate([self.position, position])

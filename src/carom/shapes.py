@@ -185,6 +185,11 @@ class ConvexPiece:
             return np.zeros((0, 2))
         return outward_normals(self.vertices)
 
+    @property
+    def reach(self) -> float:
+        """The farthest point of the piece from its frame's origin [m]."""
+        return float(np.max(np.hypot(self.vertices[:, 0], self.vertices[:, 1]))) + self.radius
+
     def moved(self, offset: FloatArray, angle: float) -> ConvexPiece:
         """The piece turned by ``angle`` [rad] about the origin, then moved by ``offset`` [m]."""
         c, s = math.cos(angle), math.sin(angle)

@@ -35,8 +35,9 @@ from carom.bodies import BODY_KINDS, KIND_DYNAMIC, Bodies
 from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, KIND_WALL, Counters
 from carom.engines.edmd.driver import OVERLAP_TOLERANCE, EdmdEngine, Environment
 from carom.engines.edmd.settings import EdmdSettings
-from carom.engines.rigid.assemble import assemble
+from carom.engines.rigid.assemble import Partners, assemble
 from carom.engines.rigid.driver import RigidEngine
+from carom.engines.rigid.model import RigidModel, RigidState
 from carom.engines.rigid.settings import RigidSettings
 from carom.errors import CaromError, CaromWarning
 from carom.limits import (
@@ -313,9 +314,6 @@ class World:
         A world with a body added here runs the time-stepped rigid-body engine when
         ``engine="auto"`` (2D only); disks added with :meth:`add_spheres` join it as circles.
         """
-        if self.dim == 2:
-            angle = _angle_value("angle", angle, "rad")
-            angular_velocity = _angle_value("angular_velocity", angular_velocity, "rad/s")
         return int(
             self.add_bodies(
                 shape,
@@ -614,7 +612,7 @@ class World:
                 "engine needs 'walls' or 'periodic'"
             )
 
-    def _rigid_parts(self) -> tuple[Any, Any, Any]:
+    def _rigid_parts(self) -> tuple[RigidModel, RigidState, Partners]:
         """The rigid engine's model, state and partner map for this world."""
         if self.dim != 2:
             raise CaromError(
@@ -1002,15 +1000,6 @@ def _vector(name: str, value: ArrayLike, dim: int, unit: str) -> FloatArray:
     if arr.shape != (dim,) or not np.all(np.isfinite(arr)):
         raise CaromError(f"{name} must be {dim} finite numbers [{unit}]; got {value!r}")
     return arr
-
-
-def _angle_value(name: str, value: float, unit: str) -> float:
-    """``value`` as one finite number, or a CaromError naming ``name``."""
-    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
-        raise CaromError(f"{name} must be one number [{unit}]; got {value!r}")
-    if not math.isfinite(value):
-        raise CaromError(f"{name} must be finite [{unit}]; got {value!r}")
-    return float(value)
 
 
 def _as_material(name: str, value: Material | float) -> Material:

@@ -256,8 +256,7 @@ class Outlines:
         self.inset = np.concatenate(insets)
         self.owner = np.array(owner, np.int64)
         self.body = np.array(body, np.int64)
-        sizes = np.bincount(np.repeat(np.arange(len(body)), [len(p) for p in points[1:]]))
-        self.splits = np.cumsum(sizes)[:-1] if len(body) else np.zeros(0, np.int64)
+        self.splits = np.cumsum([len(ring) for ring in points[1:]], dtype=np.int64)[:-1]
 
     def placed(
         self, local: FloatArray, positions: FloatArray, angles: FloatArray

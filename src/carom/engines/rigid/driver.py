@@ -413,11 +413,10 @@ class RigidEngine:
         """Kinetic and gravitational potential energy of the dynamic bodies among ``rows``
         [J]."""
         m, s = self.model, self.state
-        rows = rows[self._dynamic[rows]]
-        v, w = s.v[rows], s.omega[rows]
-        mass = m.mass[rows]
-        kinetic = 0.5 * (mass @ np.sum(v * v, axis=1) + m.inertia[rows] @ (w * w))
-        return float(kinetic - mass @ (s.x[rows] @ m.gravity))
+        gx, gy = float(m.gravity[0]), float(m.gravity[1])
+        return motion.mechanical_energy(
+            rows, self._dynamic, m.mass, m.inertia, s.x, s.v, s.omega, gx, gy
+        )
 
     def _book(self, log: FloatArray, sink: Sink | None) -> None:
         """Count the exact impacts and hand them to ``sink`` as collision records."""

@@ -140,7 +140,7 @@ def build_model(
             starts.append(row)
             counts.append(k)
             radii.append(piece.radius)
-            far = float(np.max(np.hypot(piece.vertices[:, 0], piece.vertices[:, 1]))) + piece.radius
+            far = piece.reach
             reaches.append(far)
             reach[i] = max(reach[i], far)
             owners.append(i)

@@ -13,7 +13,14 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["apply_impulse", "fly", "place_piece", "place_pieces", "relative_velocity"]
+__all__ = [
+    "apply_impulse",
+    "fly",
+    "mechanical_energy",
+    "place_piece",
+    "place_pieces",
+    "relative_velocity",
+]
 
 
 @njit(cache=True)
@@ -136,3 +143,26 @@ def fly(
     v[b, 0] += gx * t
     v[b, 1] += gy * t
     angle[b] += omega[b] * t
+
+
+@njit(cache=True)
+def mechanical_energy(
+    rows: np.ndarray,
+    dynamic: np.ndarray,
+    mass: np.ndarray,
+    inertia: np.ndarray,
+    x: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    gx: float,
+    gy: float,
+) -> float:
+    """Kinetic plus gravitational potential energy [J] of the dynamic bodies among ``rows``
+    (positions ``x`` (N, 2) [m], velocities ``v`` (N, 2) [m/s], ``omega`` (N,) [rad/s])."""
+    total = 0.0
+    for i in rows:
+        if dynamic[i]:
+            kinetic = mass[i] * (v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
+            kinetic += inertia[i] * omega[i] * omega[i]
+            total += 0.5 * kinetic - mass[i] * (x[i, 0] * gx + x[i, 1] * gy)
+    return total
