@@ -612,8 +612,19 @@ class World:
                 "engine needs 'walls' or 'periodic'"
             )
 
-    def _rigid_parts(self) -> tuple[RigidModel, RigidState, Partners]:
-        """The rigid engine's model, state and partner map for this world."""
+    def rigid_parts(self) -> tuple[RigidModel, RigidState, Partners]:
+        """The rigid engine's view of this world, as the engine would start from it.
+
+        Returns
+        -------
+        model : RigidModel
+            Every body's pieces, mass, inertia, kind and material; the caller's bodies
+            first, then the walls and planes as static slabs.
+        state : RigidState
+            Their positions (centres of mass), velocities, angles and angular velocities.
+        partners : Partners
+            What each row is: a body, a wall face or a plane (collision records name them).
+        """
         if self.dim != 2:
             raise CaromError(
                 "the rigid-body engine is 2D; 3D rigid bodies are not in carom yet (3D "
@@ -638,7 +649,7 @@ class World:
     def _build_rigid(self) -> RigidEngine:
         """The rigid engine, once no dynamic body starts overlapping another body, a wall or
         a plane deeper than the linear slop (the solver would throw them apart)."""
-        model, state, partners = self._rigid_parts()
+        model, state, partners = self.rigid_parts()
         engine = RigidEngine(model, state, self.rigid_settings, self._time, partners)
         a, b, depth = engine.deepest_overlap()
         slop = self.rigid_settings.linear_slop
@@ -983,7 +994,7 @@ class World:
         if engine_arrays is None:
             return
         if self.engine_name == "rigid":
-            model, _, partners = self._rigid_parts()
+            model, _, partners = self.rigid_parts()
             self._engine = RigidEngine.restore(model, self.rigid_settings, partners, engine_arrays)
         else:
             self._engine = EdmdEngine.restore(

@@ -15,11 +15,12 @@ from tqdm import tqdm
 from carom.compare.closed_form import Expectation, expectation
 from carom.compare.engines import ENGINES, EngineEntry, engine
 from carom.compare.monitor import Monitor
+from carom.compare.rigid import ImpactCheck, RigidMonitor, RigidScene, impact_expectation
 from carom.compare.spec import PeerScene
 from carom.errors import CaromError
 from carom.scene import Scene, find_scene, load_scene
 
-__all__ = ["Comparison", "compare", "peer_scene"]
+__all__ = ["Comparison", "RigidComparison", "compare", "peer_scene"]
 
 
 @dataclass
@@ -81,35 +82,101 @@ class Comparison:
 
 def peer_scene(
     scene: str | Path | Scene, until: float | None = None, name: str | None = None
-) -> PeerScene:
-    """The :class:`PeerScene` of a built-in scene name, a scene file or a :class:`Scene`."""
+) -> PeerScene | RigidScene:
+    """The scene of a built-in scene name, a scene file or a :class:`Scene`, as the engines
+    take it: a :class:`PeerScene` of spheres, or a :class:`RigidScene` when the scene runs
+    carom's rigid-body engine."""
     if not isinstance(scene, Scene):
         path = find_scene(scene)
         name = name or path.stem
         scene = load_scene(path)
     name = name or Path(scene.source).stem
     run = scene.run
+    title = scene.scene.get("title") or name
+    world = scene.build()
+    if world.engine_name == "rigid":
+        return RigidScene.from_world(
+            lambda: world, name, until if until is not None else run["until"], title
+        )
     return PeerScene.from_world(
-        scene.build,
+        lambda: world,
         name,
         until if until is not None else run["until"],
         run["frame_interval"],
-        scene.scene.get("title") or name,
+        title,
     )
 
 
-def default_engines(dim: int) -> list[str]:
-    """carom and every peer that simulates ``dim`` dimensions."""
-    return [e.name for e in ENGINES.values() if dim in e.dims]
+@dataclass
+class RigidComparison:
+    """The outcome of :func:`compare` on a scene of rigid bodies.
+
+    Attributes
+    ----------
+    scene : RigidScene
+        The scene every engine ran.
+    expected : ImpactCheck or None
+        The closed form of a body landing on flat ground, when the scene is one.
+    engines : dict
+        Per engine name: ``version``, ``dt_s``, ``settings``, ``notes``, ``setup_s``,
+        ``wall_s`` (time inside its step calls), ``ms_per_step``, ``simulated_s``,
+        ``metrics`` (:meth:`carom.compare.rigid.RigidMonitor.result`) and ``series``.
+    skipped : dict
+        Engines asked for but not run, with the reason.
+    """
+
+    scene: RigidScene
+    expected: ImpactCheck | None
+    engines: dict[str, dict[str, Any]]
+    skipped: dict[str, str]
+
+    @property
+    def title(self) -> str:
+        """The scene's title."""
+        return self.scene.title
+
+    def to_json(self) -> dict[str, Any]:
+        """Everything but the series, as JSON-ready data."""
+        check = self.expected
+        return {
+            "scene": self.scene.name,
+            "title": self.title,
+            "dimension": 2,
+            "bodies": self.scene.n,
+            "until_s": self.scene.until,
+            "closed_form": None if check is None else check.source,
+            "checks": []
+            if check is None
+            else [
+                {
+                    "body": check.body,
+                    "impact_time_s": check.impact_time,
+                    "time_s": check.time,
+                    "velocity_m_s": check.velocity.tolist(),
+                    "omega_rad_s": check.omega,
+                }
+            ],
+            "machine": {"python": platform.python_version(), "processor": platform.machine()},
+            "engines": {
+                name: {k: v for k, v in run.items() if k != "series"}
+                for name, run in self.engines.items()
+            },
+            "skipped": self.skipped,
+        }
+
+
+def default_engines(dim: int, kind: str = "spheres") -> list[str]:
+    """carom and every peer that simulates ``dim`` dimensions of ``kind`` bodies."""
+    return [e.name for e in ENGINES.values() if dim in e.dims and kind in e.kinds]
 
 
 def compare(
-    scene: str | Path | Scene | PeerScene,
+    scene: str | Path | Scene | PeerScene | RigidScene,
     engines: Sequence[str] | None = None,
     *,
     until: float | None = None,
     progress: bool | None = False,
-) -> Comparison:
+) -> Any:
     """Run ``scene`` in each engine and measure them against the closed form.
 
     Parameters
@@ -128,8 +195,10 @@ def compare(
 
     Returns
     -------
-    Comparison
-        Per engine: its settings, wall time and measurements.
+    Comparison or RigidComparison
+        Per engine: its settings, wall time and measurements (a :class:`RigidComparison`
+        when the scene runs carom's rigid-body engine: the closed form of a body landing on
+        flat ground, whether a stack stands, ms per step).
 
     Raises
     ------
@@ -145,20 +214,25 @@ def compare(
     >>> result.expected.checks[0].velocities.tolist()  # the spheres swap velocities [m/s]
     [[-1.0, 0.0], [1.0, 0.0]]
     """
-    spec = scene if isinstance(scene, PeerScene) else peer_scene(scene, until)
+    spec = scene if isinstance(scene, PeerScene | RigidScene) else peer_scene(scene, until)
+    kind = "rigid" if isinstance(spec, RigidScene) else "spheres"
     asked = engines is not None
-    names = list(engines) if engines is not None else default_engines(spec.dim)
+    names = list(engines) if engines is not None else default_engines(spec.dim, kind)
     chosen: list[EngineEntry] = []
     skipped: dict[str, str] = {}
     for name in names:
         e = engine(name)
-        problem = e.unable(spec.dim)
+        problem = e.unable(spec.dim, kind)
         if problem is not None:
             if asked:
                 raise CaromError(problem)
             skipped[name] = problem
             continue
         chosen.append(e)
+    if isinstance(spec, RigidScene):
+        check = impact_expectation(spec, spec.dt)  # every engine steps at the scene's rate
+        rigid = {e.name: run_rigid(e, spec, check, progress) for e in chosen}
+        return RigidComparison(spec, check, rigid, skipped)
     expected = expectation(spec)
     runs = {}
     for e in chosen:
@@ -206,5 +280,55 @@ def run_engine(
         "simulated_s": steps * sim.dt,
         "steps": steps,
         "metrics": metrics,
+        "series": monitor.series,
+    }
+
+
+#: a scene of more bodies than this is looked at ten times a simulated second, not every step
+DENSE_BODIES = 1000
+
+
+def run_rigid(
+    e: EngineEntry, scene: RigidScene, expected: ImpactCheck | None, progress: bool | None
+) -> dict[str, Any]:
+    """Set ``e`` up for a rigid scene, step it to ``until``; time only the steps."""
+    began = time.perf_counter()
+    sim = e.start(scene)
+    setup = time.perf_counter() - began
+    try:
+        steps = scene.steps(sim.dt)
+        stride = 1 if scene.n <= DENSE_BODIES else max(1, round(0.1 / sim.dt))
+        monitor = RigidMonitor(scene, expected, sim.dt * stride)
+        monitor.observe(0.0, *sim.state())
+        wall = 0.0
+        bar = tqdm(
+            total=steps,
+            disable=None if progress is None else not progress,
+            file=sys.stderr,
+            desc=f"{e.name:<9}",
+            unit="step",
+            leave=True,
+        )
+        with bar:
+            for k in range(1, steps + 1):
+                began = time.perf_counter()
+                sim.step()
+                wall += time.perf_counter() - began
+                if k % stride == 0 or k == steps:
+                    monitor.observe(k * sim.dt, *sim.state())
+                bar.update()
+    finally:
+        sim.close()
+    return {
+        "version": e.version(),
+        "dt_s": sim.dt,
+        "settings": sim.settings,
+        "notes": sim.notes,
+        "setup_s": setup,
+        "wall_s": wall,
+        "ms_per_step": 1e3 * wall / steps,
+        "simulated_s": steps * sim.dt,
+        "steps": steps,
+        "metrics": monitor.result(),
         "series": monitor.series,
     }

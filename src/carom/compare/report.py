@@ -7,12 +7,18 @@ import math
 from pathlib import Path
 from typing import Any
 
-from carom.compare.driver import Comparison
+from carom.compare.driver import Comparison, RigidComparison
 
 __all__ = ["format_number", "format_table", "plot_comparison", "write_comparison"]
 
 #: colours per engine, the same in every plot
-COLOURS = {"carom": "#d62728", "pymunk": "#1f77b4", "pybullet": "#2ca02c", "mujoco": "#9467bd"}
+COLOURS = {
+    "carom": "#d62728",
+    "pymunk": "#1f77b4",
+    "pybullet": "#2ca02c",
+    "mujoco": "#9467bd",
+    "box2d": "#ff7f0e",
+}
 #: where a zero is drawn on a log axis
 FLOOR = 1e-17
 
@@ -30,8 +36,10 @@ def _bodies(n: int) -> str:
     return "1 body" if n == 1 else f"{n} bodies"
 
 
-def format_table(comparison: Comparison) -> str:
+def format_table(comparison: Comparison | RigidComparison) -> str:
     """The comparison as a fixed-width table, one row per engine."""
+    if isinstance(comparison, RigidComparison):
+        return format_rigid_table(comparison)
     spec = comparison.scene
     source = comparison.expected.source if comparison.expected is not None else "none"
     lines = [
@@ -67,8 +75,107 @@ def format_table(comparison: Comparison) -> str:
     return "\n".join(lines)
 
 
-def plot_comparison(comparison: Comparison, path: Path) -> None:
+def format_rigid_table(comparison: RigidComparison) -> str:
+    """A rigid comparison as a fixed-width table, one row per engine."""
+    spec = comparison.scene
+    check = comparison.expected
+    lines = [
+        f"{spec.name}: {_bodies(spec.n)}, 2D rigid, {spec.until:g} s simulated at "
+        f"{1.0 / spec.dt:g} Hz",
+        f"closed form: {check.source if check is not None else 'none'}",
+        "",
+        f"{'engine':<7} {'version':<8} {'v err':>8} {'w err':>8} {'E gained':>8} "
+        f"{'overlap':>8} {'through':>7} {'top moved':>9} {'max turn':>8} {'ms/step':>8} "
+        f"{'/ carom':>7}",
+    ]
+    carom = comparison.engines.get("carom")
+    for name, run in comparison.engines.items():
+        m = run["metrics"]
+        ratio = "-"
+        if carom is not None and carom["wall_s"] > 0:
+            ratio = f"{run['wall_s'] / carom['wall_s']:.3g}"
+        lines.append(
+            f"{name:<7} {run['version']:<8} {format_number(m['velocity_error']):>8} "
+            f"{format_number(m['omega_error']):>8} {format_number(m['energy_gain']):>8} "
+            f"{format_number(m['max_overlap_m']):>8} {m['bodies_through_static']:>7} "
+            f"{m['top_drift_m']:>8.3g}m {m['max_rotation_deg']:>7.3g}° "
+            f"{run['ms_per_step']:>8.3g} {ratio:>7}"
+        )
+    for name, why in comparison.skipped.items():
+        lines.append(f"{name:<7} skipped: {why}")
+    lines += [
+        "",
+        "v err, w err: |v - v_exact| and |w - w_exact| x reach, over the contact point's "
+        "approach speed, after the impact; E gained: largest rise of kinetic plus potential "
+        "energy over E(0); overlap: deepest overlap seen [m] (carom's exact geometry on each "
+        "engine's poses); through: bodies whose centre crossed a static body; top moved: the "
+        "highest body's distance from its start at the end; max turn: largest rotation of any "
+        "body; ms/step: time inside the step calls per step, and its ratio to carom's",
+    ]
+    return "\n".join(lines)
+
+
+def plot_rigid(comparison: RigidComparison, path: Path) -> None:
+    """Energies, angular momentum and overlap over time; top drift and ms per step."""
+    from carom.viz import require_matplotlib
+
+    require_matplotlib()
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), constrained_layout=True)
+    names = list(comparison.engines)
+    colours = [COLOURS.get(n, "0.4") for n in names]
+    (energy_ax, momentum_ax), (overlap_ax, time_ax) = axes
+    for name, colour in zip(names, colours, strict=True):
+        series = comparison.engines[name]["series"]
+        t = series["time"]
+        energy_ax.plot(t, series["translation"], color=colour, lw=1.4, label=f"{name} translation")
+        energy_ax.plot(
+            t, series["rotation"], color=colour, lw=1.0, ls="--", label=f"{name} rotation"
+        )
+        momentum_ax.plot(t, series["angular_momentum"], color=colour, lw=1.2, label=name)
+        points = [(a, b) for a, b in zip(t, series["overlap"], strict=True) if b == b]
+        overlap_ax.plot(
+            [a for a, _ in points],
+            [max(b, FLOOR) for _, b in points],
+            color=colour,
+            lw=1.2,
+            label=name,
+        )
+    energy_ax.set(xlabel="time [s]", ylabel="[J]", title="kinetic energy: translation, rotation")
+    energy_ax.legend(fontsize=7)
+    momentum_ax.set(
+        xlabel="time [s]", ylabel="[kg m^2/s]", title="angular momentum about the origin"
+    )
+    momentum_ax.legend(fontsize=8)
+    overlap_ax.set(
+        xlabel="time [s]", ylabel="[m]", yscale="log", title="deepest overlap (0 drawn at 1e-17)"
+    )
+    time_ax.bar(names, [comparison.engines[n]["ms_per_step"] for n in names], color=colours)
+    time_ax.set(title="time per step", ylabel="ms")
+    for k, n in enumerate(names):
+        m = comparison.engines[n]["metrics"]
+        time_ax.text(
+            k,
+            comparison.engines[n]["ms_per_step"],
+            f"{comparison.engines[n]['ms_per_step']:.3g} ms\ntop moved {m['top_drift_m']:.2g} m",
+            ha="center",
+            va="bottom",
+            fontsize=8,
+        )
+    fig.suptitle(f"{comparison.title}: {_bodies(comparison.scene.n)}, 2D rigid", fontsize=12)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_comparison(comparison: Comparison | RigidComparison, path: Path) -> None:
     """Energy and penetration over time, velocity error and wall time per engine."""
+    if isinstance(comparison, RigidComparison):
+        plot_rigid(comparison, path)
+        return
     from carom.viz import require_matplotlib
 
     require_matplotlib()
@@ -134,7 +241,9 @@ def plot_comparison(comparison: Comparison, path: Path) -> None:
     plt.close(fig)
 
 
-def write_comparison(comparison: Comparison, folder: Path, *, plot: bool = True) -> list[str]:
+def write_comparison(
+    comparison: Comparison | RigidComparison, folder: Path, *, plot: bool = True
+) -> list[str]:
     """Write ``compare.json``, ``compare.txt`` and (with matplotlib) ``compare.png``."""
     folder.mkdir(parents=True, exist_ok=True)
     data = comparison.to_json()

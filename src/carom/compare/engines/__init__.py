@@ -18,6 +18,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from carom.compare.rigid import RigidScene
 from carom.compare.spec import PeerScene
 from carom.errors import CaromError
 
@@ -60,46 +61,68 @@ class EngineEntry:
     dims : tuple of int
         Dimensions it simulates (a 2D scene runs in 3D engines in the plane z = 0).
     module : str
-        The carom module that sets it up.
+        The carom module that sets it up: ``start(scene)`` for spheres, ``start_rigid``
+        for rigid bodies.
+    kinds : tuple of str
+        The scenes it takes: ``"spheres"`` (a :class:`PeerScene`), ``"rigid"`` (a
+        :class:`~carom.compare.rigid.RigidScene`).
+    import_name : str
+        Its module's name, when not the distribution's.
     """
 
     name: str
     distribution: str
     dims: tuple[int, ...]
     module: str
+    kinds: tuple[str, ...] = ("spheres",)
+    import_name: str = ""
 
     def missing(self) -> str | None:
         """None when installed, else why not and how to install it."""
-        if importlib.util.find_spec(self.distribution) is None:
+        if importlib.util.find_spec(self.import_name or self.distribution) is None:
             return f"{self.name} is not installed; pip install 'carom[compare]'"
         return None
 
-    def unable(self, dim: int) -> str | None:
-        """None when installed and able to simulate ``dim`` dimensions, else why not."""
+    def unable(self, dim: int, kind: str = "spheres") -> str | None:
+        """None when installed and able to simulate ``dim`` dimensions of ``kind`` bodies
+        (``"spheres"`` or ``"rigid"``), else why not."""
         problem = self.missing()
         if problem is None and dim not in self.dims:
             problem = f"{self.name} simulates {' and '.join(f'{d}D' for d in self.dims)} only"
+        if problem is None and kind not in self.kinds:
+            what = {"spheres": "spheres and disks", "rigid": "rigid bodies of any shape"}
+            problem = f"{self.name} is compared on {what[self.kinds[0]]} only"
         return problem
 
     def version(self) -> str:
         return importlib.metadata.version(self.distribution)
 
-    def start(self, scene: PeerScene) -> Simulation:
-        """Set the engine up for ``scene``."""
-        problem = self.unable(scene.dim)
+    def start(self, scene: PeerScene | RigidScene) -> Any:
+        """Set the engine up for ``scene`` (a :class:`Simulation`; for a rigid scene its
+        ``state()`` also gives angles and angular velocities)."""
+        kind = "rigid" if isinstance(scene, RigidScene) else "spheres"
+        problem = self.unable(scene.dim, kind)
         if problem is not None:
-            raise CaromError(f"{problem}; scene {scene.name!r} is {scene.dim}D")
-        starter: Callable[[PeerScene], Simulation] = importlib.import_module(self.module).start
+            raise CaromError(f"{problem}; scene {scene.name!r} is {scene.dim}D {kind}")
+        module = importlib.import_module(self.module)
+        starter: Callable[[Any], Any] = module.start_rigid if kind == "rigid" else module.start
         return starter(scene)
 
 
 ENGINES: dict[str, EngineEntry] = {
     e.name: e
     for e in (
-        EngineEntry("carom", "carom", (2, 3), "carom.compare.engines.carom_engine"),
-        EngineEntry("pymunk", "pymunk", (2,), "carom.compare.engines.pymunk_engine"),
+        EngineEntry(
+            "carom", "carom", (2, 3), "carom.compare.engines.carom_engine", ("spheres", "rigid")
+        ),
+        EngineEntry(
+            "pymunk", "pymunk", (2,), "carom.compare.engines.pymunk_engine", ("spheres", "rigid")
+        ),
         EngineEntry("pybullet", "pybullet", (2, 3), "carom.compare.engines.pybullet_engine"),
         EngineEntry("mujoco", "mujoco", (2, 3), "carom.compare.engines.mujoco_engine"),
+        EngineEntry(
+            "box2d", "box2d", (2,), "carom.compare.engines.box2d_engine", ("rigid",), "Box2D"
+        ),
     )
 }
 

@@ -125,3 +125,119 @@ class PymunkSimulation:
 
 def start(scene: PeerScene) -> PymunkSimulation:
     return PymunkSimulation(scene)
+
+
+# -- rigid bodies ---------------------------------------------------------------------------
+
+
+class PymunkRigidSimulation:
+    """pymunk with carom's rigid bodies, set up as its documentation recommends.
+
+    * The scene's rate (60 Hz in every built-in scene: the docs' ``space.step(1/60)``) and
+      pymunk's default 10 solver iterations.
+    * Each convex piece as the matching shape: a ``Circle``, a ``Segment`` with a radius (a
+      capsule or static segment) or a ``Poly`` with a radius (a rounded polygon); the
+      body's mass and moment set on the ``Body`` from carom's exact mass properties.
+    * ``elasticity`` and ``friction`` per material, so that pymunk's product rule gives each
+      pair the scene's value.
+    * ``collision_slop`` = carom's linear slop (5 mm, Box2D's; pymunk's default 0.1 is
+      meant for pixels), sleeping as in the scene (pymunk's default: none).
+    """
+
+    def __init__(self, scene: Any) -> None:
+        from carom.compare.rigid import shape_coefficients
+        from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
+
+        elastic, notes = shape_coefficients(
+            scene, scene.restitution, "product", "pymunk", "restitution"
+        )
+        rough, more = shape_coefficients(scene, scene.friction, "product", "pymunk", "friction")
+        settings = scene.settings
+        space = pymunk.Space()
+        space.gravity = (float(scene.gravity[0]), float(scene.gravity[1]))
+        space.collision_slop = settings.linear_slop
+        if settings.sleep:
+            space.sleep_time_threshold = settings.sleep_time
+            space.idle_speed_threshold = settings.sleep_speed
+        self.bodies: list[pymunk.Body] = []
+        for i in range(scene.bodies):
+            kind = int(scene.kind[i])
+            if kind == KIND_DYNAMIC:
+                body = pymunk.Body(float(scene.mass[i]), float(scene.inertia[i]))
+            elif kind == KIND_STATIC:
+                body = pymunk.Body(body_type=pymunk.Body.STATIC)
+            else:
+                body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+            body.position = (float(scene.position[i, 0]), float(scene.position[i, 1]))
+            body.angle = float(scene.angle[i])
+            if kind != KIND_STATIC:
+                body.velocity = (float(scene.velocity[i, 0]), float(scene.velocity[i, 1]))
+                body.angular_velocity = float(scene.omega[i])
+            shapes: list[pymunk.Shape] = []
+            for corners, radius in scene.pieces[i]:
+                points = [(float(p[0]), float(p[1])) for p in corners]
+                if len(points) == 1:
+                    shape: pymunk.Shape = pymunk.Circle(body, radius, points[0])
+                elif len(points) == 2:
+                    shape = pymunk.Segment(body, points[0], points[1], radius)
+                else:
+                    shape = pymunk.Poly(body, points, radius=radius)
+                material = int(scene.material[i])
+                shape.elasticity = float(elastic[material])
+                shape.friction = float(rough[material])
+                shapes.append(shape)
+            space.add(body, *shapes)
+            self.bodies.append(body)
+        self.n = scene.n
+        self.space = space
+        self.dt = scene.dt
+        self._ids = np.array([b.id for b in self.bodies[: scene.n]], dtype=np.uint64)
+        self._fields = (
+            pymunk.batch.BodyFields.BODY_ID
+            | pymunk.batch.BodyFields.POSITION
+            | pymunk.batch.BodyFields.ANGLE
+            | pymunk.batch.BodyFields.VELOCITY
+            | pymunk.batch.BodyFields.ANGULAR_VELOCITY
+        )
+        self._buffer = pymunk.batch.Buffer()
+        self.settings: dict[str, Any] = {
+            "dt_s": self.dt,
+            "iterations": space.iterations,
+            "collision_slop_m": space.collision_slop,
+            "collision_bias": space.collision_bias,
+            "collision_persistence": space.collision_persistence,
+            "damping": space.damping,
+            "idle_speed_threshold": space.idle_speed_threshold,
+            "sleep_time_threshold": space.sleep_time_threshold,
+            "elasticity_per_material": elastic.tolist(),
+            "friction_per_material": rough.tolist(),
+            "ccd": "none (pymunk has no continuous collision detection)",
+        }
+        self.notes = [
+            *notes,
+            *more,
+            "shapes: Circle, Segment with radius (capsules, static segments), Poly with radius",
+            "collision_slop = carom's linear slop (the docs: as high as possible without "
+            "noticeable overlap; the default 0.1 assumes pixel units)",
+            "dt = the scene's step (1/60 s, the docs' space.step(1/60)); iterations at the "
+            "default 10",
+        ]
+
+    def step(self) -> None:
+        self.space.step(self.dt)
+
+    def state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        self._buffer.clear()
+        pymunk.batch.get_space_bodies(self.space, self._fields, self._buffer)
+        ids = np.frombuffer(self._buffer.int_buf(), dtype=np.uint64)
+        data = np.frombuffer(self._buffer.float_buf(), dtype=np.float64).reshape(-1, 6)
+        order = np.argsort(ids, kind="stable")
+        data = data[order[np.searchsorted(ids[order], self._ids)]]
+        return data[:, 0:2].copy(), data[:, 3:5].copy(), data[:, 2].copy(), data[:, 5].copy()
+
+    def close(self) -> None:
+        pass
+
+
+def start_rigid(scene: Any) -> PymunkRigidSimulation:
+    return PymunkRigidSimulation(scene)

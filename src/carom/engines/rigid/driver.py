@@ -195,16 +195,16 @@ class RigidEngine:
         """The two bodies that overlap most now, with at least one of them dynamic, and
         the depth [m] (positive; ``(-1, -1, 0.0)`` when nothing overlaps)."""
         nc = self._contacts()
-        worst = (-1, -1, 0.0)
-        for row in range(nc):
-            a, b = int(self._ci[row, contacts.I_BODY_A]), int(self._ci[row, contacts.I_BODY_B])
-            if not (self._dynamic[a] or self._dynamic[b]):
-                continue
-            for j in range(int(self._ci[row, contacts.I_COUNT])):
-                depth = -float(self._cf[row, contacts.point_offset(j) + contacts.P_SEP])
-                if depth > worst[2]:
-                    worst = (a, b, depth)
-        return worst
+        ci, cf = self._ci[:nc], self._cf[:nc]
+        a, b = ci[:, contacts.I_BODY_A], ci[:, contacts.I_BODY_B]
+        columns = [contacts.point_offset(j) + contacts.P_SEP for j in range(2)]
+        depth = -cf[:, columns]  # (nc, 2); a contact's second point counts if it has one
+        depth[ci[:, contacts.I_COUNT] < 2, 1] = -np.inf
+        depth[~(self._dynamic[a] | self._dynamic[b])] = -np.inf
+        if nc == 0 or float(depth.max()) <= 0.0:
+            return (-1, -1, 0.0)
+        row = int(np.argmax(depth.max(axis=1)))
+        return (int(a[row]), int(b[row]), float(depth[row].max()))
 
     # -- one step -------------------------------------------------------------------------
 

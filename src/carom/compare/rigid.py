@@ -1,0 +1,599 @@
+"""Rigid bodies in ``carom compare``: the scene as plain data, the closed form, the yardstick.
+
+A :class:`RigidScene` is what carom's rigid-body engine starts from (:meth:`World.rigid_parts`):
+every body's convex pieces in its own frame, mass, inertia, kind, pose and velocities, and the
+restitution and friction of every pair of materials; the box's walls and the planes are static
+slabs, as carom sees them. Each peer builds the same bodies from it.
+
+:func:`impact_expectation` gives the closed form of one body landing on flat ground (a rod
+dropped at an angle, a box landing flat): the time of impact from free fall, and Newton's
+restitution at the contact point with the body's inertia (Hecker's formula,
+:func:`carom.laws.point_impulse.impulse`). :class:`RigidMonitor` measures every engine from its
+poses and velocities alone: energy, overlap (carom's exact geometry on the poses each engine
+reports), bodies whose centre passed through a static body, the top body's drift and the
+largest rotation.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from carom.engines.rigid.driver import RigidEngine
+from carom.engines.rigid.model import RigidModel, new_state
+from carom.engines.rigid.settings import RigidSettings
+from carom.errors import CaromError
+from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
+from carom.laws.point_impulse import impulse
+from carom.world import World
+
+__all__ = [
+    "ImpactCheck",
+    "RigidMonitor",
+    "RigidScene",
+    "impact_expectation",
+    "shape_coefficients",
+]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: at most this many points of the series are kept per engine
+SERIES_POINTS = 1500
+#: the closed form's post-impact flight is searched for a second contact at this step [s]
+FLIGHT_STEP = 1e-4
+#: two corners within this height of each other [m] land together (a face lands)
+LEVEL = 1e-12
+
+Piece = tuple[FloatArray, float]  # corners (k, 2) in the body's frame [m], rounding radius [m]
+
+
+@dataclass(frozen=True)
+class RigidScene:
+    """A 2D scene of rigid bodies as plain data, every body as carom's rigid engine sees it.
+
+    Attributes
+    ----------
+    name, title : str
+        The scene's name and title.
+    n : int
+        The caller's bodies: the first ``n`` rows. The rows after them are the box's walls
+        and the planes, as static slabs.
+    kind : (B,) int64
+        KIND_DYNAMIC, KIND_STATIC or KIND_KINEMATIC.
+    mass, inertia : (B,) float64
+        [kg], [kg m^2] about the centre of mass (inf for static and kinematic bodies).
+    position, velocity : (B, 2) float64
+        Centre of mass [m] and its velocity [m/s].
+    angle, omega : (B,) float64
+        [rad], [rad/s].
+    pieces : tuple of tuple of (corners (k, 2), radius)
+        Each body's convex pieces in its frame (centre of mass at the origin) [m]: one corner
+        is a circle, two a capsule or segment, three or more a (rounded) polygon.
+    material : (B,) int64
+        Row of ``restitution`` and ``friction``.
+    restitution, friction : (M, M) float64
+        Of each pair of materials [-].
+    gravity : (2,) float64
+        [m/s^2].
+    settings : RigidSettings
+        carom's engine settings (rate, substeps, sleep); the peers take the same rate.
+    until : float
+        Simulated time [s].
+    world : callable
+        A fresh copy of the scene's :class:`World`, not yet run.
+    """
+
+    name: str
+    title: str
+    n: int
+    kind: IntArray
+    mass: FloatArray
+    inertia: FloatArray
+    position: FloatArray
+    velocity: FloatArray
+    angle: FloatArray
+    omega: FloatArray
+    pieces: tuple[tuple[Piece, ...], ...]
+    material: IntArray
+    restitution: FloatArray
+    friction: FloatArray
+    gravity: FloatArray
+    settings: RigidSettings
+    until: float
+    model: RigidModel = field(compare=False, repr=False)
+    world: Callable[[], World] = field(compare=False, repr=False)
+
+    dim = 2
+
+    @classmethod
+    def from_world(
+        cls, build: Callable[[], World], name: str, until: float, title: str = ""
+    ) -> RigidScene:
+        """Read the world ``build()`` makes, as its rigid engine would start."""
+        world = build()
+        model, state, _ = world.rigid_parts()
+        rows = model.body_pieces
+        pieces = []
+        for body in range(model.kind.shape[0]):
+            own = []
+            for p in range(int(rows[body]), int(rows[body + 1])):
+                start, count = int(model.piece_start[p]), int(model.piece_count[p])
+                corners = model.local_vertices[start : start + count].copy()
+                own.append((corners, float(model.piece_radius[p])))
+            pieces.append(tuple(own))
+        return cls(
+            name=name,
+            title=title or name,
+            n=world.n_bodies,
+            kind=model.kind.copy(),
+            mass=model.mass.copy(),
+            inertia=model.inertia.copy(),
+            position=state.x.copy(),
+            velocity=state.v.copy(),
+            angle=state.angle.copy(),
+            omega=state.omega.copy(),
+            pieces=tuple(pieces),
+            material=model.material.copy(),
+            restitution=model.e_table.copy(),
+            friction=model.mu_table.copy(),
+            gravity=model.gravity.copy(),
+            settings=world.rigid_settings,
+            until=float(until),
+            model=model,
+            world=functools.partial(copy.deepcopy, world),
+        )
+
+    @property
+    def bodies(self) -> int:
+        """Every row: the caller's bodies, walls and planes."""
+        return int(self.kind.shape[0])
+
+    @property
+    def dt(self) -> float:
+        """carom's step [s]; every peer steps at the same rate."""
+        return self.settings.dt
+
+    def steps(self, dt: float) -> int:
+        """Steps of ``dt`` [s] that reach ``until``."""
+        ratio = self.until / dt
+        nearest = round(ratio)
+        return int(nearest) if abs(ratio - nearest) < 1e-9 * max(1.0, ratio) else math.ceil(ratio)
+
+    def energy(
+        self, x: FloatArray, v: FloatArray, angle: FloatArray, omega: FloatArray
+    ) -> tuple[float, float, float]:
+        """Translational and rotational kinetic energy and potential energy [J] of the
+        dynamic bodies among the first ``n`` (poses and velocities of those n)."""
+        del angle
+        dyn = self.kind[: self.n] == KIND_DYNAMIC
+        m, inertia = self.mass[: self.n][dyn], self.inertia[: self.n][dyn]
+        translation = 0.5 * float(np.sum(m * np.sum(v[dyn] ** 2, axis=1)))
+        rotation = 0.5 * float(np.sum(inertia * omega[dyn] ** 2))
+        potential = -float(np.sum(m * (x[dyn] @ self.gravity)))
+        return translation, rotation, potential
+
+    def needed_pairs(self) -> list[tuple[int, int]]:
+        """Pairs of materials that can meet: a dynamic body's material with any other
+        body's (a material with itself only when two bodies have it)."""
+        count = np.bincount(self.material, minlength=self.restitution.shape[0])
+        dynamic = sorted(set(self.material[self.kind == KIND_DYNAMIC].tolist()))
+        every = sorted(set(self.material.tolist()))
+        return [(a, b) for a in dynamic for b in every if a != b or count[a] >= 2]
+
+
+def shape_coefficients(
+    scene: RigidScene, table: FloatArray, rule: str, engine: str, quantity: str
+) -> tuple[FloatArray, list[str]]:
+    """Per-material coefficients that reproduce ``table`` under a peer's mixing rule.
+
+    Parameters
+    ----------
+    table : (M, M) float64
+        The scene's restitution or friction of each pair of materials [-].
+    rule : {"product", "geometric", "max"}
+        How the peer mixes two surfaces' coefficients: ``c_a c_b`` (pymunk),
+        ``sqrt(c_a c_b)`` (Box2D's friction), ``max(c_a, c_b)`` (Box2D's restitution).
+    engine, quantity : str
+        For the messages.
+
+    Returns
+    -------
+    coefficient : (M,) float64
+        One per material [-].
+    notes : list of str
+
+    Raises
+    ------
+    CaromError
+        When no coefficients give every pair of materials that can meet its value.
+    """
+    m = table.shape[0]
+    pairs = scene.needed_pairs()
+    c = np.full(m, np.nan)
+    if rule == "max":
+        for a, b in pairs:  # the smallest value a material must reach
+            for k in (a, b):
+                c[k] = table[a, b] if np.isnan(c[k]) else min(c[k], table[a, b])
+        mix: Callable[[float, float], float] = max
+    else:
+        product = table if rule == "product" else table**2
+        for a, b in pairs:
+            if a == b:
+                c[a] = math.sqrt(product[a, a])
+        for _ in range(m):  # propagate c_b = e_ab / c_a along the pairs
+            for a, b in pairs:
+                for p, q in ((a, b), (b, a)):
+                    if np.isnan(c[q]) and not np.isnan(c[p]) and c[p] > 0.0:
+                        c[q] = product[a, b] / c[p]
+        for a, b in pairs:  # a pair with neither side fixed: one side takes it all
+            if np.isnan(c[a]) and np.isnan(c[b]):
+                c[a], c[b] = 1.0, product[a, b]
+        if rule == "product":
+            mix = float.__mul__
+        else:
+
+            def mix(x: float, y: float) -> float:
+                return math.sqrt(x * y)
+
+    c = np.where(np.isnan(c), 0.0, c)
+    for a, b in pairs:
+        got = mix(float(c[a]), float(c[b]))
+        if abs(got - table[a, b]) > 1e-12 * max(1.0, table[a, b]):
+            raise CaromError(
+                f"{engine} mixes two surfaces' {quantity} by its own rule ({rule}), and no "
+                f"coefficient per material gives scene {scene.name!r} its {quantity} "
+                f"{table[a, b]:g} between materials {a} and {b} (it would be {got:g}); give "
+                f"the materials {quantity} that the rule can reproduce"
+            )
+    notes = [
+        f"{engine} mixes {quantity} as {rule}: per-material coefficients "
+        f"{', '.join(f'{x:.6g}' for x in c.tolist())} reproduce the scene's pairs"
+    ]
+    return c, notes
+
+
+@dataclass(frozen=True)
+class ImpactCheck:
+    """The closed form of one body landing on flat ground.
+
+    Attributes
+    ----------
+    body : int
+        The falling body.
+    impact_time : float
+        When its lowest point reaches the ground [s] (free fall).
+    time : float
+        When the engines are checked [s]: after the impact, before any second contact.
+    velocity : (2,) float64
+        Centre-of-mass velocity at ``time`` [m/s].
+    omega : float
+        Angular velocity after the impact [rad/s].
+    speed : float
+        Approach speed of the contact point at the impact [m/s] (the error scale).
+    reach : float
+        Farthest point of the body from its centre [m] (turns ω errors into speeds).
+    source : str
+        What the closed form is.
+    """
+
+    body: int
+    impact_time: float
+    time: float
+    velocity: FloatArray
+    omega: float
+    speed: float
+    reach: float
+    source: str
+
+
+def _corners(scene: RigidScene, body: int, angle: float) -> tuple[FloatArray, FloatArray]:
+    """The body's core corners turned by ``angle`` (relative to its centre) and their
+    rounding radii."""
+    c, s = math.cos(angle), math.sin(angle)
+    turn = np.array([[c, -s], [s, c]])
+    points = [corners @ turn.T for corners, _ in scene.pieces[body]]
+    radii = [np.full(corners.shape[0], r) for corners, r in scene.pieces[body]]
+    return np.concatenate(points), np.concatenate(radii)
+
+
+def impact_expectation(scene: RigidScene, step: float) -> ImpactCheck | None:
+    """The closed form when one dynamic body, not spinning, falls onto flat ground.
+
+    The ground is the static piece whose top is a level face under the body. The body's
+    lowest point reaches it at the free-fall time; Newton's restitution acts there
+    (Hecker's impulse with the body's inertia; a level face landing is struck under its
+    centre of mass). Friction is left out, so the closed form holds only when the contact
+    point does not slide (mu = 0, or no tangential velocity or lever arm). None when the
+    scene is not of this kind, or when no engine step fits between the impact and the
+    body's next contact.
+
+    Parameters
+    ----------
+    scene : RigidScene
+    step : float
+        The largest step of the engines compared [s]: the check waits two of them.
+    """
+    dyn = np.nonzero(scene.kind == KIND_DYNAMIC)[0]
+    if dyn.shape[0] != 1 or scene.omega[dyn[0]] != 0.0 or scene.gravity[0] != 0.0:
+        return None
+    if np.any(scene.kind == KIND_KINEMATIC) or scene.gravity[1] >= 0.0:
+        return None
+    body = int(dyn[0])
+    g = -float(scene.gravity[1])
+    x0, v0 = scene.position[body], scene.velocity[body]
+    corners, radii = _corners(scene, body, float(scene.angle[body]))
+    bottom = corners[:, 1] - radii
+    low = float(bottom.min())
+    # the ground: the highest level top face below the body that spans its lowest point
+    ground, top = -1, -math.inf
+    for other in np.nonzero(scene.kind == KIND_STATIC)[0]:
+        for piece_corners, rounding in scene.pieces[other]:
+            c, s = math.cos(scene.angle[other]), math.sin(scene.angle[other])
+            world = piece_corners @ np.array([[c, -s], [s, c]]).T + scene.position[other]
+            height = float(world[:, 1].max())
+            level = world[np.abs(world[:, 1] - height) <= LEVEL * max(1.0, abs(height))]
+            if level.shape[0] < 2:
+                continue
+            lowest = corners[bottom <= low + LEVEL] + x0
+            inside = np.all(
+                (lowest[:, 0] >= level[:, 0].min()) & (lowest[:, 0] <= level[:, 0].max())
+            )
+            if inside and top < height + rounding <= x0[1] + low:
+                ground, top = int(other), height + rounding
+    if ground < 0:
+        return None
+    a, b = material_pair(scene, body, ground)
+    e, mu = float(scene.restitution[a, b]), float(scene.friction[a, b])
+    # free fall of the lowest point: y0 + low + vy t - g t^2 / 2 = top
+    drop = x0[1] + low - top
+    vy = float(v0[1])
+    t_hit = (vy + math.sqrt(vy * vy + 2.0 * g * drop)) / g
+    v_hit = v0 + scene.gravity * t_hit
+    touching = corners[bottom <= low + LEVEL]
+    span = touching[:, 0]
+    # a level face is struck under the centre of mass when it spans it, else at its end
+    r_x = float(np.clip(0.0, span.min(), span.max()))
+    r = np.array([r_x, low])
+    lever = abs(r_x) > 0.0
+    if mu > 0.0 and (lever or v_hit[0] != 0.0):
+        return None  # friction acts: not this closed form
+    normal = np.array([0.0, 1.0])
+    mass, inertia = float(scene.mass[body]), float(scene.inertia[body])
+    j = float(impulse(v_hit, normal, mass, math.inf, e=e, r_a=r, inertia_a=inertia))
+    v_after = v_hit + j * normal / mass
+    w_after = (r[0] * j * normal[1] - r[1] * j * normal[0]) / inertia
+    # the flight after the impact, until a corner reaches the ground again
+    t_next = scene.until
+    t = t_hit + FLIGHT_STEP
+    while t < scene.until:
+        tau = t - t_hit
+        y = x0[1] + vy * t_hit - 0.5 * g * t_hit**2 + v_after[1] * tau - 0.5 * g * tau**2
+        turned, rad = _corners(scene, body, float(scene.angle[body]) + w_after * tau)
+        if float(np.min(turned[:, 1] - rad)) + y <= top:
+            t_next = t
+            break
+        t += FLIGHT_STEP
+    first = math.ceil((t_hit + 2.0 * step) / step) * step
+    if first > t_next - step:
+        return None
+    check = first
+    velocity = v_after + scene.gravity * (check - t_hit)
+    reach = float(np.max(np.linalg.norm(corners, axis=1) + radii))
+    speed = abs(float(v_hit[1]))  # the contact point's approach speed (no spin before)
+    return ImpactCheck(
+        body=body,
+        impact_time=t_hit,
+        time=check,
+        velocity=velocity,
+        omega=float(w_after),
+        speed=max(speed, 1e-300),
+        reach=reach,
+        source=(
+            f"free fall onto level ground, then Newton's restitution e = {e:g} at the "
+            f"contact point with the body's inertia (Hecker's formula)"
+        ),
+    )
+
+
+def material_pair(scene: RigidScene, a: int, b: int) -> tuple[int, int]:
+    """The materials of bodies ``a`` and ``b``."""
+    return int(scene.material[a]), int(scene.material[b])
+
+
+class RigidMonitor:
+    """The same yardstick for every engine, fed the poses and velocities after each step.
+
+    Parameters
+    ----------
+    scene : RigidScene
+    expected : ImpactCheck or None
+    dt : float
+        The engine's step [s].
+    """
+
+    def __init__(self, scene: RigidScene, expected: ImpactCheck | None, dt: float) -> None:
+        self.scene = scene
+        self.expected = expected
+        self.dt = dt
+        n = scene.n
+        self._dynamic = np.nonzero(scene.kind[:n] == KIND_DYNAMIC)[0]
+        dyn = self._dynamic
+        self._start = scene.position[dyn].copy()
+        self._angle0 = scene.angle[dyn].copy()
+        self._top = int(dyn[np.argmax(scene.position[dyn, 1])]) if dyn.shape[0] else -1
+        self._size = _extent(scene.pieces[self._top]) if self._top >= 0 else 1.0
+        # the static pieces in world coordinates (they never move)
+        self._walls: list[tuple[FloatArray, float]] = []
+        for body in np.nonzero(scene.kind == KIND_STATIC)[0]:
+            c, s = math.cos(scene.angle[body]), math.sin(scene.angle[body])
+            turn = np.array([[c, -s], [s, c]])
+            for corners, r in scene.pieces[body]:
+                self._walls.append((corners @ turn.T + scene.position[body], r))
+        # a copy of carom's engine, only to measure overlaps of the poses it is given
+        settings = RigidSettings(rate=scene.settings.rate, sleep=False, exact_impacts=False)
+        m = scene.model
+        self._probe = RigidEngine(
+            m, new_state(m, scene.position, scene.velocity, scene.angle, scene.omega), settings
+        )
+        self._every_overlap = max(1, round(0.1 / dt))  # overlaps: ten times a second
+        self._every = max(1, math.ceil(scene.until / dt / SERIES_POINTS))
+        self._previous: FloatArray | None = None
+        self.steps = 0
+        self.max_overlap = 0.0
+        self.through: set[int] = set()
+        self.max_top = 0.0
+        self.top_drift = 0.0
+        self.max_rotation = 0.0
+        self.final_rotation = 0.0
+        self.energy0: float | None = None
+        self.energy_gain = 0.0
+        self.final: tuple[float, float, float] = (0.0, 0.0, 0.0)
+        self._best: tuple[float, FloatArray, float] = (math.inf, np.zeros(2), 0.0)
+        self.series: dict[str, list[float]] = {
+            "time": [],
+            "translation": [],
+            "rotation": [],
+            "potential": [],
+            "angular_momentum": [],
+            "overlap": [],
+        }
+
+    def observe(
+        self, time: float, x: FloatArray, v: FloatArray, angle: FloatArray, omega: FloatArray
+    ) -> None:
+        """Take the state of the first ``n`` bodies after a step (time [s]; x, v (n, 2);
+        angle, omega (n,))."""
+        scene, dyn = self.scene, self._dynamic
+        translation, rotation, potential = scene.energy(x, v, angle, omega)
+        total = translation + rotation + potential
+        if self.energy0 is None:
+            self.energy0 = total
+        self.energy_gain = max(self.energy_gain, total - self.energy0)
+        self.final = (translation, rotation, potential)
+        turned = np.abs(angle[dyn] - self._angle0) if dyn.shape[0] else np.zeros(1)
+        self.final_rotation = float(turned.max())
+        self.max_rotation = max(self.max_rotation, self.final_rotation)
+        if self._top >= 0:
+            self.top_drift = float(np.linalg.norm(x[self._top] - scene.position[self._top]))
+            self.max_top = max(self.max_top, self.top_drift)
+        if self._previous is not None:
+            self._passed(self._previous[dyn], x[dyn], dyn)
+        self._previous = x.copy()
+        overlap = math.nan
+        if self.steps % self._every_overlap == 0:
+            overlap = self._overlap(x, angle)
+            self.max_overlap = max(self.max_overlap, overlap)
+        if self.expected is not None:
+            check = self.expected
+            gap = abs(time - check.time)
+            if gap < self._best[0]:
+                moved = v[check.body] + scene.gravity * (check.time - time)
+                self._best = (gap, moved, float(omega[check.body]))
+        if self.steps % self._every == 0:
+            m = scene.mass[: scene.n][dyn]
+            spin = scene.inertia[: scene.n][dyn] * omega[dyn]
+            orbit = m * (x[dyn, 0] * v[dyn, 1] - x[dyn, 1] * v[dyn, 0])
+            self.series["time"].append(time)
+            self.series["translation"].append(translation)
+            self.series["rotation"].append(rotation)
+            self.series["potential"].append(potential)
+            self.series["angular_momentum"].append(float(np.sum(spin + orbit)))
+            self.series["overlap"].append(overlap)
+        self.steps += 1
+
+    def _overlap(self, x: FloatArray, angle: FloatArray) -> float:
+        """Deepest overlap [m] of the poses, by carom's exact contact geometry."""
+        state = self._probe.state
+        n = self.scene.n
+        state.x[:n] = x
+        state.angle[:n] = angle
+        state.awake[:] = True
+        return self._probe.deepest_overlap()[2]
+
+    def _passed(self, before: FloatArray, after: FloatArray, rows: IntArray) -> None:
+        """Note the bodies whose centre's path in the step crossed a static piece's core."""
+        for corners, _ in self._walls:
+            hit = _segments_cross(before, after, corners)
+            self.through.update(int(i) for i in rows[hit])
+
+    def result(self) -> dict[str, Any]:
+        """The measurements, as JSON-ready numbers (docs/compare.md)."""
+        velocity_error = omega_error = None
+        if self.expected is not None:
+            check = self.expected
+            _, v, w = self._best
+            velocity_error = float(np.linalg.norm(v - check.velocity)) / check.speed
+            omega_error = abs(w - check.omega) * check.reach / check.speed
+        e0 = self.energy0 if self.energy0 is not None else 0.0
+        scale = abs(e0) if e0 != 0.0 else 1.0
+        return {
+            "velocity_error": velocity_error,
+            "omega_error": omega_error,
+            "energy_gain": self.energy_gain / scale,
+            "final_energy_J": {
+                "translation": self.final[0],
+                "rotation": self.final[1],
+                "potential": self.final[2],
+            },
+            "max_overlap_m": self.max_overlap,
+            "tunnelled": bool(self.through),
+            "bodies_through_static": len(self.through),
+            "top_body": self._top,
+            "top_drift_m": self.top_drift,
+            "top_drift_per_size": self.top_drift / self._size,
+            "max_top_drift_m": self.max_top,
+            "max_rotation_deg": math.degrees(self.max_rotation),
+            "final_rotation_deg": math.degrees(self.final_rotation),
+            "samples": self.steps,
+        }
+
+
+def _extent(pieces: tuple[Piece, ...]) -> float:
+    """A body's size [m]: the longer side of its bounding box in its own frame."""
+    corners = np.concatenate([c for c, _ in pieces])
+    radius = max(r for _, r in pieces)
+    return float(np.max(corners.max(axis=0) - corners.min(axis=0)) + 2.0 * radius)
+
+
+def _segments_cross(before: FloatArray, after: FloatArray, corners: FloatArray) -> NDArray[Any]:
+    """Which paths ``before[i] -> after[i]`` (n, 2) enter a convex core: a polygon's inside
+    (three or more corners, counter-clockwise) or a segment's line between its ends (two);
+    a point (one corner) is never crossed by a centre."""
+    d = after - before
+    k = corners.shape[0]
+    if k == 1:
+        return np.zeros(before.shape[0], bool)
+    if k == 2:
+        a, b = corners
+        e = b - a
+        denom = d[:, 0] * e[1] - d[:, 1] * e[0]
+        w = a - before
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = (w[:, 0] * e[1] - w[:, 1] * e[0]) / denom
+            u = (w[:, 0] * d[:, 1] - w[:, 1] * d[:, 0]) / denom
+        return np.asarray((denom != 0.0) & (s >= 0.0) & (s <= 1.0) & (u > 0.0) & (u < 1.0))
+    # clip the path to each edge's inner half-plane (Cyrus-Beck)
+    low = np.zeros(before.shape[0])
+    high = np.ones(before.shape[0])
+    for j in range(k):
+        a, b = corners[j], corners[(j + 1) % k]
+        outward = np.array([b[1] - a[1], a[0] - b[0]])
+        start = (before - a) @ outward  # > 0: outside this edge
+        rate = d @ outward
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = -start / rate
+        entering = rate < 0.0
+        leaving = rate > 0.0
+        low = np.where(entering, np.maximum(low, t), low)
+        high = np.where(leaving, np.minimum(high, t), high)
+        parallel_out = (rate == 0.0) & (start > 0.0)
+        high = np.where(parallel_out, -1.0, high)
+    return np.asarray(low < high)
