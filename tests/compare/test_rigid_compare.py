@@ -32,8 +32,8 @@ def _need(name):
 
 def test_the_rod_drop_closed_form_is_the_textbook_one():
     """A rod of length L and thickness h (I = m (L^2 + h^2) / 12) at angle theta, dropped from
-    rest with its centre at height y0, lands on one corner: the corner's height below the
-    centre is (L cos + h sin) / 2 ... by free fall it arrives at v = sqrt(2 g drop); the impulse
+    rest with its centre at height y0, lands on one corner, (L sin + h cos) / 2 below the
+    centre; by free fall it arrives at v = sqrt(2 g drop); Hecker's impulse (PHYSICS.md section 2)
     there is j = (1 + e) m v / (1 + m r_x^2 / I), with r_x the corner's horizontal lever."""
     scene = peer_scene("rod-drop")
     assert isinstance(scene, RigidScene)

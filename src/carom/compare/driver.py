@@ -5,7 +5,7 @@ from __future__ import annotations
 import platform
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -71,13 +71,19 @@ class Comparison:
                 }
                 for c in self.expected.checks
             ],
-            "machine": {"python": platform.python_version(), "processor": platform.machine()},
-            "engines": {
-                name: {k: v for k, v in run.items() if k != "series"}
-                for name, run in self.engines.items()
-            },
-            "skipped": self.skipped,
+            **_runs_json(self.engines, self.skipped),
         }
+
+
+def _runs_json(engines: dict[str, dict[str, Any]], skipped: dict[str, str]) -> dict[str, Any]:
+    """The machine, each engine's run but its series, and the engines skipped."""
+    return {
+        "machine": {"python": platform.python_version(), "processor": platform.machine()},
+        "engines": {
+            name: {k: v for k, v in run.items() if k != "series"} for name, run in engines.items()
+        },
+        "skipped": skipped,
+    }
 
 
 def peer_scene(
@@ -156,12 +162,7 @@ class RigidComparison:
                     "omega_rad_s": check.omega,
                 }
             ],
-            "machine": {"python": platform.python_version(), "processor": platform.machine()},
-            "engines": {
-                name: {k: v for k, v in run.items() if k != "series"}
-                for name, run in self.engines.items()
-            },
-            "skipped": self.skipped,
+            **_runs_json(self.engines, self.skipped),
         }
 
 
@@ -176,7 +177,7 @@ def compare(
     *,
     until: float | None = None,
     progress: bool | None = False,
-) -> Any:
+) -> Comparison | RigidComparison:
     """Run ``scene`` in each engine and measure them against the closed form.
 
     Parameters
@@ -244,44 +245,7 @@ def run_engine(
     e: EngineEntry, scene: PeerScene, expected: Expectation | None, progress: bool | None = False
 ) -> dict[str, Any]:
     """Set ``e`` up, step it to ``until`` with the monitor watching; time only the steps."""
-    began = time.perf_counter()
-    sim = e.start(scene)
-    setup = time.perf_counter() - began
-    try:
-        steps = scene.steps(sim.dt)
-        monitor = Monitor(scene, expected, sim.dt)
-        monitor.observe(0.0, *sim.state())
-        wall = 0.0
-        bar = tqdm(
-            total=steps,
-            disable=None if progress is None else not progress,
-            file=sys.stderr,
-            desc=f"{e.name:<9}",
-            unit="step",
-            leave=True,
-        )
-        with bar:
-            for k in range(1, steps + 1):
-                began = time.perf_counter()
-                sim.step()
-                wall += time.perf_counter() - began
-                monitor.observe(k * sim.dt, *sim.state())
-                bar.update()
-    finally:
-        sim.close()
-    metrics = monitor.result()
-    return {
-        "version": e.version(),
-        "dt_s": sim.dt,
-        "settings": sim.settings,
-        "notes": sim.notes,
-        "setup_s": setup,
-        "wall_s": wall,
-        "simulated_s": steps * sim.dt,
-        "steps": steps,
-        "metrics": metrics,
-        "series": monitor.series,
-    }
+    return _run(e, scene, lambda dt: Monitor(scene, expected, dt), 1, progress)
 
 
 #: a scene of more bodies than this is looked at ten times a simulated second, not every step
@@ -292,13 +256,31 @@ def run_rigid(
     e: EngineEntry, scene: RigidScene, expected: ImpactCheck | None, progress: bool | None
 ) -> dict[str, Any]:
     """Set ``e`` up for a rigid scene, step it to ``until``; time only the steps."""
+    dense = scene.n > DENSE_BODIES
+    return _run(
+        e,
+        scene,
+        lambda dt: RigidMonitor(scene, expected, dt),
+        max(1, round(0.1 * scene.settings.rate)) if dense else 1,
+        progress,
+    )
+
+
+def _run(
+    e: EngineEntry,
+    scene: PeerScene | RigidScene,
+    watch: Callable[[float], Monitor | RigidMonitor],
+    stride: int,
+    progress: bool | None,
+) -> dict[str, Any]:
+    """Step ``e`` to ``until``, showing its state to the monitor ``watch(interval)`` every
+    ``stride`` steps (and after the last); time only the step calls."""
     began = time.perf_counter()
     sim = e.start(scene)
     setup = time.perf_counter() - began
     try:
         steps = scene.steps(sim.dt)
-        stride = 1 if scene.n <= DENSE_BODIES else max(1, round(0.1 / sim.dt))
-        monitor = RigidMonitor(scene, expected, sim.dt * stride)
+        monitor = watch(sim.dt * stride)
         monitor.observe(0.0, *sim.state())
         wall = 0.0
         bar = tqdm(

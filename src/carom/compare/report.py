@@ -36,6 +36,14 @@ def _bodies(n: int) -> str:
     return "1 body" if n == 1 else f"{n} bodies"
 
 
+def _to_carom(engines: dict[str, dict[str, Any]], run: dict[str, Any]) -> str:
+    """A run's wall time over carom's, or "-" when carom did not run (or took no time)."""
+    carom = engines.get("carom")
+    if carom is None or carom["wall_s"] <= 0:
+        return "-"
+    return f"{run['wall_s'] / carom['wall_s']:.3g}"
+
+
 def format_table(comparison: Comparison | RigidComparison) -> str:
     """The comparison as a fixed-width table, one row per engine."""
     if isinstance(comparison, RigidComparison):
@@ -49,12 +57,9 @@ def format_table(comparison: Comparison | RigidComparison) -> str:
         f"{'engine':<9} {'version':<8} {'dt [s]':>9} {'velocity err':>12} {'energy err':>10} "
         f"{'max pen./r':>10} {'tunnelled':>9} {'wall [s]':>9} {'/ carom':>8}",
     ]
-    carom = comparison.engines.get("carom")
     for name, run in comparison.engines.items():
         m = run["metrics"]
-        ratio = "-"
-        if carom is not None and carom["wall_s"] > 0:
-            ratio = f"{run['wall_s'] / carom['wall_s']:.3g}"
+        ratio = _to_carom(comparison.engines, run)
         dt = "events" if name == "carom" else f"{run['dt_s']:.4g}"
         velocity, energy, depth = (
             format_number(m[k])
@@ -88,12 +93,9 @@ def format_rigid_table(comparison: RigidComparison) -> str:
         f"{'overlap':>8} {'through':>7} {'top moved':>9} {'max turn':>8} {'ms/step':>8} "
         f"{'/ carom':>7}",
     ]
-    carom = comparison.engines.get("carom")
     for name, run in comparison.engines.items():
         m = run["metrics"]
-        ratio = "-"
-        if carom is not None and carom["wall_s"] > 0:
-            ratio = f"{run['wall_s'] / carom['wall_s']:.3g}"
+        ratio = _to_carom(comparison.engines, run)
         lines.append(
             f"{name:<7} {run['version']:<8} {format_number(m['velocity_error']):>8} "
             f"{format_number(m['omega_error']):>8} {format_number(m['energy_gain']):>8} "

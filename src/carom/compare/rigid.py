@@ -26,12 +26,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from carom.compare.spec import steps_to
 from carom.engines.rigid.driver import RigidEngine
-from carom.engines.rigid.model import RigidModel, new_state
+from carom.engines.rigid.model import RigidModel, RigidState, new_state
 from carom.engines.rigid.settings import RigidSettings
 from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.laws.point_impulse import impulse
+from carom.shapes import ConvexPiece
 from carom.world import World
 
 __all__ = [
@@ -52,8 +54,6 @@ FLIGHT_STEP = 1e-4
 #: two corners within this height of each other [m] land together (a face lands)
 LEVEL = 1e-12
 
-Piece = tuple[FloatArray, float]  # corners (k, 2) in the body's frame [m], rounding radius [m]
-
 
 @dataclass(frozen=True)
 class RigidScene:
@@ -66,25 +66,17 @@ class RigidScene:
     n : int
         The caller's bodies: the first ``n`` rows. The rows after them are the box's walls
         and the planes, as static slabs.
-    kind : (B,) int64
-        KIND_DYNAMIC, KIND_STATIC or KIND_KINEMATIC.
-    mass, inertia : (B,) float64
-        [kg], [kg m^2] about the centre of mass (inf for static and kinematic bodies).
-    position, velocity : (B, 2) float64
-        Centre of mass [m] and its velocity [m/s].
-    angle, omega : (B,) float64
-        [rad], [rad/s].
-    pieces : tuple of tuple of (corners (k, 2), radius)
+    pieces : tuple of tuple of ConvexPiece
         Each body's convex pieces in its frame (centre of mass at the origin) [m]: one corner
         is a circle, two a capsule or segment, three or more a (rounded) polygon.
-    material : (B,) int64
-        Row of ``restitution`` and ``friction``.
-    restitution, friction : (M, M) float64
-        Of each pair of materials [-].
-    gravity : (2,) float64
-        [m/s^2].
     settings : RigidSettings
         carom's engine settings (rate, substeps, sleep); the peers take the same rate.
+    model, start : RigidModel, RigidState
+        carom's engine's constants and its state at the start; the properties below read
+        them: ``kind`` (B,), ``mass`` and ``inertia`` (B,) [kg], [kg m^2] (inf for static and
+        kinematic bodies), ``material`` (B,), ``restitution`` and ``friction`` (M, M) [-],
+        ``gravity`` (2,) [m/s^2], ``position`` and ``velocity`` (B, 2) [m], [m/s] (centres of
+        mass), ``angle`` and ``omega`` (B,) [rad], [rad/s].
     until : float
         Simulated time [s].
     world : callable
@@ -94,21 +86,11 @@ class RigidScene:
     name: str
     title: str
     n: int
-    kind: IntArray
-    mass: FloatArray
-    inertia: FloatArray
-    position: FloatArray
-    velocity: FloatArray
-    angle: FloatArray
-    omega: FloatArray
-    pieces: tuple[tuple[Piece, ...], ...]
-    material: IntArray
-    restitution: FloatArray
-    friction: FloatArray
-    gravity: FloatArray
+    pieces: tuple[tuple[ConvexPiece, ...], ...]
     settings: RigidSettings
     until: float
     model: RigidModel = field(compare=False, repr=False)
+    start: RigidState = field(compare=False, repr=False)
     world: Callable[[], World] = field(compare=False, repr=False)
 
     dim = 2
@@ -127,29 +109,31 @@ class RigidScene:
             for p in range(int(rows[body]), int(rows[body + 1])):
                 start, count = int(model.piece_start[p]), int(model.piece_count[p])
                 corners = model.local_vertices[start : start + count].copy()
-                own.append((corners, float(model.piece_radius[p])))
+                own.append(ConvexPiece(corners, float(model.piece_radius[p])))
             pieces.append(tuple(own))
         return cls(
             name=name,
             title=title or name,
             n=world.n_bodies,
-            kind=model.kind.copy(),
-            mass=model.mass.copy(),
-            inertia=model.inertia.copy(),
-            position=state.x.copy(),
-            velocity=state.v.copy(),
-            angle=state.angle.copy(),
-            omega=state.omega.copy(),
             pieces=tuple(pieces),
-            material=model.material.copy(),
-            restitution=model.e_table.copy(),
-            friction=model.mu_table.copy(),
-            gravity=model.gravity.copy(),
             settings=world.rigid_settings,
             until=float(until),
             model=model,
+            start=state,
             world=functools.partial(copy.deepcopy, world),
         )
+
+    kind = property(lambda self: self.model.kind)
+    mass = property(lambda self: self.model.mass)
+    inertia = property(lambda self: self.model.inertia)
+    material = property(lambda self: self.model.material)
+    restitution = property(lambda self: self.model.e_table)
+    friction = property(lambda self: self.model.mu_table)
+    gravity = property(lambda self: self.model.gravity)
+    position = property(lambda self: self.start.x)
+    velocity = property(lambda self: self.start.v)
+    angle = property(lambda self: self.start.angle)
+    omega = property(lambda self: self.start.omega)
 
     @property
     def bodies(self) -> int:
@@ -163,16 +147,11 @@ class RigidScene:
 
     def steps(self, dt: float) -> int:
         """Steps of ``dt`` [s] that reach ``until``."""
-        ratio = self.until / dt
-        nearest = round(ratio)
-        return int(nearest) if abs(ratio - nearest) < 1e-9 * max(1.0, ratio) else math.ceil(ratio)
+        return steps_to(self.until, dt)
 
-    def energy(
-        self, x: FloatArray, v: FloatArray, angle: FloatArray, omega: FloatArray
-    ) -> tuple[float, float, float]:
+    def energy(self, x: FloatArray, v: FloatArray, omega: FloatArray) -> tuple[float, float, float]:
         """Translational and rotational kinetic energy and potential energy [J] of the
-        dynamic bodies among the first ``n`` (poses and velocities of those n)."""
-        del angle
+        dynamic bodies among the first ``n`` (centres (n, 2), velocities (n, 2), omega (n,))."""
         dyn = self.kind[: self.n] == KIND_DYNAMIC
         m, inertia = self.mass[: self.n][dyn], self.inertia[: self.n][dyn]
         translation = 0.5 * float(np.sum(m * np.sum(v[dyn] ** 2, axis=1)))
@@ -297,11 +276,15 @@ class ImpactCheck:
 def _corners(scene: RigidScene, body: int, angle: float) -> tuple[FloatArray, FloatArray]:
     """The body's core corners turned by ``angle`` (relative to its centre) and their
     rounding radii."""
-    c, s = math.cos(angle), math.sin(angle)
-    turn = np.array([[c, -s], [s, c]])
-    points = [corners @ turn.T for corners, _ in scene.pieces[body]]
-    radii = [np.full(corners.shape[0], r) for corners, r in scene.pieces[body]]
-    return np.concatenate(points), np.concatenate(radii)
+    turned = [piece.moved(np.zeros(2), angle) for piece in scene.pieces[body]]
+    radii = [np.full(p.vertices.shape[0], p.radius) for p in turned]
+    return np.concatenate([p.vertices for p in turned]), np.concatenate(radii)
+
+
+def _placed(scene: RigidScene, body: int) -> list[ConvexPiece]:
+    """The body's pieces where it starts, in world coordinates."""
+    where, angle = scene.position[body], float(scene.angle[body])
+    return [piece.moved(where, angle) for piece in scene.pieces[body]]
 
 
 def impact_expectation(scene: RigidScene, step: float) -> ImpactCheck | None:
@@ -332,32 +315,29 @@ def impact_expectation(scene: RigidScene, step: float) -> ImpactCheck | None:
     corners, radii = _corners(scene, body, float(scene.angle[body]))
     bottom = corners[:, 1] - radii
     low = float(bottom.min())
+    touching = corners[bottom <= low + LEVEL]  # the lowest corner, or a level face's
+    lowest_x = touching[:, 0] + x0[0]
     # the ground: the highest level top face below the body that spans its lowest point
     ground, top = -1, -math.inf
     for other in np.nonzero(scene.kind == KIND_STATIC)[0]:
-        for piece_corners, rounding in scene.pieces[other]:
-            c, s = math.cos(scene.angle[other]), math.sin(scene.angle[other])
-            world = piece_corners @ np.array([[c, -s], [s, c]]).T + scene.position[other]
+        for piece in _placed(scene, int(other)):
+            world = piece.vertices
             height = float(world[:, 1].max())
             level = world[np.abs(world[:, 1] - height) <= LEVEL * max(1.0, abs(height))]
             if level.shape[0] < 2:
                 continue
-            lowest = corners[bottom <= low + LEVEL] + x0
-            inside = np.all(
-                (lowest[:, 0] >= level[:, 0].min()) & (lowest[:, 0] <= level[:, 0].max())
-            )
-            if inside and top < height + rounding <= x0[1] + low:
-                ground, top = int(other), height + rounding
+            inside = np.all((lowest_x >= level[:, 0].min()) & (lowest_x <= level[:, 0].max()))
+            if inside and top < height + piece.radius <= x0[1] + low:
+                ground, top = int(other), height + piece.radius
     if ground < 0:
         return None
-    a, b = material_pair(scene, body, ground)
+    a, b = int(scene.material[body]), int(scene.material[ground])
     e, mu = float(scene.restitution[a, b]), float(scene.friction[a, b])
     # free fall of the lowest point: y0 + low + vy t - g t^2 / 2 = top
     drop = x0[1] + low - top
     vy = float(v0[1])
     t_hit = (vy + math.sqrt(vy * vy + 2.0 * g * drop)) / g
     v_hit = v0 + scene.gravity * t_hit
-    touching = corners[bottom <= low + LEVEL]
     span = touching[:, 0]
     # a level face is struck under the centre of mass when it spans it, else at its end
     r_x = float(np.clip(0.0, span.min(), span.max()))
@@ -386,7 +366,7 @@ def impact_expectation(scene: RigidScene, step: float) -> ImpactCheck | None:
         return None
     check = first
     velocity = v_after + scene.gravity * (check - t_hit)
-    reach = float(np.max(np.linalg.norm(corners, axis=1) + radii))
+    reach = max(piece.reach for piece in scene.pieces[body])
     speed = abs(float(v_hit[1]))  # the contact point's approach speed (no spin before)
     return ImpactCheck(
         body=body,
@@ -403,11 +383,6 @@ def impact_expectation(scene: RigidScene, step: float) -> ImpactCheck | None:
     )
 
 
-def material_pair(scene: RigidScene, a: int, b: int) -> tuple[int, int]:
-    """The materials of bodies ``a`` and ``b``."""
-    return int(scene.material[a]), int(scene.material[b])
-
-
 class RigidMonitor:
     """The same yardstick for every engine, fed the poses and velocities after each step.
 
@@ -422,21 +397,18 @@ class RigidMonitor:
     def __init__(self, scene: RigidScene, expected: ImpactCheck | None, dt: float) -> None:
         self.scene = scene
         self.expected = expected
-        self.dt = dt
         n = scene.n
         self._dynamic = np.nonzero(scene.kind[:n] == KIND_DYNAMIC)[0]
         dyn = self._dynamic
-        self._start = scene.position[dyn].copy()
         self._angle0 = scene.angle[dyn].copy()
         self._top = int(dyn[np.argmax(scene.position[dyn, 1])]) if dyn.shape[0] else -1
         self._size = _extent(scene.pieces[self._top]) if self._top >= 0 else 1.0
         # the static pieces in world coordinates (they never move)
-        self._walls: list[tuple[FloatArray, float]] = []
-        for body in np.nonzero(scene.kind == KIND_STATIC)[0]:
-            c, s = math.cos(scene.angle[body]), math.sin(scene.angle[body])
-            turn = np.array([[c, -s], [s, c]])
-            for corners, r in scene.pieces[body]:
-                self._walls.append((corners @ turn.T + scene.position[body], r))
+        self._walls = [
+            piece
+            for body in np.nonzero(scene.kind == KIND_STATIC)[0]
+            for piece in _placed(scene, int(body))
+        ]
         # a copy of carom's engine, only to measure overlaps of the poses it is given
         settings = RigidSettings(rate=scene.settings.rate, sleep=False, exact_impacts=False)
         m = scene.model
@@ -472,7 +444,7 @@ class RigidMonitor:
         """Take the state of the first ``n`` bodies after a step (time [s]; x, v (n, 2);
         angle, omega (n,))."""
         scene, dyn = self.scene, self._dynamic
-        translation, rotation, potential = scene.energy(x, v, angle, omega)
+        translation, rotation, potential = scene.energy(x, v, omega)
         total = translation + rotation + potential
         if self.energy0 is None:
             self.energy0 = total
@@ -520,8 +492,8 @@ class RigidMonitor:
 
     def _passed(self, before: FloatArray, after: FloatArray, rows: IntArray) -> None:
         """Note the bodies whose centre's path in the step crossed a static piece's core."""
-        for corners, _ in self._walls:
-            hit = _segments_cross(before, after, corners)
+        for piece in self._walls:
+            hit = _segments_cross(before, after, piece.vertices)
             self.through.update(int(i) for i in rows[hit])
 
     def result(self) -> dict[str, Any]:
@@ -556,10 +528,10 @@ class RigidMonitor:
         }
 
 
-def _extent(pieces: tuple[Piece, ...]) -> float:
+def _extent(pieces: tuple[ConvexPiece, ...]) -> float:
     """A body's size [m]: the longer side of its bounding box in its own frame."""
-    corners = np.concatenate([c for c, _ in pieces])
-    radius = max(r for _, r in pieces)
+    corners = np.concatenate([p.vertices for p in pieces])
+    radius = max(p.radius for p in pieces)
     return float(np.max(corners.max(axis=0) - corners.min(axis=0)) + 2.0 * radius)
 
 

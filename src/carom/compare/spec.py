@@ -26,7 +26,7 @@ from carom.errors import CaromError
 from carom.materials import LAW_CODES, pair_table
 from carom.world import World
 
-__all__ = ["PeerScene", "factor_restitution"]
+__all__ = ["PeerScene", "factor_restitution", "steps_to"]
 
 FloatArray = NDArray[np.float64]
 
@@ -136,9 +136,7 @@ class PeerScene:
 
     def steps(self, dt: float) -> int:
         """Steps of ``dt`` [s] that reach ``until`` (the last may pass it by < dt)."""
-        ratio = self.until / dt
-        nearest = round(ratio)
-        return int(nearest) if abs(ratio - nearest) < 1e-9 * max(1.0, ratio) else math.ceil(ratio)
+        return steps_to(self.until, dt)
 
     def duration(self, dt: float) -> float:
         """The simulated time [s] of :meth:`steps` steps of ``dt``."""
@@ -159,6 +157,14 @@ class PeerScene:
         (N, d) [m/s]); the potential is ``-m g . x``."""
         kinetic = 0.5 * float(np.sum(self.mass * np.sum(velocities * velocities, axis=1)))
         return kinetic - float(np.sum(self.mass * (positions @ self.gravity)))
+
+
+def steps_to(until: float, dt: float) -> int:
+    """Steps of ``dt`` [s] that reach ``until`` [s]: the nearest whole number when ``until``
+    is one to 1e-9, else enough that the last passes it by less than ``dt``."""
+    ratio = until / dt
+    nearest = round(ratio)
+    return int(nearest) if abs(ratio - nearest) < 1e-9 * max(1.0, ratio) else math.ceil(ratio)
 
 
 def factor_restitution(

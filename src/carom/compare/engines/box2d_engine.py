@@ -64,7 +64,8 @@ class Box2DRigidSimulation:
                 body = world.CreateKinematicBody(**where)
             material = int(scene.material[i])
             surface = {"friction": float(rough[material]), "restitution": float(elastic[material])}
-            for corners, radius in scene.pieces[i]:
+            for piece in scene.pieces[i]:
+                corners, radius = piece.vertices, piece.radius
                 _add_piece(body, corners, radius, surface, i)
             if kind == KIND_DYNAMIC:
                 mass = Box2D.b2MassData()

@@ -19,7 +19,9 @@ import numpy as np
 import pymunk
 import pymunk.batch
 
+from carom.compare.rigid import RigidScene, shape_coefficients
 from carom.compare.spec import PeerScene, factor_restitution
+from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
 
 __all__ = ["start"]
 
@@ -84,13 +86,7 @@ class PymunkSimulation:
         self._buffer = pymunk.batch.Buffer()
         self.settings: dict[str, Any] = {
             "dt_s": DT,
-            "iterations": space.iterations,
-            "collision_slop_m": space.collision_slop,
-            "collision_bias": space.collision_bias,
-            "collision_persistence": space.collision_persistence,
-            "damping": space.damping,
-            "idle_speed_threshold": space.idle_speed_threshold,
-            "sleep_time_threshold": space.sleep_time_threshold,
+            **_space_settings(space),
             "shape": "Circle",
             "friction": 0.0,
             "body_elasticity": sorted(set(body_e.tolist())),
@@ -110,13 +106,7 @@ class PymunkSimulation:
         self.space.step(self.dt)
 
     def state(self) -> tuple[np.ndarray, np.ndarray]:
-        self._buffer.clear()
-        pymunk.batch.get_space_bodies(self.space, self._fields, self._buffer)
-        ids = np.frombuffer(self._buffer.int_buf(), dtype=np.uint64)
-        data = np.frombuffer(self._buffer.float_buf(), dtype=np.float64).reshape(-1, 4)
-        if not np.array_equal(ids, self._ids):  # the space lists other bodies too (walls)
-            order = np.argsort(ids)
-            data = data[order[np.searchsorted(ids[order], self._ids)]]
+        data = _read_bodies(self.space, self._fields, self._buffer, self._ids, 4)
         return data[:, 0:2].copy(), data[:, 2:4].copy()
 
     def close(self) -> None:
@@ -125,6 +115,34 @@ class PymunkSimulation:
 
 def start(scene: PeerScene) -> PymunkSimulation:
     return PymunkSimulation(scene)
+
+
+def _space_settings(space: pymunk.Space) -> dict[str, Any]:
+    """The space's solver settings, by pymunk's names."""
+    return {
+        "iterations": space.iterations,
+        "collision_slop_m": space.collision_slop,
+        "collision_bias": space.collision_bias,
+        "collision_persistence": space.collision_persistence,
+        "damping": space.damping,
+        "idle_speed_threshold": space.idle_speed_threshold,
+        "sleep_time_threshold": space.sleep_time_threshold,
+    }
+
+
+def _read_bodies(
+    space: pymunk.Space, fields: Any, buffer: Any, ids: np.ndarray, width: int
+) -> np.ndarray:
+    """The ``fields`` of the bodies ``ids`` (in that order), ``width`` floats a body, read in
+    one batch call (the space lists other bodies too: walls, static bodies)."""
+    buffer.clear()
+    pymunk.batch.get_space_bodies(space, fields, buffer)
+    listed = np.frombuffer(buffer.int_buf(), dtype=np.uint64)
+    data = np.frombuffer(buffer.float_buf(), dtype=np.float64).reshape(-1, width)
+    if np.array_equal(listed, ids):
+        return data
+    order = np.argsort(listed, kind="stable")
+    return data[order[np.searchsorted(listed[order], ids)]]
 
 
 # -- rigid bodies ---------------------------------------------------------------------------
@@ -144,10 +162,7 @@ class PymunkRigidSimulation:
       meant for pixels), sleeping as in the scene (pymunk's default: none).
     """
 
-    def __init__(self, scene: Any) -> None:
-        from carom.compare.rigid import shape_coefficients
-        from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
-
+    def __init__(self, scene: RigidScene) -> None:
         elastic, notes = shape_coefficients(
             scene, scene.restitution, "product", "pymunk", "restitution"
         )
@@ -174,7 +189,8 @@ class PymunkRigidSimulation:
                 body.velocity = (float(scene.velocity[i, 0]), float(scene.velocity[i, 1]))
                 body.angular_velocity = float(scene.omega[i])
             shapes: list[pymunk.Shape] = []
-            for corners, radius in scene.pieces[i]:
+            for piece in scene.pieces[i]:
+                corners, radius = piece.vertices, piece.radius
                 points = [(float(p[0]), float(p[1])) for p in corners]
                 if len(points) == 1:
                     shape: pymunk.Shape = pymunk.Circle(body, radius, points[0])
@@ -202,13 +218,7 @@ class PymunkRigidSimulation:
         self._buffer = pymunk.batch.Buffer()
         self.settings: dict[str, Any] = {
             "dt_s": self.dt,
-            "iterations": space.iterations,
-            "collision_slop_m": space.collision_slop,
-            "collision_bias": space.collision_bias,
-            "collision_persistence": space.collision_persistence,
-            "damping": space.damping,
-            "idle_speed_threshold": space.idle_speed_threshold,
-            "sleep_time_threshold": space.sleep_time_threshold,
+            **_space_settings(space),
             "elasticity_per_material": elastic.tolist(),
             "friction_per_material": rough.tolist(),
             "ccd": "none (pymunk has no continuous collision detection)",
@@ -227,17 +237,13 @@ class PymunkRigidSimulation:
         self.space.step(self.dt)
 
     def state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        self._buffer.clear()
-        pymunk.batch.get_space_bodies(self.space, self._fields, self._buffer)
-        ids = np.frombuffer(self._buffer.int_buf(), dtype=np.uint64)
-        data = np.frombuffer(self._buffer.float_buf(), dtype=np.float64).reshape(-1, 6)
-        order = np.argsort(ids, kind="stable")
-        data = data[order[np.searchsorted(ids[order], self._ids)]]
+        # columns: position (2), angle, velocity (2), angular velocity
+        data = _read_bodies(self.space, self._fields, self._buffer, self._ids, 6)
         return data[:, 0:2].copy(), data[:, 3:5].copy(), data[:, 2].copy(), data[:, 5].copy()
 
     def close(self) -> None:
         pass
 
 
-def start_rigid(scene: Any) -> PymunkRigidSimulation:
+def start_rigid(scene: RigidScene) -> PymunkRigidSimulation:
     return PymunkRigidSimulation(scene)
