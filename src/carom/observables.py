@@ -23,9 +23,11 @@ if TYPE_CHECKING:
 __all__ = [
     "RunHistory",
     "Stats",
+    "angular_momentum",
     "kinetic_energy",
     "momentum",
     "potential_energy",
+    "rotational_energy",
     "rotational_temperature",
     "temperature",
 ]
@@ -42,6 +44,33 @@ def kinetic_energy(bodies: Bodies, velocities: FloatArray, angular_velocities: F
     inertia = bodies.inertia_factor[m] * mass * bodies.radius[m] ** 2
     ke += 0.5 * np.sum(inertia * np.sum(spin * spin, axis=1))
     return float(ke)
+
+
+def rotational_energy(bodies: Bodies, angular_velocities: FloatArray) -> float:
+    """The rotational part ``sum I w^2 / 2`` [J] of :func:`kinetic_energy`, over the moving
+    bodies with these angular velocities (N, 3) [rad/s]."""
+    m = bodies.mobile
+    spin = angular_velocities[m]
+    inertia = bodies.inertia_factor[m] * bodies.mass[m] * bodies.radius[m] ** 2
+    return float(0.5 * np.sum(inertia * np.sum(spin * spin, axis=1)))
+
+
+def angular_momentum(
+    bodies: Bodies, positions: FloatArray, velocities: FloatArray, angular_velocities: FloatArray
+) -> FloatArray:
+    """Total angular momentum (3,) [kg m^2/s] about the origin of the moving bodies at these
+    positions (N, d) [m] with these velocities (N, d) [m/s] and angular velocities (N, 3)
+    [rad/s]: orbital ``sum m x × v`` plus spin ``sum I w`` (2D: only z is nonzero)."""
+    m = bodies.mobile
+    x, v, spin = positions[m], velocities[m], angular_velocities[m]
+    mass = bodies.mass[m]
+    inertia = bodies.inertia_factor[m] * mass * bodies.radius[m] ** 2
+    total: FloatArray = np.sum(inertia[:, None] * spin, axis=0)
+    if bodies.dim == 2:
+        total[2] += np.sum(mass * (x[:, 0] * v[:, 1] - x[:, 1] * v[:, 0]))
+    else:
+        total += np.sum(mass[:, None] * np.cross(x, v), axis=0)
+    return total
 
 
 def momentum(bodies: Bodies, velocities: FloatArray) -> FloatArray:
@@ -204,28 +233,34 @@ class Stats:
 @dataclass
 class RunHistory:
     """A run's observables, recorded as it goes (for its plots and summary): time [s],
-    kinetic and potential energy [J], energy dissipated so far [J], energy the parting-speed
-    floor gave so far [J], total momentum [kg m/s], and collisions so far (bodies and walls)
-    [-]."""
+    kinetic energy (translation and rotation) and its rotational part [J], potential energy
+    [J], energy dissipated so far [J], energy given so far (by the parting-speed floor, or by
+    the rigid solver) [J], total momentum [kg m/s], total angular momentum about the origin
+    [kg m^2/s], and collisions so far (bodies and walls) [-]."""
 
     time: list[float] = field(default_factory=list)
     kinetic: list[float] = field(default_factory=list)
+    rotational: list[float] = field(default_factory=list)
     potential: list[float] = field(default_factory=list)
     dissipated: list[float] = field(default_factory=list)
     given: list[float] = field(default_factory=list)
     momentum: list[NDArray[np.float64]] = field(default_factory=list)
+    angular_momentum: list[NDArray[np.float64]] = field(default_factory=list)
     collisions: list[int] = field(default_factory=list)
 
     def add(self, world: World, frame: Frame) -> None:
         """Record ``frame`` of ``world`` (taken now: the dissipation so far is the world's)."""
         b = world.bodies
+        x, v, w = frame.positions, frame.velocities, frame.angular_velocities
         self.time.append(frame.time)
-        self.kinetic.append(kinetic_energy(b, frame.velocities, frame.angular_velocities))
-        self.potential.append(potential_energy(b, frame.positions, world.gravity))
+        self.kinetic.append(kinetic_energy(b, v, w))
+        self.rotational.append(rotational_energy(b, w))
+        self.potential.append(potential_energy(b, x, world.gravity))
         counters = world.counters()
         self.dissipated.append(counters.energy_lost)
         self.given.append(counters.energy_given)
-        self.momentum.append(momentum(b, frame.velocities))
+        self.momentum.append(momentum(b, v))
+        self.angular_momentum.append(angular_momentum(b, x, v, w))
         self.collisions.append(counters.collisions + counters.wall_collisions)
 
     def arrays(self) -> dict[str, NDArray[np.float64]]:
@@ -234,7 +269,14 @@ class RunHistory:
 
     @classmethod
     def from_arrays(cls, arrays: dict[str, NDArray[np.float64]]) -> RunHistory:
-        """The history :meth:`arrays` saved."""
+        """The history :meth:`arrays` saved.
+
+        Raises
+        ------
+        KeyError
+            A series is missing (the checkpoint was written by a carom that kept fewer).
+        """
         history = cls(**{name: arrays[name].tolist() for name in cls.__dataclass_fields__})
         history.momentum = list(arrays["momentum"])
+        history.angular_momentum = list(arrays["angular_momentum"])
         return history

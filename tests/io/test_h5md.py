@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import carom
-from carom.io.h5md import ELEMENTS, ENERGIES, H5MDWriter, check_trajectory
+from carom.io.h5md import ELEMENTS, OBSERVABLES, H5MDWriter, check_trajectory
 
 h5py = pytest.importorskip("h5py")
 
@@ -34,7 +34,7 @@ def test_every_frame_is_written_as_the_world_had_it(tmp_path: Path, dim: int) ->
     frames = []
     with H5MDWriter(path, world) as writer:
         for frame in [world.frame(), *world.frames(0.5, 0.25)]:
-            writer.write(frame, dict.fromkeys(ENERGIES, 1.5))
+            writer.write(frame, dict.fromkeys(OBSERVABLES, 1.5))
             frames.append(frame)
     check_trajectory(path, world, len(frames))
     with h5py.File(path, "r") as f:
@@ -54,6 +54,7 @@ def test_every_frame_is_written_as_the_world_had_it(tmp_path: Path, dim: int) ->
             ):
                 assert particles[f"{name}/value"][k].tobytes() == value.tobytes()
         assert np.all(f["observables/kinetic_energy/value"][()] == 1.5)
+        assert f["observables/angular_momentum/value"].shape == (len(frames), 3)
 
 
 def test_reopen_keeps_the_frames_a_checkpoint_knows(tmp_path: Path) -> None:
@@ -61,7 +62,7 @@ def test_reopen_keeps_the_frames_a_checkpoint_knows(tmp_path: Path) -> None:
     path = tmp_path / "t.h5"
     with H5MDWriter(path, world) as writer:
         for frame in world.frames(0.4, 0.1):
-            writer.write(frame, dict.fromkeys(ENERGIES, 0.0))
+            writer.write(frame, dict.fromkeys(OBSERVABLES, 0.0))
     with H5MDWriter.reopen(path, world, 2) as writer:  # frames 3 and 4 came after the checkpoint
         assert writer.frames == 2
     with h5py.File(path, "r") as f:

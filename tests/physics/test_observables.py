@@ -10,7 +10,13 @@ import numpy as np
 import pytest
 
 import carom
-from carom.observables import kinetic_energy, rotational_temperature, temperature
+from carom.observables import (
+    angular_momentum,
+    kinetic_energy,
+    rotational_energy,
+    rotational_temperature,
+    temperature,
+)
 from carom.scene.layouts import lattice_gas
 
 PHI = 0.01
@@ -102,3 +108,36 @@ def test_rotational_temperature_closed_form() -> None:
     t_rot = rotational_temperature(world.bodies, world.angular_velocities)
     assert t_rot == pytest.approx(0.17, rel=4 * 2.2e-16)  # a few products and one sum
     assert world.stats.rotational_temperature == t_rot
+
+
+def test_rotational_energy_and_angular_momentum_closed_forms() -> None:
+    # The two disks above (I = 0.01 kg m^2 each, m = 2) at (0.25, 0.5) and (0.75, 0.5) with
+    # velocities (1, 0) and (0, -2), spins 3 and -5 rad/s:
+    #   rotational energy = (0.01 * 9 + 0.01 * 25) / 2 = 0.17 J
+    #   L_z = sum m (x v_y - y v_x) + I w
+    #       = 2 (0 - 0.5 * 1) + 2 (0.75 * -2 - 0) + 0.01 * 3 + 0.01 * -5 = -4.02 kg m^2/s
+    # and a static body adds nothing to either.
+    world = carom.World(2, [1.0, 1.0])
+    world.add_spheres(
+        [[0.25, 0.5], [0.75, 0.5]],
+        [[1.0, 0.0], [0.0, -2.0]],
+        radius=0.1,
+        mass=2.0,
+        angular_velocities=[3.0, -5.0],
+    )
+    world.add_static_spheres([[0.5, 0.9]], radius=0.05)
+    b, w = world.bodies, world.angular_velocities
+    assert rotational_energy(b, w) == pytest.approx(0.17, rel=4 * 2.2e-16)
+    lz = angular_momentum(b, world.positions, world.velocities, w)
+    assert lz[:2].tolist() == [0.0, 0.0]
+    assert lz[2] == pytest.approx(-4.02, rel=8 * 2.2e-16)  # six products, five sums
+    # 3D: one sphere (I = 2/5 m a^2 = 0.4 * 1 * 0.25 = 0.1) at (1, 2, 3) with v = (0, 0, 1) and
+    # w = (1, 0, 0): x × v = (2, -1, 0), so L = (2 + 0.1, -1, 0)
+    world3 = carom.World(3, [4.0, 4.0, 4.0])
+    world3.add_spheres(
+        [[1.0, 2.0, 3.0]], [[0.0, 0.0, 1.0]], radius=0.5, angular_velocities=[[1.0, 0, 0]]
+    )
+    l3 = angular_momentum(
+        world3.bodies, world3.positions, world3.velocities, world3.angular_velocities
+    )
+    np.testing.assert_allclose(l3, [2.1, -1.0, 0.0], rtol=4 * 2.2e-16, atol=0)

@@ -19,8 +19,12 @@ Layout written (de Buyl et al., Comput. Phys. Commun. 185, 1546, 2014; nongnu.or
     /observables/kinetic_energy      step, time, value (F,) [J]
     /observables/potential_energy    same (gravity; zero without it) [J]
     /observables/dissipated_energy   same: lost in collisions since the start [J]
-    /observables/given_energy        same: given by the parting-speed floor since the start
-                              [J] (E0 = kinetic + potential + dissipated - given)
+    /observables/given_energy        same: given by the parting-speed floor (the rigid
+                              engine: by its solver) since the start [J]
+                              (E0 = kinetic + potential + dissipated - given)
+    /observables/rotational_energy   same: the rotational part of the kinetic energy [J]
+    /observables/angular_momentum    same, value (F, 3): about the origin, orbital plus spin
+                              [kg m2 s-1] (2D: about z, column 2)
 
 Frames are appended as the run produces them (chunked, resizable datasets). The orientation,
 angular velocity, shape and pieces elements are carom's own (H5MD lets a program add elements).
@@ -29,6 +33,7 @@ angular velocity, shape and pieces elements are carom's own (H5MD lets a program
 from __future__ import annotations
 
 import errno
+import math
 import os
 import shutil
 import sys
@@ -49,6 +54,7 @@ from carom.world import Frame, World
 __all__ = [
     "ELEMENTS",
     "ENERGIES",
+    "OBSERVABLES",
     "H5MDWriter",
     "check_trajectory",
     "need_h5py",
@@ -115,9 +121,10 @@ def _quiet_h5py_dealloc(writer: H5MDWriter) -> None:
 
 def frame_bytes(n: int, dim: int) -> int:
     """Bytes one frame of ``n`` bodies adds to a trajectory: position and velocity (``dim``
-    each), orientation (1 in 2D, 4 in 3D) and angular velocity (3) per body, and the three
-    energies, all float64."""
-    return 8 * (n * (2 * dim + (1 if dim == 2 else 4) + 3) + len(ENERGIES))
+    each), orientation (1 in 2D, 4 in 3D) and angular velocity (3) per body, and the
+    observables, all float64."""
+    per_frame = sum(math.prod(shape) for shape, _ in OBSERVABLES.values())
+    return 8 * (n * (2 * dim + (1 if dim == 2 else 4) + 3) + per_frame)
 
 
 def write_failed() -> bool:
@@ -131,8 +138,14 @@ def write_failed() -> bool:
 #: exit, when a write finds the disk full) [bytes]
 DISK_MARGIN = 16 * 2**20
 
-#: the observables written with every frame, in joules
+#: the energies written with every frame [J]; their balance closes (module docstring)
 ENERGIES = ("kinetic_energy", "potential_energy", "dissipated_energy", "given_energy")
+#: every observable written with every frame: its value's shape and unit
+OBSERVABLES: dict[str, tuple[tuple[int, ...], str]] = {
+    **{name: ((), "J") for name in ENERGIES},
+    "rotational_energy": ((), "J"),
+    "angular_momentum": ((3,), "kg m2 s-1"),
+}
 #: the per-body elements written with every frame
 ELEMENTS = ("position", "velocity", "orientation", "angular_velocity")
 
@@ -200,7 +213,10 @@ class H5MDWriter:
             "angular_velocity": self._element(
                 particles, "angular_velocity", (self.n, 3), "rad s-1"
             ),
-            **{name: self._element(observables, name, (), "J") for name in ENERGIES},
+            **{
+                name: self._element(observables, name, shape, unit)
+                for name, (shape, unit) in OBSERVABLES.items()
+            },
         }
 
     @classmethod
@@ -215,7 +231,7 @@ class H5MDWriter:
             _quiet_h5py_dealloc(self)
             self.groups = {
                 **{name: self.file[f"particles/all/{name}"] for name in ELEMENTS},
-                **{name: self.file[f"observables/{name}"] for name in ENERGIES},
+                **{name: self.file[f"observables/{name}"] for name in OBSERVABLES},
             }
         except (OSError, KeyError) as exc:
             raise CaromError(
@@ -262,9 +278,8 @@ class H5MDWriter:
         value.attrs["unit"] = unit
         return group
 
-    def write(self, frame: Frame, energies: Mapping[str, float]) -> None:
-        """Append one frame and its energies [J] (``kinetic_energy``, ``potential_energy``,
-        ``dissipated_energy``).
+    def write(self, frame: Frame, observed: Mapping[str, Any]) -> None:
+        """Append one frame and its observables, by name (every one of :data:`OBSERVABLES`).
 
         Raises
         ------
@@ -281,12 +296,12 @@ class H5MDWriter:
                 str(self.path),
             )
         try:
-            self._append(frame, energies)
+            self._append(frame, observed)
         except OSError:
             _mark_failed(self)
             raise
 
-    def _append(self, frame: Frame, energies: Mapping[str, float]) -> None:
+    def _append(self, frame: Frame, observed: Mapping[str, Any]) -> None:
         k = self.frames
         values = [
             ("position", frame.positions),
@@ -294,7 +309,7 @@ class H5MDWriter:
             ("orientation", frame.orientations),
             ("angular_velocity", frame.angular_velocities),
         ]
-        for name, value in [*values, *((name, energies[name]) for name in ENERGIES)]:
+        for name, value in [*values, *((name, observed[name]) for name in OBSERVABLES)]:
             group = self.groups[name]
             for dataset in ("step", "time", "value"):
                 group[dataset].resize(k + 1, axis=0)

@@ -11,7 +11,13 @@ from typing import Any
 from numpy.typing import NDArray
 
 from carom.engines.base import KIND_PAIR, KIND_PLANE, KIND_WALL
-from carom.observables import kinetic_energy, momentum, potential_energy
+from carom.observables import (
+    angular_momentum,
+    kinetic_energy,
+    momentum,
+    potential_energy,
+    rotational_energy,
+)
 from carom.world import World
 
 #: the ``partner_kind`` column of events.csv, by kind code
@@ -96,17 +102,20 @@ def summary(
     """The run's observables, conservation errors, counts and speed, as plain JSON data.
 
     ``start`` holds ``kinetic_energy`` [J], ``potential_energy`` [J] and ``momentum`` [kg m/s]
-    taken before the run. The energy balance is ``E0 - E - dissipated + given`` over ``E0``
-    (kinetic plus gravitational potential energy; ``given`` by the parting-speed floor):
-    round-off when the physics is right.
+    taken before the run, and may hold ``rotational_energy`` [J] and ``angular_momentum``
+    [kg m^2/s]. The energy balance is ``E0 - E - dissipated + given`` over ``E0`` (kinetic
+    plus gravitational potential energy; ``given`` by the parting-speed floor, or by the rigid
+    engine's solver): round-off when the physics is right.
     """
     stats = world.stats
     now = world.frame()
-    ke = kinetic_energy(world.bodies, now.velocities, now.angular_velocities)
-    pe = potential_energy(world.bodies, now.positions, world.gravity)
+    b, x, v, w = world.bodies, now.positions, now.velocities, now.angular_velocities
+    ke = kinetic_energy(b, v, w)
+    pe = potential_energy(b, x, world.gravity)
     e0 = start["kinetic_energy"] + start["potential_energy"]
     balance = (e0 - (ke + pe) - stats.energy_lost + stats.energy_given) / e0 if e0 else 0.0
     events = stats.events_processed
+    giver = "given_by_solver_J" if world.engine_name == "rigid" else "given_by_parting_floor_J"
     data: dict[str, Any] = {
         "scene": scene,
         "bodies": world.n_bodies,
@@ -122,13 +131,20 @@ def summary(
             "kinetic_end_J": ke,
             "potential_start_J": start["potential_energy"],
             "potential_end_J": pe,
+            "rotational_start_J": start.get("rotational_energy"),
+            "rotational_end_J": rotational_energy(b, w),
             "dissipated_J": stats.energy_lost,
-            "given_by_parting_floor_J": stats.energy_given,
+            giver: stats.energy_given,
             "balance_error_relative": balance,
         },
         "momentum": {
             "start_kg_m_s": list(start["momentum"]),
-            "end_kg_m_s": momentum(world.bodies, now.velocities).tolist(),
+            "end_kg_m_s": momentum(b, v).tolist(),
+        },
+        "angular_momentum": {
+            "about": "origin",
+            "start_kg_m2_s": list(start.get("angular_momentum", [])) or None,
+            "end_kg_m2_s": angular_momentum(b, x, v, w).tolist(),
         },
         "temperature_J": stats.temperature,
         "rotational_temperature_J": stats.rotational_temperature,

@@ -399,9 +399,15 @@ class _Run:
         run.frames, run.t0, run.wall = progress["frames"], progress["t0"], progress["wall"]
         run.resumed_at = world.time
         prefix = "history."
-        run.history = RunHistory.from_arrays(
-            {k[len(prefix) :]: v for k, v in extra.items() if k.startswith(prefix)}
-        )
+        try:
+            run.history = RunHistory.from_arrays(
+                {k[len(prefix) :]: v for k, v in extra.items() if k.startswith(prefix)}
+            )
+        except KeyError as missing:
+            raise CaromError(
+                f"the interrupted run in {work} was checkpointed by an older carom (its history "
+                f"lacks {missing}); pass --force to start again"
+            ) from None
         run._open_trajectory(resume=True)
         run._open_events(keep=progress["events_bytes"])
         return run
@@ -439,13 +445,15 @@ class _Run:
         self.history.add(self.world, frame)
         if self.writer is not None and frame_too:
             h = self.history
-            energies = {
+            observed = {
                 "kinetic_energy": h.kinetic[-1],
                 "potential_energy": h.potential[-1],
                 "dissipated_energy": h.dissipated[-1],
                 "given_energy": h.given[-1],
+                "rotational_energy": h.rotational[-1],
+                "angular_momentum": h.angular_momentum[-1],
             }
-            self.writer.write(frame, energies)
+            self.writer.write(frame, observed)
             self.frames = self.writer.frames
 
     def checkpoint(self) -> None:
@@ -558,6 +566,8 @@ class _Run:
             "kinetic_energy": h.kinetic[0],
             "potential_energy": h.potential[0],
             "momentum": np.asarray(h.momentum[0]).tolist(),
+            "rotational_energy": h.rotational[0],
+            "angular_momentum": np.asarray(h.angular_momentum[0]).tolist(),
         }
         data = summary(world, scene=scene, start=start, wall_seconds=self.wall)
         if outputs.events:

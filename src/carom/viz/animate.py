@@ -237,37 +237,75 @@ class Outlines:
         Each polygon's body.
     splits : (K - 1,) int64
         Where each polygon after the first starts in ``points``.
+    circle : (K,) bool
+        Whether the polygon is a circle (a piece with one core vertex).
     """
 
     def __init__(self, pieces: list[tuple[ConvexPiece, ...]]) -> None:
         points: list[FloatArray] = [np.zeros((0, 2))]
         insets: list[FloatArray] = [np.zeros((0, 2))]
-        owner: list[int] = []
         body: list[int] = []
+        circle: list[bool] = []
         for i, shapes in enumerate(pieces):
             for piece in shapes:
                 ring = _outline(piece.vertices, piece.radius)
                 middle = ring.mean(axis=0)
                 points.append(ring)
                 insets.append(middle + 0.72 * (ring - middle))
-                owner.extend([i] * len(ring))
                 body.append(i)
+                circle.append(len(piece.vertices) == 1)
         self.points = np.concatenate(points)
         self.inset = np.concatenate(insets)
-        self.owner = np.array(owner, np.int64)
         self.body = np.array(body, np.int64)
-        self.splits = np.cumsum([len(ring) for ring in points[1:]], dtype=np.int64)[:-1]
+        self.circle = np.array(circle, bool)
+        sizes = [len(ring) for ring in points[1:]]
+        self.owner = np.repeat(self.body, sizes)
+        self.splits = np.cumsum(sizes, dtype=np.int64)[:-1]
 
     def placed(
         self, local: FloatArray, positions: FloatArray, angles: FloatArray
     ) -> list[FloatArray]:
         """The polygons of ``local`` outline points (M, 2) in the world, bodies at
         ``positions`` (N, 2) [m] turned by ``angles`` (N,) [rad]."""
-        theta = angles[self.owner]
-        c, s = np.cos(theta), np.sin(theta)
-        x = positions[self.owner, 0] + c * local[:, 0] - s * local[:, 1]
-        y = positions[self.owner, 1] + s * local[:, 0] + c * local[:, 1]
-        return np.split(np.stack([x, y], axis=1), self.splits)
+        return np.split(_place(local, self.owner, positions, angles), self.splits)
+
+    def strips(self) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.int64]]:
+        """The outlines as closed line strips, a circle's ending in a spoke to its centre (so
+        that its turning shows): the points (M', 2) [m] in their bodies' frames, each point's
+        body (M',) and where each strip after the first starts (K - 1,)."""
+        rings = np.split(self.points, self.splits) if len(self.body) else []
+        closed = [
+            np.concatenate(
+                [ring, ring[:1], ring.mean(axis=0, keepdims=True)] if round_ else [ring, ring[:1]]
+            )
+            for ring, round_ in zip(rings, self.circle, strict=True)
+        ]
+        sizes = [len(strip) for strip in closed]
+        points = np.concatenate(closed) if closed else np.zeros((0, 2))
+        return points, np.repeat(self.body, sizes), np.cumsum(sizes, dtype=np.int64)[:-1]
+
+
+def _place(
+    local: FloatArray, owner: NDArray[np.int64], positions: FloatArray, angles: FloatArray
+) -> FloatArray:
+    """Points (M, 2) given in their ``owner`` bodies' frames, in the world: bodies at
+    ``positions`` (N, 2) [m] turned by ``angles`` (N,) [rad]."""
+    theta = angles[owner]
+    c, s = np.cos(theta), np.sin(theta)
+    x = positions[owner, 0] + c * local[:, 0] - s * local[:, 1]
+    y = positions[owner, 1] + s * local[:, 0] + c * local[:, 1]
+    return np.stack([x, y], axis=1)
+
+
+def placed_strips(
+    strips: tuple[FloatArray, NDArray[np.int64], NDArray[np.int64]],
+    positions: FloatArray,
+    angles: FloatArray,
+) -> list[FloatArray]:
+    """The line strips of :meth:`Outlines.strips` in the world, bodies at ``positions``
+    (N, 2) [m] turned by ``angles`` (N,) [rad]."""
+    local, owner, splits = strips
+    return np.split(_place(local, owner, positions, angles), splits)
 
 
 def _outline(core: FloatArray, radius: float) -> FloatArray:

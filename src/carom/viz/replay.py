@@ -1,10 +1,12 @@
 """Interactive replays in the rerun viewer (the ``view`` extra: ``pip install 'carom[view]'``).
 
 :func:`write_recording` turns the H5MD trajectory that ``carom run`` wrote into a rerun
-recording (``.rrd``): the box, every body as a shaded sphere (a disk in 2D) coloured by speed,
-its velocity as an arrow, and the energies against time, all on two timelines, ``frame``
-(the frame number) and ``time`` (simulated seconds). The viewer's timeline scrubs, plays
-and loops it.
+recording (``.rrd``): the box, every sphere (a disk in 2D) coloured by speed, every rigid
+body of another shape as its outline turned by its angle (a circle with a spoke, so that its
+turning shows), coloured alike (static bodies grey), velocities as arrows, and the energies
+(translational and rotational kinetic apart) and the angular momentum against time, all on
+two timelines, ``frame`` (the frame number) and ``time`` (simulated seconds). The viewer's
+timeline scrubs, plays and loops it.
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ __all__ = ["RECORDING", "can_show", "need_rerun", "open_viewer", "write_recordin
 
 RECORDING = "recording.rrd"
 #: entity paths in the recording
-BOX, BODIES, VELOCITIES, ENERGY = "world/box", "world/bodies", "world/velocities", "energy"
+BOX, BODIES, SHAPES, VELOCITIES = "world/box", "world/bodies", "world/shapes", "world/velocities"
+ENERGY, ANGULAR_MOMENTUM = "energy", "angular_momentum"
 
 
 def need_rerun() -> Any:
@@ -60,7 +63,7 @@ def write_recording(folder: Path, out: Path | None = None) -> Path:
     CaromError
         No trajectory in ``folder``, or rerun (or h5py) missing.
     """
-    from carom.io.h5md import ENERGIES, read_trajectory
+    from carom.io.h5md import read_trajectory
 
     trajectory = folder / "trajectory.h5"
     if not trajectory.is_file():
@@ -75,7 +78,7 @@ def write_recording(folder: Path, out: Path | None = None) -> Path:
     stream.save(partial)
     try:
         with read_trajectory(trajectory) as f:
-            _log_all(rr, stream, f, ENERGIES)
+            _log_all(rr, stream, f)
         stream.flush()
         stream.disconnect()
     except BaseException:
@@ -85,14 +88,22 @@ def write_recording(folder: Path, out: Path | None = None) -> Path:
     return out
 
 
-def _log_all(rr: Any, stream: Any, f: Any, energies: tuple[str, ...]) -> None:
-    from carom.viz.animate import TrajectoryScene, sampled_speeds, speed_colours, speed_scale
+def _log_all(rr: Any, stream: Any, f: Any) -> None:
+    from carom.io.h5md import ENERGIES
+    from carom.viz.animate import (
+        TrajectoryScene,
+        placed_strips,
+        sampled_speeds,
+        speed_colours,
+        speed_scale,
+    )
 
     scene = TrajectoryScene.read(f)
-    box, radius, moving = scene.box, scene.radius, scene.moving
+    box, radius, moving, round_ = scene.box, scene.radius, scene.moving, scene.round
     times = f["particles/all/position/time"][:]
     positions = f["particles/all/position/value"]
     velocities = f["particles/all/velocity/value"]
+    angles = f["particles/all/orientation/value"]
     Points = rr.Points3D if scene.dim == 3 else rr.Points2D
     Arrows = rr.Arrows3D if scene.dim == 3 else rr.Arrows2D
     if scene.dim == 3:
@@ -104,20 +115,36 @@ def _log_all(rr: Any, stream: Any, f: Any, energies: tuple[str, ...]) -> None:
     top = speed_scale(speeds)
     typical = float(np.percentile(speeds, 90)) if speeds.size else 0.0
     arrow_time = 2.0 * float(np.median(radius)) / typical if typical > 0 else 0.0
+    # the rigid bodies' outlines (2D), one strip per piece, coloured by their body
+    outlines = scene.outlines
+    strips = outlines.strips() if scene.dim == 2 and len(outlines.body) else None
     observed = f["observables"]
-    series = {name: observed[f"{name}/value"][:] for name in energies if name in observed}
+    series = {name: observed[f"{name}/value"][:] for name in ENERGIES}
+    rotational = observed["rotational_energy/value"][:] if "rotational_energy" in observed else None
+    spin = observed["angular_momentum/value"][:] if "angular_momentum" in observed else None
     for k in range(len(times)):
         stream.set_time("frame", sequence=k)
         stream.set_time("time", duration=float(times[k]))
         x, v = positions[k], velocities[k]
         colours = (speed_colours(v, moving, top) * 255).astype(np.uint8)
-        stream.log(BODIES, Points(x, radii=radius, colors=colours))
+        if np.any(round_):
+            stream.log(BODIES, Points(x[round_], radii=radius[round_], colors=colours[round_]))
+        if strips is not None:
+            placed = placed_strips(strips, x, np.asarray(angles[k], float))
+            stream.log(SHAPES, rr.LineStrips2D(placed, colors=colours[outlines.body]))
         stream.log(VELOCITIES, Arrows(origins=x[moving], vectors=v[moving] * arrow_time))
         total = 0.0
         for name, values in series.items():
-            stream.log(f"{ENERGY}/{name.removesuffix('_energy')}", rr.Scalars(float(values[k])))
             total += float(values[k])
+            if name == "kinetic_energy" and rotational is not None and np.any(rotational):
+                stream.log(f"{ENERGY}/translational", rr.Scalars(float(values[k] - rotational[k])))
+                stream.log(f"{ENERGY}/rotational", rr.Scalars(float(rotational[k])))
+            stream.log(f"{ENERGY}/{name.removesuffix('_energy')}", rr.Scalars(float(values[k])))
         stream.log(f"{ENERGY}/total", rr.Scalars(total))
+        if spin is not None:
+            for axis in range(3) if scene.dim == 3 else (2,):
+                value = float(spin[k, axis])
+                stream.log(f"{ANGULAR_MOMENTUM}/{'xyz'[axis]}", rr.Scalars(value))
 
 
 def can_show() -> bool:

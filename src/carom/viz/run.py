@@ -1,5 +1,5 @@
-"""The figures of a run: energy and momentum against time, the collision rate, and the speed
-distribution against Maxwell-Boltzmann."""
+"""The figures of a run: energy, momentum and angular momentum against time, the collision
+rate, and the speed distribution against Maxwell-Boltzmann."""
 
 from __future__ import annotations
 
@@ -15,8 +15,10 @@ __all__ = ["write_run_plots"]
 
 
 def write_run_plots(folder: Path, world: World, history: RunHistory) -> list[str]:
-    """Write ``energy.png``, ``collision_rate.png`` (when there were collisions) and, for a
-    gas of equal masses in a periodic box, ``speeds.png``; return the file names written."""
+    """Write ``energy.png`` (the energy balance, translational and rotational kinetic energy
+    apart when anything spins; momentum; angular momentum about the origin when anything
+    turns), ``collision_rate.png`` (when there were collisions) and, for a gas of equal masses
+    in a periodic box, ``speeds.png``; return the file names written."""
     require_matplotlib()
     import matplotlib
 
@@ -25,20 +27,31 @@ def write_run_plots(folder: Path, world: World, history: RunHistory) -> list[str
 
     written = []
     t = np.array(history.time)
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    spin = np.array(history.angular_momentum)
+    rot = np.array(history.rotational)
+    # the angular momentum panel when anything turns (spin, or a rigid body's orbit)
+    turning = bool(np.any(rot) or world.engine_name == "rigid")
+    rows = 3 if turning else 2
+    fig, axes = plt.subplots(rows, 1, figsize=(7, 3 * rows), sharex=True)
+    top, bottom = axes[0], axes[1]
     ke, pe, lost, given = (
         np.array(history.kinetic),
         np.array(history.potential),
         np.array(history.dissipated),
         np.array(history.given),
     )
-    top.plot(t, ke, label="kinetic")
+    if np.any(rot):
+        top.plot(t, ke - rot, label="translational kinetic")
+        top.plot(t, rot, label="rotational kinetic")
+    else:
+        top.plot(t, ke, label="kinetic")
     if np.any(pe):
         top.plot(t, pe, label="potential (gravity)")
     if np.any(lost):
         top.plot(t, lost, label="dissipated")
     if np.any(given):
-        top.plot(t, given, label="given (parting floor)")
+        source = "solver" if world.engine_name == "rigid" else "parting floor"
+        top.plot(t, given, label=f"given ({source})")
     top.plot(t, ke + pe + lost - given, "k--", lw=1, label="total (conserved)")
     top.set_ylabel("energy [J]")
     top.legend(loc="best", fontsize=8)
@@ -46,8 +59,13 @@ def write_run_plots(folder: Path, world: World, history: RunHistory) -> list[str
     for k in range(p.shape[1]):
         bottom.plot(t, p[:, k], label=f"p_{'xyz'[k]}")
     bottom.set_ylabel("momentum [kg m/s]")
-    bottom.set_xlabel("time [s]")
     bottom.legend(loc="best", fontsize=8)
+    if turning:
+        for k in range(3) if world.dim == 3 else (2,):
+            axes[2].plot(t, spin[:, k], label=f"L_{'xyz'[k]}")
+        axes[2].set_ylabel("angular momentum\nabout the origin [kg m²/s]")
+        axes[2].legend(loc="best", fontsize=8)
+    axes[-1].set_xlabel("time [s]")
     fig.tight_layout()
     fig.savefig(folder / "energy.png", dpi=110)
     plt.close(fig)
