@@ -319,7 +319,6 @@ def _cmd_run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 128 + stopped.signal
-    rate = report.collisions / report.wall_seconds if report.wall_seconds > 0 else float("inf")
     resumed = "" if report.resumed_at is None else f" (resumed at {report.resumed_at:g} s)"
     prepared = (
         f"; kernels compiled or loaded in {report.prepare_seconds:.1f} s before it"
@@ -328,9 +327,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     )
     print(
         f"{report.title}: {plural(report.bodies, 'body', 'bodies')}, {report.simulated:g} s "
-        f"simulated{resumed}, {plural(report.collisions, 'collision')} and "
-        f"{report.wall_collisions} at walls in {report.wall_seconds:.2f} s "
-        f"({rate:.3g} collisions/s){prepared}"
+        f"simulated{resumed}, {report.work()}{prepared}"
     )
     print(f"wrote {', '.join(report.written)} to {args.out}/")
     return 0

@@ -225,9 +225,15 @@ class Stats:
 
     @property
     def energy_given(self) -> float:
-        """Kinetic energy the parting-speed floor gave since the last reset [J]; the ledger
-        closes as ``E0 = E + energy_lost - energy_given``."""
+        """Kinetic energy the parting-speed floor (the rigid engine: its solver) gave since the
+        last reset [J]."""
         return self._since().energy_given
+
+    @property
+    def work_done(self) -> float:
+        """Work kinematic bodies did on the others since the last reset [J]; the ledger closes
+        as ``E0 + work_done = E + energy_lost - energy_given``."""
+        return self._since().work_done
 
 
 @dataclass
@@ -235,8 +241,9 @@ class RunHistory:
     """A run's observables, recorded as it goes (for its plots and summary): time [s],
     kinetic energy (translation and rotation) and its rotational part [J], potential energy
     [J], energy dissipated so far [J], energy given so far (by the parting-speed floor, or by
-    the rigid solver) [J], total momentum [kg m/s], total angular momentum about the origin
-    [kg m^2/s], and collisions so far (bodies and walls) [-]."""
+    the rigid solver) [J], work done by kinematic bodies so far [J], total momentum [kg m/s],
+    total angular momentum about the origin [kg m^2/s], and collisions so far (bodies and
+    walls) [-]."""
 
     time: list[float] = field(default_factory=list)
     kinetic: list[float] = field(default_factory=list)
@@ -244,6 +251,7 @@ class RunHistory:
     potential: list[float] = field(default_factory=list)
     dissipated: list[float] = field(default_factory=list)
     given: list[float] = field(default_factory=list)
+    work: list[float] = field(default_factory=list)
     momentum: list[NDArray[np.float64]] = field(default_factory=list)
     angular_momentum: list[NDArray[np.float64]] = field(default_factory=list)
     collisions: list[int] = field(default_factory=list)
@@ -259,6 +267,7 @@ class RunHistory:
         counters = world.counters()
         self.dissipated.append(counters.energy_lost)
         self.given.append(counters.energy_given)
+        self.work.append(counters.work_done)
         self.momentum.append(momentum(b, v))
         self.angular_momentum.append(angular_momentum(b, x, v, w))
         self.collisions.append(counters.collisions + counters.wall_collisions)

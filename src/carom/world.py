@@ -167,7 +167,7 @@ class World:
         #: whether the last run got to its target (False: its stop request ended it early)
         self.reached = True
         # totals of the engines dropped so far (adding bodies or materials rebuilds it)
-        self._counters_before = Counters(0, 0, 0, 0, 0, 0.0, 0.0, 0, 0.0)
+        self._counters_before = Counters(0, 0, 0, 0, 0, 0.0, 0.0, 0, 0.0, 0.0)
         self.stats = Stats(self)
 
     def _wall_materials(

@@ -113,6 +113,7 @@ def test_run_a_rigid_body_reports_its_spin_and_energy_balance(tmp_path: Path) ->
     assert energy["rotational_start_J"] == 0.0  # dropped without spin
     assert energy["rotational_end_J"] == pytest.approx(0.5 * inertia * w**2, rel=1e-12)
     assert energy["given_by_solver_J"] == 0.0
+    assert energy["work_by_kinematic_bodies_J"] == 0.0  # nothing kinematic here
     assert "given_by_parting_floor_J" not in energy
     assert abs(energy["balance_error_relative"]) < 1e-12
     lz = m * (x[0] * v[1] - x[1] * v[0]) + inertia * w
@@ -121,6 +122,10 @@ def test_run_a_rigid_body_reports_its_spin_and_energy_balance(tmp_path: Path) ->
     # it did land: m g h = 0.05 * 9.81 * 1 = 0.49 J at the start, most of it lost since
     assert energy["dissipated_J"] > 0.1
     assert "energy.png" in done.stdout
+    # a time-stepped run reports its steps (0.6 s at 60 Hz), not a collision rate
+    assert re.search(
+        r"36 steps of 0.01667 s in [0-9.]+ s, [0-9.]+ ms a step; \d+ impacts? ", done.stdout
+    )
 
 
 def _refused(done: subprocess.CompletedProcess[str], out: Path, message: str) -> None:

@@ -17,7 +17,7 @@ pytest.importorskip("imageio_ffmpeg", reason="the viz extra is not installed")
 def test_the_page_shows_the_study_and_links_every_file(tmp_path: Path) -> None:
     out = tmp_path / "out"
     lines: list[str] = []
-    page = build_showcase(out, scenes=("case-4", "newtons-cradle"), say=lines.append)
+    page = build_showcase(out, scenes=("case-4", "newtons-cradle", "rod-drop"), say=lines.append)
     assert page == out / "index.html"
     text = page.read_text()
     # one row per impact of the study (19), each model's error shown
@@ -27,18 +27,25 @@ def test_the_page_shows_the_study_and_links_every_file(tmp_path: Path) -> None:
     assert "scenes/case-4/animation.mp4" in links
     assert "scenes/newtons-cradle/trajectory.h5" in links
     assert "cases/case-7.png" in links
+    assert "scenes/rod-drop/animation.mp4" in links  # a rigid body, drawn turned
+    assert "energy given by the solver" in text  # the rigid engine's ledger
     missing = [link for link in links if not (out / link).is_file()]
     assert not missing
     # and nothing written that the page does not show or link
     files = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()}
     assert files - links == {"index.html"}
-    assert len(lines) == 3  # the study, then each scene
+    # the study, then each scene (and a line on compiling when the kernels were not cached)
+    done = [line for line in lines if " -> " in line]
+    assert len(done) == 4
+    assert done[0].startswith("the seven two-sphere cases")
 
 
 def test_the_showcase_runs_what_the_issue_asks() -> None:
-    # the seven cases, Newton's cradle, a billiards break and a 3D gas
+    # the seven cases, Newton's cradle, a billiards break and a 3D gas (issue 1); a pyramid, a
+    # tumbler and the rod drop (issue 13)
     assert SHOWCASE_SCENES[:7] == tuple(f"case-{n}" for n in range(1, 8))
     assert {"newtons-cradle", "billiards-break", "hard-sphere-gas"} <= set(SHOWCASE_SCENES)
+    assert {"pyramid", "tumbler", "rod-drop"} <= set(SHOWCASE_SCENES)
 
 
 def test_the_showcase_says_when_it_compiles_first(
@@ -52,7 +59,7 @@ def test_the_showcase_says_when_it_compiles_first(
     lines: list[str] = []
     build_showcase(tmp_path / "out", scenes=("case-1",), say=lines.append)
     compiling = [k for k, line in enumerate(lines) if "compiling the engine's kernels" in line]
-    case = [k for k, line in enumerate(lines) if "1 collision in" in line]
+    case = [k for k, line in enumerate(lines) if "1 collision and 0 at walls in" in line]
     assert compiling
     assert case
     assert compiling[0] < case[0]

@@ -27,7 +27,15 @@ EXPECTED = CASE_SCENES | {
     "rain-3d",
 }
 #: the rigid-body scenes (tests/scene/test_rigid_scenes.py runs them)
-RIGID = {"bullet", "dominoes", "large-pyramid", "many-pyramids", "rod-drop", "tumbler"}
+RIGID = {
+    "bullet",
+    "card-house",
+    "dominoes",
+    "large-pyramid",
+    "many-pyramids",
+    "rod-drop",
+    "tumbler",
+}
 
 
 def test_the_built_in_scenes_are_all_there() -> None:

@@ -81,8 +81,10 @@ class Counters(NamedTuple):
         Impacts whose parting speed the engine raised to a floor so that the bodies part
         (event-driven engine; ``docs/engine.md``, "Minimum parting speed").
     energy_given : float
-        Kinetic energy those raised speeds gave [J]: the energy ledger closes as
-        ``E0 = E + energy_lost - energy_given``.
+        Kinetic energy those raised speeds gave [J] (the rigid engine: what its solver gave).
+    work_done : float
+        Work done on the bodies by kinematic bodies (a turning drum, a paddle) [J]; the
+        energy ledger closes as ``E0 + work_done = E + energy_lost - energy_given``.
     """
 
     events: int
@@ -94,6 +96,7 @@ class Counters(NamedTuple):
     energy_lost: float
     floor_collisions: int
     energy_given: float
+    work_done: float = 0.0
 
     def plus(self, other: Counters) -> Counters:
         """These totals and ``other``'s, added."""

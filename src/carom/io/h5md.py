@@ -21,7 +21,8 @@ Layout written (de Buyl et al., Comput. Phys. Commun. 185, 1546, 2014; nongnu.or
     /observables/dissipated_energy   same: lost in collisions since the start [J]
     /observables/given_energy        same: given by the parting-speed floor (the rigid
                               engine: by its solver) since the start [J]
-                              (E0 = kinetic + potential + dissipated - given)
+    /observables/work_done           same: work done by kinematic bodies since the start [J]
+                              (E0 + work = kinetic + potential + dissipated - given)
     /observables/rotational_energy   same: the rotational part of the kinetic energy [J]
     /observables/angular_momentum    same, value (F, 3): about the origin, orbital plus spin
                               [kg m2 s-1] (2D: about z, column 2)
@@ -52,6 +53,7 @@ from carom.shapes import SHAPE_NAMES
 from carom.world import Frame, World
 
 __all__ = [
+    "BALANCE",
     "ELEMENTS",
     "ENERGIES",
     "OBSERVABLES",
@@ -138,8 +140,16 @@ def write_failed() -> bool:
 #: exit, when a write finds the disk full) [bytes]
 DISK_MARGIN = 16 * 2**20
 
-#: the energies written with every frame [J]; their balance closes (module docstring)
-ENERGIES = ("kinetic_energy", "potential_energy", "dissipated_energy", "given_energy")
+#: the energies written with every frame [J], each with its sign in the total that stays E0
+#: (module docstring)
+BALANCE = {
+    "kinetic_energy": 1.0,
+    "potential_energy": 1.0,
+    "dissipated_energy": 1.0,
+    "given_energy": -1.0,
+    "work_done": -1.0,
+}
+ENERGIES = tuple(BALANCE)
 #: every observable written with every frame: its value's shape and unit
 OBSERVABLES: dict[str, tuple[tuple[int, ...], str]] = {
     **{name: ((), "J") for name in ENERGIES},

@@ -103,9 +103,10 @@ def summary(
 
     ``start`` holds ``kinetic_energy`` [J], ``potential_energy`` [J] and ``momentum`` [kg m/s]
     taken before the run, and may hold ``rotational_energy`` [J] and ``angular_momentum``
-    [kg m^2/s]. The energy balance is ``E0 - E - dissipated + given`` over ``E0`` (kinetic
-    plus gravitational potential energy; ``given`` by the parting-speed floor, or by the rigid
-    engine's solver): round-off when the physics is right.
+    [kg m^2/s]. The energy balance is ``E0 + work - E - dissipated + given`` over ``E0``
+    (kinetic plus gravitational potential energy; ``given`` by the parting-speed floor, or by
+    the rigid engine's solver; ``work`` by kinematic bodies): round-off when the physics is
+    right.
     """
     stats = world.stats
     now = world.frame()
@@ -113,9 +114,11 @@ def summary(
     ke = kinetic_energy(b, v, w)
     pe = potential_energy(b, x, world.gravity)
     e0 = start["kinetic_energy"] + start["potential_energy"]
-    balance = (e0 - (ke + pe) - stats.energy_lost + stats.energy_given) / e0 if e0 else 0.0
+    closed = e0 + stats.work_done - (ke + pe) - stats.energy_lost + stats.energy_given
+    balance = closed / e0 if e0 else 0.0
     events = stats.events_processed
-    giver = "given_by_solver_J" if world.engine_name == "rigid" else "given_by_parting_floor_J"
+    rigid = world.engine_name == "rigid"
+    giver = "given_by_solver_J" if rigid else "given_by_parting_floor_J"
     data: dict[str, Any] = {
         "scene": scene,
         "bodies": world.n_bodies,
@@ -135,6 +138,7 @@ def summary(
             "rotational_end_J": rotational_energy(b, w),
             "dissipated_J": stats.energy_lost,
             giver: stats.energy_given,
+            **({"work_by_kinematic_bodies_J": stats.work_done} if rigid else {}),
             "balance_error_relative": balance,
         },
         "momentum": {

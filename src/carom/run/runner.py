@@ -28,6 +28,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from carom._text import plural
 from carom.errors import CaromError
 from carom.limits import LARGEST, MAX_FRAMES, SMALLEST
 from carom.observables import RunHistory
@@ -80,6 +81,26 @@ class RunReport:
     #: seconds spent before the run compiling the engine's kernels (once per install) or
     #: loading them from the cache; not part of ``wall_seconds``
     prepare_seconds: float = 0.0
+    #: the time-stepped (rigid) engine's step [s]; None for the event-driven engine
+    step: float | None = None
+
+    def work(self) -> str:
+        """What the engine did, and how fast: collisions for the event-driven engine, steps
+        (and the impacts it solved exactly) for the time-stepped one."""
+        wall = self.wall_seconds
+        if self.step is None:
+            rate = self.collisions / wall if wall > 0 else float("inf")
+            return (
+                f"{plural(self.collisions, 'collision')} and {self.wall_collisions} at walls in "
+                f"{wall:.2f} s ({rate:.3g} collisions/s)"
+            )
+        steps = round(self.simulated / self.step)
+        each = f", {1e3 * wall / steps:.3g} ms a step" if steps else ""
+        impacts = self.collisions + self.wall_collisions
+        return (
+            f"{plural(steps, 'step')} of {self.step:.4g} s in {wall:.2f} s{each}; "
+            f"{plural(impacts, 'impact')} solved exactly"
+        )
 
 
 class RunInterrupted(Exception):  # noqa: N818 (it is not an error: the user asked to stop)
@@ -231,6 +252,7 @@ def run_scene(
         written=written,
         resumed_at=run.resumed_at,
         prepare_seconds=run.prepare_seconds,
+        step=1.0 / world.rigid_settings.rate if world.engine_name == "rigid" else None,
     )
 
 
@@ -450,6 +472,7 @@ class _Run:
                 "potential_energy": h.potential[-1],
                 "dissipated_energy": h.dissipated[-1],
                 "given_energy": h.given[-1],
+                "work_done": h.work[-1],
                 "rotational_energy": h.rotational[-1],
                 "angular_momentum": h.angular_momentum[-1],
             }

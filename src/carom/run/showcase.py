@@ -1,4 +1,5 @@
-"""The showcase behind ``make demo``: the two-sphere study and a few scenes, on one page.
+"""The showcase behind ``make demo``: the two-sphere study and a few scenes of both engines
+(spheres, event-driven; rigid bodies, time-stepped), on one page.
 
 :func:`build_showcase` writes, into one output directory (all or nothing)::
 
@@ -16,7 +17,6 @@ from pathlib import Path
 from typing import Any
 
 from carom import __version__
-from carom._text import plural
 from carom.io.outdir import check_output, staged_output
 from carom.jit import kernels_cached
 from carom.run.runner import run_scene
@@ -26,12 +26,16 @@ from carom.studies.two_spheres import CASES, MODELS, run_study
 
 __all__ = ["SHOWCASE_SCENES", "build_showcase"]
 
-#: the scenes shown, in page order
+#: the scenes shown, in page order: the event-driven engine's, then the rigid engine's
 SHOWCASE_SCENES = (
     *(f"case-{case.number}" for case in CASES),
     "newtons-cradle",
     "billiards-break",
     "hard-sphere-gas",
+    "rod-drop",
+    "card-house",
+    "pyramid",
+    "tumbler",
 )
 
 
@@ -80,11 +84,7 @@ def build_showcase(
                     f"(the engine's kernels: compiled or loaded in {report.prepare_seconds:.1f} "
                     f"s, once per install; not counted in the run times)"
                 )
-            say(
-                f"{report.title}: {plural(report.collisions, 'collision')} in "
-                f"{report.wall_seconds:.2f} s "
-                f"-> {out / 'scenes' / folder.name}/"
-            )
+            say(f"{report.title}: {report.work()} -> {out / 'scenes' / folder.name}/")
             shown.append((scene, folder, report.written))
         page = _page(staging, json.loads((cases / "cases.json").read_text()), shown)
         (staging / "index.html").write_text(page, encoding="utf-8")
@@ -198,7 +198,17 @@ def _scene_section(root: Path, scene: str, folder: Path, written: list[str]) -> 
         ("simulated time [s]", summary["simulated_time_s"]),
         ("collisions (pairs, walls)", f"{summary['collisions']}, {summary['wall_collisions']}"),
         ("energy dissipated [J]", f"{energy['dissipated_J']:.6g}"),
-        ("energy given by the parting floor [J]", f"{energy['given_by_parting_floor_J']:.3g}"),
+        ("rotational kinetic energy at the end [J]", f"{energy['rotational_end_J']:.3g}"),
+        *(
+            [("energy given by the solver [J]", f"{energy['given_by_solver_J']:.3g}")]
+            if "given_by_solver_J" in energy
+            else [
+                (
+                    "energy given by the parting floor [J]",
+                    f"{energy['given_by_parting_floor_J']:.3g}",
+                )
+            ]
+        ),
         ("energy balance error (relative)", f"{energy['balance_error_relative']:.2e}"),
         ("wall time [s]", f"{summary['performance']['wall_time_s']:.3g}"),
     ]

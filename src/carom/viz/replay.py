@@ -89,7 +89,7 @@ def write_recording(folder: Path, out: Path | None = None) -> Path:
 
 
 def _log_all(rr: Any, stream: Any, f: Any) -> None:
-    from carom.io.h5md import ENERGIES
+    from carom.io.h5md import BALANCE
     from carom.viz.animate import (
         TrajectoryScene,
         placed_strips,
@@ -119,7 +119,7 @@ def _log_all(rr: Any, stream: Any, f: Any) -> None:
     outlines = scene.outlines
     strips = outlines.strips() if scene.dim == 2 and len(outlines.body) else None
     observed = f["observables"]
-    series = {name: observed[f"{name}/value"][:] for name in ENERGIES}
+    series = {name: observed[f"{name}/value"][:] for name in BALANCE}
     rotational = observed["rotational_energy/value"][:] if "rotational_energy" in observed else None
     spin = observed["angular_momentum/value"][:] if "angular_momentum" in observed else None
     for k in range(len(times)):
@@ -135,7 +135,7 @@ def _log_all(rr: Any, stream: Any, f: Any) -> None:
         stream.log(VELOCITIES, Arrows(origins=x[moving], vectors=v[moving] * arrow_time))
         total = 0.0
         for name, values in series.items():
-            total += float(values[k])
+            total += BALANCE[name] * float(values[k])
             if name == "kinetic_energy" and rotational is not None and np.any(rotational):
                 stream.log(f"{ENERGY}/translational", rr.Scalars(float(values[k] - rotational[k])))
                 stream.log(f"{ENERGY}/rotational", rr.Scalars(float(rotational[k])))

@@ -34,11 +34,12 @@ def write_run_plots(folder: Path, world: World, history: RunHistory) -> list[str
     rows = 3 if turning else 2
     fig, axes = plt.subplots(rows, 1, figsize=(7, 3 * rows), sharex=True)
     top, bottom = axes[0], axes[1]
-    ke, pe, lost, given = (
+    ke, pe, lost, given, work = (
         np.array(history.kinetic),
         np.array(history.potential),
         np.array(history.dissipated),
         np.array(history.given),
+        np.array(history.work),
     )
     if np.any(rot):
         top.plot(t, ke - rot, label="translational kinetic")
@@ -52,7 +53,11 @@ def write_run_plots(folder: Path, world: World, history: RunHistory) -> list[str
     if np.any(given):
         source = "solver" if world.engine_name == "rigid" else "parting floor"
         top.plot(t, given, label=f"given ({source})")
-    top.plot(t, ke + pe + lost - given, "k--", lw=1, label="total (conserved)")
+    if np.any(work):
+        top.plot(t, work, label="work by kinematic bodies")
+        top.plot(t, ke + pe + lost - given - work, "k--", lw=1, label="total less that work (E0)")
+    else:
+        top.plot(t, ke + pe + lost - given, "k--", lw=1, label="total (conserved)")
     top.set_ylabel("energy [J]")
     top.legend(loc="best", fontsize=8)
     p = np.array(history.momentum)

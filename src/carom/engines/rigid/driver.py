@@ -12,7 +12,8 @@ One step (``dt = 1/rate``) runs these stages, in this order (docs/rigid.md):
    the time of impact (:mod:`.impacts`);
 6. **free flight**: bodies with no contact, exactly (:mod:`.motion`);
 7. **solve**: the soft step over the remaining contacts (:mod:`.solver`);
-8. **store** the impulses for the next step, and **sleep** the islands at rest.
+8. **store** the impulses for the next step, and **sleep** the islands at rest (their bodies
+   stop, as in Box2D; the kinetic energy they kept goes to the ledger as lost).
 """
 
 from __future__ import annotations
@@ -57,10 +58,12 @@ class RigidEngine:
 
     Notes
     -----
-    The counters keep the energy ledger: ``energy_lost`` is what the impacts solved exactly
-    and the solver took out of the bodies' kinetic and potential energy, ``energy_given`` what
-    the solver put in (pushing overlaps apart, a kinematic body's work), step by step, so that
-    ``E0 = E + energy_lost - energy_given``.
+    The counters keep the energy ledger: ``work_done`` is what kinematic bodies put in (each
+    impulse on a body times the kinematic body's velocity at the contact point, summed as the
+    solver and the exact impacts apply them), ``energy_lost`` what the impacts solved exactly
+    and the solver took out of the bodies' kinetic and potential energy beyond that work,
+    ``energy_given`` what the solver put in (pushing overlaps apart), step by step, so that
+    ``E0 + work_done = E + energy_lost - energy_given``.
     """
 
     name = "rigid"
@@ -102,6 +105,7 @@ class RigidEngine:
         self._wall_collisions = 0
         self._energy_lost = 0.0
         self._energy_given = 0.0
+        self._work_done = 0.0
         self._virial = 0.0
         # place everything once: static pieces never move again
         motion.place_pieces(
@@ -158,6 +162,7 @@ class RigidEngine:
             self._energy_lost,
             0,
             self._energy_given,
+            self._work_done,
         )
 
     def resting(self) -> NDArray[np.int64]:
@@ -169,7 +174,13 @@ class RigidEngine:
             "steps": np.array([self.steps]),
             "start": np.array([self.start]),
             "totals": np.array(
-                [self._collisions, self._wall_collisions, self._energy_lost, self._energy_given]
+                [
+                    self._collisions,
+                    self._wall_collisions,
+                    self._energy_lost,
+                    self._energy_given,
+                    self._work_done,
+                ]
             ),
         }
 
@@ -186,9 +197,9 @@ class RigidEngine:
         start = float(arrays["start"][0])
         engine = cls(model, state, settings, start, partners)
         engine.steps = int(arrays["steps"][0])
-        collisions, walls, lost, given = (float(t) for t in arrays["totals"])
+        collisions, walls, lost, given, work = (float(t) for t in arrays["totals"])
         engine._collisions, engine._wall_collisions = int(collisions), int(walls)
-        engine._energy_lost, engine._energy_given = lost, given
+        engine._energy_lost, engine._energy_given, engine._work_done = lost, given, work
         return engine
 
     def deepest_overlap(self) -> tuple[int, int, float]:
@@ -348,6 +359,7 @@ class RigidEngine:
             motion.fly(i, dt, s.x, s.angle, s.v, s.omega, self._accel[i, 0], self._accel[i, 1])
         bodies = np.flatnonzero(self._role == islands.ROLE_SOLVER)
         before = self._energy(bodies)
+        work = np.zeros(1)  # by kinematic bodies on the others, this step [J]
         solver.solve_step(
             self._cf,
             self._ci,
@@ -368,8 +380,10 @@ class RigidEngine:
             st.damping_ratio,
             st.push_speed,
             st.restitution_threshold,
+            work,
         )
-        change = self._energy(bodies) - before
+        self._work_done += work[0]
+        change = self._energy(bodies) - before - work[0]  # the solver's own part
         if change < 0.0:
             self._energy_lost -= change
         else:
@@ -391,7 +405,7 @@ class RigidEngine:
             s.cache_impulses,
         )
         if st.sleep:
-            islands.settle(
+            self._energy_lost += islands.settle(
                 self._ci,
                 nc,
                 m.kind,
@@ -399,6 +413,8 @@ class RigidEngine:
                 s.awake,
                 s.v,
                 s.omega,
+                m.mass,
+                m.inertia,
                 m.reach,
                 s.clock,
                 s.island,
@@ -425,6 +441,7 @@ class RigidEngine:
         self._wall_collisions += int(np.count_nonzero(against != KIND_PAIR))
         self._collisions += int(np.count_nonzero(against == KIND_PAIR))
         self._energy_lost += float(np.sum(log[:, 9]))
+        self._work_done += float(np.sum(log[:, 10]))
         if sink is None:
             return
         records = np.zeros(log.shape[0], COLLISION_DTYPE)

@@ -31,7 +31,13 @@ import numpy as np
 from numba import njit
 
 from carom.engines.rigid.contacts import I_BODY_A, I_BODY_B, I_FLAGS, I_PIECE_A, I_PIECE_B
-from carom.engines.rigid.motion import apply_impulse, fly, place_piece, relative_velocity
+from carom.engines.rigid.motion import (
+    apply_impulse,
+    fixed_work,
+    fly,
+    place_piece,
+    relative_velocity,
+)
 from carom.engines.rigid.solver import FLAG_EXACT
 from carom.geometry.manifold2d import collide, core_witness
 
@@ -43,8 +49,9 @@ MAX_ITERATIONS = 200
 #: impacts of one pair within one step
 MAX_IMPACTS = 8
 #: columns of a logged impact: time into the step, body A, body B, impulse on A (x, y),
-#: normal speeds before and after (the deepest point), the point (x, y), energy lost
-IMPACT_FIELDS = 10
+#: normal speeds before and after (the deepest point), the point (x, y), energy lost, work
+#: done by a kinematic partner
+IMPACT_FIELDS = 11
 
 
 @njit(cache=True)
@@ -384,9 +391,11 @@ def _impact(
         k12 = ma + mb + ia * rn1a * rn2a + ib * rn1b * rn2b
         jn[0], jn[1] = _solve_two(k11, k12, k22, -(1.0 + e) * un[0], -(1.0 + e) * un[1])
     # apply the normal impulses, then friction point by point (clamped to each cone)
+    work = 0.0  # by a kinematic partner (its velocity does not change)
     for j in range(used):
         px = jn[j] * nx + jt[j] * tx
         py = jn[j] * ny + jt[j] * ty
+        work += fixed_work(a, b, px, py, rax[j], ray[j], rbx[j], rby[j], inv_mass, v, omega)
         apply_impulse(a, b, px, py, rax[j], ray[j], rbx[j], rby[j], inv_mass, inv_inertia, v, omega)
     if used == 2 and mu > 0.0:
         for j in range(2):
@@ -396,6 +405,9 @@ def _impact(
             ktt = ma + mb + ia * rta * rta + ib * rtb * rtb
             dj = min(max(-(ux * tx + uy * ty) / ktt, -mu * jn[j]), mu * jn[j])
             jt[j] = dj
+            work += fixed_work(
+                a, b, dj * tx, dj * ty, rax[j], ray[j], rbx[j], rby[j], inv_mass, v, omega
+            )
             apply_impulse(
                 a,
                 b,
@@ -422,7 +434,8 @@ def _impact(
     record[6] = ux * nx + uy * ny
     record[7] = x[a, 0] + rax[j0]
     record[8] = x[a, 1] + ray[j0]
-    record[9] = energy - after
+    record[9] = energy - after + work
+    record[10] = work
     return True
 
 

@@ -150,15 +150,18 @@ def settle(
     awake: np.ndarray,
     v: np.ndarray,
     omega: np.ndarray,
+    mass: np.ndarray,
+    inertia: np.ndarray,
     reach: np.ndarray,
     clock: np.ndarray,
     island: np.ndarray,
     dt: float,
     speed: float,
     time: float,
-) -> int:
-    """Run the sleep clocks and put to sleep every island that stayed slow for ``time`` [s];
-    return how many bodies fell asleep. ``island[i]`` is set to the island's root."""
+) -> float:
+    """Run the sleep clocks and put to sleep every island that stayed slow for ``time`` [s]:
+    its bodies stop (velocity and spin zero, as Box2D does; they wake at rest) and
+    ``island[i]`` is set to the island's root. Return the kinetic energy so taken [J]."""
     n = kind.shape[0]
     slowest = np.full(n, np.inf)
     for i in range(n):
@@ -179,13 +182,16 @@ def settle(
             moving = v[other, 0] != 0.0 or v[other, 1] != 0.0 or omega[other] != 0.0
             if kind[body] == KIND_DYNAMIC and kind[other] == KIND_KINEMATIC and moving:
                 slowest[parent[body]] = 0.0
-    fell = 0
+    taken = 0.0
     for i in range(n):
         if kind[i] == KIND_DYNAMIC and awake[i] and slowest[parent[i]] >= time:
             awake[i] = False
             island[i] = parent[i]
-            fell += 1
-    return fell
+            taken += 0.5 * (mass[i] * (v[i, 0] ** 2 + v[i, 1] ** 2) + inertia[i] * omega[i] ** 2)
+            v[i, 0] = 0.0
+            v[i, 1] = 0.0
+            omega[i] = 0.0
+    return taken
 
 
 @njit(cache=True)

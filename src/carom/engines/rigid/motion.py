@@ -127,6 +127,32 @@ def apply_impulse(
 
 
 @njit(cache=True, inline="always")
+def fixed_work(
+    a: int,
+    b: int,
+    px: float,
+    py: float,
+    rax: float,
+    ray: float,
+    rbx: float,
+    rby: float,
+    inv_mass: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+) -> float:
+    """Work [J] that the impulse ``P`` on A and ``-P`` on B (as :func:`apply_impulse`) draws
+    from a body that impulses do not move (infinite mass: static, kinematic, asleep): the
+    impulse on the other body times the fixed body's velocity at the contact point. Zero
+    for a body at rest; a moving kinematic body feeds (or takes) that much energy."""
+    work = 0.0
+    if inv_mass[a] == 0.0:
+        work -= px * (v[a, 0] - omega[a] * ray) + py * (v[a, 1] + omega[a] * rax)
+    if inv_mass[b] == 0.0:
+        work += px * (v[b, 0] - omega[b] * rby) + py * (v[b, 1] + omega[b] * rbx)
+    return work
+
+
+@njit(cache=True, inline="always")
 def fly(
     b: int,
     t: float,

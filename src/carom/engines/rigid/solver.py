@@ -48,7 +48,7 @@ from carom.engines.rigid.contacts import (
     P_VREL,
     point_offset,
 )
-from carom.engines.rigid.motion import apply_impulse, relative_velocity
+from carom.engines.rigid.motion import apply_impulse, fixed_work, relative_velocity
 
 __all__ = ["softness", "solve_step"]
 
@@ -105,6 +105,7 @@ def _warm_start(
     inv_inertia: np.ndarray,
     v: np.ndarray,
     omega: np.ndarray,
+    work: np.ndarray,
 ) -> None:
     for m in range(nc):
         if ci[m, I_FLAGS] & FLAG_EXACT:
@@ -113,6 +114,7 @@ def _warm_start(
         b = ci[m, I_BODY_B]
         nx = cf[m, F_NX]
         ny = cf[m, F_NY]
+        fixed = inv_mass[a] == 0.0 or inv_mass[b] == 0.0
         for j in range(ci[m, I_COUNT]):
             o = point_offset(j)
             jn = cf[m, o + P_JN]
@@ -120,6 +122,20 @@ def _warm_start(
             px = jn * nx + jt * ny
             py = jn * ny - jt * nx
             cf[m, o + P_TOTAL] += jn
+            if fixed:
+                work[0] += fixed_work(
+                    a,
+                    b,
+                    px,
+                    py,
+                    cf[m, o + P_RAX],
+                    cf[m, o + P_RAY],
+                    cf[m, o + P_RBX],
+                    cf[m, o + P_RBY],
+                    inv_mass,
+                    v,
+                    omega,
+                )
             apply_impulse(
                 a,
                 b,
@@ -152,9 +168,11 @@ def _solve(
     soft_moving: tuple[float, float, float],
     soft_fixed: tuple[float, float, float],
     push_speed: float,
+    work: np.ndarray,
 ) -> None:
     """One Gauss-Seidel pass over the contacts: normal impulses, then friction. ``dx`` (N, 2)
-    and ``turn`` (N, 2: cos, sin) are each body's move and turn since the step began."""
+    and ``turn`` (N, 2: cos, sin) are each body's move and turn since the step began;
+    ``work[0]`` gathers what kinematic bodies do (:func:`.motion.fixed_work`)."""
     for m in range(nc):
         if ci[m, I_FLAGS] & FLAG_EXACT:
             continue
@@ -198,6 +216,10 @@ def _solve(
             dj = new - jn
             cf[m, o + P_JN] = new
             cf[m, o + P_TOTAL] += dj
+            if fixed:
+                work[0] += fixed_work(
+                    a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, v, omega
+                )
             apply_impulse(
                 a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega
             )
@@ -219,6 +241,10 @@ def _solve(
             new = min(max(jt - cf[m, o + P_TMASS] * ut, -limit), limit)
             dj = new - jt
             cf[m, o + P_JT] = new
+            if fixed:
+                work[0] += fixed_work(
+                    a, b, dj * tx, dj * ty, rax, ray, rbx, rby, inv_mass, v, omega
+                )
             apply_impulse(
                 a, b, dj * tx, dj * ty, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega
             )
@@ -234,6 +260,7 @@ def _restitution(
     inv_inertia: np.ndarray,
     v: np.ndarray,
     omega: np.ndarray,
+    work: np.ndarray,
 ) -> None:
     """Points that approached faster than ``threshold`` and were pushed leave at ``-e`` times
     their approach speed (Newton's restitution, per point, in order)."""
@@ -263,6 +290,7 @@ def _restitution(
             dj = new - jn
             cf[m, o + P_JN] = new
             cf[m, o + P_TOTAL] += dj
+            work[0] += fixed_work(a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, v, omega)
             apply_impulse(
                 a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega
             )
@@ -289,11 +317,13 @@ def solve_step(
     damping_ratio: float,
     push_speed: float,
     restitution_threshold: float,
+    work: np.ndarray,
 ) -> None:
     """Advance the ``bodies`` (indices) and their contacts by one step ``dt`` [s].
 
     Contacts flagged exact are skipped; every other contact must join bodies of ``bodies``
     or a body that does not move under impulses (static, kinematic, asleep: infinite mass).
+    ``work[0]`` gains the work kinematic bodies did on the others [J].
     """
     h = dt / substeps
     hertz = min(contact_hertz, 0.25 / h)
@@ -310,7 +340,7 @@ def solve_step(
             if gravity_on[i]:
                 v[i, 0] += h * gx
                 v[i, 1] += h * gy
-        _warm_start(cf, ci, nc, inv_mass, inv_inertia, v, omega)
+        _warm_start(cf, ci, nc, inv_mass, inv_inertia, v, omega, work)
         _solve(
             cf,
             ci,
@@ -326,6 +356,7 @@ def solve_step(
             soft_moving,
             soft_fixed,
             push_speed,
+            work,
         )
         for i in bodies:
             x[i, 0] += h * v[i, 0]
@@ -352,5 +383,6 @@ def solve_step(
             soft_moving,
             soft_fixed,
             push_speed,
+            work,
         )
-    _restitution(cf, ci, nc, restitution_threshold, inv_mass, inv_inertia, v, omega)
+    _restitution(cf, ci, nc, restitution_threshold, inv_mass, inv_inertia, v, omega, work)
