@@ -669,6 +669,10 @@ class World:
         that a timed run times the simulation alone. Changes nothing."""
         engine = self.build()
         engine.advance(self._time, 0, None)  # no event is processed
+        if self.engine_name == "rigid":
+            from carom.engines.rigid.driver import warm_up
+
+            warm_up()  # the kernels a step calls only on its first impact or sleep, too
         self.frame()
 
     @property
