@@ -31,6 +31,7 @@ RIGID = {
     "bullet",
     "card-house",
     "dominoes",
+    "pyramid",
     "large-pyramid",
     "many-pyramids",
     "rod-drop",

@@ -195,7 +195,13 @@ def test_the_tumbler_turns_at_its_own_rate() -> None:
 
 @pytest.mark.parametrize(
     ("name", "count"),
-    [("large-pyramid", 1 + 5050), ("many-pyramids", 20 + 400 * 55), ("dominoes", 41)],
+    [
+        ("large-pyramid", 1 + 5050),
+        ("many-pyramids", 20 + 400 * 55),
+        ("dominoes", 41),
+        ("pyramid", 1 + 210 + 1),  # ground, 20 rows, the cannonball
+        ("card-house", 1 + 40),
+    ],
 )
 def test_the_rigid_built_in_scenes_build(name: str, count: int) -> None:
     world = load_scene(find_scene(name)).build()  # no overlap deeper than the slop
