@@ -39,11 +39,9 @@ def kinetic_energy(bodies: Bodies, velocities: FloatArray, angular_velocities: F
     """Kinetic energy [J], translation and rotation, of the moving bodies with these
     velocities (N, d) [m/s] and angular velocities (N, 3) [rad/s]."""
     m = bodies.mobile
-    v, mass, spin = velocities[m], bodies.mass[m], angular_velocities[m]
+    v, mass = velocities[m], bodies.mass[m]
     ke = 0.5 * np.sum(mass * np.sum(v * v, axis=1))
-    inertia = bodies.inertia_factor[m] * mass * bodies.radius[m] ** 2
-    ke += 0.5 * np.sum(inertia * np.sum(spin * spin, axis=1))
-    return float(ke)
+    return float(ke + rotational_energy(bodies, angular_velocities))
 
 
 def rotational_energy(bodies: Bodies, angular_velocities: FloatArray) -> float:
@@ -51,8 +49,7 @@ def rotational_energy(bodies: Bodies, angular_velocities: FloatArray) -> float:
     bodies with these angular velocities (N, 3) [rad/s]."""
     m = bodies.mobile
     spin = angular_velocities[m]
-    inertia = bodies.inertia_factor[m] * bodies.mass[m] * bodies.radius[m] ** 2
-    return float(0.5 * np.sum(inertia * np.sum(spin * spin, axis=1)))
+    return float(0.5 * np.sum(bodies.inertia[m] * np.sum(spin * spin, axis=1)))
 
 
 def angular_momentum(
@@ -64,8 +61,7 @@ def angular_momentum(
     m = bodies.mobile
     x, v, spin = positions[m], velocities[m], angular_velocities[m]
     mass = bodies.mass[m]
-    inertia = bodies.inertia_factor[m] * mass * bodies.radius[m] ** 2
-    total: FloatArray = np.sum(inertia[:, None] * spin, axis=0)
+    total: FloatArray = np.sum(bodies.inertia[m, None] * spin, axis=0)
     if bodies.dim == 2:
         total[2] += np.sum(mass * (x[:, 0] * v[:, 1] - x[:, 1] * v[:, 0]))
     else:

@@ -193,22 +193,16 @@ def _scene_section(root: Path, scene: str, folder: Path, written: list[str]) -> 
     )
     summary = json.loads((folder / "summary.json").read_text())
     energy = summary["energy"]
+    # the rigid engine's solver, or the event-driven engine's parting floor
+    key = "given_by_solver_J" if "given_by_solver_J" in energy else "given_by_parting_floor_J"
+    giver = "solver" if key == "given_by_solver_J" else "parting floor"
     facts = [
         ("bodies", summary["bodies"]),
         ("simulated time [s]", summary["simulated_time_s"]),
         ("collisions (pairs, walls)", f"{summary['collisions']}, {summary['wall_collisions']}"),
         ("energy dissipated [J]", f"{energy['dissipated_J']:.6g}"),
         ("rotational kinetic energy at the end [J]", f"{energy['rotational_end_J']:.3g}"),
-        *(
-            [("energy given by the solver [J]", f"{energy['given_by_solver_J']:.3g}")]
-            if "given_by_solver_J" in energy
-            else [
-                (
-                    "energy given by the parting floor [J]",
-                    f"{energy['given_by_parting_floor_J']:.3g}",
-                )
-            ]
-        ),
+        (f"energy given by the {giver} [J]", f"{energy[key]:.3g}"),
         ("energy balance error (relative)", f"{energy['balance_error_relative']:.2e}"),
         ("wall time [s]", f"{summary['performance']['wall_time_s']:.3g}"),
     ]

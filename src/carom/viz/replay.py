@@ -120,14 +120,17 @@ def _log_all(rr: Any, stream: Any, f: Any) -> None:
     strips = outlines.strips() if scene.dim == 2 and len(outlines.body) else None
     observed = f["observables"]
     series = {name: observed[f"{name}/value"][:] for name in BALANCE}
-    rotational = observed["rotational_energy/value"][:] if "rotational_energy" in observed else None
-    spin = observed["angular_momentum/value"][:] if "angular_momentum" in observed else None
+    rotational = observed["rotational_energy/value"][:]
+    spins = bool(np.any(rotational))  # translational and rotational apart only then
+    spin = observed["angular_momentum/value"][:]
+    axes = range(3) if scene.dim == 3 else (2,)
+    spheres = bool(np.any(round_))
     for k in range(len(times)):
         stream.set_time("frame", sequence=k)
         stream.set_time("time", duration=float(times[k]))
         x, v = positions[k], velocities[k]
         colours = (speed_colours(v, moving, top) * 255).astype(np.uint8)
-        if np.any(round_):
+        if spheres:
             stream.log(BODIES, Points(x[round_], radii=radius[round_], colors=colours[round_]))
         if strips is not None:
             placed = placed_strips(strips, x, np.asarray(angles[k], float))
@@ -136,15 +139,14 @@ def _log_all(rr: Any, stream: Any, f: Any) -> None:
         total = 0.0
         for name, values in series.items():
             total += BALANCE[name] * float(values[k])
-            if name == "kinetic_energy" and rotational is not None and np.any(rotational):
+            if name == "kinetic_energy" and spins:
                 stream.log(f"{ENERGY}/translational", rr.Scalars(float(values[k] - rotational[k])))
                 stream.log(f"{ENERGY}/rotational", rr.Scalars(float(rotational[k])))
             stream.log(f"{ENERGY}/{name.removesuffix('_energy')}", rr.Scalars(float(values[k])))
         stream.log(f"{ENERGY}/total", rr.Scalars(total))
-        if spin is not None:
-            for axis in range(3) if scene.dim == 3 else (2,):
-                value = float(spin[k, axis])
-                stream.log(f"{ANGULAR_MOMENTUM}/{'xyz'[axis]}", rr.Scalars(value))
+        for axis in axes:
+            value = float(spin[k, axis])
+            stream.log(f"{ANGULAR_MOMENTUM}/{'xyz'[axis]}", rr.Scalars(value))
 
 
 def can_show() -> bool:

@@ -503,6 +503,6 @@ def warm_up() -> None:
     settings = RigidSettings(sleep_time=0.1)
     engine = RigidEngine(model, state, settings)
     for _ in range(40):
-        engine.step(lambda records: None)
+        engine.step()
     engine.deepest_overlap()
     _WARM = True

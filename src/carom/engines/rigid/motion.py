@@ -95,9 +95,18 @@ def relative_velocity(
 ) -> tuple[float, float]:
     """Velocity of body A's point at ``r_A`` less body B's at ``r_B`` [m/s]
     (``v + omega x r``, 2D)."""
-    ux = (v[a, 0] - omega[a] * ray) - (v[b, 0] - omega[b] * rby)
-    uy = (v[a, 1] + omega[a] * rax) - (v[b, 1] + omega[b] * rbx)
-    return ux, uy
+    pax, pay = point_velocity(a, rax, ray, v, omega)
+    pbx, pby = point_velocity(b, rbx, rby, v, omega)
+    return pax - pbx, pay - pby
+
+
+@njit(cache=True, inline="always")
+def point_velocity(
+    body: int, rx: float, ry: float, v: np.ndarray, omega: np.ndarray
+) -> tuple[float, float]:
+    """Velocity [m/s] of the point of ``body`` at offset ``r`` from its centre of mass:
+    ``v + omega x r`` (2D)."""
+    return v[body, 0] - omega[body] * ry, v[body, 1] + omega[body] * rx
 
 
 @njit(cache=True, inline="always")
@@ -146,9 +155,11 @@ def fixed_work(
     for a body at rest; a moving kinematic body feeds (or takes) that much energy."""
     work = 0.0
     if inv_mass[a] == 0.0:
-        work -= px * (v[a, 0] - omega[a] * ray) + py * (v[a, 1] + omega[a] * rax)
+        ux, uy = point_velocity(a, rax, ray, v, omega)
+        work -= px * ux + py * uy
     if inv_mass[b] == 0.0:
-        work += px * (v[b, 0] - omega[b] * rby) + py * (v[b, 1] + omega[b] * rbx)
+        ux, uy = point_velocity(b, rbx, rby, v, omega)
+        work += px * ux + py * uy
     return work
 
 

@@ -122,34 +122,13 @@ def _warm_start(
             px = jn * nx + jt * ny
             py = jn * ny - jt * nx
             cf[m, o + P_TOTAL] += jn
+            rax = cf[m, o + P_RAX]
+            ray = cf[m, o + P_RAY]
+            rbx = cf[m, o + P_RBX]
+            rby = cf[m, o + P_RBY]
             if fixed:
-                work[0] += fixed_work(
-                    a,
-                    b,
-                    px,
-                    py,
-                    cf[m, o + P_RAX],
-                    cf[m, o + P_RAY],
-                    cf[m, o + P_RBX],
-                    cf[m, o + P_RBY],
-                    inv_mass,
-                    v,
-                    omega,
-                )
-            apply_impulse(
-                a,
-                b,
-                px,
-                py,
-                cf[m, o + P_RAX],
-                cf[m, o + P_RAY],
-                cf[m, o + P_RBX],
-                cf[m, o + P_RBY],
-                inv_mass,
-                inv_inertia,
-                v,
-                omega,
-            )
+                work[0] += fixed_work(a, b, px, py, rax, ray, rbx, rby, inv_mass, v, omega)
+            apply_impulse(a, b, px, py, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega)
 
 
 @njit(cache=True)
