@@ -65,20 +65,15 @@ def point_offset(j: int) -> int:
     return POINT0 + POINT_FLOATS * j
 
 
-@njit(cache=True)
-def _cached(keys: np.ndarray, count: int, key: int) -> int:
-    """Row of ``key`` in the sorted ``keys[:count]``, or -1."""
-    lo = 0
-    hi = count
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if keys[mid] < key:
-            lo = mid + 1
-        else:
-            hi = mid
-    if lo < count and keys[lo] == key:
-        return lo
-    return -1
+@njit(cache=True, inline="always")
+def _cached(keys: np.ndarray, count: int, key: int, start: int) -> int:
+    """The first row from ``start`` on whose key in the sorted ``keys[:count]`` is at least
+    ``key`` (``count`` if none). The pairs come in key order, so each lookup starts where the
+    last one ended and the whole walk costs O(pairs + cache), not a search per pair."""
+    row = start
+    while row < count and keys[row] < key:
+        row += 1
+    return row
 
 
 @njit(cache=True)
@@ -123,6 +118,7 @@ def narrow_phase(
     out = np.empty(8)
     ids = np.empty(2, np.int64)
     m = 0
+    cursor = 0  # the warm-start cache's row for the pair at hand
     for k in range(n_pairs):
         pa = pairs[k, 0]
         pb = pairs[k, 1]
@@ -200,8 +196,10 @@ def narrow_phase(
         ci[m, I_PIECE_B] = pb
         ci[m, I_COUNT] = kept
         ci[m, I_FLAGS] = 0
-        row = _cached(cache_keys, n_cache, pa * n_pieces + pb)
-        if row >= 0:
+        key = pa * n_pieces + pb
+        cursor = _cached(cache_keys, n_cache, key, cursor)
+        if cursor < n_cache and cache_keys[cursor] == key:
+            row = cursor
             for j in range(kept):
                 for q in range(2):
                     if cache_ids[row, q] == ci[m, I_ID0 + j]:
