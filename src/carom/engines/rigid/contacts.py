@@ -21,7 +21,7 @@ from numba import njit
 from carom.engines.rigid.motion import relative_velocity
 from carom.geometry.manifold2d import collide
 
-__all__ = ["CONTACT_FLOATS", "CONTACT_INTS", "narrow_phase", "point_offset"]
+__all__ = ["CONTACT_FLOATS", "CONTACT_INTS", "find_cached", "narrow_phase", "point_offset"]
 
 # float columns of a contact row
 F_NX = 0
@@ -66,14 +66,17 @@ def point_offset(j: int) -> int:
 
 
 @njit(cache=True, inline="always")
-def _cached(keys: np.ndarray, count: int, key: int, start: int) -> int:
-    """The first row from ``start`` on whose key in the sorted ``keys[:count]`` is at least
-    ``key`` (``count`` if none). The pairs come in key order, so each lookup starts where the
-    last one ended and the whole walk costs O(pairs + cache), not a search per pair."""
-    row = start
-    while row < count and keys[row] < key:
-        row += 1
-    return row
+def find_cached(keys: np.ndarray, count: int, key: int, cursor: int) -> tuple[int, int]:
+    """Row of ``key`` in the sorted ``keys[:count]`` (-1 if absent), searched from row
+    ``cursor`` on, and where the next search may start.
+
+    Keys asked for in increasing order (the pairs come sorted) walk the cache once in all:
+    O(pairs + cache) per step, not a search per pair.
+    """
+    while cursor < count and keys[cursor] < key:
+        cursor += 1
+    row = cursor if cursor < count and keys[cursor] == key else -1
+    return row, cursor
 
 
 @njit(cache=True)
@@ -118,7 +121,7 @@ def narrow_phase(
     out = np.empty(8)
     ids = np.empty(2, np.int64)
     m = 0
-    cursor = 0  # the warm-start cache's row for the pair at hand
+    cursor = 0  # where the next warm-start cache search starts
     for k in range(n_pairs):
         pa = pairs[k, 0]
         pb = pairs[k, 1]
@@ -196,10 +199,8 @@ def narrow_phase(
         ci[m, I_PIECE_B] = pb
         ci[m, I_COUNT] = kept
         ci[m, I_FLAGS] = 0
-        key = pa * n_pieces + pb
-        cursor = _cached(cache_keys, n_cache, key, cursor)
-        if cursor < n_cache and cache_keys[cursor] == key:
-            row = cursor
+        row, cursor = find_cached(cache_keys, n_cache, pa * n_pieces + pb, cursor)
+        if row >= 0:
             for j in range(kept):
                 for q in range(2):
                     if cache_ids[row, q] == ci[m, I_ID0 + j]:
