@@ -17,6 +17,16 @@ and anchors stay fixed, and ``s = s_0 + (dx_A + R(dtheta_A) r_A - dx_B - R(dthet
 - (r_A - r_B) . n``.
 
 Friction is Coulomb's, ``|j_t| <= mu j_n`` per point, solved after the normal impulse.
+
+**Layout: colours and lanes** (as Box2D v3's graph colouring and wide solver). The contacts
+are coloured so that no two of one colour share a body that impulses move (static and
+kinematic bodies take no colour: they are only read). Each colour is cut into groups of
+``W = 8`` contacts, the *lanes*; a group is copied into one small buffer, its body velocities
+gathered beside it, and every stage runs over the eight lanes at once, which the compiler turns
+into vector instructions. The lanes of a group are independent, so this is Gauss-Seidel in
+colour order: the same arithmetic as one contact after another, in that order. A contact whose
+bodies have used all 64 colours gets a group to itself. Padding lanes join a dummy body that
+nothing moves.
 """
 
 from __future__ import annotations
@@ -50,9 +60,60 @@ from carom.engines.rigid.contacts import (
 )
 from carom.engines.rigid.motion import apply_impulse, fixed_work, relative_velocity
 
-__all__ = ["softness", "solve_step"]
+__all__ = ["LANES", "color_groups", "softness", "solve_step"]
 
 FLAG_EXACT = 1  # the contact was solved exactly this step (an isolated impact)
+
+#: contacts solved together in one group
+LANES = 8
+#: colours a body can take (the bits of one mask); a contact finding none free is solved alone
+COLORS = 64
+
+# rows of a group's buffer, each LANES wide: the contact ...
+R_NX = 0
+R_NY = 1
+R_MU = 2
+R_RATE = 3  # soft bias rate [1/s]
+R_MSCALE = 4  # soft mass scale [-]
+R_ISCALE = 5  # soft impulse scale [-]
+R_POINT = 6  # point p's rows start at R_POINT + p * POINT_ROWS
+Q_RAX = 0
+Q_RAY = 1
+Q_RBX = 2
+Q_RBY = 3
+Q_BASE = 4
+Q_NMASS = 5
+Q_TMASS = 6
+Q_JN = 7
+Q_JT = 8
+Q_TOTAL = 9
+POINT_ROWS = 10
+GROUP_ROWS = R_POINT + 2 * POINT_ROWS
+# ... then, in the working buffer only, its two bodies
+B_VAX = GROUP_ROWS
+B_VAY = GROUP_ROWS + 1
+B_WA = GROUP_ROWS + 2
+B_VBX = GROUP_ROWS + 3
+B_VBY = GROUP_ROWS + 4
+B_WB = GROUP_ROWS + 5
+B_IMA = GROUP_ROWS + 6  # inverse mass [1/kg]
+B_IIA = GROUP_ROWS + 7  # inverse moment of inertia [1/(kg m^2)]
+B_IMB = GROUP_ROWS + 8
+B_IIB = GROUP_ROWS + 9
+B_DX = GROUP_ROWS + 10  # A's move less B's since the step began [m]
+B_DY = GROUP_ROWS + 11
+B_CA = GROUP_ROWS + 12  # cos and sin of A's turn since the step began
+B_SA = GROUP_ROWS + 13
+B_CB = GROUP_ROWS + 14
+B_SB = GROUP_ROWS + 15
+BUFFER_ROWS = GROUP_ROWS + 16
+#: a point that is not there: never touching, never pushed
+ABSENT_BASE = 1e30
+
+#: what the lane loops let the compiler assume: no NaN or infinity, and the sign of a zero
+#: does not matter. This lets it use vector min and max; nothing is reordered or fused, so
+#: every lane does the arithmetic as written.
+LANE_MATH = {"nnan", "ninf", "nsz"}
 
 
 @njit(cache=True)
@@ -66,9 +127,78 @@ def softness(hertz: float, zeta: float, h: float) -> tuple[float, float, float]:
 
 
 @njit(cache=True)
+def color_groups(ci: np.ndarray, nc: int, inv_mass: np.ndarray) -> np.ndarray:
+    """The contacts in groups of :data:`LANES`, no two of a group sharing a body that moves.
+
+    Greedy colouring in row order: a contact takes the lowest colour that neither of its
+    bodies has used; a body of zero inverse mass (static, kinematic) takes none, so any number
+    of contacts with the ground share a colour. A contact whose bodies have used all
+    :data:`COLORS` colours gets a group to itself.
+
+    Parameters
+    ----------
+    ci : (M, CONTACT_INTS) int64
+        Contact rows (:mod:`.contacts`); rows flagged exact are left out.
+    nc : int
+        Rows in use.
+    inv_mass : (N,) float64
+        Inverse masses [1/kg].
+
+    Returns
+    -------
+    (G, LANES) int64
+        Contact rows, group by group: the colours in order, each cut into groups in row
+        order, then the contacts that found no colour one per group; -1 in a padding lane.
+    """
+    one = np.uint64(1)
+    used = np.zeros(inv_mass.shape[0], np.uint64)
+    color = np.full(nc, -1, np.int64)
+    counts = np.zeros(COLORS + 1, np.int64)
+    for m in range(nc):
+        if ci[m, I_FLAGS] & FLAG_EXACT:
+            continue
+        a = ci[m, I_BODY_A]
+        b = ci[m, I_BODY_B]
+        taken = np.uint64(0)
+        if inv_mass[a] > 0.0:
+            taken |= used[a]
+        if inv_mass[b] > 0.0:
+            taken |= used[b]
+        c = 0
+        while c < COLORS and (taken >> np.uint64(c)) & one:
+            c += 1
+        color[m] = c
+        counts[c] += 1
+        if c < COLORS:
+            bit = one << np.uint64(c)
+            if inv_mass[a] > 0.0:
+                used[a] |= bit
+            if inv_mass[b] > 0.0:
+                used[b] |= bit
+    first = np.zeros(COLORS + 2, np.int64)  # each colour's first group
+    for c in range(COLORS):
+        first[c + 1] = first[c] + (counts[c] + LANES - 1) // LANES
+    first[COLORS + 1] = first[COLORS] + counts[COLORS]
+    lanes = np.full((first[COLORS + 1], LANES), -1, np.int64)
+    filled = np.zeros(COLORS + 1, np.int64)
+    for m in range(nc):
+        c = color[m]
+        if c < 0:
+            continue
+        k = filled[c]
+        filled[c] += 1
+        if c < COLORS:
+            lanes[first[c] + k // LANES, k % LANES] = m
+        else:
+            lanes[first[c] + k, 0] = m
+    return lanes
+
+
+@njit(cache=True)
 def _prepare(
     cf: np.ndarray, ci: np.ndarray, nc: int, inv_mass: np.ndarray, inv_inertia: np.ndarray
 ) -> None:
+    """Each point's effective masses along the normal and the tangent, and a zero total."""
     for m in range(nc):
         if ci[m, I_FLAGS] & FLAG_EXACT:
             continue
@@ -97,136 +227,300 @@ def _prepare(
 
 
 @njit(cache=True)
-def _warm_start(
+def _pack(
     cf: np.ndarray,
     ci: np.ndarray,
-    nc: int,
+    lanes: np.ndarray,
     inv_mass: np.ndarray,
-    inv_inertia: np.ndarray,
-    v: np.ndarray,
-    omega: np.ndarray,
-    work: np.ndarray,
+    vel: np.ndarray,
+    soft_moving: tuple[float, float, float],
+    soft_fixed: tuple[float, float, float],
+    group: np.ndarray,
+    pair: np.ndarray,
+    kinematic: np.ndarray,
 ) -> None:
-    for m in range(nc):
-        if ci[m, I_FLAGS] & FLAG_EXACT:
-            continue
-        a = ci[m, I_BODY_A]
-        b = ci[m, I_BODY_B]
-        nx = cf[m, F_NX]
-        ny = cf[m, F_NY]
-        fixed = inv_mass[a] == 0.0 or inv_mass[b] == 0.0
-        for j in range(ci[m, I_COUNT]):
-            o = point_offset(j)
-            jn = cf[m, o + P_JN]
-            jt = cf[m, o + P_JT]
-            px = jn * nx + jt * ny
-            py = jn * ny - jt * nx
-            cf[m, o + P_TOTAL] += jn
-            rax = cf[m, o + P_RAX]
-            ray = cf[m, o + P_RAY]
-            rbx = cf[m, o + P_RBX]
-            rby = cf[m, o + P_RBY]
-            if fixed:
-                work[0] += fixed_work(a, b, px, py, rax, ray, rbx, rby, inv_mass, v, omega)
-            apply_impulse(a, b, px, py, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega)
+    """Copy the contacts of ``lanes`` into ``group`` (G, GROUP_ROWS, LANES) and their bodies
+    into ``pair`` (G, 2, LANES); ``kinematic[g]``: a lane of group g touches a moving body of
+    infinite mass (its work is counted)."""
+    dummy = vel.shape[0] - 1
+    for g in range(lanes.shape[0]):
+        kinematic[g] = False
+        for lane in range(LANES):
+            m = lanes[g, lane]
+            for r in range(GROUP_ROWS):
+                group[g, r, lane] = 0.0
+            if m < 0:
+                pair[g, 0, lane] = dummy
+                pair[g, 1, lane] = dummy
+                for p in range(2):
+                    group[g, R_POINT + p * POINT_ROWS + Q_BASE, lane] = ABSENT_BASE
+                continue
+            a = ci[m, I_BODY_A]
+            b = ci[m, I_BODY_B]
+            pair[g, 0, lane] = a
+            pair[g, 1, lane] = b
+            fixed = inv_mass[a] == 0.0 or inv_mass[b] == 0.0
+            rate, mass_scale, impulse_scale = soft_fixed if fixed else soft_moving
+            group[g, R_NX, lane] = cf[m, F_NX]
+            group[g, R_NY, lane] = cf[m, F_NY]
+            group[g, R_MU, lane] = cf[m, F_MU]
+            group[g, R_RATE, lane] = rate
+            group[g, R_MSCALE, lane] = mass_scale
+            group[g, R_ISCALE, lane] = impulse_scale
+            for p in range(2):
+                q = R_POINT + p * POINT_ROWS
+                if p >= ci[m, I_COUNT]:
+                    group[g, q + Q_BASE, lane] = ABSENT_BASE
+                    continue
+                o = point_offset(p)
+                group[g, q + Q_RAX, lane] = cf[m, o + P_RAX]
+                group[g, q + Q_RAY, lane] = cf[m, o + P_RAY]
+                group[g, q + Q_RBX, lane] = cf[m, o + P_RBX]
+                group[g, q + Q_RBY, lane] = cf[m, o + P_RBY]
+                group[g, q + Q_BASE, lane] = cf[m, o + P_BASE]
+                group[g, q + Q_NMASS, lane] = cf[m, o + P_NMASS]
+                group[g, q + Q_TMASS, lane] = cf[m, o + P_TMASS]
+                group[g, q + Q_JN, lane] = cf[m, o + P_JN]
+                group[g, q + Q_JT, lane] = cf[m, o + P_JT]
+            for body in (a, b):
+                if inv_mass[body] == 0.0 and (
+                    vel[body, 0] != 0.0 or vel[body, 1] != 0.0 or vel[body, 2] != 0.0
+                ):
+                    kinematic[g] = True
 
 
 @njit(cache=True)
+def _unpack(group: np.ndarray, lanes: np.ndarray, cf: np.ndarray) -> None:
+    """Copy each point's impulses and its total back to its contact row."""
+    for g in range(lanes.shape[0]):
+        for lane in range(LANES):
+            m = lanes[g, lane]
+            if m < 0:
+                continue
+            for p in range(2):
+                q = R_POINT + p * POINT_ROWS
+                o = point_offset(p)
+                cf[m, o + P_JN] = group[g, q + Q_JN, lane]
+                cf[m, o + P_JT] = group[g, q + Q_JT, lane]
+                cf[m, o + P_TOTAL] = group[g, q + Q_TOTAL, lane]
+
+
+@njit(cache=True, inline="always")
+def _gather(
+    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, vel: np.ndarray, prop: np.ndarray
+) -> None:
+    """Group g and its bodies' velocities and inverse masses into the working buffer
+    (BUFFER_ROWS, LANES)."""
+    for r in range(GROUP_ROWS):
+        for lane in range(LANES):
+            buf[r, lane] = group[g, r, lane]
+    for lane in range(LANES):
+        a = pair[g, 0, lane]
+        b = pair[g, 1, lane]
+        buf[B_VAX, lane] = vel[a, 0]
+        buf[B_VAY, lane] = vel[a, 1]
+        buf[B_WA, lane] = vel[a, 2]
+        buf[B_VBX, lane] = vel[b, 0]
+        buf[B_VBY, lane] = vel[b, 1]
+        buf[B_WB, lane] = vel[b, 2]
+        buf[B_IMA, lane] = prop[a, 0]
+        buf[B_IIA, lane] = prop[a, 1]
+        buf[B_IMB, lane] = prop[b, 0]
+        buf[B_IIB, lane] = prop[b, 1]
+
+
+@njit(cache=True, inline="always")
+def _gather_moves(buf: np.ndarray, pair: np.ndarray, g: int, moved: np.ndarray) -> None:
+    """Group g's bodies' moves and turns since the step began into the working buffer."""
+    for lane in range(LANES):
+        a = pair[g, 0, lane]
+        b = pair[g, 1, lane]
+        buf[B_DX, lane] = moved[a, 0] - moved[b, 0]
+        buf[B_DY, lane] = moved[a, 1] - moved[b, 1]
+        buf[B_CA, lane] = moved[a, 2]
+        buf[B_SA, lane] = moved[a, 3]
+        buf[B_CB, lane] = moved[b, 2]
+        buf[B_SB, lane] = moved[b, 3]
+
+
+@njit(cache=True, inline="always")
+def _scatter(buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, vel: np.ndarray) -> None:
+    """The impulses back to group g, the velocities back to its bodies. Lanes sharing a body
+    of infinite mass write back the value they all read."""
+    for p in range(2):
+        q = R_POINT + p * POINT_ROWS
+        for lane in range(LANES):
+            group[g, q + Q_JN, lane] = buf[q + Q_JN, lane]
+            group[g, q + Q_JT, lane] = buf[q + Q_JT, lane]
+            group[g, q + Q_TOTAL, lane] = buf[q + Q_TOTAL, lane]
+    for lane in range(LANES):
+        a = pair[g, 0, lane]
+        b = pair[g, 1, lane]
+        vel[a, 0] = buf[B_VAX, lane]
+        vel[a, 1] = buf[B_VAY, lane]
+        vel[a, 2] = buf[B_WA, lane]
+        vel[b, 0] = buf[B_VBX, lane]
+        vel[b, 1] = buf[B_VBY, lane]
+        vel[b, 2] = buf[B_WB, lane]
+
+
+@njit(cache=True, inline="always")
+def _push(buf: np.ndarray, lane: int, q: int, px: float, py: float) -> None:
+    """Impulse ``P`` on A at point q's ``r_A`` and ``-P`` on B at its ``r_B`` (one lane; as
+    :func:`.motion.apply_impulse`)."""
+    ma = buf[B_IMA, lane]
+    mb = buf[B_IMB, lane]
+    buf[B_VAX, lane] += ma * px
+    buf[B_VAY, lane] += ma * py
+    buf[B_WA, lane] += buf[B_IIA, lane] * (buf[q + Q_RAX, lane] * py - buf[q + Q_RAY, lane] * px)
+    buf[B_VBX, lane] -= mb * px
+    buf[B_VBY, lane] -= mb * py
+    buf[B_WB, lane] -= buf[B_IIB, lane] * (buf[q + Q_RBX, lane] * py - buf[q + Q_RBY, lane] * px)
+
+
+@njit(cache=True)
+def _group_work(buf: np.ndarray, group: np.ndarray, g: int, warm: bool) -> float:
+    """Work [J] done on group g's lanes by their bodies of infinite mass, for the impulses
+    the buffer holds beyond what ``group`` held (all of them, if ``warm``): the impulse on
+    the other body times the fixed body's velocity at the point (:func:`.motion.fixed_work`);
+    such a body's velocity is the same before and after."""
+    total = 0.0
+    for lane in range(LANES):
+        nx = buf[R_NX, lane]
+        ny = buf[R_NY, lane]
+        for p in range(2):
+            q = R_POINT + p * POINT_ROWS
+            dn = buf[q + Q_JN, lane]
+            dt = buf[q + Q_JT, lane]
+            if not warm:
+                dn -= group[g, q + Q_JN, lane]
+                dt -= group[g, q + Q_JT, lane]
+            px = dn * nx + dt * ny
+            py = dn * ny - dt * nx
+            if buf[B_IMA, lane] == 0.0:
+                wa = buf[B_WA, lane]
+                ux = buf[B_VAX, lane] - wa * buf[q + Q_RAY, lane]
+                uy = buf[B_VAY, lane] + wa * buf[q + Q_RAX, lane]
+                total -= px * ux + py * uy
+            if buf[B_IMB, lane] == 0.0:
+                wb = buf[B_WB, lane]
+                ux = buf[B_VBX, lane] - wb * buf[q + Q_RBY, lane]
+                uy = buf[B_VBY, lane] + wb * buf[q + Q_RBX, lane]
+                total += px * ux + py * uy
+    return total
+
+
+@njit(cache=True, fastmath=LANE_MATH)
+def _warm_start(
+    group: np.ndarray,
+    pair: np.ndarray,
+    kinematic: np.ndarray,
+    vel: np.ndarray,
+    prop: np.ndarray,
+    work: np.ndarray,
+) -> None:
+    """Apply every point's impulse from the last substep (or step) again."""
+    buf = np.empty((BUFFER_ROWS, LANES))
+    for g in range(group.shape[0]):
+        _gather(buf, group, pair, g, vel, prop)
+        for p in range(2):
+            q = R_POINT + p * POINT_ROWS
+            for lane in range(LANES):
+                nx = buf[R_NX, lane]
+                ny = buf[R_NY, lane]
+                jn = buf[q + Q_JN, lane]
+                jt = buf[q + Q_JT, lane]
+                buf[q + Q_TOTAL, lane] += jn
+                _push(buf, lane, q, jn * nx + jt * ny, jn * ny - jt * nx)
+        if kinematic[g]:
+            work[0] += _group_work(buf, group, g, True)
+        _scatter(buf, group, pair, g, vel)
+
+
+@njit(cache=True, fastmath=LANE_MATH)
 def _solve(
-    cf: np.ndarray,
-    ci: np.ndarray,
-    nc: int,
-    inv_mass: np.ndarray,
-    inv_inertia: np.ndarray,
-    v: np.ndarray,
-    omega: np.ndarray,
-    dx: np.ndarray,
-    turn: np.ndarray,
+    group: np.ndarray,
+    pair: np.ndarray,
+    kinematic: np.ndarray,
+    vel: np.ndarray,
+    prop: np.ndarray,
+    moved: np.ndarray,
     inv_h: float,
     use_bias: bool,
-    soft_moving: tuple[float, float, float],
-    soft_fixed: tuple[float, float, float],
     push_speed: float,
     work: np.ndarray,
 ) -> None:
-    """One Gauss-Seidel pass over the contacts: normal impulses, then friction. ``dx`` (N, 2)
-    and ``turn`` (N, 2: cos, sin) are each body's move and turn since the step began;
-    ``work[0]`` gathers what kinematic bodies do (:func:`.motion.fixed_work`)."""
-    for m in range(nc):
-        if ci[m, I_FLAGS] & FLAG_EXACT:
-            continue
-        a = ci[m, I_BODY_A]
-        b = ci[m, I_BODY_B]
-        nx = cf[m, F_NX]
-        ny = cf[m, F_NY]
-        fixed = inv_mass[a] == 0.0 or inv_mass[b] == 0.0
-        rate, mass_scale, impulse_scale = soft_fixed if fixed else soft_moving
-        ca = turn[a, 0]
-        sa = turn[a, 1]
-        cb = turn[b, 0]
-        sb = turn[b, 1]
-        ddx = dx[a, 0] - dx[b, 0]
-        ddy = dx[a, 1] - dx[b, 1]
-        count = ci[m, I_COUNT]
-        for j in range(count):
-            o = point_offset(j)
-            rax = cf[m, o + P_RAX]
-            ray = cf[m, o + P_RAY]
-            rbx = cf[m, o + P_RBX]
-            rby = cf[m, o + P_RBY]
-            # the separation now: anchors turned by each body's turn since the step began
-            sx = ddx + (ca * rax - sa * ray) - (cb * rbx - sb * rby)
-            sy = ddy + (sa * rax + ca * ray) - (sb * rbx + cb * rby)
-            s = cf[m, o + P_BASE] + sx * nx + sy * ny
-            bias = 0.0
-            ms = 1.0
-            isc = 0.0
-            if s > 0.0:
-                bias = s * inv_h  # speculative: close the gap, no more
-            elif use_bias:
-                bias = max(mass_scale * rate * s, -push_speed)
-                ms = mass_scale
-                isc = impulse_scale
-            ux, uy = relative_velocity(a, b, rax, ray, rbx, rby, v, omega)
-            un = ux * nx + uy * ny
-            jn = cf[m, o + P_JN]
-            dj = -cf[m, o + P_NMASS] * (ms * un + bias) - isc * jn
-            new = max(jn + dj, 0.0)
-            dj = new - jn
-            cf[m, o + P_JN] = new
-            cf[m, o + P_TOTAL] += dj
-            if fixed:
-                work[0] += fixed_work(
-                    a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, v, omega
-                )
-            apply_impulse(
-                a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega
-            )
-        mu = cf[m, F_MU]
-        if mu == 0.0:
-            continue
-        tx = ny
-        ty = -nx
-        for j in range(count):
-            o = point_offset(j)
-            rax = cf[m, o + P_RAX]
-            ray = cf[m, o + P_RAY]
-            rbx = cf[m, o + P_RBX]
-            rby = cf[m, o + P_RBY]
-            ux, uy = relative_velocity(a, b, rax, ray, rbx, rby, v, omega)
-            ut = ux * tx + uy * ty
-            jt = cf[m, o + P_JT]
-            limit = mu * cf[m, o + P_JN]
-            new = min(max(jt - cf[m, o + P_TMASS] * ut, -limit), limit)
-            dj = new - jt
-            cf[m, o + P_JT] = new
-            if fixed:
-                work[0] += fixed_work(
-                    a, b, dj * tx, dj * ty, rax, ray, rbx, rby, inv_mass, v, omega
-                )
-            apply_impulse(
-                a, b, dj * tx, dj * ty, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega
-            )
+    """One Gauss-Seidel pass over the groups: normal impulses, then friction, lane by lane.
+    ``vel`` (N+1, 3: vx, vy, omega), ``prop`` (N+1, 2: inverse mass and inertia) and
+    ``moved`` (N+1, 4: dx, dy, cos and sin of the turn since the step began) have a row for
+    each body and one for the padding lanes' dummy; ``work[0]`` gathers what kinematic bodies
+    do."""
+    buf = np.empty((BUFFER_ROWS, LANES))
+    for g in range(group.shape[0]):
+        _gather(buf, group, pair, g, vel, prop)
+        _gather_moves(buf, pair, g, moved)
+        for p in range(2):
+            q = R_POINT + p * POINT_ROWS
+            for lane in range(LANES):
+                nx = buf[R_NX, lane]
+                ny = buf[R_NY, lane]
+                rax = buf[q + Q_RAX, lane]
+                ray = buf[q + Q_RAY, lane]
+                rbx = buf[q + Q_RBX, lane]
+                rby = buf[q + Q_RBY, lane]
+                ca = buf[B_CA, lane]
+                sa = buf[B_SA, lane]
+                cb = buf[B_CB, lane]
+                sb = buf[B_SB, lane]
+                # the separation now: anchors turned by each body's turn since the step began
+                sx = buf[B_DX, lane] + (ca * rax - sa * ray) - (cb * rbx - sb * rby)
+                sy = buf[B_DY, lane] + (sa * rax + ca * ray) - (sb * rbx + cb * rby)
+                s = buf[q + Q_BASE, lane] + sx * nx + sy * ny
+                spec = s > 0.0  # speculative: close the gap, no more
+                soft = use_bias and not spec
+                mass_scale = buf[R_MSCALE, lane] if soft else 1.0
+                impulse_scale = buf[R_ISCALE, lane] if soft else 0.0
+                if spec:
+                    bias = s * inv_h
+                elif use_bias:
+                    bias = max(buf[R_MSCALE, lane] * buf[R_RATE, lane] * s, -push_speed)
+                else:
+                    bias = 0.0
+                wa = buf[B_WA, lane]
+                wb = buf[B_WB, lane]
+                ux = (buf[B_VAX, lane] - wa * ray) - (buf[B_VBX, lane] - wb * rby)
+                uy = (buf[B_VAY, lane] + wa * rax) - (buf[B_VBY, lane] + wb * rbx)
+                un = ux * nx + uy * ny
+                jn = buf[q + Q_JN, lane]
+                dj = -buf[q + Q_NMASS, lane] * (mass_scale * un + bias) - impulse_scale * jn
+                new = max(jn + dj, 0.0)
+                dj = new - jn
+                buf[q + Q_JN, lane] = new
+                buf[q + Q_TOTAL, lane] += dj
+                _push(buf, lane, q, dj * nx, dj * ny)
+        for p in range(2):
+            q = R_POINT + p * POINT_ROWS
+            for lane in range(LANES):
+                tx = buf[R_NY, lane]
+                ty = -buf[R_NX, lane]
+                rax = buf[q + Q_RAX, lane]
+                ray = buf[q + Q_RAY, lane]
+                rbx = buf[q + Q_RBX, lane]
+                rby = buf[q + Q_RBY, lane]
+                wa = buf[B_WA, lane]
+                wb = buf[B_WB, lane]
+                ux = (buf[B_VAX, lane] - wa * ray) - (buf[B_VBX, lane] - wb * rby)
+                uy = (buf[B_VAY, lane] + wa * rax) - (buf[B_VBY, lane] + wb * rbx)
+                ut = ux * tx + uy * ty
+                jt = buf[q + Q_JT, lane]
+                limit = buf[R_MU, lane] * buf[q + Q_JN, lane]
+                new = min(max(jt - buf[q + Q_TMASS, lane] * ut, -limit), limit)
+                dj = new - jt
+                buf[q + Q_JT, lane] = new
+                _push(buf, lane, q, dj * tx, dj * ty)
+        if kinematic[g]:
+            work[0] += _group_work(buf, group, g, False)
+        _scatter(buf, group, pair, g, vel)
 
 
 @njit(cache=True)
@@ -301,7 +595,7 @@ def solve_step(
     """Advance the ``bodies`` (indices) and their contacts by one step ``dt`` [s].
 
     Contacts flagged exact are skipped; every other contact must join bodies of ``bodies``
-    or a body that does not move under impulses (static, kinematic, asleep: infinite mass).
+    or a body that does not move under impulses (static, kinematic: infinite mass).
     ``work[0]`` gains the work kinematic bodies did on the others [J].
     """
     h = dt / substeps
@@ -309,59 +603,45 @@ def solve_step(
     soft_moving = softness(hertz, damping_ratio, h)
     soft_fixed = softness(2.0 * hertz, damping_ratio, h)
     n = x.shape[0]
-    dx = np.zeros((n, 2))
+    # every body's row, and a last one for the padding lanes' dummy (at rest, infinite mass)
+    vel = np.zeros((n + 1, 3))
+    vel[:n, 0] = v[:, 0]
+    vel[:n, 1] = v[:, 1]
+    vel[:n, 2] = omega
+    prop = np.zeros((n + 1, 2))
+    prop[:n, 0] = inv_mass
+    prop[:n, 1] = inv_inertia
+    moved = np.zeros((n + 1, 4))
+    moved[:, 2] = 1.0
     dtheta = np.zeros(n)
-    turn = np.zeros((n, 2))
-    turn[:, 0] = 1.0
     _prepare(cf, ci, nc, inv_mass, inv_inertia)
+    lanes = color_groups(ci, nc, inv_mass)
+    groups = lanes.shape[0]
+    group = np.empty((groups, GROUP_ROWS, LANES))
+    pair = np.empty((groups, 2, LANES), np.int64)
+    kinematic = np.empty(groups, np.bool_)
+    _pack(cf, ci, lanes, inv_mass, vel, soft_moving, soft_fixed, group, pair, kinematic)
     for _ in range(substeps):
         for i in bodies:
             if gravity_on[i]:
-                v[i, 0] += h * gx
-                v[i, 1] += h * gy
-        _warm_start(cf, ci, nc, inv_mass, inv_inertia, v, omega, work)
-        _solve(
-            cf,
-            ci,
-            nc,
-            inv_mass,
-            inv_inertia,
-            v,
-            omega,
-            dx,
-            turn,
-            1.0 / h,
-            True,
-            soft_moving,
-            soft_fixed,
-            push_speed,
-            work,
-        )
+                vel[i, 0] += h * gx
+                vel[i, 1] += h * gy
+        _warm_start(group, pair, kinematic, vel, prop, work)
+        _solve(group, pair, kinematic, vel, prop, moved, 1.0 / h, True, push_speed, work)
         for i in bodies:
-            x[i, 0] += h * v[i, 0]
-            x[i, 1] += h * v[i, 1]
-            angle[i] += h * omega[i]
-            dx[i, 0] += h * v[i, 0]
-            dx[i, 1] += h * v[i, 1]
-            dtheta[i] += h * omega[i]
+            x[i, 0] += h * vel[i, 0]
+            x[i, 1] += h * vel[i, 1]
+            angle[i] += h * vel[i, 2]
+            moved[i, 0] += h * vel[i, 0]
+            moved[i, 1] += h * vel[i, 1]
+            dtheta[i] += h * vel[i, 2]
             # each body's turn since the step began, once per substep (not per contact)
-            turn[i, 0] = math.cos(dtheta[i])
-            turn[i, 1] = math.sin(dtheta[i])
-        _solve(
-            cf,
-            ci,
-            nc,
-            inv_mass,
-            inv_inertia,
-            v,
-            omega,
-            dx,
-            turn,
-            1.0 / h,
-            False,
-            soft_moving,
-            soft_fixed,
-            push_speed,
-            work,
-        )
+            moved[i, 2] = math.cos(dtheta[i])
+            moved[i, 3] = math.sin(dtheta[i])
+        _solve(group, pair, kinematic, vel, prop, moved, 1.0 / h, False, push_speed, work)
+    for i in bodies:
+        v[i, 0] = vel[i, 0]
+        v[i, 1] = vel[i, 1]
+        omega[i] = vel[i, 2]
+    _unpack(group, lanes, cf)
     _restitution(cf, ci, nc, restitution_threshold, inv_mass, inv_inertia, v, omega, work)
