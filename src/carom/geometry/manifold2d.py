@@ -206,7 +206,7 @@ def segment_closest(
     return f1, f2, dx * dx + dy * dy
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _max_separation(
     vertices: np.ndarray, normals: np.ndarray, s1: int, k1: int, s2: int, k2: int
 ) -> tuple[float, int]:
@@ -229,7 +229,7 @@ def _max_separation(
     return best, edge
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _incident_edge(normals: np.ndarray, s2: int, k2: int, nx: float, ny: float) -> int:
     """The edge of polygon 2 whose normal is most anti-parallel to ``n``."""
     lowest = np.inf
@@ -242,7 +242,7 @@ def _incident_edge(normals: np.ndarray, s2: int, k2: int, nx: float, ny: float) 
     return edge
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _clip(
     vertices: np.ndarray,
     normals: np.ndarray,
@@ -330,7 +330,7 @@ def _clip(
     return 2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _polygons(
     vertices: np.ndarray,
     normals: np.ndarray,
@@ -570,7 +570,7 @@ def _segments(
     return _one_point(c1x, c1y, c2x, c2y, nx, ny, ra, rb, distance - radius, fid, out, ids)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def collide(
     vertices: np.ndarray,
     normals: np.ndarray,

@@ -222,8 +222,33 @@ def find_pairs(
             count += 1
     if count > capacity:
         return -count
-    keys = pairs[:count, 0] * n + pairs[:count, 1]
-    order = np.argsort(keys)
-    sorted_pairs = pairs[:count][order].copy()
-    pairs[:count] = sorted_pairs
+    _sort_pairs(pairs, count, n)
     return count
+
+
+@njit(cache=True)
+def _sort_pairs(pairs: np.ndarray, count: int, n: int) -> None:
+    """Sort ``pairs[:count]`` (each ``a < b``, distinct) by ``(a, b)`` in O(count + n): a
+    counting sort on ``a``, then each piece's few partners by insertion."""
+    start = np.zeros(n + 1, np.int64)
+    for k in range(count):
+        start[pairs[k, 0] + 1] += 1
+    for a in range(n):
+        start[a + 1] += start[a]
+    fill = start[:-1].copy()
+    partner = np.empty(count, np.int64)
+    for k in range(count):
+        a = pairs[k, 0]
+        partner[fill[a]] = pairs[k, 1]
+        fill[a] += 1
+    for a in range(n):
+        for i in range(start[a] + 1, start[a + 1]):
+            b = partner[i]
+            j = i - 1
+            while j >= start[a] and partner[j] > b:
+                partner[j + 1] = partner[j]
+                j -= 1
+            partner[j + 1] = b
+        for i in range(start[a], start[a + 1]):
+            pairs[i, 0] = a
+            pairs[i, 1] = partner[i]
