@@ -1,12 +1,14 @@
 """The broad phase (:func:`carom.engines.rigid.broadphase.find_pairs`): every pair of pieces
 whose boxes overlap, of two bodies, one active and one dynamic, reported once and sorted by
-``(a, b)``; checked against the brute-force O(P^2) answer."""
+``(a, b)``; checked against the brute-force O(P^2) answer. Kept fat boxes
+(:func:`refit`, :func:`select_pairs`) give the same pairs while rebuilding only when a piece
+leaves its fat box."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from carom.engines.rigid.broadphase import MAX_CELLS, find_pairs
+from carom.engines.rigid.broadphase import FAT, MAX_CELLS, find_pairs, refit, select_pairs
 
 
 def _brute(
@@ -72,3 +74,40 @@ def test_a_pair_sharing_many_cells_is_reported_once_and_big_pieces_meet_each_oth
     yes = np.ones(4, np.bool_)
     assert _pairs(boxes, body, yes, yes, 0.5) == [(0, 1), (0, 2), (1, 2)]
     assert _pairs(boxes, body, yes, yes, 4.0) == [(0, 1), (0, 2), (1, 2)]  # no big piece
+
+
+def test_fat_boxes_give_the_same_pairs_and_rebuild_only_when_a_piece_leaves_its_own() -> None:
+    rng = np.random.default_rng(5)
+    pieces = 60
+    body = np.arange(pieces)
+    dynamic = np.ones(pieces, np.bool_)
+    dynamic[:5] = False  # static pieces: never paired with each other
+    everyone = np.ones(pieces, np.bool_)
+    reach = rng.uniform(0.1, 0.5, pieces)
+    centre = rng.uniform(0.0, 6.0, (pieces, 2))
+    fat = np.zeros((pieces, 4))
+    fat[:, :2] = np.inf  # empty: every piece gets a fat box at the first step
+    fat[:, 2:] = -np.inf
+    candidates = np.zeros((pieces * pieces, 2), np.int64)
+    n_candidates = 0
+    rebuilds = 0
+    for step in range(200):
+        # pieces drift at random, some steps not at all; some sleep now and then
+        if step % 3:
+            centre[5:] += rng.normal(0.0, 0.02, (pieces - 5, 2))
+        active = dynamic & (rng.random(pieces) < 0.9)
+        boxes = np.hstack([centre - reach[:, None], centre + reach[:, None]])
+        before = fat.copy()
+        moved = refit(boxes, fat, reach)
+        left = np.any((boxes[:, :2] < before[:, :2]) | (boxes[:, 2:] > before[:, 2:]), axis=1)
+        assert moved == np.count_nonzero(left)
+        np.testing.assert_array_equal(fat[~left], before[~left])  # the others keep theirs
+        np.testing.assert_allclose(fat[left, :2], boxes[left, :2] - FAT * reach[left, None])
+        if moved:
+            rebuilds += 1
+            n_candidates = find_pairs(fat, body, everyone, dynamic, 0.5, candidates)
+        pairs = np.zeros((max(n_candidates, 1), 2), np.int64)
+        count = select_pairs(candidates, n_candidates, boxes, body, active, dynamic, pairs)
+        found = [(int(a), int(b)) for a, b in pairs[:count]]
+        assert found == _brute(boxes, body, active, dynamic), step
+    assert rebuilds <= 200 - 66  # the 66 steps moving nothing (step % 3 == 0, after the first)

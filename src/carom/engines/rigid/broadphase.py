@@ -12,6 +12,12 @@ tested against every box (a handful of such pieces, each O(N)).
 
 Pairs are sorted by key ``a * P + b`` (``a < b``, P pieces), so the contact list comes out in
 the same order every step and every run.
+
+The grid is rebuilt only when a piece leaves its *fat box* (its swept box grown by
+:data:`FAT` of its reach, as Box2D's enlarged boxes): the pairs of overlapping fat boxes are
+kept, and each step takes from them the pairs whose swept boxes overlap
+(:func:`select_pairs`). Every swept box lies in its fat box, so that is every pair
+:func:`find_pairs` would give, in the same order; a resting stack never rebuilds.
 """
 
 from __future__ import annotations
@@ -21,10 +27,12 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["MAX_CELLS", "find_pairs", "piece_boxes"]
+__all__ = ["FAT", "MAX_CELLS", "find_pairs", "piece_boxes", "refit", "select_pairs"]
 
 #: a box covering more cells than this is tested against every box instead of gridded
 MAX_CELLS = 16
+#: a fat box is a piece's swept box grown by this fraction of the piece's reach on each side
+FAT = 0.1
 
 
 @njit(cache=True)
@@ -252,3 +260,59 @@ def _sort_pairs(pairs: np.ndarray, count: int, n: int) -> None:
         for i in range(start[a], start[a + 1]):
             pairs[i, 0] = a
             pairs[i, 1] = partner[i]
+
+
+@njit(cache=True)
+def refit(boxes: np.ndarray, fat: np.ndarray, piece_reach: np.ndarray) -> int:
+    """Give each piece whose swept box is not inside its fat box a new one; return how many.
+
+    Parameters
+    ----------
+    boxes : (P, 4) float64
+        Swept boxes [m] (:func:`piece_boxes`).
+    fat : (P, 4) float64
+        Fat boxes [m], updated; an empty box (lower corner above the upper) is refitted.
+    piece_reach : (P,) float64
+        Each piece's reach from its body's centre [m]; the new fat box is the swept box
+        grown by ``FAT`` times it on every side.
+    """
+    moved = 0
+    for p in range(boxes.shape[0]):
+        if (
+            boxes[p, 0] < fat[p, 0]
+            or boxes[p, 1] < fat[p, 1]
+            or boxes[p, 2] > fat[p, 2]
+            or boxes[p, 3] > fat[p, 3]
+        ):
+            grow = FAT * piece_reach[p]
+            fat[p, 0] = boxes[p, 0] - grow
+            fat[p, 1] = boxes[p, 1] - grow
+            fat[p, 2] = boxes[p, 2] + grow
+            fat[p, 3] = boxes[p, 3] + grow
+            moved += 1
+    return moved
+
+
+@njit(cache=True)
+def select_pairs(
+    candidates: np.ndarray,
+    n_candidates: int,
+    boxes: np.ndarray,
+    piece_body: np.ndarray,
+    active: np.ndarray,
+    dynamic: np.ndarray,
+    pairs: np.ndarray,
+) -> int:
+    """The ``candidates`` (sorted pairs of overlapping fat boxes) whose swept ``boxes``
+    overlap and that :func:`find_pairs` would want (two bodies, one ``active``, one
+    ``dynamic``), in order, into ``pairs`` (at least ``n_candidates`` rows); return how many.
+    """
+    count = 0
+    for k in range(n_candidates):
+        a = candidates[k, 0]
+        b = candidates[k, 1]
+        if _wanted(piece_body, active, dynamic, a, b) and _overlap(boxes, a, b):
+            pairs[count, 0] = a
+            pairs[count, 1] = b
+            count += 1
+    return count

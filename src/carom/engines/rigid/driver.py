@@ -94,6 +94,15 @@ class RigidEngine:
         self._cf = np.zeros((max(64, 2 * n), contacts.CONTACT_FLOATS))
         self._ci = np.zeros((max(64, 2 * n), contacts.CONTACT_INTS), np.int64)
         self._boxes = np.zeros((model.piece_start.shape[0], 4))
+        # fat boxes (empty: refitted at the first step) and the pairs of those that overlap
+        self._fat = np.zeros((model.piece_start.shape[0], 4))
+        self._fat[:, :2] = np.inf
+        self._fat[:, 2:] = -np.inf
+        self._fat_pairs = np.zeros((max(64, 4 * n), 2), np.int64)
+        self._n_fat = 0
+        self._fat_valid = False  # the fat pairs are those of the fat boxes now
+        self._busy = True  # a piece left its fat box at the last step
+        self._everyone = np.ones(n, np.bool_)
         self._parent = np.zeros(n, np.int64)
         self._role = np.zeros(n, np.int64)
         self._dynamic = model.kind == islands.KIND_DYNAMIC
@@ -254,13 +263,7 @@ class RigidEngine:
             speculative,
             self._boxes,
         )
-        while True:
-            n_pairs = broadphase.find_pairs(
-                self._boxes, m.piece_body, moving, self._dynamic, self.cell, self._pairs
-            )
-            if n_pairs >= 0:
-                break
-            self._pairs = np.zeros((2 * -n_pairs, 2), np.int64)
+        n_pairs = self._pairs_now(moving)
         while True:
             nc = contacts.narrow_phase(
                 self._pairs,
@@ -296,6 +299,48 @@ class RigidEngine:
             self._cf = np.zeros((size, contacts.CONTACT_FLOATS))
             self._ci = np.zeros((size, contacts.CONTACT_INTS), np.int64)
         return nc
+
+    def _pairs_now(self, moving: NDArray[np.bool_]) -> int:
+        """Stage 2: the pairs of swept boxes that overlap, into ``self._pairs``; return how
+        many. The pairs of overlapping fat boxes are rebuilt only when a piece left its fat
+        box (:mod:`.broadphase`); while pieces leave theirs step after step (a tumbler), the
+        swept boxes are paired directly, which costs less than pairing the fat boxes and
+        choosing among them. Both give the same pairs in the same order."""
+        m = self.model
+        moved = broadphase.refit(self._boxes, self._fat, m.piece_reach)
+        busy, self._busy = self._busy, moved > 0
+        if moved:
+            self._fat_valid = False
+            if busy:
+                return self._grow_pairs(self._boxes, moving)
+        if not self._fat_valid:
+            self._n_fat = self._grow_pairs(self._fat, self._everyone, fat=True)
+            self._fat_valid = True
+        if self._pairs.shape[0] < self._n_fat:
+            self._pairs = np.zeros_like(self._fat_pairs)
+        return broadphase.select_pairs(
+            self._fat_pairs,
+            self._n_fat,
+            self._boxes,
+            m.piece_body,
+            moving,
+            self._dynamic,
+            self._pairs,
+        )
+
+    def _grow_pairs(self, boxes: FloatArray, active: NDArray[np.bool_], fat: bool = False) -> int:
+        """:func:`.broadphase.find_pairs` into the fat pairs or the pairs, grown to fit."""
+        while True:
+            out = self._fat_pairs if fat else self._pairs
+            count = broadphase.find_pairs(
+                boxes, self.model.piece_body, active, self._dynamic, self.cell, out
+            )
+            if count >= 0:
+                return count
+            if fat:
+                self._fat_pairs = np.zeros((2 * -count, 2), np.int64)
+            else:
+                self._pairs = np.zeros((2 * -count, 2), np.int64)
 
     def step(self, sink: Sink | None = None) -> None:
         """Advance one step of ``dt`` [s]."""
