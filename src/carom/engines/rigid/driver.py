@@ -99,8 +99,7 @@ class RigidEngine:
         self._fat[:, :2] = np.inf
         self._fat[:, 2:] = -np.inf
         self._fat_pairs = np.zeros((max(64, 4 * n), 2), np.int64)
-        self._n_fat = 0
-        self._fat_valid = False  # the fat pairs are those of the fat boxes now
+        self._n_fat = -1  # how many fat pairs; -1: they are not those of the fat boxes now
         self._busy = True  # a piece left its fat box at the last step
         self._everyone = np.ones(n, np.bool_)
         self._parent = np.zeros(n, np.int64)
@@ -310,12 +309,14 @@ class RigidEngine:
         moved = broadphase.refit(self._boxes, self._fat, m.piece_reach)
         busy, self._busy = self._busy, moved > 0
         if moved:
-            self._fat_valid = False
+            self._n_fat = -1
             if busy:
-                return self._grow_pairs(self._boxes, moving)
-        if not self._fat_valid:
-            self._n_fat = self._grow_pairs(self._fat, self._everyone, fat=True)
-            self._fat_valid = True
+                count, self._pairs = self._find_pairs(self._boxes, moving, self._pairs)
+                return count
+        if self._n_fat < 0:
+            self._n_fat, self._fat_pairs = self._find_pairs(
+                self._fat, self._everyone, self._fat_pairs
+            )
         if self._pairs.shape[0] < self._n_fat:
             self._pairs = np.zeros_like(self._fat_pairs)
         return broadphase.select_pairs(
@@ -328,19 +329,18 @@ class RigidEngine:
             self._pairs,
         )
 
-    def _grow_pairs(self, boxes: FloatArray, active: NDArray[np.bool_], fat: bool = False) -> int:
-        """:func:`.broadphase.find_pairs` into the fat pairs or the pairs, grown to fit."""
+    def _find_pairs(
+        self, boxes: FloatArray, active: NDArray[np.bool_], out: NDArray[np.int64]
+    ) -> tuple[int, NDArray[np.int64]]:
+        """:func:`.broadphase.find_pairs` into ``out``, grown until they fit; return the
+        count and the array that holds them."""
         while True:
-            out = self._fat_pairs if fat else self._pairs
             count = broadphase.find_pairs(
                 boxes, self.model.piece_body, active, self._dynamic, self.cell, out
             )
             if count >= 0:
-                return count
-            if fat:
-                self._fat_pairs = np.zeros((2 * -count, 2), np.int64)
-            else:
-                self._pairs = np.zeros((2 * -count, 2), np.int64)
+                return count, out
+            out = np.zeros((2 * -count, 2), np.int64)
 
     def step(self, sink: Sink | None = None) -> None:
         """Advance one step of ``dt`` [s]."""

@@ -378,6 +378,21 @@ def _push(buf: np.ndarray, lane: int, q: int, px: float, py: float) -> None:
     buf[B_WB, lane] -= buf[B_IIB, lane] * (buf[q + Q_RBX, lane] * py - buf[q + Q_RBY, lane] * px)
 
 
+@njit(cache=True, inline="always")
+def _slip(buf: np.ndarray, lane: int, q: int) -> tuple[float, float]:
+    """Velocity [m/s] of A's point at point q's ``r_A`` less B's at its ``r_B`` (one lane;
+    as :func:`.motion.relative_velocity`)."""
+    wa = buf[B_WA, lane]
+    wb = buf[B_WB, lane]
+    ux = (buf[B_VAX, lane] - wa * buf[q + Q_RAY, lane]) - (
+        buf[B_VBX, lane] - wb * buf[q + Q_RBY, lane]
+    )
+    uy = (buf[B_VAY, lane] + wa * buf[q + Q_RAX, lane]) - (
+        buf[B_VBY, lane] + wb * buf[q + Q_RBX, lane]
+    )
+    return ux, uy
+
+
 @njit(cache=True)
 def _group_work(buf: np.ndarray, group: np.ndarray, g: int, warm: bool) -> float:
     """Work [J] done on group g's lanes by their bodies of infinite mass, for the impulses
@@ -483,13 +498,10 @@ def _solve(
                 if spec:
                     bias = s * inv_h
                 elif use_bias:
-                    bias = max(buf[R_MSCALE, lane] * buf[R_RATE, lane] * s, -push_speed)
+                    bias = max(mass_scale * buf[R_RATE, lane] * s, -push_speed)
                 else:
                     bias = 0.0
-                wa = buf[B_WA, lane]
-                wb = buf[B_WB, lane]
-                ux = (buf[B_VAX, lane] - wa * ray) - (buf[B_VBX, lane] - wb * rby)
-                uy = (buf[B_VAY, lane] + wa * rax) - (buf[B_VBY, lane] + wb * rbx)
+                ux, uy = _slip(buf, lane, q)
                 un = ux * nx + uy * ny
                 jn = buf[q + Q_JN, lane]
                 dj = -buf[q + Q_NMASS, lane] * (mass_scale * un + bias) - impulse_scale * jn
@@ -503,14 +515,7 @@ def _solve(
             for lane in range(LANES):
                 tx = buf[R_NY, lane]
                 ty = -buf[R_NX, lane]
-                rax = buf[q + Q_RAX, lane]
-                ray = buf[q + Q_RAY, lane]
-                rbx = buf[q + Q_RBX, lane]
-                rby = buf[q + Q_RBY, lane]
-                wa = buf[B_WA, lane]
-                wb = buf[B_WB, lane]
-                ux = (buf[B_VAX, lane] - wa * ray) - (buf[B_VBX, lane] - wb * rby)
-                uy = (buf[B_VAY, lane] + wa * rax) - (buf[B_VBY, lane] + wb * rbx)
+                ux, uy = _slip(buf, lane, q)
                 ut = ux * tx + uy * ty
                 jt = buf[q + Q_JT, lane]
                 limit = buf[R_MU, lane] * buf[q + Q_JN, lane]
