@@ -53,7 +53,6 @@ from carom.engines.rigid.contacts import (
     P_RAY,
     P_RBX,
     P_RBY,
-    P_TMASS,
     P_TOTAL,
     P_VREL,
     point_offset,
@@ -195,43 +194,12 @@ def color_groups(ci: np.ndarray, nc: int, inv_mass: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def _prepare(
-    cf: np.ndarray, ci: np.ndarray, nc: int, inv_mass: np.ndarray, inv_inertia: np.ndarray
-) -> None:
-    """Each point's effective masses along the normal and the tangent, and a zero total."""
-    for m in range(nc):
-        if ci[m, I_FLAGS] & FLAG_EXACT:
-            continue
-        a = ci[m, I_BODY_A]
-        b = ci[m, I_BODY_B]
-        nx = cf[m, F_NX]
-        ny = cf[m, F_NY]
-        tx = ny
-        ty = -nx
-        mass = inv_mass[a] + inv_mass[b]
-        for j in range(ci[m, I_COUNT]):
-            o = point_offset(j)
-            rax = cf[m, o + P_RAX]
-            ray = cf[m, o + P_RAY]
-            rbx = cf[m, o + P_RBX]
-            rby = cf[m, o + P_RBY]
-            rna = rax * ny - ray * nx
-            rnb = rbx * ny - rby * nx
-            k = mass + inv_inertia[a] * rna * rna + inv_inertia[b] * rnb * rnb
-            cf[m, o + P_NMASS] = 1.0 / k if k > 0.0 else 0.0
-            rta = rax * ty - ray * tx
-            rtb = rbx * ty - rby * tx
-            k = mass + inv_inertia[a] * rta * rta + inv_inertia[b] * rtb * rtb
-            cf[m, o + P_TMASS] = 1.0 / k if k > 0.0 else 0.0
-            cf[m, o + P_TOTAL] = 0.0
-
-
-@njit(cache=True)
 def _pack(
     cf: np.ndarray,
     ci: np.ndarray,
     lanes: np.ndarray,
     inv_mass: np.ndarray,
+    inv_inertia: np.ndarray,
     vel: np.ndarray,
     soft_moving: tuple[float, float, float],
     soft_fixed: tuple[float, float, float],
@@ -239,19 +207,20 @@ def _pack(
     pair: np.ndarray,
     kinematic: np.ndarray,
 ) -> None:
-    """Copy the contacts of ``lanes`` into ``group`` (G, GROUP_ROWS, LANES) and their bodies
-    into ``pair`` (G, 2, LANES); ``kinematic[g]``: a lane of group g touches a moving body of
-    infinite mass (its work is counted)."""
+    """Copy the contacts of ``lanes`` into ``group`` (G, GROUP_ROWS, LANES), with each
+    point's effective masses along the normal and the tangent and a zero total, and their
+    bodies into ``pair`` (G, 2, LANES); ``kinematic[g]``: a lane of group g touches a moving
+    body of infinite mass (its work is counted)."""
     dummy = vel.shape[0] - 1
     for g in range(lanes.shape[0]):
         kinematic[g] = False
         for lane in range(LANES):
             m = lanes[g, lane]
-            for r in range(GROUP_ROWS):
-                group[g, r, lane] = 0.0
             if m < 0:
                 pair[g, 0, lane] = dummy
                 pair[g, 1, lane] = dummy
+                for r in range(GROUP_ROWS):
+                    group[g, r, lane] = 0.0
                 for p in range(2):
                     group[g, R_POINT + p * POINT_ROWS + Q_BASE, lane] = ABSENT_BASE
                 continue
@@ -261,27 +230,46 @@ def _pack(
             pair[g, 1, lane] = b
             fixed = inv_mass[a] == 0.0 or inv_mass[b] == 0.0
             rate, mass_scale, impulse_scale = soft_fixed if fixed else soft_moving
-            group[g, R_NX, lane] = cf[m, F_NX]
-            group[g, R_NY, lane] = cf[m, F_NY]
+            nx = cf[m, F_NX]
+            ny = cf[m, F_NY]
+            group[g, R_NX, lane] = nx
+            group[g, R_NY, lane] = ny
             group[g, R_MU, lane] = cf[m, F_MU]
             group[g, R_RATE, lane] = rate
             group[g, R_MSCALE, lane] = mass_scale
             group[g, R_ISCALE, lane] = impulse_scale
+            mass = inv_mass[a] + inv_mass[b]
+            ia = inv_inertia[a]
+            ib = inv_inertia[b]
             for p in range(2):
                 q = R_POINT + p * POINT_ROWS
                 if p >= ci[m, I_COUNT]:
+                    for r in range(POINT_ROWS):
+                        group[g, q + r, lane] = 0.0
                     group[g, q + Q_BASE, lane] = ABSENT_BASE
                     continue
                 o = point_offset(p)
-                group[g, q + Q_RAX, lane] = cf[m, o + P_RAX]
-                group[g, q + Q_RAY, lane] = cf[m, o + P_RAY]
-                group[g, q + Q_RBX, lane] = cf[m, o + P_RBX]
-                group[g, q + Q_RBY, lane] = cf[m, o + P_RBY]
+                rax = cf[m, o + P_RAX]
+                ray = cf[m, o + P_RAY]
+                rbx = cf[m, o + P_RBX]
+                rby = cf[m, o + P_RBY]
+                rna = rax * ny - ray * nx
+                rnb = rbx * ny - rby * nx
+                k = mass + ia * rna * rna + ib * rnb * rnb
+                # the tangent is (ny, -nx)
+                rta = rax * -nx - ray * ny
+                rtb = rbx * -nx - rby * ny
+                kt = mass + ia * rta * rta + ib * rtb * rtb
+                group[g, q + Q_RAX, lane] = rax
+                group[g, q + Q_RAY, lane] = ray
+                group[g, q + Q_RBX, lane] = rbx
+                group[g, q + Q_RBY, lane] = rby
                 group[g, q + Q_BASE, lane] = cf[m, o + P_BASE]
-                group[g, q + Q_NMASS, lane] = cf[m, o + P_NMASS]
-                group[g, q + Q_TMASS, lane] = cf[m, o + P_TMASS]
+                group[g, q + Q_NMASS, lane] = 1.0 / k if k > 0.0 else 0.0
+                group[g, q + Q_TMASS, lane] = 1.0 / kt if kt > 0.0 else 0.0
                 group[g, q + Q_JN, lane] = cf[m, o + P_JN]
                 group[g, q + Q_JT, lane] = cf[m, o + P_JT]
+                group[g, q + Q_TOTAL, lane] = 0.0
             for body in (a, b):
                 if inv_mass[body] == 0.0 and (
                     vel[body, 0] != 0.0 or vel[body, 1] != 0.0 or vel[body, 2] != 0.0
@@ -291,7 +279,7 @@ def _pack(
 
 @njit(cache=True)
 def _unpack(group: np.ndarray, lanes: np.ndarray, cf: np.ndarray) -> None:
-    """Copy each point's impulses and its total back to its contact row."""
+    """Copy each point's impulses, its total and its normal mass back to its contact row."""
     for g in range(lanes.shape[0]):
         for lane in range(LANES):
             m = lanes[g, lane]
@@ -303,6 +291,7 @@ def _unpack(group: np.ndarray, lanes: np.ndarray, cf: np.ndarray) -> None:
                 cf[m, o + P_JN] = group[g, q + Q_JN, lane]
                 cf[m, o + P_JT] = group[g, q + Q_JT, lane]
                 cf[m, o + P_TOTAL] = group[g, q + Q_TOTAL, lane]
+                cf[m, o + P_NMASS] = group[g, q + Q_NMASS, lane]
 
 
 @njit(cache=True, inline="always")
@@ -619,13 +608,14 @@ def solve_step(
     moved = np.zeros((n + 1, 4))
     moved[:, 2] = 1.0
     dtheta = np.zeros(n)
-    _prepare(cf, ci, nc, inv_mass, inv_inertia)
     lanes = color_groups(ci, nc, inv_mass)
     groups = lanes.shape[0]
     group = np.empty((groups, GROUP_ROWS, LANES))
     pair = np.empty((groups, 2, LANES), np.int64)
     kinematic = np.empty(groups, np.bool_)
-    _pack(cf, ci, lanes, inv_mass, vel, soft_moving, soft_fixed, group, pair, kinematic)
+    _pack(
+        cf, ci, lanes, inv_mass, inv_inertia, vel, soft_moving, soft_fixed, group, pair, kinematic
+    )
     for _ in range(substeps):
         for i in bodies:
             if gravity_on[i]:
