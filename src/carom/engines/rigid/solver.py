@@ -27,6 +27,12 @@ into vector instructions. The lanes of a group are independent, so this is Gauss
 colour order: the same arithmetic as one contact after another, in that order. A contact whose
 bodies have used all 64 colours gets a group to itself. Padding lanes join a dummy body that
 nothing moves.
+
+Every buffer is flat: row ``r`` of a group is ``LANES`` numbers from ``r * LANES`` on, with ``r``
+a constant, so each row is one vector load; the group's rows (its contacts and both bodies'
+inverse masses, fixed for the step) are copied as one run. Each body's velocity, move and turn
+since the step began share one row of the solver's state (one cache line), gathered lane by
+lane.
 """
 
 from __future__ import annotations
@@ -68,14 +74,18 @@ LANES = 8
 #: colours a body can take (the bits of one mask); a contact finding none free is solved alone
 COLORS = 64
 
-# rows of a group's buffer, each LANES wide: the contact ...
+# rows of a group (each LANES wide, row r from r * LANES on): the contact ...
 R_NX = 0
 R_NY = 1
 R_MU = 2
 R_RATE = 3  # soft bias rate [1/s]
 R_MSCALE = 4  # soft mass scale [-]
 R_ISCALE = 5  # soft impulse scale [-]
-R_POINT = 6  # point p's rows start at R_POINT + p * POINT_ROWS
+R_IMA = 6  # body A's inverse mass [1/kg]
+R_IIA = 7  # body A's inverse moment of inertia [1/(kg m^2)]
+R_IMB = 8
+R_IIB = 9
+R_POINT = 10  # point p's rows start at R_POINT + p * POINT_ROWS
 Q_RAX = 0
 Q_RAY = 1
 Q_RBX = 2
@@ -88,24 +98,29 @@ Q_JT = 8
 Q_TOTAL = 9
 POINT_ROWS = 10
 GROUP_ROWS = R_POINT + 2 * POINT_ROWS
-# ... then, in the working buffer only, its two bodies
+# ... then, in the working buffer only, its two bodies' velocities and moves
 B_VAX = GROUP_ROWS
 B_VAY = GROUP_ROWS + 1
 B_WA = GROUP_ROWS + 2
 B_VBX = GROUP_ROWS + 3
 B_VBY = GROUP_ROWS + 4
 B_WB = GROUP_ROWS + 5
-B_IMA = GROUP_ROWS + 6  # inverse mass [1/kg]
-B_IIA = GROUP_ROWS + 7  # inverse moment of inertia [1/(kg m^2)]
-B_IMB = GROUP_ROWS + 8
-B_IIB = GROUP_ROWS + 9
-B_DX = GROUP_ROWS + 10  # A's move less B's since the step began [m]
-B_DY = GROUP_ROWS + 11
-B_CA = GROUP_ROWS + 12  # cos and sin of A's turn since the step began
-B_SA = GROUP_ROWS + 13
-B_CB = GROUP_ROWS + 14
-B_SB = GROUP_ROWS + 15
-BUFFER_ROWS = GROUP_ROWS + 16
+B_DX = GROUP_ROWS + 6  # A's move less B's since the step began [m]
+B_DY = GROUP_ROWS + 7
+B_CA = GROUP_ROWS + 8  # cos and sin of A's turn since the step began
+B_SA = GROUP_ROWS + 9
+B_CB = GROUP_ROWS + 10
+B_SB = GROUP_ROWS + 11
+BUFFER_ROWS = GROUP_ROWS + 12
+# columns of a body's row in the solver's state (N+1, STATE_COLS): one cache line a body
+S_VX = 0
+S_VY = 1
+S_W = 2
+S_DX = 3  # move since the step began [m]
+S_DY = 4
+S_COS = 5  # cos and sin of the turn since the step began
+S_SIN = 6
+STATE_COLS = 8
 #: a point that is not there: never touching, never pushed
 ABSENT_BASE = 1e30
 
@@ -200,44 +215,48 @@ def _pack(
     lanes: np.ndarray,
     inv_mass: np.ndarray,
     inv_inertia: np.ndarray,
-    vel: np.ndarray,
+    state: np.ndarray,
     soft_moving: tuple[float, float, float],
     soft_fixed: tuple[float, float, float],
     group: np.ndarray,
     pair: np.ndarray,
     kinematic: np.ndarray,
 ) -> None:
-    """Copy the contacts of ``lanes`` into ``group`` (G, GROUP_ROWS, LANES), with each
+    """Copy the contacts of ``lanes`` into ``group`` (G, GROUP_ROWS * LANES), with each
     point's effective masses along the normal and the tangent and a zero total, and their
-    bodies into ``pair`` (G, 2, LANES); ``kinematic[g]``: a lane of group g touches a moving
+    bodies into ``pair`` (G, 2 * LANES); ``kinematic[g]``: a lane of group g touches a moving
     body of infinite mass (its work is counted)."""
-    dummy = vel.shape[0] - 1
+    dummy = state.shape[0] - 1
     for g in range(lanes.shape[0]):
         kinematic[g] = False
         for lane in range(LANES):
             m = lanes[g, lane]
             if m < 0:
-                pair[g, 0, lane] = dummy
-                pair[g, 1, lane] = dummy
+                pair[g, lane] = dummy
+                pair[g, LANES + lane] = dummy
                 for r in range(GROUP_ROWS):
-                    group[g, r, lane] = 0.0
+                    group[g, r * LANES + lane] = 0.0
                 for p in range(2):
-                    group[g, R_POINT + p * POINT_ROWS + Q_BASE, lane] = ABSENT_BASE
+                    group[g, (R_POINT + p * POINT_ROWS + Q_BASE) * LANES + lane] = ABSENT_BASE
                 continue
             a = ci[m, I_BODY_A]
             b = ci[m, I_BODY_B]
-            pair[g, 0, lane] = a
-            pair[g, 1, lane] = b
+            pair[g, lane] = a
+            pair[g, LANES + lane] = b
             fixed = inv_mass[a] == 0.0 or inv_mass[b] == 0.0
             rate, mass_scale, impulse_scale = soft_fixed if fixed else soft_moving
             nx = cf[m, F_NX]
             ny = cf[m, F_NY]
-            group[g, R_NX, lane] = nx
-            group[g, R_NY, lane] = ny
-            group[g, R_MU, lane] = cf[m, F_MU]
-            group[g, R_RATE, lane] = rate
-            group[g, R_MSCALE, lane] = mass_scale
-            group[g, R_ISCALE, lane] = impulse_scale
+            group[g, R_NX * LANES + lane] = nx
+            group[g, R_NY * LANES + lane] = ny
+            group[g, R_MU * LANES + lane] = cf[m, F_MU]
+            group[g, R_RATE * LANES + lane] = rate
+            group[g, R_MSCALE * LANES + lane] = mass_scale
+            group[g, R_ISCALE * LANES + lane] = impulse_scale
+            group[g, R_IMA * LANES + lane] = inv_mass[a]
+            group[g, R_IIA * LANES + lane] = inv_inertia[a]
+            group[g, R_IMB * LANES + lane] = inv_mass[b]
+            group[g, R_IIB * LANES + lane] = inv_inertia[b]
             mass = inv_mass[a] + inv_mass[b]
             ia = inv_inertia[a]
             ib = inv_inertia[b]
@@ -245,8 +264,8 @@ def _pack(
                 q = R_POINT + p * POINT_ROWS
                 if p >= ci[m, I_COUNT]:
                     for r in range(POINT_ROWS):
-                        group[g, q + r, lane] = 0.0
-                    group[g, q + Q_BASE, lane] = ABSENT_BASE
+                        group[g, (q + r) * LANES + lane] = 0.0
+                    group[g, (q + Q_BASE) * LANES + lane] = ABSENT_BASE
                     continue
                 o = point_offset(p)
                 rax = cf[m, o + P_RAX]
@@ -260,19 +279,19 @@ def _pack(
                 rta = rax * -nx - ray * ny
                 rtb = rbx * -nx - rby * ny
                 kt = mass + ia * rta * rta + ib * rtb * rtb
-                group[g, q + Q_RAX, lane] = rax
-                group[g, q + Q_RAY, lane] = ray
-                group[g, q + Q_RBX, lane] = rbx
-                group[g, q + Q_RBY, lane] = rby
-                group[g, q + Q_BASE, lane] = cf[m, o + P_BASE]
-                group[g, q + Q_NMASS, lane] = 1.0 / k if k > 0.0 else 0.0
-                group[g, q + Q_TMASS, lane] = 1.0 / kt if kt > 0.0 else 0.0
-                group[g, q + Q_JN, lane] = cf[m, o + P_JN]
-                group[g, q + Q_JT, lane] = cf[m, o + P_JT]
-                group[g, q + Q_TOTAL, lane] = 0.0
+                group[g, (q + Q_RAX) * LANES + lane] = rax
+                group[g, (q + Q_RAY) * LANES + lane] = ray
+                group[g, (q + Q_RBX) * LANES + lane] = rbx
+                group[g, (q + Q_RBY) * LANES + lane] = rby
+                group[g, (q + Q_BASE) * LANES + lane] = cf[m, o + P_BASE]
+                group[g, (q + Q_NMASS) * LANES + lane] = 1.0 / k if k > 0.0 else 0.0
+                group[g, (q + Q_TMASS) * LANES + lane] = 1.0 / kt if kt > 0.0 else 0.0
+                group[g, (q + Q_JN) * LANES + lane] = cf[m, o + P_JN]
+                group[g, (q + Q_JT) * LANES + lane] = cf[m, o + P_JT]
+                group[g, (q + Q_TOTAL) * LANES + lane] = 0.0
             for body in (a, b):
                 if inv_mass[body] == 0.0 and (
-                    vel[body, 0] != 0.0 or vel[body, 1] != 0.0 or vel[body, 2] != 0.0
+                    state[body, S_VX] != 0.0 or state[body, S_VY] != 0.0 or state[body, S_W] != 0.0
                 ):
                     kinematic[g] = True
 
@@ -288,96 +307,107 @@ def _unpack(group: np.ndarray, lanes: np.ndarray, cf: np.ndarray) -> None:
             for p in range(2):
                 q = R_POINT + p * POINT_ROWS
                 o = point_offset(p)
-                cf[m, o + P_JN] = group[g, q + Q_JN, lane]
-                cf[m, o + P_JT] = group[g, q + Q_JT, lane]
-                cf[m, o + P_TOTAL] = group[g, q + Q_TOTAL, lane]
-                cf[m, o + P_NMASS] = group[g, q + Q_NMASS, lane]
+                cf[m, o + P_JN] = group[g, (q + Q_JN) * LANES + lane]
+                cf[m, o + P_JT] = group[g, (q + Q_JT) * LANES + lane]
+                cf[m, o + P_TOTAL] = group[g, (q + Q_TOTAL) * LANES + lane]
+                cf[m, o + P_NMASS] = group[g, (q + Q_NMASS) * LANES + lane]
 
 
 @njit(cache=True, inline="always")
 def _gather(
-    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, vel: np.ndarray, prop: np.ndarray
+    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray
 ) -> None:
-    """Group g and its bodies' velocities and inverse masses into the working buffer
-    (BUFFER_ROWS, LANES)."""
-    for r in range(GROUP_ROWS):
-        for lane in range(LANES):
-            buf[r, lane] = group[g, r, lane]
+    """Group g and its bodies' velocities into the working buffer (BUFFER_ROWS * LANES)."""
+    for k in range(GROUP_ROWS * LANES):  # one flat run: the compiler moves it in vectors
+        buf[k] = group[g, k]
     for lane in range(LANES):
-        a = pair[g, 0, lane]
-        b = pair[g, 1, lane]
-        buf[B_VAX, lane] = vel[a, 0]
-        buf[B_VAY, lane] = vel[a, 1]
-        buf[B_WA, lane] = vel[a, 2]
-        buf[B_VBX, lane] = vel[b, 0]
-        buf[B_VBY, lane] = vel[b, 1]
-        buf[B_WB, lane] = vel[b, 2]
-        buf[B_IMA, lane] = prop[a, 0]
-        buf[B_IIA, lane] = prop[a, 1]
-        buf[B_IMB, lane] = prop[b, 0]
-        buf[B_IIB, lane] = prop[b, 1]
+        a = pair[g, lane]
+        b = pair[g, LANES + lane]
+        buf[B_VAX * LANES + lane] = state[a, S_VX]
+        buf[B_VAY * LANES + lane] = state[a, S_VY]
+        buf[B_WA * LANES + lane] = state[a, S_W]
+        buf[B_VBX * LANES + lane] = state[b, S_VX]
+        buf[B_VBY * LANES + lane] = state[b, S_VY]
+        buf[B_WB * LANES + lane] = state[b, S_W]
 
 
 @njit(cache=True, inline="always")
-def _gather_moves(buf: np.ndarray, pair: np.ndarray, g: int, moved: np.ndarray) -> None:
-    """Group g's bodies' moves and turns since the step began into the working buffer."""
+def _gather_all(
+    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray
+) -> None:
+    """Group g and its bodies' velocities, moves and turns since the step began into the
+    working buffer."""
+    for k in range(GROUP_ROWS * LANES):  # one flat run: the compiler moves it in vectors
+        buf[k] = group[g, k]
     for lane in range(LANES):
-        a = pair[g, 0, lane]
-        b = pair[g, 1, lane]
-        buf[B_DX, lane] = moved[a, 0] - moved[b, 0]
-        buf[B_DY, lane] = moved[a, 1] - moved[b, 1]
-        buf[B_CA, lane] = moved[a, 2]
-        buf[B_SA, lane] = moved[a, 3]
-        buf[B_CB, lane] = moved[b, 2]
-        buf[B_SB, lane] = moved[b, 3]
+        a = pair[g, lane]
+        b = pair[g, LANES + lane]
+        buf[B_VAX * LANES + lane] = state[a, S_VX]
+        buf[B_VAY * LANES + lane] = state[a, S_VY]
+        buf[B_WA * LANES + lane] = state[a, S_W]
+        buf[B_DX * LANES + lane] = state[a, S_DX] - state[b, S_DX]
+        buf[B_DY * LANES + lane] = state[a, S_DY] - state[b, S_DY]
+        buf[B_CA * LANES + lane] = state[a, S_COS]
+        buf[B_SA * LANES + lane] = state[a, S_SIN]
+        buf[B_VBX * LANES + lane] = state[b, S_VX]
+        buf[B_VBY * LANES + lane] = state[b, S_VY]
+        buf[B_WB * LANES + lane] = state[b, S_W]
+        buf[B_CB * LANES + lane] = state[b, S_COS]
+        buf[B_SB * LANES + lane] = state[b, S_SIN]
 
 
 @njit(cache=True, inline="always")
-def _scatter(buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, vel: np.ndarray) -> None:
+def _scatter(
+    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray
+) -> None:
     """The impulses back to group g, the velocities back to its bodies. Lanes sharing a body
     of infinite mass write back the value they all read."""
     for p in range(2):
         q = R_POINT + p * POINT_ROWS
         for lane in range(LANES):
-            group[g, q + Q_JN, lane] = buf[q + Q_JN, lane]
-            group[g, q + Q_JT, lane] = buf[q + Q_JT, lane]
-            group[g, q + Q_TOTAL, lane] = buf[q + Q_TOTAL, lane]
+            group[g, (q + Q_JN) * LANES + lane] = buf[(q + Q_JN) * LANES + lane]
+            group[g, (q + Q_JT) * LANES + lane] = buf[(q + Q_JT) * LANES + lane]
+            group[g, (q + Q_TOTAL) * LANES + lane] = buf[(q + Q_TOTAL) * LANES + lane]
     for lane in range(LANES):
-        a = pair[g, 0, lane]
-        b = pair[g, 1, lane]
-        vel[a, 0] = buf[B_VAX, lane]
-        vel[a, 1] = buf[B_VAY, lane]
-        vel[a, 2] = buf[B_WA, lane]
-        vel[b, 0] = buf[B_VBX, lane]
-        vel[b, 1] = buf[B_VBY, lane]
-        vel[b, 2] = buf[B_WB, lane]
+        a = pair[g, lane]
+        b = pair[g, LANES + lane]
+        state[a, S_VX] = buf[B_VAX * LANES + lane]
+        state[a, S_VY] = buf[B_VAY * LANES + lane]
+        state[a, S_W] = buf[B_WA * LANES + lane]
+        state[b, S_VX] = buf[B_VBX * LANES + lane]
+        state[b, S_VY] = buf[B_VBY * LANES + lane]
+        state[b, S_W] = buf[B_WB * LANES + lane]
 
 
 @njit(cache=True, inline="always")
 def _push(buf: np.ndarray, lane: int, q: int, px: float, py: float) -> None:
     """Impulse ``P`` on A at point q's ``r_A`` and ``-P`` on B at its ``r_B`` (one lane; as
     :func:`.motion.apply_impulse`)."""
-    ma = buf[B_IMA, lane]
-    mb = buf[B_IMB, lane]
-    buf[B_VAX, lane] += ma * px
-    buf[B_VAY, lane] += ma * py
-    buf[B_WA, lane] += buf[B_IIA, lane] * (buf[q + Q_RAX, lane] * py - buf[q + Q_RAY, lane] * px)
-    buf[B_VBX, lane] -= mb * px
-    buf[B_VBY, lane] -= mb * py
-    buf[B_WB, lane] -= buf[B_IIB, lane] * (buf[q + Q_RBX, lane] * py - buf[q + Q_RBY, lane] * px)
+    ma = buf[R_IMA * LANES + lane]
+    mb = buf[R_IMB * LANES + lane]
+    buf[B_VAX * LANES + lane] += ma * px
+    buf[B_VAY * LANES + lane] += ma * py
+    buf[B_WA * LANES + lane] += buf[R_IIA * LANES + lane] * (
+        buf[(q + Q_RAX) * LANES + lane] * py - buf[(q + Q_RAY) * LANES + lane] * px
+    )
+    buf[B_VBX * LANES + lane] -= mb * px
+    buf[B_VBY * LANES + lane] -= mb * py
+    buf[B_WB * LANES + lane] -= buf[R_IIB * LANES + lane] * (
+        buf[(q + Q_RBX) * LANES + lane] * py - buf[(q + Q_RBY) * LANES + lane] * px
+    )
 
 
 @njit(cache=True, inline="always")
 def _slip(buf: np.ndarray, lane: int, q: int) -> tuple[float, float]:
     """Velocity [m/s] of A's point at point q's ``r_A`` less B's at its ``r_B`` (one lane;
     as :func:`.motion.relative_velocity`)."""
-    wa = buf[B_WA, lane]
-    wb = buf[B_WB, lane]
-    ux = (buf[B_VAX, lane] - wa * buf[q + Q_RAY, lane]) - (
-        buf[B_VBX, lane] - wb * buf[q + Q_RBY, lane]
+    wa = buf[B_WA * LANES + lane]
+    wb = buf[B_WB * LANES + lane]
+    ux = (buf[B_VAX * LANES + lane] - wa * buf[(q + Q_RAY) * LANES + lane]) - (
+        buf[B_VBX * LANES + lane] - wb * buf[(q + Q_RBY) * LANES + lane]
     )
-    uy = (buf[B_VAY, lane] + wa * buf[q + Q_RAX, lane]) - (
-        buf[B_VBY, lane] + wb * buf[q + Q_RBX, lane]
+    uy = (buf[B_VAY * LANES + lane] + wa * buf[(q + Q_RAX) * LANES + lane]) - (
+        buf[B_VBY * LANES + lane] + wb * buf[(q + Q_RBX) * LANES + lane]
     )
     return ux, uy
 
@@ -390,26 +420,26 @@ def _group_work(buf: np.ndarray, group: np.ndarray, g: int, warm: bool) -> float
     such a body's velocity is the same before and after."""
     total = 0.0
     for lane in range(LANES):
-        nx = buf[R_NX, lane]
-        ny = buf[R_NY, lane]
+        nx = buf[R_NX * LANES + lane]
+        ny = buf[R_NY * LANES + lane]
         for p in range(2):
             q = R_POINT + p * POINT_ROWS
-            dn = buf[q + Q_JN, lane]
-            dt = buf[q + Q_JT, lane]
+            dn = buf[(q + Q_JN) * LANES + lane]
+            dt = buf[(q + Q_JT) * LANES + lane]
             if not warm:
-                dn -= group[g, q + Q_JN, lane]
-                dt -= group[g, q + Q_JT, lane]
+                dn -= group[g, (q + Q_JN) * LANES + lane]
+                dt -= group[g, (q + Q_JT) * LANES + lane]
             px = dn * nx + dt * ny
             py = dn * ny - dt * nx
-            if buf[B_IMA, lane] == 0.0:
-                wa = buf[B_WA, lane]
-                ux = buf[B_VAX, lane] - wa * buf[q + Q_RAY, lane]
-                uy = buf[B_VAY, lane] + wa * buf[q + Q_RAX, lane]
+            if buf[R_IMA * LANES + lane] == 0.0:
+                wa = buf[B_WA * LANES + lane]
+                ux = buf[B_VAX * LANES + lane] - wa * buf[(q + Q_RAY) * LANES + lane]
+                uy = buf[B_VAY * LANES + lane] + wa * buf[(q + Q_RAX) * LANES + lane]
                 total -= px * ux + py * uy
-            if buf[B_IMB, lane] == 0.0:
-                wb = buf[B_WB, lane]
-                ux = buf[B_VBX, lane] - wb * buf[q + Q_RBY, lane]
-                uy = buf[B_VBY, lane] + wb * buf[q + Q_RBX, lane]
+            if buf[R_IMB * LANES + lane] == 0.0:
+                wb = buf[B_WB * LANES + lane]
+                ux = buf[B_VBX * LANES + lane] - wb * buf[(q + Q_RBY) * LANES + lane]
+                uy = buf[B_VBY * LANES + lane] + wb * buf[(q + Q_RBX) * LANES + lane]
                 total += px * ux + py * uy
     return total
 
@@ -419,26 +449,25 @@ def _warm_start(
     group: np.ndarray,
     pair: np.ndarray,
     kinematic: np.ndarray,
-    vel: np.ndarray,
-    prop: np.ndarray,
+    state: np.ndarray,
     work: np.ndarray,
 ) -> None:
     """Apply every point's impulse from the last substep (or step) again."""
-    buf = np.empty((BUFFER_ROWS, LANES))
+    buf = np.empty(BUFFER_ROWS * LANES)
     for g in range(group.shape[0]):
-        _gather(buf, group, pair, g, vel, prop)
+        _gather(buf, group, pair, g, state)
         for p in range(2):
             q = R_POINT + p * POINT_ROWS
             for lane in range(LANES):
-                nx = buf[R_NX, lane]
-                ny = buf[R_NY, lane]
-                jn = buf[q + Q_JN, lane]
-                jt = buf[q + Q_JT, lane]
-                buf[q + Q_TOTAL, lane] += jn
+                nx = buf[R_NX * LANES + lane]
+                ny = buf[R_NY * LANES + lane]
+                jn = buf[(q + Q_JN) * LANES + lane]
+                jt = buf[(q + Q_JT) * LANES + lane]
+                buf[(q + Q_TOTAL) * LANES + lane] += jn
                 _push(buf, lane, q, jn * nx + jt * ny, jn * ny - jt * nx)
         if kinematic[g]:
             work[0] += _group_work(buf, group, g, True)
-        _scatter(buf, group, pair, g, vel)
+        _scatter(buf, group, pair, g, state)
 
 
 @njit(cache=True, fastmath=LANE_MATH)
@@ -446,75 +475,74 @@ def _solve(
     group: np.ndarray,
     pair: np.ndarray,
     kinematic: np.ndarray,
-    vel: np.ndarray,
-    prop: np.ndarray,
-    moved: np.ndarray,
+    state: np.ndarray,
     inv_h: float,
     use_bias: bool,
     push_speed: float,
     work: np.ndarray,
 ) -> None:
     """One Gauss-Seidel pass over the groups: normal impulses, then friction, lane by lane.
-    ``vel`` (N+1, 3: vx, vy, omega), ``prop`` (N+1, 2: inverse mass and inertia) and
-    ``moved`` (N+1, 4: dx, dy, cos and sin of the turn since the step began) have a row for
-    each body and one for the padding lanes' dummy; ``work[0]`` gathers what kinematic bodies
-    do."""
-    buf = np.empty((BUFFER_ROWS, LANES))
+    ``state`` (N+1, STATE_COLS: velocity, angular velocity, move and the cos and sin of the
+    turn since the step began) has a row for each body and one for the padding lanes' dummy;
+    ``work[0]`` gathers what kinematic bodies do."""
+    buf = np.empty(BUFFER_ROWS * LANES)
     for g in range(group.shape[0]):
-        _gather(buf, group, pair, g, vel, prop)
-        _gather_moves(buf, pair, g, moved)
+        _gather_all(buf, group, pair, g, state)
         for p in range(2):
             q = R_POINT + p * POINT_ROWS
             for lane in range(LANES):
-                nx = buf[R_NX, lane]
-                ny = buf[R_NY, lane]
-                rax = buf[q + Q_RAX, lane]
-                ray = buf[q + Q_RAY, lane]
-                rbx = buf[q + Q_RBX, lane]
-                rby = buf[q + Q_RBY, lane]
-                ca = buf[B_CA, lane]
-                sa = buf[B_SA, lane]
-                cb = buf[B_CB, lane]
-                sb = buf[B_SB, lane]
+                nx = buf[R_NX * LANES + lane]
+                ny = buf[R_NY * LANES + lane]
+                rax = buf[(q + Q_RAX) * LANES + lane]
+                ray = buf[(q + Q_RAY) * LANES + lane]
+                rbx = buf[(q + Q_RBX) * LANES + lane]
+                rby = buf[(q + Q_RBY) * LANES + lane]
+                ca = buf[B_CA * LANES + lane]
+                sa = buf[B_SA * LANES + lane]
+                cb = buf[B_CB * LANES + lane]
+                sb = buf[B_SB * LANES + lane]
                 # the separation now: anchors turned by each body's turn since the step began
-                sx = buf[B_DX, lane] + (ca * rax - sa * ray) - (cb * rbx - sb * rby)
-                sy = buf[B_DY, lane] + (sa * rax + ca * ray) - (sb * rbx + cb * rby)
-                s = buf[q + Q_BASE, lane] + sx * nx + sy * ny
+                sx = buf[B_DX * LANES + lane] + (ca * rax - sa * ray) - (cb * rbx - sb * rby)
+                sy = buf[B_DY * LANES + lane] + (sa * rax + ca * ray) - (sb * rbx + cb * rby)
+                s = buf[(q + Q_BASE) * LANES + lane] + sx * nx + sy * ny
                 spec = s > 0.0  # speculative: close the gap, no more
                 soft = use_bias and not spec
-                mass_scale = buf[R_MSCALE, lane] if soft else 1.0
-                impulse_scale = buf[R_ISCALE, lane] if soft else 0.0
+                mass_scale = buf[R_MSCALE * LANES + lane] if soft else 1.0
+                impulse_scale = buf[R_ISCALE * LANES + lane] if soft else 0.0
                 if spec:
                     bias = s * inv_h
                 elif use_bias:
-                    bias = max(mass_scale * buf[R_RATE, lane] * s, -push_speed)
+                    bias = max(mass_scale * buf[R_RATE * LANES + lane] * s, -push_speed)
                 else:
                     bias = 0.0
                 ux, uy = _slip(buf, lane, q)
                 un = ux * nx + uy * ny
-                jn = buf[q + Q_JN, lane]
-                dj = -buf[q + Q_NMASS, lane] * (mass_scale * un + bias) - impulse_scale * jn
+                jn = buf[(q + Q_JN) * LANES + lane]
+                dj = (
+                    -buf[(q + Q_NMASS) * LANES + lane] * (mass_scale * un + bias)
+                    - impulse_scale * jn
+                )
                 new = max(jn + dj, 0.0)
                 dj = new - jn
-                buf[q + Q_JN, lane] = new
-                buf[q + Q_TOTAL, lane] += dj
+                buf[(q + Q_JN) * LANES + lane] = new
+                buf[(q + Q_TOTAL) * LANES + lane] += dj
                 _push(buf, lane, q, dj * nx, dj * ny)
         for p in range(2):
             q = R_POINT + p * POINT_ROWS
             for lane in range(LANES):
-                tx = buf[R_NY, lane]
-                ty = -buf[R_NX, lane]
+                tx = buf[R_NY * LANES + lane]
+                ty = -buf[R_NX * LANES + lane]
                 ux, uy = _slip(buf, lane, q)
                 ut = ux * tx + uy * ty
-                jt = buf[q + Q_JT, lane]
-                limit = buf[R_MU, lane] * buf[q + Q_JN, lane]
-                new = min(max(jt - buf[q + Q_TMASS, lane] * ut, -limit), limit)
+                jt = buf[(q + Q_JT) * LANES + lane]
+                limit = buf[R_MU * LANES + lane] * buf[(q + Q_JN) * LANES + lane]
+                new = min(max(jt - buf[(q + Q_TMASS) * LANES + lane] * ut, -limit), limit)
                 dj = new - jt
-                buf[q + Q_JT, lane] = new
+                buf[(q + Q_JT) * LANES + lane] = new
                 _push(buf, lane, q, dj * tx, dj * ty)
         if kinematic[g]:
             work[0] += _group_work(buf, group, g, False)
-        _scatter(buf, group, pair, g, vel)
+        _scatter(buf, group, pair, g, state)
 
 
 @njit(cache=True)
@@ -598,45 +626,41 @@ def solve_step(
     soft_fixed = softness(2.0 * hertz, damping_ratio, h)
     n = x.shape[0]
     # every body's row, and a last one for the padding lanes' dummy (at rest, infinite mass)
-    vel = np.zeros((n + 1, 3))
-    vel[:n, 0] = v[:, 0]
-    vel[:n, 1] = v[:, 1]
-    vel[:n, 2] = omega
-    prop = np.zeros((n + 1, 2))
-    prop[:n, 0] = inv_mass
-    prop[:n, 1] = inv_inertia
-    moved = np.zeros((n + 1, 4))
-    moved[:, 2] = 1.0
+    state = np.zeros((n + 1, STATE_COLS))
+    state[:n, S_VX] = v[:, 0]
+    state[:n, S_VY] = v[:, 1]
+    state[:n, S_W] = omega
+    state[:, S_COS] = 1.0
     dtheta = np.zeros(n)
     lanes = color_groups(ci, nc, inv_mass)
     groups = lanes.shape[0]
-    group = np.empty((groups, GROUP_ROWS, LANES))
-    pair = np.empty((groups, 2, LANES), np.int64)
+    group = np.empty((groups, GROUP_ROWS * LANES))
+    pair = np.empty((groups, 2 * LANES), np.int64)
     kinematic = np.empty(groups, np.bool_)
     _pack(
-        cf, ci, lanes, inv_mass, inv_inertia, vel, soft_moving, soft_fixed, group, pair, kinematic
+        cf, ci, lanes, inv_mass, inv_inertia, state, soft_moving, soft_fixed, group, pair, kinematic
     )
     for _ in range(substeps):
         for i in bodies:
             if gravity_on[i]:
-                vel[i, 0] += h * gx
-                vel[i, 1] += h * gy
-        _warm_start(group, pair, kinematic, vel, prop, work)
-        _solve(group, pair, kinematic, vel, prop, moved, 1.0 / h, True, push_speed, work)
+                state[i, S_VX] += h * gx
+                state[i, S_VY] += h * gy
+        _warm_start(group, pair, kinematic, state, work)
+        _solve(group, pair, kinematic, state, 1.0 / h, True, push_speed, work)
         for i in bodies:
-            x[i, 0] += h * vel[i, 0]
-            x[i, 1] += h * vel[i, 1]
-            angle[i] += h * vel[i, 2]
-            moved[i, 0] += h * vel[i, 0]
-            moved[i, 1] += h * vel[i, 1]
-            dtheta[i] += h * vel[i, 2]
+            x[i, 0] += h * state[i, S_VX]
+            x[i, 1] += h * state[i, S_VY]
+            angle[i] += h * state[i, S_W]
+            state[i, S_DX] += h * state[i, S_VX]
+            state[i, S_DY] += h * state[i, S_VY]
+            dtheta[i] += h * state[i, S_W]
             # each body's turn since the step began, once per substep (not per contact)
-            moved[i, 2] = math.cos(dtheta[i])
-            moved[i, 3] = math.sin(dtheta[i])
-        _solve(group, pair, kinematic, vel, prop, moved, 1.0 / h, False, push_speed, work)
+            state[i, S_COS] = math.cos(dtheta[i])
+            state[i, S_SIN] = math.sin(dtheta[i])
+        _solve(group, pair, kinematic, state, 1.0 / h, False, push_speed, work)
     for i in bodies:
-        v[i, 0] = vel[i, 0]
-        v[i, 1] = vel[i, 1]
-        omega[i] = vel[i, 2]
+        v[i, 0] = state[i, S_VX]
+        v[i, 1] = state[i, S_VY]
+        omega[i] = state[i, S_W]
     _unpack(group, lanes, cf)
     _restitution(cf, ci, nc, restitution_threshold, inv_mass, inv_inertia, v, omega, work)
