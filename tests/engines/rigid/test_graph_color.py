@@ -1,5 +1,5 @@
 """The solver's layout: contacts coloured so that no two of a group share a body that impulses
-move, cut into groups of eight lanes solved together (:func:`carom.engines.rigid.solver.
+move, cut into groups of LANES lanes solved together (:func:`carom.engines.rigid.solver.
 color_groups`), and a body with more contacts than there are colours (the overflow, each such
 contact in a group of its own) still held up.
 """
