@@ -27,7 +27,7 @@ $(VENV)/.stamp-demo: pyproject.toml | $(BIN)/python
 	@touch $@
 
 $(VENV)/.stamp-dev: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[viz,io,view,compare,dev]'
+	$(BIN)/python -m pip install --quiet -e '.[viz,io,view,compare,rigid3d,dev]'
 	@touch $@ $(VENV)/.stamp-demo
 
 demo: $(VENV)/.stamp-demo
