@@ -16,7 +16,7 @@ ROOT = Path(carom.__file__).parent
 LAYERS = [
     {"errors", "limits", "_inputs", "_text", "jit"},  # the base: they import only each other
     {"geometry", "laws"},  # world-free kernels and closed forms
-    {"shapes", "shapes3d", "materials", "bodies"},  # the engine-neutral core
+    {"shapes", "shapes3d", "meshes", "materials", "bodies"},  # the engine-neutral core
     {"engines"},
     {"world", "observables", "checkpoint"},
     {"scene", "reference", "studies"},

@@ -421,9 +421,14 @@ class Compound(Shape3D):
         Each part is placed by turning it by ``rotation`` (a quaternion (w, x, y, z) or a 3x3
         matrix) about its own origin, then moving it by ``offset`` [m]. Parts may touch but
         should not overlap: overlapping volume counts twice in the mass.
+    solid : SolidIntegrals, optional
+        The body's own volume integrals, when known better than the parts' sum: a mesh cut
+        into convex pieces (:func:`carom.meshes.decompose`) weighs what the closed mesh
+        weighs, not what its slightly overlapping pieces add up to.
     """
 
     parts: Sequence[Any]
+    solid: SolidIntegrals | None = field(default=None, kw_only=True)
     placed: tuple[ConvexPiece3D, ...] = field(init=False, repr=False)
     kind = "compound"
 
@@ -442,6 +447,9 @@ class Compound(Shape3D):
 
     def pieces(self) -> tuple[ConvexPiece3D, ...]:
         return self.placed
+
+    def integrals(self) -> SolidIntegrals:
+        return self.solid if self.solid is not None else super().integrals()
 
 
 def _part(i: int, part: Any) -> tuple[Shape3D, FloatArray, FloatArray]:

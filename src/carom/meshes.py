@@ -1,0 +1,240 @@
+"""Triangle meshes in 3D: static terrain from OBJ/STL/PLY files, and concave dynamic bodies cut
+into convex pieces.
+
+:class:`Mesh` is a static body's surface (a bowl, a ramp, a room): any triangle soup, closed or
+not, loaded by ``trimesh``. A concave *dynamic* body needs volume and convex pieces to collide
+with: :func:`decompose` cuts a closed mesh with CoACD (Wei et al., "Approximate convex
+decomposition for 3D meshes with collision-aware concavity and tree search", SIGGRAPH 2022)
+into a :class:`carom.shapes3d.Compound` of hulls whose mass properties are the closed mesh's
+own, exact. The cut takes seconds, so it is done once and kept beside the mesh file
+(``NAME.carom-pieces.npz``), keyed by a hash of the mesh and the cut's settings: a changed
+mesh or setting cuts again, and a file of that name that carom did not write is never
+overwritten.
+
+Needs ``pip install carom[rigid3d]`` (SciPy, trimesh, CoACD).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from carom.errors import CaromError
+from carom.geometry.mass3d import SolidIntegrals, check_closed, polyhedron_integrals
+from carom.shapes3d import Compound, ConvexPiece3D, Hull, Shape3D
+
+__all__ = ["CACHE_SUFFIX", "Mesh", "decompose", "load_mesh"]
+
+FloatArray = NDArray[np.float64]
+
+#: what a mesh file's pieces are kept in, beside it
+CACHE_SUFFIX = ".carom-pieces.npz"
+_CACHE_FORMAT = "carom-pieces 1"
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh(Shape3D):
+    """A static triangle mesh: terrain, a bowl, a room. Static only: it has no mass.
+
+    Parameters
+    ----------
+    vertices : (V, 3) float64
+        [m].
+    triangles : (F, 3) int64
+        Corner indices; counter-clockwise seen from the side bodies stay on.
+    """
+
+    vertices: ArrayLike
+    triangles: ArrayLike
+    kind = "mesh"
+
+    def __post_init__(self) -> None:
+        try:
+            v = np.asarray(self.vertices, dtype=float)
+            f = np.asarray(self.triangles)
+        except (TypeError, ValueError):
+            raise CaromError("Mesh needs vertices (V, 3) [m] and triangles (F, 3)") from None
+        if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] < 3:
+            raise CaromError(f"Mesh vertices must be (V, 3) with V >= 3 [m]; got {v.shape}")
+        if not np.all(np.isfinite(v)):
+            i = int(np.flatnonzero(~np.all(np.isfinite(v), axis=1))[0])
+            raise CaromError(f"Mesh vertex {i} = {v[i].tolist()} is not finite")
+        if f.ndim != 2 or f.shape[1] != 3 or f.shape[0] < 1 or f.dtype.kind not in "iu":
+            raise CaromError(f"Mesh triangles must be (F, 3) corner indices; got {f.shape}")
+        if f.min() < 0 or f.max() >= v.shape[0]:
+            raise CaromError(f"Mesh triangles name corners outside 0..{v.shape[0] - 1}")
+        corners = v[f]
+        area = np.linalg.norm(
+            np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+        )
+        if not np.all(area > 0.0):
+            i = int(np.flatnonzero(~(area > 0.0))[0])
+            raise CaromError(f"Mesh triangle {i} ({f[i].tolist()}) has no area")
+        object.__setattr__(self, "vertices", v)
+        object.__setattr__(self, "triangles", f.astype(np.int64))
+
+    def pieces(self) -> tuple[ConvexPiece3D, ...]:
+        raise CaromError(
+            "a Mesh is a static surface with no pieces and no mass; for a dynamic concave "
+            "body cut it into convex pieces: carom.meshes.decompose(path)"
+        )
+
+    def integrals(self) -> SolidIntegrals:
+        raise CaromError(
+            "a Mesh is a static surface and has no mass; make it static, or for a dynamic "
+            "concave body use carom.meshes.decompose(path)"
+        )
+
+    def is_closed(self) -> bool:
+        """Whether the triangles close a consistently oriented surface (a solid)."""
+        try:
+            check_closed(np.asarray(self.triangles), np.asarray(self.vertices).shape[0])
+        except CaromError:
+            return False
+        return True
+
+
+def _trimesh() -> Any:
+    try:
+        import trimesh
+    except ImportError:
+        raise CaromError(
+            "loading meshes needs trimesh: pip install 'carom[rigid3d]' (or trimesh)"
+        ) from None
+    return trimesh
+
+
+def load_mesh(path: str | os.PathLike[str], *, scale: float = 1.0) -> Mesh:
+    """A mesh file (OBJ, STL, PLY, or anything ``trimesh`` reads) as a :class:`Mesh`.
+
+    Parameters
+    ----------
+    path : path
+        The file.
+    scale : float
+        Multiplies every coordinate (e.g. 0.001 for a file in millimetres) [-].
+    """
+    trimesh = _trimesh()
+    file = Path(path)
+    if not file.is_file():
+        raise CaromError(f"{file}: no such mesh file")
+    try:
+        loaded = trimesh.load(file, force="mesh", process=True)
+    except Exception as error:  # trimesh raises many kinds on a bad file
+        raise CaromError(f"{file}: cannot read it as a mesh ({error})") from None
+    vertices = np.asarray(loaded.vertices, float)
+    triangles = np.asarray(loaded.faces, np.int64)
+    if triangles.size == 0:
+        raise CaromError(f"{file}: holds no triangles")
+    if not (np.isfinite(scale) and scale > 0.0):
+        raise CaromError(f"scale must be positive and finite; got {scale!r}")
+    return Mesh(vertices * scale, triangles)
+
+
+def _key(mesh: Mesh, threshold: float, seed: int) -> str:
+    """A hash of the mesh and the cut's settings: a cache made for them, and only them."""
+    digest = hashlib.sha256()
+    digest.update(_CACHE_FORMAT.encode())
+    digest.update(np.ascontiguousarray(mesh.vertices, np.float64).tobytes())
+    digest.update(np.ascontiguousarray(mesh.triangles, np.int64).tobytes())
+    digest.update(repr((float(threshold), int(seed))).encode())
+    return digest.hexdigest()
+
+
+def _read_cache(file: Path, key: str) -> list[FloatArray] | None:
+    """The pieces kept in ``file`` for ``key``; None if absent or made for another mesh; a
+    CaromError if the file is not carom's."""
+    if not file.exists():
+        return None
+    try:
+        with np.load(file, allow_pickle=False) as data:
+            if str(data["format"]) != _CACHE_FORMAT:
+                raise KeyError("format")
+            if str(data["key"]) != key:
+                return None
+            points, counts = data["points"], data["counts"]
+    except (OSError, KeyError, ValueError):
+        raise CaromError(
+            f"{file} exists and is not carom's pieces file; carom will not overwrite it: move "
+            "it, or pass cache=False"
+        ) from None
+    return np.split(np.asarray(points, float), np.cumsum(counts)[:-1])
+
+
+def _write_cache(file: Path, key: str, pieces: list[FloatArray]) -> None:
+    """Keep ``pieces`` in ``file`` (written whole to a temporary file, then renamed)."""
+    partial = file.with_name(file.name + ".partial.npz")
+    counts = np.array([p.shape[0] for p in pieces], np.int64)
+    np.savez_compressed(
+        partial, format=_CACHE_FORMAT, key=key, points=np.concatenate(pieces), counts=counts
+    )
+    os.replace(partial, file)
+
+
+def decompose(
+    source: str | os.PathLike[str] | Mesh,
+    *,
+    threshold: float = 0.05,
+    seed: int = 0,
+    cache: bool = True,
+) -> Compound:
+    """A closed mesh as a dynamic concave body: convex pieces (CoACD) with the mesh's exact
+    mass properties.
+
+    Parameters
+    ----------
+    source : path or Mesh
+        A closed, consistently oriented mesh (a solid), or its file.
+    threshold : float
+        CoACD's concavity threshold [-]: smaller cuts into more, tighter pieces.
+    seed : int
+        CoACD's random seed: the same mesh, threshold and seed give the same pieces.
+    cache : bool
+        For a file, keep the pieces beside it (``NAME`` + :data:`CACHE_SUFFIX`) and reuse them.
+
+    Returns
+    -------
+    Compound
+        Hulls of the pieces; ``solid`` the closed mesh's integrals (Mirtich), so the mass,
+        centre of mass and inertia are the mesh's, however the pieces overlap.
+    """
+    file = None if isinstance(source, Mesh) else Path(source)
+    mesh = source if isinstance(source, Mesh) else load_mesh(source)
+    vertices = np.asarray(mesh.vertices, float)
+    triangles = np.asarray(mesh.triangles, np.int64)
+    name = str(file) if file is not None else "mesh"
+    check_closed(triangles, vertices.shape[0], name)
+    solid = polyhedron_integrals(vertices, triangles)
+    if not solid.volume > 0.0:
+        raise CaromError(f"{name}: its faces turn inward (negative volume); flip them")
+    if not (np.isfinite(threshold) and 0.0 < threshold < 1.0):
+        raise CaromError(f"threshold must be in (0, 1); got {threshold!r}")
+    key = _key(mesh, threshold, seed)
+    kept = file.with_name(file.name + CACHE_SUFFIX) if file is not None and cache else None
+    pieces = _read_cache(kept, key) if kept is not None else None
+    if pieces is None:
+        pieces = _run_coacd(vertices, triangles, threshold, seed)
+        if kept is not None:
+            _write_cache(kept, key, pieces)
+    return Compound([Hull(points) for points in pieces], solid=solid)
+
+
+def _run_coacd(
+    vertices: FloatArray, triangles: NDArray[np.int64], threshold: float, seed: int
+) -> list[FloatArray]:
+    """The corners of each convex piece CoACD cuts the mesh into."""
+    try:
+        import coacd
+    except ImportError:
+        raise CaromError(
+            "cutting a mesh into convex pieces needs CoACD: pip install 'carom[rigid3d]'"
+        ) from None
+    coacd.set_log_level("error")
+    parts = coacd.run_coacd(coacd.Mesh(vertices, triangles), threshold=threshold, seed=seed)
+    return [np.asarray(points, float) for points, _faces in parts]

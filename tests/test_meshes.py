@@ -1,0 +1,130 @@
+"""carom.meshes: mesh files, static meshes, and concave dynamic bodies cut by CoACD with the
+closed mesh's exact mass properties, kept beside the file."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from carom.errors import CaromError
+from carom.geometry.mass3d import polyhedron_integrals
+from carom.meshes import CACHE_SUFFIX, Mesh, decompose, load_mesh
+from carom.shapes3d import Box
+
+trimesh = pytest.importorskip("trimesh")
+pytest.importorskip("coacd")
+pytest.importorskip("scipy")
+
+MAJOR, MINOR = 0.1, 0.03  # a torus's ring and tube radii [m]
+
+
+def _torus(sections: int = 32, tube: int = 16) -> Mesh:
+    t = trimesh.creation.torus(
+        major_radius=MAJOR, minor_radius=MINOR, major_sections=sections, minor_sections=tube
+    )
+    return Mesh(np.asarray(t.vertices), np.asarray(t.faces))
+
+
+def test_a_mesh_file_loads_as_a_static_mesh(tmp_path: Path) -> None:
+    path = tmp_path / "box.stl"
+    trimesh.creation.box(extents=[1.0, 2.0, 3.0]).export(path)
+    mesh = load_mesh(path, scale=0.5)
+    assert np.asarray(mesh.vertices).shape == (8, 3)
+    assert np.asarray(mesh.triangles).shape == (12, 3)
+    assert mesh.is_closed()
+    assert np.allclose(np.ptp(np.asarray(mesh.vertices), axis=0), [0.5, 1.0, 1.5])
+    with pytest.raises(CaromError, match="no mass"):
+        mesh.mass_properties(density=1.0)
+
+
+def test_the_polyhedral_torus_has_its_closed_form() -> None:
+    # The torus V = 2 pi^2 R r^2, I_zz = m (R^2 + 3 r^2/4), I_xx = m (R^2/2 + 5 r^2/8). Its
+    # mesh of n ring and k tube sections is inscribed: each circle becomes a polygon, which
+    # keeps sin(a)/a of the area for a = 2 pi/n (and 2 pi/k), and the mesh's volume is exactly
+    # V (n sin(2 pi/n)/2 pi)(k sin(2 pi/k)/2 pi) (to round-off). The inertia per unit mass
+    # carries a chord error of the same second order; it is held to half the volume's defect.
+    for n, k in ((32, 16), (64, 32)):
+        mesh = _torus(n, k)
+        solid = polyhedron_integrals(np.asarray(mesh.vertices), np.asarray(mesh.triangles))
+        kept = (n * math.sin(2 * math.pi / n) / (2 * math.pi)) * (
+            k * math.sin(2 * math.pi / k) / (2 * math.pi)
+        )
+        volume = 2 * math.pi**2 * MAJOR * MINOR**2
+        assert solid.volume == pytest.approx(volume * kept, rel=1e-12)
+        inertia = (
+            np.trace(solid.second_about_centroid()) * np.eye(3) - solid.second_about_centroid()
+        )
+        per_mass = np.diag(inertia) / solid.volume
+        exact = [MAJOR**2 / 2 + 5 * MINOR**2 / 8] * 2 + [MAJOR**2 + 3 * MINOR**2 / 4]
+        assert np.all(np.abs(per_mass / exact - 1) <= (1 - kept) / 2)
+
+
+def test_a_torus_file_is_cut_once_and_its_pieces_kept_beside_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "torus.obj"
+    mesh = _torus()
+    trimesh.Trimesh(np.asarray(mesh.vertices), np.asarray(mesh.triangles)).export(path)
+    body = decompose(path)
+    kept = tmp_path / ("torus.obj" + CACHE_SUFFIX)
+    assert kept.is_file()
+    # a ring cannot be one convex piece; the pieces hold the ring's corners
+    assert len(body.pieces()) >= 4
+    # the mass is the closed mesh's, not the overlapping pieces' sum
+    loaded = load_mesh(path)
+    exact = polyhedron_integrals(np.asarray(loaded.vertices), np.asarray(loaded.triangles))
+    props = body.mass_properties(density=1000.0)
+    assert props.mass == pytest.approx(1000.0 * exact.volume, rel=1e-12)
+    assert np.max(np.abs(props.centroid)) < 1e-12
+
+    # a second cut reads the file: CoACD is not called again, the pieces are the same
+    def refuse(*args: object, **kwargs: object) -> None:
+        raise AssertionError("CoACD ran again")
+
+    monkeypatch.setattr("carom.meshes._run_coacd", refuse)
+    again = decompose(path)
+    assert len(again.pieces()) == len(body.pieces())
+    for a, b in zip(again.pieces(), body.pieces(), strict=True):
+        assert np.array_equal(a.vertices, b.vertices)
+    # another threshold is another cut
+    with pytest.raises(AssertionError, match="CoACD ran again"):
+        decompose(path, threshold=0.1)
+
+
+def test_a_file_in_the_way_of_the_cache_is_never_overwritten(tmp_path: Path) -> None:
+    path = tmp_path / "box.obj"
+    trimesh.creation.box(extents=[1.0, 1.0, 1.0]).export(path)
+    mine = tmp_path / ("box.obj" + CACHE_SUFFIX)
+    mine.write_text("my notes")
+    with pytest.raises(CaromError, match="not carom's pieces file"):
+        decompose(path)
+    assert mine.read_text() == "my notes"
+    body = decompose(path, cache=False)  # and without the cache it still cuts
+    assert body.mass_properties(mass=1.0).inertia[0, 0] == pytest.approx(1 / 6, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("build", "message"),
+    [
+        (lambda: Mesh([[0, 0, 0], [1, 0, 0], [0, math.nan, 0]], [[0, 1, 2]]), "vertex 2"),
+        (lambda: Mesh([[0, 0, 0], [1, 0, 0], [2, 0, 0]], [[0, 1, 2]]), "no area"),
+        (lambda: Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 3]]), r"outside 0\.\.2"),
+        (lambda: Mesh([[0, 0, 0], [1, 0, 0]], [[0, 1, 1]]), "V >= 3"),
+        (lambda: load_mesh("/nonexistent/mug.obj"), "no such mesh file"),
+        (lambda: decompose(Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])), "at least 4"),
+    ],
+)
+def test_bad_meshes_are_refused(build: object, message: str) -> None:
+    with pytest.raises(CaromError, match=message):
+        build()  # type: ignore[operator]
+
+
+def test_open_and_inward_meshes_cannot_be_solids() -> None:
+    piece = Box([1.0, 1.0, 1.0]).pieces()[0]
+    with pytest.raises(CaromError, match="not closed"):
+        decompose(Mesh(piece.vertices, piece.triangles[1:]))
+    with pytest.raises(CaromError, match="turn inward"):
+        decompose(Mesh(piece.vertices, piece.triangles[:, [0, 2, 1]]))
