@@ -1,0 +1,377 @@
+"""Contact manifolds in 3D: world-free functions per shape pair, as in 2D (:mod:`.manifold2d`).
+
+Each ``contact_<a>_<b>`` takes two placed shapes and writes up to four contact points into
+``out`` (19,) float64: the unit normal ``n`` from A to B in ``out[0:3]``, then for point ``j``
+its position ``out[3 + 4j : 6 + 4j]`` [m], midway between the two surfaces, and its separation
+``out[6 + 4j]`` [m] (the gap along ``n``; negative when they overlap); ``ids[j]`` names the
+features that made the point, so the solver can warm-start it next step. It returns the number
+of points; none when the shapes are further apart than ``margin`` [m] (speculative contact
+reaches that far).
+
+Round shapes are cores with a radius (a sphere is a point, a capsule a segment), so their
+manifolds are closed forms on closest points of cores:
+
+- sphere-sphere: the centres' line;
+- capsule-sphere: the closest point of the segment to the centre (clamped projection);
+- capsule-capsule: the closest points of two segments (Ericson, *Real-Time Collision
+  Detection*, 2005, sec. 5.1.9); nearly parallel segments whose spans overlap touch along a
+  line, and give the two ends of the overlap, so a capsule lying on another rests on two
+  points;
+- sphere-, capsule- and hull-plane: the core's corners below the plane (up to 4, the deepest
+  and those spanning the largest area, so a box resting on a plane has its 4 corners).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = [
+    "MAX_POINTS",
+    "OUT_SIZE",
+    "closest_segment_segment",
+    "contact_capsule_capsule",
+    "contact_capsule_sphere",
+    "contact_hull_plane",
+    "contact_segments_plane",
+    "contact_sphere_sphere",
+]
+
+#: points in a manifold at most
+MAX_POINTS = 4
+#: floats in a manifold: the normal and 4 points of (x, y, z, separation)
+OUT_SIZE = 3 + 4 * MAX_POINTS
+
+#: below this squared sine between two segments they count as parallel [-]
+_PARALLEL = 1e-10
+
+
+@njit(cache=True, inline="always")
+def _point(
+    out: np.ndarray, ids: np.ndarray, j: int, x: float, y: float, z: float, sep: float, fid: int
+) -> None:
+    """Point j of the manifold."""
+    out[3 + 4 * j] = x
+    out[4 + 4 * j] = y
+    out[5 + 4 * j] = z
+    out[6 + 4 * j] = sep
+    ids[j] = fid
+
+
+@njit(cache=True)
+def _balls(
+    ax: float, ay: float, az: float, ra: float,
+    bx: float, by: float, bz: float, rb: float,
+    margin: float, fid: int, out: np.ndarray, ids: np.ndarray,
+) -> int:  # fmt: skip
+    """Ball (a, ra) against ball (b, rb): one point on the centres' line, or none."""
+    dx, dy, dz = bx - ax, by - ay, bz - az
+    distance = math.sqrt(dx * dx + dy * dy + dz * dz)
+    sep = distance - ra - rb
+    if sep > margin:
+        return 0
+    if distance > 0.0:
+        nx, ny, nz = dx / distance, dy / distance, dz / distance
+    else:  # concentric: any direction is as good; up, so the choice is fixed
+        nx, ny, nz = 0.0, 0.0, 1.0
+    # midway between A's surface point a + ra n and B's b - rb n
+    h = 0.5 * (ra - rb + distance)
+    out[0], out[1], out[2] = nx, ny, nz
+    _point(out, ids, 0, ax + h * nx, ay + h * ny, az + h * nz, sep, fid)
+    return 1
+
+
+@njit(cache=True)
+def contact_sphere_sphere(
+    a: np.ndarray,
+    ra: float,
+    b: np.ndarray,
+    rb: float,
+    margin: float,
+    out: np.ndarray,
+    ids: np.ndarray,
+) -> int:
+    """Sphere (centre ``a`` (3,) [m], radius ``ra``) against sphere (``b``, ``rb``).
+
+    Returns
+    -------
+    int
+        0 or 1 point (module docstring for ``out`` and ``ids``).
+
+    Examples
+    --------
+    >>> out, ids = np.zeros(OUT_SIZE), np.zeros(MAX_POINTS, np.int64)
+    >>> contact_sphere_sphere(np.zeros(3), 1.0, np.array([0.0, 0.0, 1.5]), 1.0, 0.0, out, ids)
+    1
+    >>> out[:3].tolist(), out[3:7].tolist()  # up, at z = 0.75, overlapping by 0.5 m
+    ([0.0, 0.0, 1.0], [0.0, 0.0, 0.75, -0.5])
+    """
+    return _balls(a[0], a[1], a[2], ra, b[0], b[1], b[2], rb, margin, 0, out, ids)
+
+
+@njit(cache=True, inline="always")
+def _on_segment(p0: np.ndarray, p1: np.ndarray, x: float, y: float, z: float) -> float:
+    """The fraction t in [0, 1] of the point of segment p0-p1 nearest (x, y, z)."""
+    dx, dy, dz = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
+    length2 = dx * dx + dy * dy + dz * dz
+    if length2 == 0.0:
+        return 0.0
+    t: float = ((x - p0[0]) * dx + (y - p0[1]) * dy + (z - p0[2]) * dz) / length2
+    return min(max(t, 0.0), 1.0)
+
+
+@njit(cache=True)
+def contact_capsule_sphere(
+    a0: np.ndarray, a1: np.ndarray, ra: float, b: np.ndarray, rb: float, margin: float,
+    out: np.ndarray, ids: np.ndarray,
+) -> int:  # fmt: skip
+    """Capsule (segment ``a0``-``a1`` (3,) [m], radius ``ra``) against sphere (``b``, ``rb``):
+    the ball of the segment's point nearest ``b``. The point's id is 0 at ``a0``, 1 at ``a1``
+    and 2 between."""
+    t = _on_segment(a0, a1, b[0], b[1], b[2])
+    fid = 0 if t == 0.0 else (1 if t == 1.0 else 2)
+    px = a0[0] + t * (a1[0] - a0[0])
+    py = a0[1] + t * (a1[1] - a0[1])
+    pz = a0[2] + t * (a1[2] - a0[2])
+    return _balls(px, py, pz, ra, b[0], b[1], b[2], rb, margin, fid, out, ids)
+
+
+@njit(cache=True)
+def closest_segment_segment(
+    p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray
+) -> tuple[float, float]:
+    """Fractions (s, t) in [0, 1] of the closest points ``p0 + s (p1 - p0)`` and
+    ``q0 + t (q1 - q0)`` of two segments (Ericson 2005, sec. 5.1.9: the unclamped minimum of
+    ``|p(s) - q(t)|^2``, clamped to the square edge by edge; for parallel segments any s
+    works, and s = 0 is taken)."""
+    d1 = p1 - p0
+    d2 = q1 - q0
+    r = p0 - q0
+    a = d1 @ d1
+    e = d2 @ d2
+    f = d2 @ r
+    if a == 0.0 and e == 0.0:
+        return 0.0, 0.0
+    if a == 0.0:
+        return 0.0, min(max(f / e, 0.0), 1.0)
+    c = d1 @ r
+    if e == 0.0:
+        return min(max(-c / a, 0.0), 1.0), 0.0
+    b = d1 @ d2
+    denominator = a * e - b * b  # |d1 x d2|^2 >= 0
+    s = (
+        min(max((b * f - c * e) / denominator, 0.0), 1.0)
+        if denominator > _PARALLEL * a * e
+        else 0.0
+    )
+    # the nearest t to p(s), and if it left [0, 1], the nearest s to the clamped end
+    t = (b * s + f) / e
+    if t < 0.0:
+        t = 0.0
+        s = min(max(-c / a, 0.0), 1.0)
+    elif t > 1.0:
+        t = 1.0
+        s = min(max((b - c) / a, 0.0), 1.0)
+    return s, t
+
+
+@njit(cache=True)
+def contact_capsule_capsule(
+    a0: np.ndarray, a1: np.ndarray, ra: float, b0: np.ndarray, b1: np.ndarray, rb: float,
+    margin: float, out: np.ndarray, ids: np.ndarray,
+) -> int:  # fmt: skip
+    """Capsule (``a0``-``a1``, ``ra``) against capsule (``b0``-``b1``, ``rb``).
+
+    Crossing segments touch at their closest points (one point, id 2). Nearly parallel ones
+    (sine of the angle below 1e-5) whose spans overlap along A touch along a line: two points,
+    at the overlap's ends (ids 0 and 1), on the common normal."""
+    da = a1 - a0
+    db = b1 - b0
+    la2 = da @ da
+    lb2 = db @ db
+    cross = np.cross(da, db)
+    if la2 > 0.0 and lb2 > 0.0 and cross @ cross <= _PARALLEL * la2 * lb2:
+        # B's ends along A, as fractions of A
+        u0 = ((b0 - a0) @ da) / la2
+        u1 = ((b1 - a0) @ da) / la2
+        lo = max(min(u0, u1), 0.0)
+        hi = min(max(u0, u1), 1.0)
+        if hi > lo:
+            # every point of two parallel lines has the same normal, A's line to B's
+            _normal_of(a0, da, la2, b0, out)
+            n = out[0:3].copy()
+            count = 0
+            for j, u in enumerate((lo, hi)):
+                p = a0 + u * da
+                q = b0 + _on_segment(b0, b1, p[0], p[1], p[2]) * db
+                gap = (q - p) @ n
+                sep = gap - ra - rb
+                if sep > margin:
+                    continue
+                m = p + (0.5 * (ra - rb + gap)) * n
+                _point(out, ids, count, m[0], m[1], m[2], sep, j)
+                count += 1
+            return count
+    s, t = closest_segment_segment(a0, a1, b0, b1)
+    p = a0 + s * da
+    q = b0 + t * db
+    return _balls(p[0], p[1], p[2], ra, q[0], q[1], q[2], rb, margin, 2, out, ids)
+
+
+@njit(cache=True)
+def _normal_of(a0: np.ndarray, da: np.ndarray, la2: float, b0: np.ndarray, out: np.ndarray) -> None:
+    """The unit normal from line A to a parallel line through b0 (up when they coincide)."""
+    r = b0 - a0
+    r = r - ((r @ da) / la2) * da
+    length = math.sqrt(r @ r)
+    if length > 0.0:
+        out[0], out[1], out[2] = r[0] / length, r[1] / length, r[2] / length
+    else:
+        out[0], out[1], out[2] = 0.0, 0.0, 1.0
+
+
+@njit(cache=True)
+def contact_segments_plane(
+    ends: np.ndarray, radius: float, normal: np.ndarray, offset: float, margin: float,
+    out: np.ndarray, ids: np.ndarray,
+) -> int:  # fmt: skip
+    """A sphere (``ends`` (1, 3)) or a capsule (``ends`` (2, 3)) of ``radius`` [m] against the
+    plane ``normal . x = offset`` (B, solid below): each end within ``margin`` of the plane is
+    a point (id: the end's index). The normal from A to B is ``-normal``."""
+    out[0], out[1], out[2] = -normal[0], -normal[1], -normal[2]
+    count = 0
+    for j in range(ends.shape[0]):
+        height = ends[j] @ normal - offset
+        sep = height - radius
+        if sep > margin:
+            continue
+        # midway between the ball's lowest point (height - radius) and the plane (0)
+        h = 0.5 * (height + radius)
+        _point(
+            out,
+            ids,
+            count,
+            ends[j, 0] - h * normal[0],
+            ends[j, 1] - h * normal[1],
+            ends[j, 2] - h * normal[2],
+            sep,
+            j,
+        )
+        count += 1
+    return count
+
+
+@njit(cache=True)
+def contact_hull_plane(
+    vertices: np.ndarray, normal: np.ndarray, offset: float, margin: float,
+    out: np.ndarray, ids: np.ndarray,
+) -> int:  # fmt: skip
+    """A convex polyhedron's placed corners ``vertices`` (k, 3) [m] against the plane
+    ``normal . x = offset``: the corners within ``margin`` of the plane, at most 4 of them.
+
+    When more are near, four are kept: the deepest; the one farthest from it along the plane;
+    the one farthest from the line of those two; and the one that adds the most area to that
+    triangle (the greatest distance outside its edges) - so a face resting on the plane keeps
+    its outline, and the deepest point is always kept. Ids are the corners' indices.
+    """
+    out[0], out[1], out[2] = -normal[0], -normal[1], -normal[2]
+    k = vertices.shape[0]
+    near = np.empty(k, np.int64)
+    sep = np.empty(k)
+    count = 0
+    for i in range(k):
+        s = vertices[i] @ normal - offset
+        if s <= margin:
+            near[count] = i
+            sep[count] = s
+            count += 1
+    if count == 0:
+        return 0
+    keep = np.empty(MAX_POINTS, np.int64)
+    if count <= MAX_POINTS:
+        for j in range(count):
+            keep[j] = j
+        kept = count
+    else:
+        kept = _reduce(vertices, normal, near, sep, count, keep)
+    for j in range(kept):
+        i = near[keep[j]]
+        s = sep[keep[j]]
+        h = 0.5 * s  # midway between the corner and the plane
+        _point(
+            out,
+            ids,
+            j,
+            vertices[i, 0] - h * normal[0],
+            vertices[i, 1] - h * normal[1],
+            vertices[i, 2] - h * normal[2],
+            s,
+            i,
+        )
+    return kept
+
+
+@njit(cache=True, inline="always")
+def _dot(u: np.ndarray, v: np.ndarray) -> float:
+    """u . v of two (3,) vectors."""
+    total: float = u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+    return total
+
+
+@njit(cache=True)
+def _reduce(
+    vertices: np.ndarray, normal: np.ndarray, near: np.ndarray, sep: np.ndarray, count: int,
+    keep: np.ndarray,
+) -> int:  # fmt: skip
+    """Four of ``count`` candidate corners (rows of ``near``) into ``keep``: deepest, farthest,
+    farthest from their line, and the most area added (ties go to the lower index)."""
+    # positions projected onto the plane
+    flat = np.empty((count, 3))
+    for j in range(count):
+        p = vertices[near[j]]
+        flat[j] = p - (p @ normal) * normal
+    first = 0
+    for j in range(1, count):
+        if sep[j] < sep[first]:
+            first = j
+    second = first
+    best = -1.0
+    for j in range(count):
+        d = flat[j] - flat[first]
+        reach = _dot(d, d)
+        if reach > best:
+            best = reach
+            second = j
+    axis = flat[second] - flat[first]
+    third = first
+    best = -1.0
+    for j in range(count):
+        c = np.cross(axis, flat[j] - flat[first])
+        spread = _dot(c, c)
+        if spread > best:
+            best = spread
+            third = j
+    keep[0], keep[1], keep[2] = first, second, third
+    # the fourth: most area outside the triangle's edges, on the far side of an edge from the
+    # triangle's remaining corner
+    up = np.cross(flat[second] - flat[first], flat[third] - flat[first])
+    fourth = -1
+    best = 0.0
+    corners = (first, second, third)
+    for j in range(count):
+        if j in corners:
+            continue
+        for e in range(3):
+            p = flat[corners[e]]
+            q = flat[corners[(e + 1) % 3]]
+            # signed area of (p, q, x) against the triangle's turn: negative is outside
+            area = -_dot(np.cross(q - p, flat[j] - p), up)
+            if area > best:
+                best = area
+                fourth = j
+    if fourth < 0:
+        return 3
+    keep[3] = fourth
+    return 4
