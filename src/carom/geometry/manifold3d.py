@@ -34,9 +34,11 @@ __all__ = [
     "closest_segment_segment",
     "contact_capsule_capsule",
     "contact_capsule_sphere",
+    "contact_hull_hull",
     "contact_hull_plane",
     "contact_segments_plane",
     "contact_sphere_sphere",
+    "reduce_points",
 ]
 
 #: points in a manifold at most
@@ -289,13 +291,11 @@ def contact_hull_plane(
             count += 1
     if count == 0:
         return 0
+    points = np.empty((count, 3))
+    for j in range(count):
+        points[j] = vertices[near[j]]
     keep = np.empty(MAX_POINTS, np.int64)
-    if count <= MAX_POINTS:
-        for j in range(count):
-            keep[j] = j
-        kept = count
-    else:
-        kept = _reduce(vertices, normal, near, sep, count, keep)
+    kept = reduce_points(points, sep, count, normal, keep)
     for j in range(kept):
         i = near[keep[j]]
         s = sep[keep[j]]
@@ -321,17 +321,22 @@ def _dot(u: np.ndarray, v: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def _reduce(
-    vertices: np.ndarray, normal: np.ndarray, near: np.ndarray, sep: np.ndarray, count: int,
-    keep: np.ndarray,
-) -> int:  # fmt: skip
-    """Four of ``count`` candidate corners (rows of ``near``) into ``keep``: deepest, farthest,
-    farthest from their line, and the most area added (ties go to the lower index)."""
+def reduce_points(
+    points: np.ndarray, sep: np.ndarray, count: int, normal: np.ndarray, keep: np.ndarray
+) -> int:
+    """At most four of ``count`` contact candidates ``points`` (k, 3) [m] with separations
+    ``sep`` into ``keep`` (their rows): all of them if four or fewer, else the deepest, the
+    farthest from it across ``normal``, the farthest from the line of those two, and the one
+    adding the most area outside that triangle (ties to the lower row). Returns how many."""
+    if count <= MAX_POINTS:
+        for j in range(count):
+            keep[j] = j
+        return count
     # positions projected onto the plane
     flat = np.empty((count, 3))
     for j in range(count):
-        p = vertices[near[j]]
-        flat[j] = p - (p @ normal) * normal
+        p = points[j]
+        flat[j] = p - _dot(p, normal) * normal
     first = 0
     for j in range(1, count):
         if sep[j] < sep[first]:
@@ -375,3 +380,202 @@ def _reduce(
         return 3
     keep[3] = fourth
     return 4
+
+
+@njit(cache=True)
+def _face_separation(
+    va: np.ndarray, na: np.ndarray, sa: np.ndarray, cora: np.ndarray, vb: np.ndarray
+) -> tuple[float, int]:
+    """The largest separation of polyhedron B's corners ``vb`` from a face plane of A, and
+    that face: for each face, B's deepest corner's height above the plane."""
+    best = -np.inf
+    face = 0
+    for f in range(na.shape[0]):
+        n = na[f]
+        d = _dot(n, va[cora[sa[f]]])
+        deepest = np.inf
+        for j in range(vb.shape[0]):
+            deepest = min(deepest, _dot(n, vb[j]))
+        if deepest - d > best:
+            best = deepest - d
+            face = f
+    return best, face
+
+
+@njit(cache=True)
+def _clip_faces(
+    vr: np.ndarray, nr: np.ndarray, sr: np.ndarray, cr: np.ndarray, cor_r: np.ndarray, fr: int,
+    vi: np.ndarray, ni: np.ndarray, si: np.ndarray, ci: np.ndarray, cor_i: np.ndarray,
+    margin: float, flip: bool, out: np.ndarray, ids: np.ndarray,
+) -> int:  # fmt: skip
+    """Face contact: the incident face (of the other body, the most anti-parallel to reference
+    face ``fr``) clipped to the reference face's sides (Sutherland-Hodgman), the points within
+    ``margin`` of the reference plane kept, at most four. ``flip``: the reference body is B."""
+    n = nr[fr]
+    d = _dot(n, vr[cor_r[sr[fr]]])
+    incident = 0
+    lowest = np.inf
+    for f in range(ni.shape[0]):
+        c = _dot(ni[f], n)
+        if c < lowest:
+            lowest = c
+            incident = f
+    size = ci[incident] + cr[fr] + 2
+    poly = np.empty((size, 3))
+    tags = np.empty(size, np.int64)
+    spare = np.empty((size, 3))
+    spare_tags = np.empty(size, np.int64)
+    count = ci[incident]
+    for k in range(count):
+        poly[k] = vi[cor_i[si[incident] + k]]
+        tags[k] = cor_i[si[incident] + k]
+    for k in range(cr[fr]):
+        if count == 0:
+            break
+        r0 = vr[cor_r[sr[fr] + k]]
+        r1 = vr[cor_r[sr[fr] + (k + 1) % cr[fr]]]
+        side = np.cross(r1 - r0, n)  # outward from the face, in its plane
+        kept = 0
+        for j in range(count):
+            p = poly[j]
+            q = poly[(j + 1) % count]
+            dp = _dot(side, p - r0)
+            dq = _dot(side, q - r0)
+            if dp <= 0.0:
+                spare[kept] = p
+                spare_tags[kept] = tags[j]
+                kept += 1
+            if (dp <= 0.0) != (dq <= 0.0):
+                frac = dp / (dp - dq)
+                spare[kept] = p + frac * (q - p)
+                spare_tags[kept] = (1 << 20) | (k << 10) | (tags[j] & 1023)
+                kept += 1
+        poly, spare = spare, poly
+        tags, spare_tags = spare_tags, tags
+        count = kept
+    sep = np.empty(max(count, 1))
+    near = 0
+    for j in range(count):
+        s = _dot(n, poly[j]) - d
+        if s <= margin:
+            poly[near] = poly[j]
+            tags[near] = tags[j]
+            sep[near] = s
+            near += 1
+    if near == 0:
+        return 0
+    keep = np.empty(MAX_POINTS, np.int64)
+    kept = reduce_points(poly, sep, near, n, keep)
+    sign = -1.0 if flip else 1.0
+    out[0], out[1], out[2] = sign * n[0], sign * n[1], sign * n[2]
+    face_bits = (fr << 40) | (incident << 30) | ((1 << 29) if flip else 0)
+    for j in range(kept):
+        p = poly[keep[j]]
+        s = sep[keep[j]]
+        # midway between the incident point and the reference plane
+        _point(
+            out,
+            ids,
+            j,
+            p[0] - 0.5 * s * n[0],
+            p[1] - 0.5 * s * n[1],
+            p[2] - 0.5 * s * n[2],
+            s,
+            face_bits | tags[keep[j]],
+        )
+    return kept
+
+
+@njit(cache=True)
+def contact_hull_hull(
+    va: np.ndarray, na: np.ndarray, sa: np.ndarray, ca: np.ndarray, cora: np.ndarray,
+    ea: np.ndarray, vb: np.ndarray, nb: np.ndarray, sb: np.ndarray, cb: np.ndarray,
+    corb: np.ndarray, eb: np.ndarray, margin: float, slop: float, out: np.ndarray,
+    ids: np.ndarray,
+) -> int:  # fmt: skip
+    """Convex polyhedron A against convex polyhedron B, by separating axes (the face normals
+    of each, and the cross products of an edge of each) and face clipping.
+
+    Each polyhedron is given placed: corners ``v`` (k, 3) [m], face normals ``n`` (F, 3),
+    faces' first corner ``s`` and corner count ``c`` (F,) into ``cor`` (vertex indices,
+    counter-clockwise from outside), and edges ``e`` (E, 2)
+    (:func:`carom.geometry.polyhedron.polyhedron_features`, turned and moved).
+
+    The axis of largest separation decides (Gottschalk's separating-axis test, as Gregorius
+    presents it for games, GDC 2013). When an edge pair's axis separates more than every face
+    axis, by ``slop/10`` [m] or more, the edges touch: one point midway between their closest
+    points. Otherwise the face with the larger separation (A's, in a tie within ``slop/10``)
+    is the reference and the other body's most anti-parallel face is clipped to it: up to four
+    points, normal along the reference face's.
+
+    Returns
+    -------
+    int
+        Number of points, 0 to 4 (module docstring for ``out`` and ``ids``).
+    """
+    sep_a, face_a = _face_separation(va, na, sa, cora, vb)
+    if sep_a > margin:
+        return 0
+    sep_b, face_b = _face_separation(vb, nb, sb, corb, va)
+    if sep_b > margin:
+        return 0
+    centre = np.zeros(3)
+    for i in range(va.shape[0]):
+        centre += va[i]
+    centre /= va.shape[0]
+    size = 0.0
+    for i in range(va.shape[0]):
+        for k in range(3):
+            size = max(size, abs(va[i, k] - centre[k]))
+    tol = 1e-9 * size  # round-off of a support along an axis [m]
+    sep_e = -np.inf
+    edge_a = -1
+    edge_b = -1
+    axis_e = np.zeros(3)
+    for i in range(ea.shape[0]):
+        p0 = va[ea[i, 0]]
+        u = va[ea[i, 1]] - p0
+        for j in range(eb.shape[0]):
+            w = vb[eb[j, 1]] - vb[eb[j, 0]]
+            axis = np.cross(u, w)
+            length2 = _dot(axis, axis)
+            if length2 <= _PARALLEL * _dot(u, u) * _dot(w, w):
+                continue  # parallel edges: their plane's normal is a face axis already
+            axis /= math.sqrt(length2)
+            if _dot(axis, p0 - centre) < 0.0:
+                axis = -axis
+            high = -np.inf
+            for k in range(va.shape[0]):
+                high = max(high, _dot(axis, va[k]))
+            low = np.inf
+            for k in range(vb.shape[0]):
+                low = min(low, _dot(axis, vb[k]))
+            # only edges that carry the supports along the axis can touch along it (pairs of
+            # other, parallel edges give the same axis and separation, but not the points)
+            if _dot(axis, p0) < high - tol or _dot(axis, vb[eb[j, 0]]) > low + tol:
+                continue
+            if low - high > sep_e:
+                sep_e = low - high
+                edge_a = i
+                edge_b = j
+                axis_e = axis
+    if sep_e > margin:
+        return 0
+    tie = 0.1 * slop
+    if edge_a >= 0 and sep_e > max(sep_a, sep_b) + tie:
+        a0 = va[ea[edge_a, 0]]
+        a1 = va[ea[edge_a, 1]]
+        b0 = vb[eb[edge_b, 0]]
+        b1 = vb[eb[edge_b, 1]]
+        s, t = closest_segment_segment(a0, a1, b0, b1)
+        p = a0 + s * (a1 - a0)
+        q = b0 + t * (b1 - b0)
+        m = 0.5 * (p + q)
+        out[0], out[1], out[2] = axis_e[0], axis_e[1], axis_e[2]
+        _point(out, ids, 0, m[0], m[1], m[2], sep_e, (1 << 50) | (edge_a << 20) | edge_b)
+        return 1
+    if sep_a + tie >= sep_b:
+        return _clip_faces(
+            va, na, sa, ca, cora, face_a, vb, nb, sb, cb, corb, margin, False, out, ids
+        )
+    return _clip_faces(vb, nb, sb, cb, corb, face_b, va, na, sa, ca, cora, margin, True, out, ids)

@@ -1,0 +1,117 @@
+"""A convex polyhedron's features for contact: its faces as polygons, its edges (NumPy; when
+shapes are built, never per step).
+
+A hull comes as triangles (qhull's facets); contact wants whole faces, so a box's side is one
+quadrilateral that the other body's face is clipped against, not two triangles with a
+diagonal. Coplanar triangles are merged (their normals within 1e-9 and their planes within
+round-off of the solid's size) and each face's corners ordered counter-clockwise seen from
+outside.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["PolyhedronFeatures", "polyhedron_features"]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+@dataclass(frozen=True)
+class PolyhedronFeatures:
+    """Faces and edges of a convex polyhedron, in its own frame.
+
+    Attributes
+    ----------
+    normals : (F, 3) float64
+        Each face's unit outward normal.
+    offsets : (F,) float64
+        Each face's plane: ``normals[f] . x = offsets[f]`` [m].
+    face_start, face_count : (F,) int64
+        Face f's corners are ``corners[face_start[f] : face_start[f] + face_count[f]]``.
+    corners : (C,) int64
+        Vertex indices, face by face, counter-clockwise seen from outside.
+    edges : (E, 2) int64
+        Each edge once, as its two vertex indices.
+    """
+
+    normals: FloatArray
+    offsets: FloatArray
+    face_start: IntArray
+    face_count: IntArray
+    corners: IntArray
+    edges: IntArray
+
+
+def polyhedron_features(vertices: FloatArray, triangles: IntArray) -> PolyhedronFeatures:
+    """The faces (coplanar triangles merged) and edges of a convex polyhedron.
+
+    Parameters
+    ----------
+    vertices : (V, 3) float64
+        Corners [m].
+    triangles : (T, 3) int64
+        Outward counter-clockwise triangles of its closed surface.
+    """
+    v = np.asarray(vertices, float)
+    tri = np.asarray(triangles, np.int64)
+    cross = np.cross(v[tri[:, 1]] - v[tri[:, 0]], v[tri[:, 2]] - v[tri[:, 0]])
+    normals = cross / np.linalg.norm(cross, axis=1)[:, None]
+    size = float(np.max(np.abs(v - v.mean(axis=0))))
+    plane_tol = 1e-9 * max(size, 1e-300)
+    # group triangles by plane (greedy, in order: the same faces every run)
+    face_of = np.full(tri.shape[0], -1, np.int64)
+    planes: list[tuple[FloatArray, float]] = []
+    for t in range(tri.shape[0]):
+        n = normals[t]
+        d = float(n @ v[tri[t, 0]])
+        for f, (m, e) in enumerate(planes):
+            if float(n @ m) > 1.0 - 1e-9 and abs(d - e) <= plane_tol:
+                face_of[t] = f
+                break
+        else:
+            face_of[t] = len(planes)
+            planes.append((n, d))
+    face_normals = np.zeros((len(planes), 3))
+    offsets = np.zeros(len(planes))
+    starts: list[int] = []
+    counts: list[int] = []
+    corners: list[int] = []
+    for f in range(len(planes)):
+        members = tri[face_of == f]
+        # the face's normal and plane, averaged over its triangles (weighted by area)
+        weights = np.linalg.norm(cross[face_of == f], axis=1)
+        n = (normals[face_of == f] * weights[:, None]).sum(axis=0)
+        n /= np.linalg.norm(n)
+        ids = np.unique(members)
+        centre = v[ids].mean(axis=0)
+        # corners counter-clockwise about n: angle in the face's plane
+        u = v[ids[0]] - centre
+        u -= (u @ n) * n
+        u /= np.linalg.norm(u)
+        w = np.cross(n, u)
+        rel = v[ids] - centre
+        order = np.argsort(np.arctan2(rel @ w, rel @ u), kind="stable")
+        face_normals[f] = n
+        offsets[f] = float(np.mean(v[ids] @ n))
+        starts.append(len(corners))
+        counts.append(ids.size)
+        corners.extend(int(i) for i in ids[order])
+    edges: set[tuple[int, int]] = set()
+    for f in range(len(planes)):
+        ring = corners[starts[f] : starts[f] + counts[f]]
+        for k in range(len(ring)):
+            a, b = ring[k], ring[(k + 1) % len(ring)]
+            edges.add((min(a, b), max(a, b)))
+    return PolyhedronFeatures(
+        face_normals,
+        offsets,
+        np.array(starts, np.int64),
+        np.array(counts, np.int64),
+        np.array(corners, np.int64),
+        np.array(sorted(edges), np.int64).reshape(-1, 2),
+    )
