@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from carom.geometry.manifold3d import MAX_POINTS, OUT_SIZE, contact_hull_hull
+from carom.geometry.manifold3d import MAX_POINTS, OUT_SIZE, contact_hull_hull, contact_hull_sphere
 from carom.geometry.polyhedron import polyhedron_features
 from carom.shapes3d import Box, Hull, rotation_matrix
 
@@ -161,3 +161,42 @@ def test_the_separating_axes_decide_overlap_as_a_linear_program_does(seed: int, 
         return
     assert (sep <= 0.0) == _overlap(a[0], b[0])
     assert abs(np.linalg.norm(normal) - 1.0) < 1e-12
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    point=st.tuples(*[st.floats(-2.0, 2.0)] * 3),
+    radius=st.floats(0.01, 0.5),
+)
+def test_a_sphere_against_a_box_meets_its_exact_closest_point(
+    seed: int, point: tuple[float, float, float], radius: float
+) -> None:
+    # In the box's frame (half sizes h) the closest point of a box to p is p clamped to
+    # [-h, h], at distance |max(|p| - h, 0)| outside; inside, the way out is through the
+    # nearest face, min(h - |p|) away. The contact's separation is that distance less the
+    # radius, its normal from the box to the centre, its point midway.
+    rng = np.random.default_rng(seed)
+    half = rng.uniform(0.1, 1.0, size=3)
+    r = rotation_matrix(rng.normal(size=4))
+    offset = rng.normal(size=3)
+    box = _box(list(2 * half), list(offset), None)
+    box = (box[0] - offset) @ r.T + offset, box[1] @ r.T, *box[2:]
+    centre = offset + r @ np.array(point)
+    local = np.array(point)
+    outside = np.maximum(np.abs(local) - half, 0.0)
+    if np.all(outside == 0.0):
+        distance = -float(np.min(half - np.abs(local)))
+        if np.sort(half - np.abs(local))[1] - np.sort(half - np.abs(local))[0] < 1e-9:
+            return  # two faces equally near: either is right
+    else:
+        distance = float(np.linalg.norm(outside))
+    out = np.zeros(OUT_SIZE)
+    ids = np.full(MAX_POINTS, -1, np.int64)
+    count = contact_hull_sphere(*box, centre, radius, 10.0, out, ids)
+    assert count == 1
+    assert out[6] == pytest.approx(distance - radius, abs=1e-12)
+    if distance > 1e-9:
+        surface = offset + r @ np.clip(local, -half, half)
+        assert out[:3] == pytest.approx((centre - surface) / distance, abs=1e-9)
+        assert out[3:6] == pytest.approx(surface + 0.5 * (distance - radius) * out[:3], abs=1e-12)

@@ -36,6 +36,7 @@ __all__ = [
     "contact_capsule_sphere",
     "contact_hull_hull",
     "contact_hull_plane",
+    "contact_hull_sphere",
     "contact_segments_plane",
     "contact_sphere_sphere",
     "reduce_points",
@@ -579,3 +580,70 @@ def contact_hull_hull(
             va, na, sa, ca, cora, face_a, vb, nb, sb, cb, corb, margin, False, out, ids
         )
     return _clip_faces(vb, nb, sb, cb, corb, face_b, va, na, sa, ca, cora, margin, True, out, ids)
+
+
+@njit(cache=True)
+def contact_hull_sphere(
+    va: np.ndarray, na: np.ndarray, sa: np.ndarray, ca: np.ndarray, cora: np.ndarray,
+    ea: np.ndarray, b: np.ndarray, rb: float, margin: float, out: np.ndarray, ids: np.ndarray,
+) -> int:  # fmt: skip
+    """Convex polyhedron A (placed as in :func:`contact_hull_hull`) against sphere (``b``,
+    ``rb``): the exact closest point of A's surface to the centre.
+
+    Inside A, the face the centre is least deep below is the way out (id: the face). Outside,
+    the closest point is on a face whose plane the centre is above, where its foot falls
+    inside the face (id: the face), or else on an edge (id: ``1 << 20`` plus the edge).
+    """
+    highest = -np.inf
+    top = 0
+    for f in range(na.shape[0]):
+        h = _dot(na[f], b) - _dot(na[f], va[cora[sa[f]]])
+        if h > highest:
+            highest = h
+            top = f
+    if highest - rb > margin:
+        return 0  # a face plane separates them by more than the margin
+    if highest <= 0.0:  # the centre is inside
+        n = na[top]
+        m = b - 0.5 * (rb + highest) * n  # midway between b - rb n and the face, b - highest n
+        out[0], out[1], out[2] = n[0], n[1], n[2]
+        _point(out, ids, 0, m[0], m[1], m[2], highest - rb, top)
+        return 1
+    best = np.inf
+    closest = np.zeros(3)
+    feature = 0
+    for f in range(na.shape[0]):
+        n = na[f]
+        h = _dot(n, b) - _dot(n, va[cora[sa[f]]])
+        if h <= 0.0:
+            continue
+        foot = b - h * n
+        inside = True
+        for k in range(ca[f]):
+            r0 = va[cora[sa[f] + k]]
+            r1 = va[cora[sa[f] + (k + 1) % ca[f]]]
+            if _dot(np.cross(r1 - r0, n), foot - r0) > 0.0:
+                inside = False
+                break
+        if inside and h < best:
+            best = h
+            closest = foot
+            feature = f
+    for e in range(ea.shape[0]):
+        p0 = va[ea[e, 0]]
+        p1 = va[ea[e, 1]]
+        q = p0 + _on_segment(p0, p1, b[0], b[1], b[2]) * (p1 - p0)
+        d = b - q
+        distance = math.sqrt(_dot(d, d))
+        if distance < best:
+            best = distance
+            closest = q
+            feature = (1 << 20) | e
+    sep = best - rb
+    if sep > margin:
+        return 0
+    n = (b - closest) / best
+    m = closest + 0.5 * (best - rb) * n
+    out[0], out[1], out[2] = n[0], n[1], n[2]
+    _point(out, ids, 0, m[0], m[1], m[2], sep, feature)
+    return 1
