@@ -34,6 +34,7 @@ __all__ = [
     "closest_segment_segment",
     "contact_capsule_capsule",
     "contact_capsule_sphere",
+    "contact_hull_capsule",
     "contact_hull_hull",
     "contact_hull_plane",
     "contact_hull_sphere",
@@ -647,3 +648,165 @@ def contact_hull_sphere(
     out[0], out[1], out[2] = n[0], n[1], n[2]
     _point(out, ids, 0, m[0], m[1], m[2], sep, feature)
     return 1
+
+
+@njit(cache=True)
+def _segment_on_face(
+    va: np.ndarray, na: np.ndarray, sa: np.ndarray, ca: np.ndarray, cora: np.ndarray, f: int,
+    p0: np.ndarray, p1: np.ndarray, rb: float, margin: float, out: np.ndarray, ids: np.ndarray,
+) -> int:  # fmt: skip
+    """The segment p0-p1 (a capsule's core, radius ``rb``) clipped to face ``f``'s sides; each
+    clipped end within ``margin`` of the face is a point (ids: face f, end 0 or 1)."""
+    n = na[f]
+    d = _dot(n, va[cora[sa[f]]])
+    lo = 0.0
+    hi = 1.0
+    u = p1 - p0
+    for k in range(ca[f]):
+        r0 = va[cora[sa[f] + k]]
+        r1 = va[cora[sa[f] + (k + 1) % ca[f]]]
+        side = np.cross(r1 - r0, n)
+        a = _dot(side, p0 - r0)  # beyond the side where > 0
+        b = _dot(side, u)
+        if b == 0.0:
+            if a > 0.0:
+                return 0
+            continue
+        t = -a / b
+        if b > 0.0:
+            hi = min(hi, t)
+        else:
+            lo = max(lo, t)
+    if lo > hi:
+        return 0
+    out[0], out[1], out[2] = n[0], n[1], n[2]
+    count = 0
+    for j, t in enumerate((lo, hi)):
+        if j == 1 and hi == lo:
+            break
+        p = p0 + t * u
+        h = _dot(n, p) - d
+        sep = h - rb
+        if sep > margin:
+            continue
+        m = p - 0.5 * (h + rb) * n  # midway between the face (p - h n) and p - rb n
+        _point(out, ids, count, m[0], m[1], m[2], sep, (f << 20) | j)
+        count += 1
+    return count
+
+
+@njit(cache=True)
+def contact_hull_capsule(
+    va: np.ndarray, na: np.ndarray, sa: np.ndarray, ca: np.ndarray, cora: np.ndarray,
+    ea: np.ndarray, b0: np.ndarray, b1: np.ndarray, rb: float, margin: float, slop: float,
+    out: np.ndarray, ids: np.ndarray,
+) -> int:  # fmt: skip
+    """Convex polyhedron A (placed as in :func:`contact_hull_hull`) against capsule
+    (segment ``b0``-``b1``, radius ``rb``).
+
+    The separating axes of a polyhedron and a segment are A's face normals and the cross
+    products of the segment with A's edges. Where a face axis decides (within ``slop/10``),
+    the segment is clipped to that face: one or two points, so a capsule lying on a box
+    rests on both ends. Where an edge axis decides, one point at the closest points of the
+    segment and that edge. When the two are apart, the gap is the exact distance (the least
+    over the segment's ends against A, and the segment against A's edges), so speculative
+    contact never reports less than the true gap's separation.
+    """
+    u = b1 - b0
+    # face axes: the segment's lower end above each face's plane
+    sep_f = -np.inf
+    face = 0
+    for f in range(na.shape[0]):
+        d = _dot(na[f], va[cora[sa[f]]])
+        h = min(_dot(na[f], b0), _dot(na[f], b1)) - d
+        if h > sep_f:
+            sep_f = h
+            face = f
+    # edge axes, oriented from A to the segment
+    centre = np.zeros(3)
+    for i in range(va.shape[0]):
+        centre += va[i]
+    centre /= va.shape[0]
+    sep_e = -np.inf
+    edge = -1
+    axis_e = np.zeros(3)
+    for e in range(ea.shape[0]):
+        w = va[ea[e, 1]] - va[ea[e, 0]]
+        axis = np.cross(u, w)
+        length2 = _dot(axis, axis)
+        if length2 <= _PARALLEL * _dot(u, u) * _dot(w, w):
+            continue
+        axis /= math.sqrt(length2)
+        if _dot(axis, va[ea[e, 0]] - centre) < 0.0:
+            axis = -axis
+        high = -np.inf
+        for k in range(va.shape[0]):
+            high = max(high, _dot(axis, va[k]))
+        if _dot(axis, va[ea[e, 0]]) < high - 1e-12 * (1.0 + abs(high)):
+            continue  # not a support edge
+        s = min(_dot(axis, b0), _dot(axis, b1)) - high
+        if s > sep_e:
+            sep_e = s
+            edge = e
+            axis_e = axis
+    if max(sep_f, sep_e) - rb > margin:
+        return 0
+    if max(sep_f, sep_e) > 0.0:
+        # apart: the exact distance decides; the closest features give the points
+        best = np.inf
+        closest = np.zeros(3)
+        on_segment = np.zeros(3)
+        feature = -1
+        for j in range(2):
+            e_ = b0 if j == 0 else b1
+            for f in range(na.shape[0]):
+                n = na[f]
+                h = _dot(n, e_) - _dot(n, va[cora[sa[f]]])
+                if h <= 0.0 or h >= best:
+                    continue
+                foot = e_ - h * n
+                inside = True
+                for k in range(ca[f]):
+                    r0 = va[cora[sa[f] + k]]
+                    r1 = va[cora[sa[f] + (k + 1) % ca[f]]]
+                    if _dot(np.cross(r1 - r0, n), foot - r0) > 0.0:
+                        inside = False
+                        break
+                if inside:
+                    best = h
+                    closest = foot
+                    on_segment = e_.copy()
+                    feature = f
+        for e in range(ea.shape[0]):
+            p0 = va[ea[e, 0]]
+            p1 = va[ea[e, 1]]
+            s, t = closest_segment_segment(b0, b1, p0, p1)
+            p = b0 + s * u
+            q = p0 + t * (p1 - p0)
+            dd = p - q
+            distance = math.sqrt(_dot(dd, dd))
+            if distance < best:
+                best = distance
+                closest = q
+                on_segment = p
+                feature = -1 - e
+        if best - rb > margin:
+            return 0
+        if feature >= 0:  # an end above a face: the segment on that face, one or two points
+            return _segment_on_face(va, na, sa, ca, cora, feature, b0, b1, rb, margin, out, ids)
+        n = (on_segment - closest) / best
+        m = closest + 0.5 * (best - rb) * n
+        out[0], out[1], out[2] = n[0], n[1], n[2]
+        _point(out, ids, 0, m[0], m[1], m[2], best - rb, (1 << 50) | (-1 - feature))
+        return 1
+    if edge >= 0 and sep_e > sep_f + 0.1 * slop:
+        p0 = va[ea[edge, 0]]
+        p1 = va[ea[edge, 1]]
+        s, t = closest_segment_segment(b0, b1, p0, p1)
+        p = b0 + s * u
+        q = p0 + t * (p1 - p0)
+        m = 0.5 * (p + q) - 0.5 * rb * axis_e
+        out[0], out[1], out[2] = axis_e[0], axis_e[1], axis_e[2]
+        _point(out, ids, 0, m[0], m[1], m[2], sep_e - rb, (1 << 50) | edge)
+        return 1
+    return _segment_on_face(va, na, sa, ca, cora, face, b0, b1, rb, margin, out, ids)
