@@ -19,7 +19,7 @@ from carom.geometry.manifold3d import (
     contact_hull_hull,
     contact_hull_sphere,
 )
-from carom.geometry.polyhedron import polyhedron_features
+from carom.geometry.polyhedron import polyhedron_features, triangle_features
 from carom.shapes3d import Box, Hull, rotation_matrix
 
 scipy_optimize = pytest.importorskip("scipy.optimize")
@@ -279,3 +279,28 @@ def test_a_capsule_apart_from_a_box_reports_the_exact_gap(seed: int) -> None:
     assert count >= 1
     assert abs(float(np.linalg.norm(normal)) - 1.0) < 1e-12
     assert float(points[:, 3].min()) == pytest.approx(distance - 0.05, abs=1e-8)
+
+
+def test_a_box_on_a_mesh_triangle_rests_on_its_four_corners() -> None:
+    # a triangle of the floor (z = 0) much larger than the box; the cube 2 mm into it
+    floor = triangle_features(np.array([[-5.0, -5.0, 0.0], [5.0, -5.0, 0.0], [0.0, 5.0, 0.0]]))
+    cube = _box([0.4, 0.4, 0.4], [0.0, 0.0, 0.198])
+    count, normal, points = _contact(cube, floor)
+    assert count == 4
+    assert normal == pytest.approx([0.0, 0.0, -1.0], abs=TOL)  # from the box down to the floor
+    assert points[:, 3] == pytest.approx([-0.002] * 4, abs=TOL)
+
+
+def test_a_sphere_on_a_mesh_triangle_meets_its_face_or_its_edge() -> None:
+    triangle = triangle_features(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]))
+    out = np.zeros(OUT_SIZE)
+    ids = np.full(MAX_POINTS, -1, np.int64)
+    # above the inside: straight down to the face, gap 0.3 - 0.1
+    assert contact_hull_sphere(*triangle, np.array([0.2, 0.2, 0.3]), 0.1, 1.0, out, ids) == 1
+    assert out[:7] == pytest.approx([0.0, 0.0, 1.0, 0.2, 0.2, 0.1, 0.2], abs=TOL)
+    # beyond the long edge x + y = 1, level with the plane: to that edge's nearest point
+    centre = np.array([0.8, 0.8, 0.0])
+    assert contact_hull_sphere(*triangle, centre, 0.1, 1.0, out, ids) == 1
+    gap = (1.6 - 1.0) / math.sqrt(2.0)  # the distance from (0.8, 0.8) to the line x + y = 1
+    assert out[:3] == pytest.approx([math.sqrt(0.5), math.sqrt(0.5), 0.0], abs=TOL)
+    assert out[6] == pytest.approx(gap - 0.1, abs=TOL)

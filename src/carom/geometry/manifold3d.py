@@ -604,7 +604,7 @@ def contact_hull_sphere(
             top = f
     if highest - rb > margin:
         return 0  # a face plane separates them by more than the margin
-    if highest <= 0.0:  # the centre is inside
+    if highest < 0.0:  # the centre is inside (a flat polytope, a mesh triangle, has no inside)
         n = na[top]
         m = b - 0.5 * (rb + highest) * n  # midway between b - rb n and the face, b - highest n
         out[0], out[1], out[2] = n[0], n[1], n[2]
@@ -616,7 +616,7 @@ def contact_hull_sphere(
     for f in range(na.shape[0]):
         n = na[f]
         h = _dot(n, b) - _dot(n, va[cora[sa[f]]])
-        if h <= 0.0:
+        if h < 0.0:
             continue
         foot = b - h * n
         inside = True
@@ -643,7 +643,8 @@ def contact_hull_sphere(
     sep = best - rb
     if sep > margin:
         return 0
-    n = (b - closest) / best
+    # on the surface itself: out along the face it lies on
+    n = (b - closest) / best if best > 0.0 else na[top].copy()
     m = closest + 0.5 * (best - rb) * n
     out[0], out[1], out[2] = n[0], n[1], n[2]
     _point(out, ids, 0, m[0], m[1], m[2], sep, feature)

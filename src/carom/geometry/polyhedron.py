@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["PolyhedronFeatures", "polyhedron_features"]
+__all__ = ["PolyhedronFeatures", "polyhedron_features", "triangle_features"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -114,4 +114,29 @@ def polyhedron_features(vertices: FloatArray, triangles: IntArray) -> Polyhedron
         np.array(counts, np.int64),
         np.array(corners, np.int64),
         np.array(sorted(edges), np.int64).reshape(-1, 2),
+    )
+
+
+def triangle_features(
+    corners: FloatArray,
+) -> tuple[FloatArray, FloatArray, IntArray, IntArray, IntArray, IntArray]:
+    """A mesh triangle as a flat convex polytope, in the placed form the contact kernels take
+    (:func:`carom.geometry.manifold3d.contact_hull_hull` and the like, as body B): corners
+    (3, 3) [m]; two faces, the front (counter-clockwise) and the back; three edges.
+
+    Returns
+    -------
+    vertices, normals, face_start, face_count, corners, edges
+        (3, 3), (2, 3), (2,), (2,), (6,), (3, 2).
+    """
+    v = np.asarray(corners, float)
+    n = np.cross(v[1] - v[0], v[2] - v[0])
+    n /= np.linalg.norm(n)
+    return (
+        v.copy(),
+        np.array([n, -n]),
+        np.array([0, 3], np.int64),
+        np.array([3, 3], np.int64),
+        np.array([0, 1, 2, 0, 2, 1], np.int64),
+        np.array([[0, 1], [1, 2], [0, 2]], np.int64),
     )
