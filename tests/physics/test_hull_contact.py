@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from carom.geometry.manifold3d import (
@@ -136,6 +136,7 @@ def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
 
 @settings(max_examples=80, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), gap=st.floats(-0.6, 0.6))
+@example(seed=45, gap=0.5)  # apart and beside each other: clipping alone found no point
 def test_the_separating_axes_decide_overlap_as_a_linear_program_does(seed: int, gap: float) -> None:
     # two random hulls, B moved along a random direction by a distance around touching: the
     # test's separation is positive exactly when no point is shared (every axis that can
@@ -304,3 +305,17 @@ def test_a_sphere_on_a_mesh_triangle_meets_its_face_or_its_edge() -> None:
     gap = (1.6 - 1.0) / math.sqrt(2.0)  # the distance from (0.8, 0.8) to the line x + y = 1
     assert out[:3] == pytest.approx([math.sqrt(0.5), math.sqrt(0.5), 0.0], abs=TOL)
     assert out[6] == pytest.approx(gap - 0.1, abs=TOL)
+
+
+def test_boxes_apart_beside_each_other_meet_at_their_closest_edges() -> None:
+    # regression: two cubes apart by 0.2 along x and along z: the best face axis separates
+    # them by 0.2, but the facing faces do not overlap, so clipping kept nothing and the
+    # speculative contact was lost. The closest points are the parallel edges at
+    # (0.5, y, 0.5) and (0.7, y, 0.7): 0.2 sqrt(2) apart along (1, 0, 1)/sqrt(2).
+    a = _box([1.0, 1.0, 1.0], [0.0, 0.0, 0.0])
+    b = _box([1.0, 1.0, 1.0], [1.2, 0.0, 1.2])
+    count, normal, points = _contact(a, b, margin=0.5)
+    assert count == 1
+    assert normal == pytest.approx([math.sqrt(0.5), 0.0, math.sqrt(0.5)], abs=TOL)
+    assert points[0, 3] == pytest.approx(0.2 * math.sqrt(2.0), abs=TOL)
+    assert points[0, [0, 2]] == pytest.approx([0.6, 0.6], abs=TOL)

@@ -577,39 +577,71 @@ def contact_hull_hull(
         _point(out, ids, 0, m[0], m[1], m[2], sep_e, (1 << 50) | (edge_a << 20) | edge_b)
         return 1
     if sep_a + tie >= sep_b:
-        return _clip_faces(
+        count = _clip_faces(
             va, na, sa, ca, cora, face_a, vb, nb, sb, cb, corb, margin, False, out, ids
         )
-    return _clip_faces(vb, nb, sb, cb, corb, face_b, va, na, sa, ca, cora, margin, True, out, ids)
+    else:
+        count = _clip_faces(
+            vb, nb, sb, cb, corb, face_b, va, na, sa, ca, cora, margin, True, out, ids
+        )
+    if count == 0 and max(sep_a, sep_b, sep_e) > 0.0:
+        # apart and beside each other (a corner passing a face's edge): the clipped faces do
+        # not overlap; the exact closest points decide
+        return _closest_hulls(va, na, sa, ca, cora, ea, vb, nb, sb, cb, corb, eb, margin, out, ids)
+    return count
 
 
 @njit(cache=True)
-def contact_hull_sphere(
+def _closest_hulls(
     va: np.ndarray, na: np.ndarray, sa: np.ndarray, ca: np.ndarray, cora: np.ndarray,
-    ea: np.ndarray, b: np.ndarray, rb: float, margin: float, out: np.ndarray, ids: np.ndarray,
+    ea: np.ndarray, vb: np.ndarray, nb: np.ndarray, sb: np.ndarray, cb: np.ndarray,
+    corb: np.ndarray, eb: np.ndarray, margin: float, out: np.ndarray, ids: np.ndarray,
 ) -> int:  # fmt: skip
-    """Convex polyhedron A (placed as in :func:`contact_hull_hull`) against sphere (``b``,
-    ``rb``): the exact closest point of A's surface to the centre.
+    """One point at the closest points of two disjoint convex polytopes: the least over A's
+    corners against B, B's corners against A, and A's edges against B's (every closest pair
+    of two convex polytopes is one of these)."""
+    best = np.inf
+    on_a = np.zeros(3)
+    on_b = np.zeros(3)
+    feature = 0
+    for i in range(va.shape[0]):
+        d, q, f = _closest_on_hull(vb, nb, sb, cb, corb, eb, va[i])
+        if d < best:
+            best, on_a, on_b, feature = d, va[i].copy(), q, (2 << 50) | (i << 25) | f
+    for j in range(vb.shape[0]):
+        d, q, f = _closest_on_hull(va, na, sa, ca, cora, ea, vb[j])
+        if d < best:
+            best, on_a, on_b, feature = d, q, vb[j].copy(), (3 << 50) | (j << 25) | f
+    for i in range(ea.shape[0]):
+        p0 = va[ea[i, 0]]
+        p1 = va[ea[i, 1]]
+        for j in range(eb.shape[0]):
+            q0 = vb[eb[j, 0]]
+            q1 = vb[eb[j, 1]]
+            s, t = closest_segment_segment(p0, p1, q0, q1)
+            p = p0 + s * (p1 - p0)
+            q = q0 + t * (q1 - q0)
+            dd = q - p
+            d = math.sqrt(_dot(dd, dd))
+            if d < best:
+                best, on_a, on_b, feature = d, p, q, (1 << 50) | (i << 20) | j
+    if best > margin or not best > 0.0:
+        return 0
+    n = (on_b - on_a) / best
+    m = 0.5 * (on_a + on_b)
+    out[0], out[1], out[2] = n[0], n[1], n[2]
+    _point(out, ids, 0, m[0], m[1], m[2], best, feature)
+    return 1
 
-    Inside A, the face the centre is least deep below is the way out (id: the face). Outside,
-    the closest point is on a face whose plane the centre is above, where its foot falls
-    inside the face (id: the face), or else on an edge (id: ``1 << 20`` plus the edge).
-    """
-    highest = -np.inf
-    top = 0
-    for f in range(na.shape[0]):
-        h = _dot(na[f], b) - _dot(na[f], va[cora[sa[f]]])
-        if h > highest:
-            highest = h
-            top = f
-    if highest - rb > margin:
-        return 0  # a face plane separates them by more than the margin
-    if highest < 0.0:  # the centre is inside (a flat polytope, a mesh triangle, has no inside)
-        n = na[top]
-        m = b - 0.5 * (rb + highest) * n  # midway between b - rb n and the face, b - highest n
-        out[0], out[1], out[2] = n[0], n[1], n[2]
-        _point(out, ids, 0, m[0], m[1], m[2], highest - rb, top)
-        return 1
+
+@njit(cache=True)
+def _closest_on_hull(
+    va: np.ndarray, na: np.ndarray, sa: np.ndarray, ca: np.ndarray, cora: np.ndarray,
+    ea: np.ndarray, b: np.ndarray,
+) -> tuple[float, np.ndarray, int]:  # fmt: skip
+    """Distance [m] from a point ``b`` on or outside a convex polytope to it, the nearest
+    point, and its feature: a face whose plane ``b`` is on or above and whose foot falls
+    inside it (id: the face), or else an edge (id: ``1 << 20`` plus the edge)."""
     best = np.inf
     closest = np.zeros(3)
     feature = 0
@@ -640,6 +672,37 @@ def contact_hull_sphere(
             best = distance
             closest = q
             feature = (1 << 20) | e
+    return best, closest, feature
+
+
+@njit(cache=True)
+def contact_hull_sphere(
+    va: np.ndarray, na: np.ndarray, sa: np.ndarray, ca: np.ndarray, cora: np.ndarray,
+    ea: np.ndarray, b: np.ndarray, rb: float, margin: float, out: np.ndarray, ids: np.ndarray,
+) -> int:  # fmt: skip
+    """Convex polyhedron A (placed as in :func:`contact_hull_hull`) against sphere (``b``,
+    ``rb``): the exact closest point of A's surface to the centre.
+
+    Inside A, the face the centre is least deep below is the way out (id: the face). Outside,
+    the closest point is on a face whose plane the centre is above, where its foot falls
+    inside the face (id: the face), or else on an edge (id: ``1 << 20`` plus the edge).
+    """
+    highest = -np.inf
+    top = 0
+    for f in range(na.shape[0]):
+        h = _dot(na[f], b) - _dot(na[f], va[cora[sa[f]]])
+        if h > highest:
+            highest = h
+            top = f
+    if highest - rb > margin:
+        return 0  # a face plane separates them by more than the margin
+    if highest < 0.0:  # the centre is inside (a flat polytope, a mesh triangle, has no inside)
+        n = na[top]
+        m = b - 0.5 * (rb + highest) * n  # midway between b - rb n and the face, b - highest n
+        out[0], out[1], out[2] = n[0], n[1], n[2]
+        _point(out, ids, 0, m[0], m[1], m[2], highest - rb, top)
+        return 1
+    best, closest, feature = _closest_on_hull(va, na, sa, ca, cora, ea, b)
     sep = best - rb
     if sep > margin:
         return 0
