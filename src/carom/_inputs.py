@@ -234,3 +234,18 @@ def check_not_both_static(m1: FloatArray, m2: FloatArray) -> None:
             f"m1 and m2 are both infinite{where}: two static bodies cannot exchange an impulse; "
             "give at least one body a finite mass"
         )
+
+
+def finite_positive(name: str, value: object, unit: str, *, zero: bool = False) -> float:
+    """``value`` as a float if it is finite and positive (or zero when allowed); a CaromError
+    naming it, its unit and what it got otherwise (a shape's sizes, a density, a mass)."""
+    ok = (
+        not isinstance(value, bool)
+        and isinstance(value, int | float | np.floating | np.integer)
+        and math.isfinite(float(value))
+        and (float(value) >= 0.0 if zero else float(value) > 0.0)
+    )
+    if not ok:
+        what = "zero or positive" if zero else "positive"
+        raise CaromError(f"{name} must be {what} and finite [{unit}]; got {value!r}")
+    return float(value)  # type: ignore[arg-type]

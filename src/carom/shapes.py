@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from carom._inputs import finite_positive
 from carom.errors import CaromError
 from carom.geometry.outline import (
     MassIntegrals,
@@ -106,20 +107,6 @@ class Sphere:
         """``q m a^2`` about any axis through the centre [kg m^2]."""
         q = self.inertia_factor if self.inertia_factor is not None else default_inertia_factor(dim)
         return q * mass * self.radius**2
-
-
-def _finite_positive(name: str, value: object, unit: str, *, zero: bool = False) -> float:
-    """``value`` as a float if it is finite and positive (or zero when allowed)."""
-    ok = (
-        not isinstance(value, bool)
-        and isinstance(value, int | float | np.floating | np.integer)
-        and math.isfinite(float(value))
-        and (float(value) >= 0.0 if zero else float(value) > 0.0)
-    )
-    if not ok:
-        what = "zero or positive" if zero else "positive"
-        raise CaromError(f"{name} must be {what} and finite [{unit}]; got {value!r}")
-    return float(value)  # type: ignore[arg-type]
 
 
 def _points(name: str, value: ArrayLike, count: int | None = None) -> FloatArray:
@@ -260,9 +247,9 @@ class Shape2D:
                 'kind="static"'
             )
         if density is not None:
-            rho = _finite_positive("density", density, "kg/m^2")
+            rho = finite_positive("density", density, "kg/m^2")
         else:
-            rho = _finite_positive("mass", mass, "kg") / integrals.area
+            rho = finite_positive("mass", mass, "kg") / integrals.area
         return MassProperties(
             rho * integrals.area, integrals.centroid, rho * integrals.second_about_centroid
         )
@@ -276,7 +263,7 @@ class Circle(Shape2D):
     kind = "circle"
 
     def __post_init__(self) -> None:
-        _finite_positive("Circle radius", self.radius, "m")
+        finite_positive("Circle radius", self.radius, "m")
 
     def pieces(self) -> tuple[ConvexPiece, ...]:
         return (ConvexPiece(np.zeros((1, 2)), float(self.radius)),)
@@ -300,8 +287,8 @@ class Capsule(Shape2D):
     kind = "capsule"
 
     def __post_init__(self) -> None:
-        _finite_positive("Capsule length", self.length, "m")
-        _finite_positive("Capsule radius", self.radius, "m")
+        finite_positive("Capsule length", self.length, "m")
+        finite_positive("Capsule radius", self.radius, "m")
 
     def pieces(self) -> tuple[ConvexPiece, ...]:
         h = float(self.length) / 2.0
@@ -322,9 +309,9 @@ class Box(Shape2D):
     kind = "box"
 
     def __post_init__(self) -> None:
-        _finite_positive("Box width", self.width, "m")
-        _finite_positive("Box height", self.height, "m")
-        _finite_positive("Box radius", self.radius, "m", zero=True)
+        finite_positive("Box width", self.width, "m")
+        finite_positive("Box height", self.height, "m")
+        finite_positive("Box radius", self.radius, "m", zero=True)
 
     def pieces(self) -> tuple[ConvexPiece, ...]:
         w, h = float(self.width) / 2.0, float(self.height) / 2.0
@@ -355,7 +342,7 @@ class Polygon(Shape2D):
 
     def __post_init__(self) -> None:
         points = _points("Polygon vertices", self.vertices)
-        _finite_positive("Polygon radius", self.radius, "m", zero=True)
+        finite_positive("Polygon radius", self.radius, "m", zero=True)
         object.__setattr__(self, "corners", convex_outline(points, "Polygon vertices"))
 
     @classmethod
@@ -363,7 +350,7 @@ class Polygon(Shape2D):
         """A regular polygon with a corner on the +x axis, centred on the origin."""
         if isinstance(sides, bool) or not isinstance(sides, int) or sides < 3:
             raise CaromError(f"sides must be an integer >= 3; got {sides!r}")
-        _finite_positive("circumradius", circumradius, "m")
+        finite_positive("circumradius", circumradius, "m")
         phi = 2.0 * np.pi * np.arange(sides) / sides
         return cls(circumradius * np.stack([np.cos(phi), np.sin(phi)], axis=1), radius)
 
@@ -450,7 +437,7 @@ class Segment(Shape2D):
         )
         if np.array_equal(ends[0], ends[1]):
             raise CaromError(f"Segment p1 and p2 are the same point {ends[0].tolist()}; move one")
-        _finite_positive("Segment radius", self.radius, "m", zero=True)
+        finite_positive("Segment radius", self.radius, "m", zero=True)
         object.__setattr__(self, "ends", ends)
 
     def pieces(self) -> tuple[ConvexPiece, ...]:
@@ -487,7 +474,7 @@ class Chain(Shape2D):
                 f"Chain points[{i}] and points[{(i + 1) % points.shape[0]}] are the same point "
                 f"{points[i].tolist()}; drop one"
             )
-        _finite_positive("Chain radius", self.radius, "m", zero=True)
+        finite_positive("Chain radius", self.radius, "m", zero=True)
         object.__setattr__(self, "vertices", points)
 
     def pieces(self) -> tuple[ConvexPiece, ...]:

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from carom._inputs import finite_positive
 from carom.errors import CaromError
 from carom.geometry.mass3d import (
     SolidIntegrals,
@@ -51,20 +52,6 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
-
-
-def _finite_positive(name: str, value: object, unit: str, *, zero: bool = False) -> float:
-    """``value`` as a float if it is finite and positive (or zero when allowed)."""
-    ok = (
-        not isinstance(value, bool)
-        and isinstance(value, int | float | np.floating | np.integer)
-        and math.isfinite(float(value))
-        and (float(value) >= 0.0 if zero else float(value) > 0.0)
-    )
-    if not ok:
-        what = "zero or positive" if zero else "positive"
-        raise CaromError(f"{name} must be {what} and finite [{unit}]; got {value!r}")
-    return float(value)  # type: ignore[arg-type]
 
 
 def _vector(name: str, value: ArrayLike, unit: str) -> FloatArray:
@@ -249,9 +236,9 @@ class Shape3D:
             raise CaromError("give density [kg/m^3] or mass [kg] (one of them)")
         integrals = self.integrals()
         if density is not None:
-            rho = _finite_positive("density", density, "kg/m^3")
+            rho = finite_positive("density", density, "kg/m^3")
         else:
-            rho = _finite_positive("mass", mass, "kg") / integrals.volume
+            rho = finite_positive("mass", mass, "kg") / integrals.volume
         return MassProperties3D(
             rho * integrals.volume,
             integrals.centroid,
@@ -267,7 +254,7 @@ class Sphere(Shape3D):
     kind = "sphere"
 
     def __post_init__(self) -> None:
-        _finite_positive("Sphere radius", self.radius, "m")
+        finite_positive("Sphere radius", self.radius, "m")
 
     def pieces(self) -> tuple[ConvexPiece3D, ...]:
         return (ConvexPiece3D(np.zeros((1, 3)), np.zeros((0, 3), np.int64), float(self.radius)),)
@@ -291,8 +278,8 @@ class Capsule(Shape3D):
     kind = "capsule"
 
     def __post_init__(self) -> None:
-        _finite_positive("Capsule length", self.length, "m")
-        _finite_positive("Capsule radius", self.radius, "m")
+        finite_positive("Capsule length", self.length, "m")
+        finite_positive("Capsule radius", self.radius, "m")
 
     def pieces(self) -> tuple[ConvexPiece3D, ...]:
         h = float(self.length) / 2.0
@@ -325,7 +312,7 @@ class Box(Shape3D):
     def __post_init__(self) -> None:
         size = _vector("Box size", self.size, "m")
         for axis, value in zip("xyz", size, strict=True):
-            _finite_positive(f"Box size along {axis}", float(value), "m")
+            finite_positive(f"Box size along {axis}", float(value), "m")
         object.__setattr__(self, "size", size)
 
     def corners(self) -> FloatArray:

@@ -822,25 +822,13 @@ def contact_hull_capsule(
         on_segment = np.zeros(3)
         feature = -1
         for j in range(2):
-            e_ = b0 if j == 0 else b1
-            for f in range(na.shape[0]):
-                n = na[f]
-                h = _dot(n, e_) - _dot(n, va[cora[sa[f]]])
-                if h <= 0.0 or h >= best:
-                    continue
-                foot = e_ - h * n
-                inside = True
-                for k in range(ca[f]):
-                    r0 = va[cora[sa[f] + k]]
-                    r1 = va[cora[sa[f] + (k + 1) % ca[f]]]
-                    if _dot(np.cross(r1 - r0, n), foot - r0) > 0.0:
-                        inside = False
-                        break
-                if inside:
-                    best = h
-                    closest = foot
-                    on_segment = e_.copy()
-                    feature = f
+            end = b0 if j == 0 else b1
+            d, q, f = _closest_on_hull(va, na, sa, ca, cora, ea, end)
+            if d < best:
+                best = d
+                closest = q
+                on_segment = end.copy()
+                feature = f if f < (1 << 20) else -1 - (f - (1 << 20))
         for e in range(ea.shape[0]):
             p0 = va[ea[e, 0]]
             p1 = va[ea[e, 1]]

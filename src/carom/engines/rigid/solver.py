@@ -358,21 +358,14 @@ def _gather_all(
 ) -> None:
     """Group g and its bodies' velocities, moves and turns since the step began into the
     working buffer."""
-    for k in range(GROUP_ROWS * LANES):  # one flat run: the compiler moves it in vectors
-        buf[k] = group[g, k]
+    _gather(buf, group, pair, g, state)
     for lane in range(LANES):
         a = pair[g, lane]
         b = pair[g, LANES + lane]
-        buf[B_VAX * LANES + lane] = state[a, S_VX]
-        buf[B_VAY * LANES + lane] = state[a, S_VY]
-        buf[B_WA * LANES + lane] = state[a, S_W]
         buf[B_DX * LANES + lane] = state[a, S_DX] - state[b, S_DX]
         buf[B_DY * LANES + lane] = state[a, S_DY] - state[b, S_DY]
         buf[B_CA * LANES + lane] = state[a, S_COS]
         buf[B_SA * LANES + lane] = state[a, S_SIN]
-        buf[B_VBX * LANES + lane] = state[b, S_VX]
-        buf[B_VBY * LANES + lane] = state[b, S_VY]
-        buf[B_WB * LANES + lane] = state[b, S_W]
         buf[B_CB * LANES + lane] = state[b, S_COS]
         buf[B_SB * LANES + lane] = state[b, S_SIN]
 
