@@ -423,69 +423,203 @@ def _clip_faces(
             lowest = c
             incident = f
     size = ci[incident] + cr[fr] + 2
-    poly = np.empty((size, 3))
-    tags = np.empty(size, np.int64)
-    spare = np.empty((size, 3))
-    spare_tags = np.empty(size, np.int64)
+    # two layers of (x, y, z, tag, separation) rows: the polygon and the one being clipped
+    # out of it, swapped after each side (one allocation)
+    work = np.empty((2, size, 5))
+    cur = 0
     count = ci[incident]
     for k in range(count):
-        poly[k] = vi[cor_i[si[incident] + k]]
-        tags[k] = cor_i[si[incident] + k]
+        corner = cor_i[si[incident] + k]
+        for c in range(3):
+            work[0, k, c] = vi[corner, c]
+        work[0, k, 3] = corner
     for k in range(cr[fr]):
         if count == 0:
             break
-        r0 = vr[cor_r[sr[fr] + k]]
-        r1 = vr[cor_r[sr[fr] + (k + 1) % cr[fr]]]
-        side = np.cross(r1 - r0, n)  # outward from the face, in its plane
+        r0 = cor_r[sr[fr] + k]
+        r1 = cor_r[sr[fr] + (k + 1) % cr[fr]]
+        ex = vr[r1, 0] - vr[r0, 0]
+        ey = vr[r1, 1] - vr[r0, 1]
+        ez = vr[r1, 2] - vr[r0, 2]
+        # the side's outward normal, in the face's plane: edge x n
+        sx = ey * n[2] - ez * n[1]
+        sy = ez * n[0] - ex * n[2]
+        sz = ex * n[1] - ey * n[0]
+        level = sx * vr[r0, 0] + sy * vr[r0, 1] + sz * vr[r0, 2]
+        nxt = 1 - cur
         kept = 0
         for j in range(count):
-            p = poly[j]
-            q = poly[(j + 1) % count]
-            dp = _dot(side, p - r0)
-            dq = _dot(side, q - r0)
+            q = (j + 1) % count
+            dp = sx * work[cur, j, 0] + sy * work[cur, j, 1] + sz * work[cur, j, 2] - level
+            dq = sx * work[cur, q, 0] + sy * work[cur, q, 1] + sz * work[cur, q, 2] - level
             if dp <= 0.0:
-                spare[kept] = p
-                spare_tags[kept] = tags[j]
+                for c in range(4):
+                    work[nxt, kept, c] = work[cur, j, c]
                 kept += 1
             if (dp <= 0.0) != (dq <= 0.0):
                 frac = dp / (dp - dq)
-                spare[kept] = p + frac * (q - p)
-                spare_tags[kept] = (1 << 20) | (k << 10) | (tags[j] & 1023)
+                for c in range(3):
+                    work[nxt, kept, c] = work[cur, j, c] + frac * (
+                        work[cur, q, c] - work[cur, j, c]
+                    )
+                tag = int(work[cur, j, 3])
+                work[nxt, kept, 3] = (1 << 20) | (k << 10) | (tag & 1023)
                 kept += 1
-        poly, spare = spare, poly
-        tags, spare_tags = spare_tags, tags
+        cur = nxt
         count = kept
-    sep = np.empty(max(count, 1))
     near = 0
     for j in range(count):
-        s = _dot(n, poly[j]) - d
+        s = n[0] * work[cur, j, 0] + n[1] * work[cur, j, 1] + n[2] * work[cur, j, 2] - d
         if s <= margin:
-            poly[near] = poly[j]
-            tags[near] = tags[j]
-            sep[near] = s
+            for c in range(4):
+                work[cur, near, c] = work[cur, j, c]
+            work[cur, near, 4] = s
             near += 1
     if near == 0:
         return 0
     keep = np.empty(MAX_POINTS, np.int64)
-    kept = reduce_points(poly, sep, near, n, keep)
+    kept = reduce_points(work[cur, :, :3], work[cur, :, 4], near, n, keep)
     sign = -1.0 if flip else 1.0
     out[0], out[1], out[2] = sign * n[0], sign * n[1], sign * n[2]
     face_bits = (fr << 40) | (incident << 30) | ((1 << 29) if flip else 0)
     for j in range(kept):
-        p = poly[keep[j]]
-        s = sep[keep[j]]
+        row = keep[j]
+        s = work[cur, row, 4]
         # midway between the incident point and the reference plane
         _point(
             out,
             ids,
             j,
-            p[0] - 0.5 * s * n[0],
-            p[1] - 0.5 * s * n[1],
-            p[2] - 0.5 * s * n[2],
+            work[cur, row, 0] - 0.5 * s * n[0],
+            work[cur, row, 1] - 0.5 * s * n[1],
+            work[cur, row, 2] - 0.5 * s * n[2],
             s,
-            face_bits | tags[keep[j]],
+            face_bits | int(work[cur, row, 3]),
         )
     return kept
+
+
+@njit(cache=True, inline="always")
+def _edge(v: np.ndarray, e: np.ndarray, i: int) -> tuple[float, float, float]:
+    """Edge i's vector, first corner to second [m]."""
+    a = e[i, 0]
+    b = e[i, 1]
+    return v[b, 0] - v[a, 0], v[b, 1] - v[a, 1], v[b, 2] - v[a, 2]
+
+
+@njit(cache=True)
+def _directions(v: np.ndarray, e: np.ndarray, out: np.ndarray) -> int:
+    """The edges of distinct directions (the first of each set of parallel edges) into
+    ``out``; a box's 12 edges have 3."""
+    count = 0
+    for i in range(e.shape[0]):
+        ux, uy, uz = _edge(v, e, i)
+        uu = ux * ux + uy * uy + uz * uz
+        seen = False
+        for k in range(count):
+            wx, wy, wz = _edge(v, e, out[k])
+            cx, cy, cz = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
+            if cx * cx + cy * cy + cz * cz <= _PARALLEL * uu * (wx * wx + wy * wy + wz * wz):
+                seen = True
+                break
+        if not seen:
+            out[count] = i
+            count += 1
+    return count
+
+
+@njit(cache=True, inline="always")
+def _extent(v: np.ndarray, x: float, y: float, z: float) -> tuple[float, float]:
+    """Least and greatest of the corners ``v`` along (x, y, z)."""
+    low = np.inf
+    high = -np.inf
+    for k in range(v.shape[0]):
+        d = v[k, 0] * x + v[k, 1] * y + v[k, 2] * z
+        low = min(low, d)
+        high = max(high, d)
+    return low, high
+
+
+@njit(cache=True)
+def _support_edge(
+    v: np.ndarray, e: np.ndarray, like: int, x: float, y: float, z: float, level: float,
+    tol: float,
+) -> int:  # fmt: skip
+    """An edge parallel to edge ``like`` with both corners at ``level`` along (x, y, z)
+    (within ``tol``), or -1."""
+    ux, uy, uz = _edge(v, e, like)
+    uu = ux * ux + uy * uy + uz * uz
+    for i in range(e.shape[0]):
+        wx, wy, wz = _edge(v, e, i)
+        cx, cy, cz = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
+        if cx * cx + cy * cy + cz * cz > _PARALLEL * uu * (wx * wx + wy * wy + wz * wz):
+            continue
+        a = e[i, 0]
+        b = e[i, 1]
+        if (
+            abs(v[a, 0] * x + v[a, 1] * y + v[a, 2] * z - level) <= tol
+            and abs(v[b, 0] * x + v[b, 1] * y + v[b, 2] * z - level) <= tol
+        ):
+            return i
+    return -1
+
+
+@njit(cache=True)
+def _edge_separation(
+    va: np.ndarray, ea: np.ndarray, vb: np.ndarray, eb: np.ndarray
+) -> tuple[float, int, int, float, float, float]:
+    """The largest separation along the cross product of an edge direction of A and one of
+    B, the support edges along it (-1 if none: a degenerate axis), and the axis, from A to B.
+
+    Along an axis the two bodies' extents are intervals; their gap, whichever lies ahead,
+    is the separation (negative: the overlap). Only distinct directions are crossed (a box
+    pair: 3 x 3 axes, not 12 x 12), and only the best axis's support edges are looked up.
+    """
+    dir_a = np.empty(ea.shape[0], np.int64)
+    dir_b = np.empty(eb.shape[0], np.int64)
+    na_ = _directions(va, ea, dir_a)
+    nb_ = _directions(vb, eb, dir_b)
+    best = -np.inf
+    best_i = -1
+    best_j = -1
+    bx = by = bz = 0.0
+    high_a = low_b = 0.0
+    for i in range(na_):
+        ux, uy, uz = _edge(va, ea, dir_a[i])
+        uu = ux * ux + uy * uy + uz * uz
+        for j in range(nb_):
+            wx, wy, wz = _edge(vb, eb, dir_b[j])
+            x, y, z = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
+            length2 = x * x + y * y + z * z
+            if length2 <= _PARALLEL * uu * (wx * wx + wy * wy + wz * wz):
+                continue  # parallel edges: their plane's normal is a face axis already
+            scale = 1.0 / math.sqrt(length2)
+            x, y, z = x * scale, y * scale, z * scale
+            low_a_, high_a_ = _extent(va, x, y, z)
+            low_b_, high_b_ = _extent(vb, x, y, z)
+            if low_b_ - high_a_ >= low_a_ - high_b_:  # B ahead of A along the axis
+                s = low_b_ - high_a_
+            else:  # behind: turn the axis round
+                s = low_a_ - high_b_
+                x, y, z = -x, -y, -z
+                low_b_, high_a_ = -high_b_, -low_a_
+            if s > best:
+                best, best_i, best_j = s, dir_a[i], dir_b[j]
+                bx, by, bz = x, y, z
+                high_a, low_b = high_a_, low_b_
+    if best_i < 0:
+        return best, -1, -1, 0.0, 0.0, 0.0
+    size = 0.0
+    for k in range(va.shape[0]):
+        size = max(size, abs(va[k, 0]) + abs(va[k, 1]) + abs(va[k, 2]))
+    for k in range(vb.shape[0]):
+        size = max(size, abs(vb[k, 0]) + abs(vb[k, 1]) + abs(vb[k, 2]))
+    tol = 1e-9 * size  # round-off of a corner's level along the axis [m]
+    edge_a = _support_edge(va, ea, best_i, bx, by, bz, high_a, tol)
+    edge_b = _support_edge(vb, eb, best_j, bx, by, bz, low_b, tol)
+    if edge_a < 0 or edge_b < 0:
+        return best, -1, -1, bx, by, bz
+    return best, edge_a, edge_b, bx, by, bz
 
 
 @njit(cache=True)
@@ -521,46 +655,8 @@ def contact_hull_hull(
     sep_b, face_b = _face_separation(vb, nb, sb, corb, va)
     if sep_b > margin:
         return 0
-    centre = np.zeros(3)
-    for i in range(va.shape[0]):
-        centre += va[i]
-    centre /= va.shape[0]
-    size = 0.0
-    for i in range(va.shape[0]):
-        for k in range(3):
-            size = max(size, abs(va[i, k] - centre[k]))
-    tol = 1e-9 * size  # round-off of a support along an axis [m]
-    sep_e = -np.inf
-    edge_a = -1
-    edge_b = -1
-    axis_e = np.zeros(3)
-    for i in range(ea.shape[0]):
-        p0 = va[ea[i, 0]]
-        u = va[ea[i, 1]] - p0
-        for j in range(eb.shape[0]):
-            w = vb[eb[j, 1]] - vb[eb[j, 0]]
-            axis = np.cross(u, w)
-            length2 = _dot(axis, axis)
-            if length2 <= _PARALLEL * _dot(u, u) * _dot(w, w):
-                continue  # parallel edges: their plane's normal is a face axis already
-            axis /= math.sqrt(length2)
-            if _dot(axis, p0 - centre) < 0.0:
-                axis = -axis
-            high = -np.inf
-            for k in range(va.shape[0]):
-                high = max(high, _dot(axis, va[k]))
-            low = np.inf
-            for k in range(vb.shape[0]):
-                low = min(low, _dot(axis, vb[k]))
-            # only edges that carry the supports along the axis can touch along it (pairs of
-            # other, parallel edges give the same axis and separation, but not the points)
-            if _dot(axis, p0) < high - tol or _dot(axis, vb[eb[j, 0]]) > low + tol:
-                continue
-            if low - high > sep_e:
-                sep_e = low - high
-                edge_a = i
-                edge_b = j
-                axis_e = axis
+    sep_e, edge_a, edge_b, ax, ay, az = _edge_separation(va, ea, vb, eb)
+    axis_e = np.array([ax, ay, az])
     if sep_e > margin:
         return 0
     tie = 0.1 * slop
