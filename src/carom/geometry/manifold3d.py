@@ -19,6 +19,15 @@ manifolds are closed forms on closest points of cores:
   points;
 - sphere-, capsule- and hull-plane: the core's corners below the plane (up to 4, the deepest
   and those spanning the largest area, so a box resting on a plane has its 4 corners).
+
+Convex polytopes (boxes, hulls, and mesh triangles as flat ones) are given placed, with their
+faces and edges (:func:`carom.geometry.polyhedron.polyhedron_features`):
+
+- hull-hull: separating axes (face normals, crosses of edge directions) with face clipping,
+  or the exact closest points when they are apart and beside each other;
+- hull-sphere: the exact closest point of the surface;
+- hull-capsule: the segment clipped to a face, the closest points to an edge, or the exact
+  gap when apart.
 """
 
 from __future__ import annotations
@@ -50,6 +59,10 @@ OUT_SIZE = 3 + 4 * MAX_POINTS
 
 #: below this squared sine between two segments they count as parallel [-]
 _PARALLEL = 1e-10
+# Vectors are multiplied with _dot, never "@": Numba's "@" calls BLAS through SciPy, and the
+# core needs nothing beyond NumPy and Numba.
+#: the edge list of a segment taken as a polytope: its two ends joined
+_ONE_EDGE = np.array([[0, 1]], np.int64)
 
 
 @njit(cache=True, inline="always")
@@ -153,17 +166,17 @@ def closest_segment_segment(
     d1 = p1 - p0
     d2 = q1 - q0
     r = p0 - q0
-    a = d1 @ d1
-    e = d2 @ d2
-    f = d2 @ r
+    a = _dot(d1, d1)
+    e = _dot(d2, d2)
+    f = _dot(d2, r)
     if a == 0.0 and e == 0.0:
         return 0.0, 0.0
     if a == 0.0:
         return 0.0, min(max(f / e, 0.0), 1.0)
-    c = d1 @ r
+    c = _dot(d1, r)
     if e == 0.0:
         return min(max(-c / a, 0.0), 1.0), 0.0
-    b = d1 @ d2
+    b = _dot(d1, d2)
     denominator = a * e - b * b  # |d1 x d2|^2 >= 0
     s = (
         min(max((b * f - c * e) / denominator, 0.0), 1.0)
@@ -193,13 +206,13 @@ def contact_capsule_capsule(
     at the overlap's ends (ids 0 and 1), on the common normal."""
     da = a1 - a0
     db = b1 - b0
-    la2 = da @ da
-    lb2 = db @ db
+    la2 = _dot(da, da)
+    lb2 = _dot(db, db)
     cross = np.cross(da, db)
-    if la2 > 0.0 and lb2 > 0.0 and cross @ cross <= _PARALLEL * la2 * lb2:
+    if la2 > 0.0 and lb2 > 0.0 and _dot(cross, cross) <= _PARALLEL * la2 * lb2:
         # B's ends along A, as fractions of A
-        u0 = ((b0 - a0) @ da) / la2
-        u1 = ((b1 - a0) @ da) / la2
+        u0 = _dot(b0 - a0, da) / la2
+        u1 = _dot(b1 - a0, da) / la2
         lo = max(min(u0, u1), 0.0)
         hi = min(max(u0, u1), 1.0)
         if hi > lo:
@@ -210,7 +223,7 @@ def contact_capsule_capsule(
             for j, u in enumerate((lo, hi)):
                 p = a0 + u * da
                 q = b0 + _on_segment(b0, b1, p[0], p[1], p[2]) * db
-                gap = (q - p) @ n
+                gap = _dot(q - p, n)
                 sep = gap - ra - rb
                 if sep > margin:
                     continue
@@ -228,8 +241,8 @@ def contact_capsule_capsule(
 def _normal_of(a0: np.ndarray, da: np.ndarray, la2: float, b0: np.ndarray, out: np.ndarray) -> None:
     """The unit normal from line A to a parallel line through b0 (up when they coincide)."""
     r = b0 - a0
-    r = r - ((r @ da) / la2) * da
-    length = math.sqrt(r @ r)
+    r = r - (_dot(r, da) / la2) * da
+    length = math.sqrt(_dot(r, r))
     if length > 0.0:
         out[0], out[1], out[2] = r[0] / length, r[1] / length, r[2] / length
     else:
@@ -244,27 +257,7 @@ def contact_segments_plane(
     """A sphere (``ends`` (1, 3)) or a capsule (``ends`` (2, 3)) of ``radius`` [m] against the
     plane ``normal . x = offset`` (B, solid below): each end within ``margin`` of the plane is
     a point (id: the end's index). The normal from A to B is ``-normal``."""
-    out[0], out[1], out[2] = -normal[0], -normal[1], -normal[2]
-    count = 0
-    for j in range(ends.shape[0]):
-        height = ends[j] @ normal - offset
-        sep = height - radius
-        if sep > margin:
-            continue
-        # midway between the ball's lowest point (height - radius) and the plane (0)
-        h = 0.5 * (height + radius)
-        _point(
-            out,
-            ids,
-            count,
-            ends[j, 0] - h * normal[0],
-            ends[j, 1] - h * normal[1],
-            ends[j, 2] - h * normal[2],
-            sep,
-            j,
-        )
-        count += 1
-    return count
+    return _core_plane(ends, radius, normal, offset, margin, out, ids)
 
 
 @njit(cache=True)
@@ -280,13 +273,23 @@ def contact_hull_plane(
     triangle (the greatest distance outside its edges) - so a face resting on the plane keeps
     its outline, and the deepest point is always kept. Ids are the corners' indices.
     """
+    return _core_plane(vertices, 0.0, normal, offset, margin, out, ids)
+
+
+@njit(cache=True)
+def _core_plane(
+    core: np.ndarray, radius: float, normal: np.ndarray, offset: float, margin: float,
+    out: np.ndarray, ids: np.ndarray,
+) -> int:  # fmt: skip
+    """A rounded core's corners ``core`` (k, 3) within ``margin`` of the plane, at most four
+    (:func:`reduce_points`), each midway between the plane and its ball's lowest point."""
     out[0], out[1], out[2] = -normal[0], -normal[1], -normal[2]
-    k = vertices.shape[0]
+    k = core.shape[0]
     near = np.empty(k, np.int64)
     sep = np.empty(k)
     count = 0
     for i in range(k):
-        s = vertices[i] @ normal - offset
+        s = _dot(core[i], normal) - offset - radius
         if s <= margin:
             near[count] = i
             sep[count] = s
@@ -295,21 +298,21 @@ def contact_hull_plane(
         return 0
     points = np.empty((count, 3))
     for j in range(count):
-        points[j] = vertices[near[j]]
+        points[j] = core[near[j]]
     keep = np.empty(MAX_POINTS, np.int64)
     kept = reduce_points(points, sep, count, normal, keep)
     for j in range(kept):
         i = near[keep[j]]
-        s = sep[keep[j]]
-        h = 0.5 * s  # midway between the corner and the plane
+        # midway between the ball's lowest point (height - radius) and the plane (0)
+        h = 0.5 * (sep[keep[j]] + 2.0 * radius)
         _point(
             out,
             ids,
             j,
-            vertices[i, 0] - h * normal[0],
-            vertices[i, 1] - h * normal[1],
-            vertices[i, 2] - h * normal[2],
-            s,
+            core[i, 0] - h * normal[0],
+            core[i, 1] - h * normal[1],
+            core[i, 2] - h * normal[2],
+            sep[keep[j]],
             i,
         )
     return kept
@@ -656,7 +659,6 @@ def contact_hull_hull(
     if sep_b > margin:
         return 0
     sep_e, edge_a, edge_b, ax, ay, az = _edge_separation(va, ea, vb, eb)
-    axis_e = np.array([ax, ay, az])
     if sep_e > margin:
         return 0
     tie = 0.1 * slop
@@ -669,7 +671,7 @@ def contact_hull_hull(
         p = a0 + s * (a1 - a0)
         q = b0 + t * (b1 - b0)
         m = 0.5 * (p + q)
-        out[0], out[1], out[2] = axis_e[0], axis_e[1], axis_e[2]
+        out[0], out[1], out[2] = ax, ay, az
         _point(out, ids, 0, m[0], m[1], m[2], sep_e, (1 << 50) | (edge_a << 20) | edge_b)
         return 1
     if sep_a + tie >= sep_b:
@@ -882,33 +884,11 @@ def contact_hull_capsule(
         if h > sep_f:
             sep_f = h
             face = f
-    # edge axes, oriented from A to the segment
-    centre = np.zeros(3)
-    for i in range(va.shape[0]):
-        centre += va[i]
-    centre /= va.shape[0]
-    sep_e = -np.inf
-    edge = -1
-    axis_e = np.zeros(3)
-    for e in range(ea.shape[0]):
-        w = va[ea[e, 1]] - va[ea[e, 0]]
-        axis = np.cross(u, w)
-        length2 = _dot(axis, axis)
-        if length2 <= _PARALLEL * _dot(u, u) * _dot(w, w):
-            continue
-        axis /= math.sqrt(length2)
-        if _dot(axis, va[ea[e, 0]] - centre) < 0.0:
-            axis = -axis
-        high = -np.inf
-        for k in range(va.shape[0]):
-            high = max(high, _dot(axis, va[k]))
-        if _dot(axis, va[ea[e, 0]]) < high - 1e-12 * (1.0 + abs(high)):
-            continue  # not a support edge
-        s = min(_dot(axis, b0), _dot(axis, b1)) - high
-        if s > sep_e:
-            sep_e = s
-            edge = e
-            axis_e = axis
+    # edge axes: the segment is a polytope of one edge
+    ends = np.empty((2, 3))
+    ends[0] = b0
+    ends[1] = b1
+    sep_e, edge, _, ax, ay, az = _edge_separation(va, ea, ends, _ONE_EDGE)
     if max(sep_f, sep_e) - rb > margin:
         return 0
     if max(sep_f, sep_e) > 0.0:
@@ -953,8 +933,8 @@ def contact_hull_capsule(
         s, t = closest_segment_segment(b0, b1, p0, p1)
         p = b0 + s * u
         q = p0 + t * (p1 - p0)
-        m = 0.5 * (p + q) - 0.5 * rb * axis_e
-        out[0], out[1], out[2] = axis_e[0], axis_e[1], axis_e[2]
+        m = 0.5 * (p + q) - 0.5 * rb * np.array([ax, ay, az])
+        out[0], out[1], out[2] = ax, ay, az
         _point(out, ids, 0, m[0], m[1], m[2], sep_e - rb, (1 << 50) | edge)
         return 1
     return _segment_on_face(va, na, sa, ca, cora, face, b0, b1, rb, margin, out, ids)

@@ -45,7 +45,13 @@ def _skew_sandwich(inv_inertia: np.ndarray, r: np.ndarray, k: np.ndarray) -> Non
     s[0, 1], s[0, 2] = -r[2], r[1]
     s[1, 0], s[1, 2] = r[2], -r[0]
     s[2, 0], s[2, 1] = -r[1], r[0]
-    k -= s @ inv_inertia @ s
+    for i in range(3):
+        for j in range(3):
+            total = 0.0
+            for a in range(3):
+                for b in range(3):
+                    total += s[i, a] * inv_inertia[a, b] * s[b, j]
+            k[i, j] -= total
 
 
 @njit(cache=True)
@@ -81,39 +87,40 @@ def point_impulse(u: np.ndarray, n: np.ndarray, k: np.ndarray, e: float, mu: flo
     (3,) float64
         Zero when the points are not approaching (``u . n >= 0``).
     """
-    un = u @ n
+    un = _dot(u, n)
     if un >= 0.0:
         return np.zeros(3)
     ut = u - un * n
     target = -(1.0 + e) * un  # the normal velocity change Newton asks for
     if mu > 0.0:
         stick = _solve3(k, target * n - ut)
-        pn = stick @ n
+        pn = _dot(stick, n)
         pt = stick - pn * n
-        if pn >= 0.0 and math.sqrt(pt @ pt) <= mu * pn and _gain(stick, u, k) <= 0.0:
+        if pn >= 0.0 and math.sqrt(_dot(pt, pt)) <= mu * pn and _gain(stick, u, k) <= 0.0:
             return stick
         # against the slip; with no slip, against the way the sticking impulse would push
-        slip = ut if ut @ ut > 0.0 else -pt
-        size = math.sqrt(slip @ slip)
+        slip = ut if _dot(ut, ut) > 0.0 else -pt
+        size = math.sqrt(_dot(slip, slip))
         t = slip / size if size > 0.0 else slip
         direction = n - mu * t
-        denominator = n @ (k @ direction)
+        denominator = _dot(n, _times(k, direction))
         if denominator > 0.0:
             slide: np.ndarray = (target / denominator) * direction
             if _gain(slide, u, k) <= 0.0:
                 return slide
-    jn = target / (n @ (k @ n))
+    jn = target / _dot(n, _times(k, n))
     p: np.ndarray = jn * n
     if mu == 0.0:
         return p
     # for that normal impulse, the tangent impulse that removes the most energy (stops the
     # slip as far as the tangent block of K allows), clamped to the cone
     t1, t2 = _tangents(n)
-    r1 = -(t1 @ (u + k @ p))
-    r2 = -(t2 @ (u + k @ p))
-    a11 = t1 @ (k @ t1)
-    a12 = t1 @ (k @ t2)
-    a22 = t2 @ (k @ t2)
+    after = u + _times(k, p)
+    r1 = -_dot(t1, after)
+    r2 = -_dot(t2, after)
+    a11 = _dot(t1, _times(k, t1))
+    a12 = _dot(t1, _times(k, t2))
+    a22 = _dot(t2, _times(k, t2))
     det = a11 * a22 - a12 * a12
     x1 = (a22 * r1 - a12 * r2) / det
     x2 = (a11 * r2 - a12 * r1) / det
@@ -147,8 +154,25 @@ def _solve3(k: np.ndarray, b: np.ndarray) -> np.ndarray:
 @njit(cache=True, inline="always")
 def _gain(p: np.ndarray, u: np.ndarray, k: np.ndarray) -> float:
     """Kinetic energy an impulse ``p`` adds [J]: ``p . u + p . K p / 2``."""
-    gain: float = p @ u + 0.5 * (p @ (k @ p))
+    gain: float = _dot(p, u) + 0.5 * _dot(p, _times(k, p))
     return gain
+
+
+@njit(cache=True, inline="always")
+def _dot(u: np.ndarray, v: np.ndarray) -> float:
+    """u . v of two (3,) vectors (not "@": Numba's "@" calls BLAS through SciPy, and the
+    core needs nothing beyond NumPy and Numba)."""
+    total: float = u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+    return total
+
+
+@njit(cache=True, inline="always")
+def _times(k: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``K v`` for a (3, 3) matrix and a (3,) vector."""
+    out = np.empty(3)
+    for i in range(3):
+        out[i] = k[i, 0] * v[0] + k[i, 1] * v[1] + k[i, 2] * v[2]
+    return out
 
 
 @njit(cache=True)
@@ -156,5 +180,5 @@ def _tangents(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit vectors completing ``n`` to a right-handed frame."""
     a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     t1 = np.cross(n, a)
-    t1 /= math.sqrt(t1 @ t1)
+    t1 /= math.sqrt(_dot(t1, t1))
     return t1, np.cross(n, t1)

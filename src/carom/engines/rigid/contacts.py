@@ -29,22 +29,21 @@ F_NY = 1
 F_MU = 2  # friction coefficient [-]
 F_E = 3  # restitution [-]
 POINT0 = 4  # first point's columns; a point has POINT_FLOATS of them
-POINT_FLOATS = 14
+POINT_FLOATS = 13
 # a point's columns, from its offset
 P_RAX = 0  # anchor on A [m]
 P_RAY = 1
 P_RBX = 2  # anchor on B [m]
 P_RBY = 3
 P_BASE = 4  # separation less (r_A - r_B) . n at the step's start [m]
-P_NMASS = 5  # effective mass along n [kg]
-P_TMASS = 6  # effective mass along the tangent [kg]
-P_JN = 7  # accumulated normal impulse [N s]
-P_JT = 8  # accumulated tangent impulse [N s]
-P_TOTAL = 9  # normal impulse applied over the step [N s]
-P_VREL = 10  # normal relative speed at the step's start [m/s] (negative: approaching)
-P_SEP = 11  # separation at the step's start [m]
-P_X = 12  # the point [m]
-P_Y = 13
+P_NMASS = 5  # effective mass along n [kg] (the solver's, for the restitution pass)
+P_JN = 6  # accumulated normal impulse [N s]
+P_JT = 7  # accumulated tangent impulse [N s]
+P_TOTAL = 8  # normal impulse applied over the step [N s]
+P_VREL = 9  # normal relative speed at the step's start [m/s] (negative: approaching)
+P_SEP = 10  # separation at the step's start [m]
+P_X = 11  # the point [m]
+P_Y = 12
 CONTACT_FLOATS = POINT0 + 2 * POINT_FLOATS
 
 # int columns of a contact row
