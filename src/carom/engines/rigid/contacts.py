@@ -21,7 +21,14 @@ from numba import njit
 from carom.engines.rigid.motion import relative_velocity
 from carom.geometry.manifold2d import collide
 
-__all__ = ["CONTACT_FLOATS", "CONTACT_INTS", "find_cached", "narrow_phase", "point_offset"]
+__all__ = [
+    "CONTACT_FLOATS",
+    "CONTACT_INTS",
+    "extremes",
+    "find_cached",
+    "narrow_phase",
+    "point_offset",
+]
 
 # float columns of a contact row
 F_NX = 0
@@ -208,6 +215,19 @@ def narrow_phase(
                         cf[m, o + P_JT] = cache_impulses[row, 2 * q + 1]
         m += 1
     return m
+
+
+@njit(cache=True)
+def extremes(cf: np.ndarray, ci: np.ndarray, nc: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each contact's least separation [m] and least normal relative speed [m/s] over its
+    points, (nc,) each (:func:`carom.engines.rigid.islands.plan`)."""
+    closest = np.full(nc, np.inf)
+    closing = np.full(nc, np.inf)
+    for m in range(nc):
+        for j in range(ci[m, I_COUNT]):
+            closest[m] = min(closest[m], cf[m, point_offset(j) + P_SEP])
+            closing[m] = min(closing[m], cf[m, point_offset(j) + P_VREL])
+    return closest, closing
 
 
 @njit(cache=True)

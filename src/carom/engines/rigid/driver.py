@@ -348,19 +348,22 @@ class RigidEngine:
         dt = self.dt
         nc = self._contacts()
         if st.sleep and islands.wake(
-            self._ci, nc, m.kind, s.awake, s.v, s.omega, s.clock, s.island
+            self._ci, nc, m.kind, s.awake, self._moving(), s.clock, s.island
         ):
             nc = self._contacts()
         isolated = np.zeros(max(nc, 1), np.int64)
+        closest, closing = contacts.extremes(self._cf, self._ci, nc)
         n_iso = islands.plan(
             self._ci,
-            self._cf,
             nc,
+            closest,
+            closing,
             m.kind,
             s.awake,
             st.exact_impacts,
             0.1 * st.linear_slop,
             st.restitution_threshold,
+            np.inf,
             self._parent,
             self._role,
             isolated,
@@ -451,25 +454,35 @@ class RigidEngine:
             s.cache_impulses,
         )
         if st.sleep:
-            self._energy_lost += islands.settle(
-                self._ci,
-                nc,
-                m.kind,
-                self._parent,
-                s.awake,
-                s.v,
-                s.omega,
-                m.mass,
-                m.inertia,
-                m.reach,
-                s.clock,
-                s.island,
-                dt,
-                st.sleep_speed,
-                st.sleep_time,
-            )
+            self._settle(nc)
         self.n_contacts = nc
         self.steps += 1
+
+    def _moving(self) -> NDArray[np.bool_]:
+        """Kinematic bodies in motion (N,)."""
+        s = self.state
+        moving: NDArray[np.bool_] = self._kinematic & (
+            (s.v[:, 0] != 0.0) | (s.v[:, 1] != 0.0) | (s.omega != 0.0)
+        )
+        return moving
+
+    def _settle(self, nc: int) -> None:
+        """Stage 8: sleep the islands at rest (:func:`.islands.settle`); their bodies stop and
+        the kinetic energy they kept goes to the ledger as lost."""
+        m, s, st = self.model, self.state, self.settings
+        before = s.awake.copy()
+        fastest = np.sqrt(s.v[:, 0] ** 2 + s.v[:, 1] ** 2) + np.abs(s.omega) * m.reach
+        islands.settle(
+            self._ci, nc, m.kind, self._parent, s.awake, fastest, self._moving(), s.clock,
+            s.island, self.dt, st.sleep_speed, st.sleep_time,
+        )  # fmt: skip
+        taken = 0.0
+        for i in np.flatnonzero(before & ~s.awake).tolist():
+            vx, vy, w = float(s.v[i, 0]), float(s.v[i, 1]), float(s.omega[i])
+            taken += 0.5 * (m.mass[i] * (vx * vx + vy * vy) + m.inertia[i] * (w * w))
+            s.v[i] = 0.0
+            s.omega[i] = 0.0
+        self._energy_lost += taken
 
     def _energy(self, rows: NDArray[np.int64]) -> float:
         """Kinetic and gravitational potential energy of the dynamic bodies among ``rows``

@@ -16,14 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from carom.engines.rigid.contacts import (
-    I_BODY_A,
-    I_BODY_B,
-    I_COUNT,
-    P_SEP,
-    P_VREL,
-    point_offset,
-)
+from carom.engines.rigid.contacts import I_BODY_A, I_BODY_B
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 
 __all__ = ["KIND_DYNAMIC", "KIND_KINEMATIC", "KIND_STATIC", "plan", "settle", "wake"]
@@ -46,13 +39,15 @@ def _root(parent: np.ndarray, i: int) -> int:
 @njit(cache=True)
 def plan(
     ci: np.ndarray,
-    cf: np.ndarray,
     nc: int,
+    closest: np.ndarray,
+    closing: np.ndarray,
     kind: np.ndarray,
     awake: np.ndarray,
     exact: bool,
     apart: float,
     fast: float,
+    leaving: float,
     parent: np.ndarray,
     role: np.ndarray,
     isolated: np.ndarray,
@@ -62,7 +57,10 @@ def plan(
 
     Parameters
     ----------
-    ci, cf : contact rows; ``nc`` of them.
+    ci : contact rows (their bodies in columns ``I_BODY_A``, ``I_BODY_B``); ``nc`` of them.
+    closest, closing : (nc,) float64
+        Each contact's least separation [m] and least normal relative speed [m/s] over its
+        points at the start of the step (the 2D and 3D engines lay their rows out apart).
     kind : (N,) int64
         KIND_DYNAMIC, KIND_STATIC or KIND_KINEMATIC.
     awake : (N,) bool
@@ -75,6 +73,9 @@ def plan(
     fast : float
         So is a touching contact closing faster than this [m/s] (the restitution threshold):
         the impact happens at the very start of the step.
+    leaving : float
+        And so is a touching contact whose every point separates faster than this [m/s]: the
+        pair has just bounced, and flies apart exactly (inf: never).
     parent : (N,) int64
         Written: each body's island root (itself for non-dynamic bodies).
     role : (N,) int64
@@ -127,12 +128,7 @@ def plan(
         b = ci[m, I_BODY_B]
         if kind[a] == KIND_KINEMATIC or kind[b] == KIND_KINEMATIC:
             continue
-        closest = np.inf
-        closing = np.inf
-        for j in range(ci[m, I_COUNT]):
-            closest = min(closest, cf[m, point_offset(j) + P_SEP])
-            closing = min(closing, cf[m, point_offset(j) + P_VREL])
-        if closest <= apart and closing >= -fast:
+        if closest[m] <= apart and -fast <= closing[m] <= leaving:
             continue
         isolated[count] = m
         count += 1
@@ -148,50 +144,42 @@ def settle(
     kind: np.ndarray,
     parent: np.ndarray,
     awake: np.ndarray,
-    v: np.ndarray,
-    omega: np.ndarray,
-    mass: np.ndarray,
-    inertia: np.ndarray,
-    reach: np.ndarray,
+    fastest: np.ndarray,
+    moving: np.ndarray,
     clock: np.ndarray,
     island: np.ndarray,
     dt: float,
     speed: float,
     time: float,
-) -> float:
+) -> None:
     """Run the sleep clocks and put to sleep every island that stayed slow for ``time`` [s]:
-    its bodies stop (velocity and spin zero, as Box2D does; they wake at rest) and
-    ``island[i]`` is set to the island's root. Return the kinetic energy so taken [J]."""
+    ``awake[i]`` goes false and ``island[i]`` is set to the island's root (the caller stops
+    those bodies, as Box2D does: they wake at rest).
+
+    ``fastest`` (N,) is the speed of each body's fastest point [m/s] (``|v| + |w| reach``);
+    ``moving`` (N,) marks kinematic bodies in motion: an island touching one stays awake.
+    """
     n = kind.shape[0]
     slowest = np.full(n, np.inf)
     for i in range(n):
         if kind[i] != KIND_DYNAMIC or not awake[i]:
             continue
-        fast = np.sqrt(v[i, 0] ** 2 + v[i, 1] ** 2) + abs(omega[i]) * reach[i]
-        if fast > speed:
+        if fastest[i] > speed:
             clock[i] = 0.0
         else:
             clock[i] += dt
         r = parent[i]
         slowest[r] = min(slowest[r], clock[i])
-    # an island touching a moving kinematic body stays awake
     for m in range(nc):
         a = ci[m, I_BODY_A]
         b = ci[m, I_BODY_B]
         for body, other in ((a, b), (b, a)):
-            moving = v[other, 0] != 0.0 or v[other, 1] != 0.0 or omega[other] != 0.0
-            if kind[body] == KIND_DYNAMIC and kind[other] == KIND_KINEMATIC and moving:
+            if kind[body] == KIND_DYNAMIC and kind[other] == KIND_KINEMATIC and moving[other]:
                 slowest[parent[body]] = 0.0
-    taken = 0.0
     for i in range(n):
         if kind[i] == KIND_DYNAMIC and awake[i] and slowest[parent[i]] >= time:
             awake[i] = False
             island[i] = parent[i]
-            taken += 0.5 * (mass[i] * (v[i, 0] ** 2 + v[i, 1] ** 2) + inertia[i] * omega[i] ** 2)
-            v[i, 0] = 0.0
-            v[i, 1] = 0.0
-            omega[i] = 0.0
-    return taken
 
 
 @njit(cache=True)
@@ -200,13 +188,13 @@ def wake(
     nc: int,
     kind: np.ndarray,
     awake: np.ndarray,
-    v: np.ndarray,
-    omega: np.ndarray,
+    moving: np.ndarray,
     clock: np.ndarray,
     island: np.ndarray,
 ) -> int:
     """Wake every sleeping island that a contact joins to an awake body or a moving
-    kinematic one; return how many bodies woke (the caller then finds contacts again)."""
+    kinematic one (``moving``, (N,) bool); return how many bodies woke (the caller then finds
+    contacts again)."""
     n = kind.shape[0]
     rouse = np.zeros(n, np.bool_)
     any_island = False
@@ -216,11 +204,9 @@ def wake(
         for body, other in ((a, b), (b, a)):
             if kind[body] != KIND_DYNAMIC or awake[body]:
                 continue
-            moving = (kind[other] == KIND_DYNAMIC and awake[other]) or (
-                kind[other] == KIND_KINEMATIC
-                and (v[other, 0] != 0.0 or v[other, 1] != 0.0 or omega[other] != 0.0)
-            )
-            if moving:
+            if (kind[other] == KIND_DYNAMIC and awake[other]) or (
+                kind[other] == KIND_KINEMATIC and moving[other]
+            ):
                 rouse[island[body]] = True
                 any_island = True
     if not any_island:
