@@ -246,9 +246,9 @@ def test_bad_starts_are_refused_when_run(setup, pattern: str) -> None:  # type: 
     assert world.time == 0.0
 
 
-def test_rigid_bodies_are_2d_and_walled_or_open() -> None:
-    with pytest.raises(CaromError, match=r"add_body takes 2D shapes"):
-        carom.World(3, [1.0, 1.0, 1.0]).add_body(Box(0.1, 0.1), [0.5, 0.5])
+def test_rigid_bodies_match_the_worlds_dimension_and_are_walled_or_open() -> None:
+    with pytest.raises(CaromError, match=r"Box is a 2D shape .* this world is 3D"):
+        carom.World(3, [1.0, 1.0, 1.0]).add_body(Box(0.1, 0.1), [0.5, 0.5, 0.5])
     periodic = carom.World(2, [1.0, 1.0], "periodic")
     periodic.add_body(Box(0.1, 0.1), [0.5, 0.5])
     with pytest.raises(CaromError, match=r"no periodic boundary"):

@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.shapes import SHAPE_CODES, ConvexPiece
+from carom.shapes3d import ConvexPiece3D
 
 __all__ = [
     "BODY_KINDS",
@@ -26,6 +27,7 @@ __all__ = [
     "KIND_STATIC",
     "PIECE_ARRAYS",
     "Bodies",
+    "Pieces",
     "identity_orientations",
     "pieces_from_arrays",
     "pieces_to_arrays",
@@ -38,37 +40,58 @@ BODY_KINDS = {"dynamic": KIND_DYNAMIC, "static": KIND_STATIC, "kinematic": KIND_
 
 
 #: the flat arrays that hold every body's pieces (checkpoints, trajectories)
-PIECE_ARRAYS = ("owner", "radius", "corners", "vertices")
+PIECE_ARRAYS = ("owner", "radius", "corners", "vertices", "faces", "triangles")
+
+#: a body's pieces: rounded convex polygons in 2D, rounded convex solids in 3D
+Pieces = tuple[ConvexPiece, ...] | tuple[ConvexPiece3D, ...]
 
 
-def pieces_to_arrays(pieces: list[tuple[ConvexPiece, ...]]) -> dict[str, NDArray[Any]]:
+def pieces_to_arrays(pieces: list[Pieces], dim: int = 2) -> dict[str, NDArray[Any]]:
     """Every body's convex pieces as flat arrays: per piece its ``owner`` body (P,) int64,
-    ``radius`` (P,) [m] and number of ``corners`` (P,) int64; all ``vertices`` (V, 2) [m] in
-    order, in the bodies' frames (spheres have none)."""
-    owner, radius, corners, vertices = [], [], [], [np.zeros((0, 2))]
+    ``radius`` (P,) [m], number of ``corners`` (P,) int64 and of triangles, ``faces`` (P,)
+    int64 (0 in 2D); all ``vertices`` (V, dim) [m] in order, in the bodies' frames (spheres
+    of the event-driven engine have none), and all ``triangles`` (T, 3) int64, each piece's
+    counting from its own first corner."""
+    owner, radius, corners, faces = [], [], [], []
+    vertices, triangles = [np.zeros((0, dim))], [np.zeros((0, 3), np.int64)]
     for i, body in enumerate(pieces):
         for piece in body:
             owner.append(i)
             radius.append(piece.radius)
             corners.append(piece.vertices.shape[0])
             vertices.append(piece.vertices)
+            own = piece.triangles if isinstance(piece, ConvexPiece3D) else triangles[0]
+            faces.append(own.shape[0])
+            triangles.append(np.asarray(own, np.int64).reshape(-1, 3))
     return {
         "owner": np.array(owner, np.int64),
         "radius": np.array(radius, np.float64),
         "corners": np.array(corners, np.int64),
         "vertices": np.concatenate(vertices),
+        "faces": np.array(faces, np.int64),
+        "triangles": np.concatenate(triangles),
     }
 
 
-def pieces_from_arrays(arrays: Mapping[str, Any], n: int) -> list[tuple[ConvexPiece, ...]]:
+def pieces_from_arrays(arrays: Mapping[str, Any], n: int) -> list[Pieces]:
     """The ``n`` bodies' pieces from the arrays :func:`pieces_to_arrays` wrote."""
-    bodies: list[list[ConvexPiece]] = [[] for _ in range(n)]
+    bodies: list[list[Any]] = [[] for _ in range(n)]
     vertices = np.asarray(arrays["vertices"], np.float64)
+    three = vertices.ndim == 2 and vertices.shape[1] == 3 and "triangles" in arrays
+    triangles = np.asarray(arrays["triangles"], np.int64) if three else None
     row = 0
-    for owner, radius, count in zip(
-        arrays["owner"], arrays["radius"], arrays["corners"], strict=True
+    tri = 0
+    for k, (owner, radius, count) in enumerate(
+        zip(arrays["owner"], arrays["radius"], arrays["corners"], strict=True)
     ):
-        bodies[int(owner)].append(ConvexPiece(vertices[row : row + count], float(radius)))
+        corners = vertices[row : row + count]
+        if triangles is not None:
+            faces = int(arrays["faces"][k])
+            piece: Any = ConvexPiece3D(corners, triangles[tri : tri + faces], float(radius))
+            tri += faces
+        else:
+            piece = ConvexPiece(corners, float(radius))
+        bodies[int(owner)].append(piece)
         row += int(count)
     return [tuple(body) for body in bodies]
 
@@ -103,13 +126,18 @@ class Bodies:
     mass : (N,) float64
         [kg]; inf for static and kinematic bodies.
     inertia_factor : (N,) float64
-        ``q`` in ``I = q m a^2`` [-] (other shapes: their exact inertia over ``m a^2``).
+        ``q`` in ``I = q m a^2`` [-] (other shapes: their exact inertia over ``m a^2``; 3D
+        bodies: a third of the trace of their inertia tensor over ``m a^2``).
+    inertia_tensor : (N, 3, 3) float64
+        3D: the inertia tensor about the centre of mass in the body's frame [kg m^2] (inf for
+        static and kinematic bodies); 2D: unused, zero.
     material : (N,) int64
         Index of the body's material in the World's list.
     kind : (N,) int8
         ``KIND_DYNAMIC``, ``KIND_STATIC`` or ``KIND_KINEMATIC``.
-    pieces : list of N tuples of ConvexPiece
-        Each body's pieces in its frame, centred on its centre of mass [m] (spheres: none).
+    pieces : list of N tuples of ConvexPiece (2D) or ConvexPiece3D (3D)
+        Each body's pieces in its frame, centred on its centre of mass [m] (spheres of the
+        event-driven engine: none).
     """
 
     def __init__(self, dim: int) -> None:
@@ -122,9 +150,10 @@ class Bodies:
         self.radius = np.zeros(0)
         self.mass = np.zeros(0)
         self.inertia_factor = np.zeros(0)
+        self.inertia_tensor = np.zeros((0, 3, 3))
         self.material = np.zeros(0, np.int64)
         self.kind = np.zeros(0, np.int8)
-        self.pieces: list[tuple[ConvexPiece, ...]] = []
+        self.pieces: list[Pieces] = []
 
     @property
     def n(self) -> int:
@@ -169,6 +198,12 @@ class Bodies:
         self.radius = np.concatenate([self.radius, radius])
         self.mass = np.concatenate([self.mass, mass])
         self.inertia_factor = np.concatenate([self.inertia_factor, np.full(n, inertia_factor)])
+        tensor = np.zeros((n, 3, 3))
+        if self.dim == 3:
+            with np.errstate(invalid="ignore"):  # static spheres: inf times 0 off the diagonal
+                moment = np.where(np.isfinite(mass), inertia_factor * mass * radius**2, np.inf)
+            tensor[:, [0, 1, 2], [0, 1, 2]] = moment[:, None]
+        self.inertia_tensor = np.concatenate([self.inertia_tensor, tensor])
         self.material = np.concatenate([self.material, np.full(n, material, np.int64)])
         kind = np.where(np.isfinite(mass), KIND_DYNAMIC, KIND_STATIC).astype(np.int8)
         self.kind = np.concatenate([self.kind, kind])
@@ -179,33 +214,46 @@ class Bodies:
         self,
         position: FloatArray,
         velocity: FloatArray,
-        angle: FloatArray,
+        orientation: FloatArray,
         angular_velocity: FloatArray,
-        pieces: tuple[ConvexPiece, ...],
+        pieces: Pieces,
         shape: int,
         mass: float,
-        inertia: float,
+        inertia: float | FloatArray,
         kind: int,
         material: int,
     ) -> NDArray[np.int64]:
-        """Add n 2D bodies of one shape (checked by the caller): centres of mass ``position``
-        (n, 2) [m], velocities (n, 2) [m/s], ``angle`` and ``angular_velocity`` (n,) [rad],
-        [rad/s]; ``pieces`` about the centre of mass; infinite ``mass`` and ``inertia``
-        unless dynamic. Return their indices."""
+        """Add n bodies of one shape (checked by the caller): centres of mass ``position``
+        (n, d) [m], velocities (n, d) [m/s]; in 2D ``orientation`` and ``angular_velocity``
+        (n,) [rad], [rad/s] and a moment ``inertia`` [kg m^2]; in 3D quaternions (n, 4),
+        angular velocities (n, 3) [rad/s] and the body-frame tensor ``inertia`` (3, 3);
+        ``pieces`` about the centre of mass; infinite ``mass`` and ``inertia`` unless
+        dynamic. Return their indices."""
         n = position.shape[0]
         start = self.n
-        reach = max(piece.reach for piece in pieces)
-        w = np.zeros((n, 3))
-        w[:, 2] = angular_velocity
+        reach = max(piece.reach for piece in pieces) if pieces else 0.0
+        tensor = np.zeros((n, 3, 3))
+        if self.dim == 2:
+            w = np.zeros((n, 3))
+            w[:, 2] = angular_velocity
+            orient = orientation.reshape(n, 1)
+            moment = float(np.asarray(inertia))
+        else:
+            w = angular_velocity.reshape(n, 3)
+            orient = orientation.reshape(n, 4)
+            full = np.asarray(inertia, float) * np.ones((3, 3))
+            tensor[:] = full
+            moment = float(np.trace(full)) / 3.0
         self.position = np.concatenate([self.position, position])
         self.velocity = np.concatenate([self.velocity, velocity])
-        self.orientation = np.concatenate([self.orientation, angle.reshape(n, 1)])
+        self.orientation = np.concatenate([self.orientation, orient])
         self.angular_velocity = np.concatenate([self.angular_velocity, w])
         self.shape = np.concatenate([self.shape, np.full(n, shape, np.int8)])
         self.radius = np.concatenate([self.radius, np.full(n, reach)])
         self.mass = np.concatenate([self.mass, np.full(n, mass)])
-        q = inertia / (mass * reach**2) if math.isfinite(mass) else 0.0
+        q = moment / (mass * reach**2) if math.isfinite(mass) and reach > 0.0 else 0.0
         self.inertia_factor = np.concatenate([self.inertia_factor, np.full(n, q)])
+        self.inertia_tensor = np.concatenate([self.inertia_tensor, tensor])
         self.material = np.concatenate([self.material, np.full(n, material, np.int64)])
         self.kind = np.concatenate([self.kind, np.full(n, kind, np.int8)])
         self.pieces.extend(pieces for _ in range(n))

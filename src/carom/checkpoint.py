@@ -32,7 +32,7 @@ __all__ = ["FORMAT", "VERSION", "load_world", "save_world"]
 
 FORMAT = "carom-checkpoint"
 #: bumped whenever the layout of the file or of an engine's arrays changes
-VERSION = 7
+VERSION = 8
 BODY_FIELDS = (
     "position",
     "velocity",
@@ -42,6 +42,7 @@ BODY_FIELDS = (
     "radius",
     "mass",
     "inertia_factor",
+    "inertia_tensor",
     "material",
     "kind",
 )
@@ -73,7 +74,8 @@ def save_world(world: World, path: Path, extra: Mapping[str, NDArray[Any]]) -> N
     arrays: dict[str, Any] = {"meta": np.array(json.dumps(meta))}
     for name in BODY_FIELDS:
         arrays[f"body.{name}"] = getattr(world.bodies, name)
-    arrays |= {f"pieces.{k}": v for k, v in pieces_to_arrays(world.bodies.pieces).items()}
+    pieces = pieces_to_arrays(world.bodies.pieces, world.dim)
+    arrays |= {f"pieces.{k}": v for k, v in pieces.items()}
     if engine is not None:
         arrays |= {f"engine.{k}": v for k, v in engine.arrays().items()}
     arrays["log"] = world.collisions
@@ -161,5 +163,5 @@ def _check_version(path: Path, meta: dict[str, Any]) -> None:
             f"version {VERSION}; re-run the simulation with this version, or load it with the "
             f"carom that wrote it"
         )
-    if meta.get("engine") not in (None, "edmd", "rigid"):
+    if meta.get("engine") not in (None, "edmd", "rigid", "rigid3d"):
         raise CaromError(f"checkpoint {path} is of engine {meta['engine']!r}, unknown here")

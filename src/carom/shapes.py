@@ -67,6 +67,9 @@ SHAPE_CODES = {
     "compound": 5,
     "segment": 6,
     "chain": 7,
+    "hull": 8,  # 3D
+    "mesh": 9,  # 3D, static
+    "ball": 10,  # a 3D sphere added as a rigid body (World.add_body), not as an EDMD sphere
 }
 SHAPE_NAMES = {code: name for name, code in SHAPE_CODES.items()}
 

@@ -39,6 +39,9 @@ from carom.engines.rigid.assemble import Partners, assemble
 from carom.engines.rigid.driver import RigidEngine
 from carom.engines.rigid.model import RigidModel, RigidState
 from carom.engines.rigid.settings import RigidSettings
+from carom.engines.rigid3d.assemble import assemble3d
+from carom.engines.rigid3d.driver import RigidEngine3D
+from carom.engines.rigid3d.model import Model3D, State3D
 from carom.errors import CaromError, CaromWarning
 from carom.limits import (
     MAX_BODIES,
@@ -48,8 +51,10 @@ from carom.limits import (
     check_size,
 )
 from carom.materials import COMBINE_RULES, CombineRule, Material, pair_table
+from carom.meshes import Mesh
 from carom.observables import Stats
 from carom.shapes import SHAPE_CODES, Shape2D, check_inertia_factor, default_inertia_factor
+from carom.shapes3d import ConvexPiece3D, Plane, Shape3D, rotation_matrix
 
 __all__ = ["LOG_LIMIT", "Frame", "Material", "World"]
 
@@ -159,7 +164,7 @@ class World:
         self._pair_overrides: dict[tuple[int, int], float] = {}
         self.planes: list[tuple[FloatArray, FloatArray, Material]] = []
         self.bodies = Bodies(self.dim)
-        self._engine: EdmdEngine | RigidEngine | None = None
+        self._engine: EdmdEngine | RigidEngine | RigidEngine3D | None = None
         self._time = 0.0
         self._log: list[NDArray[Any]] = []
         self._logged = 0
@@ -275,33 +280,39 @@ class World:
         *,
         velocity: ArrayLike | None = None,
         angle: float = 0.0,
-        angular_velocity: float = 0.0,
+        orientation: ArrayLike | None = None,
+        angular_velocity: float | ArrayLike = 0.0,
         density: float | None = None,
         mass: float | None = None,
         restitution: float | None = None,
         material: Material | int | None = None,
         kind: Literal["dynamic", "static", "kinematic"] = "dynamic",
     ) -> int:
-        """Add one rigid body of any 2D shape (:mod:`carom.shapes`); return its index.
-        (:meth:`add_bodies` adds many of one shape at once.)
+        """Add one rigid body of any shape; return its index. (:meth:`add_bodies` adds many of
+        one shape at once.)
 
         Parameters
         ----------
-        shape : Shape2D
-            Circle, Capsule, Box, Polygon, Compound; Segment and Chain (static only).
-        position : (2,) array_like
+        shape : Shape2D or Shape3D
+            2D (:mod:`carom.shapes`): Circle, Capsule, Box, Polygon, Compound; Segment and
+            Chain (static only). 3D (:mod:`carom.shapes3d`): Sphere, Capsule, Box, Hull,
+            Compound; :class:`carom.meshes.Mesh` (static only).
+        position : (d,) array_like
             Where the shape's origin goes [m]. The body's position as the World reports it
             (:attr:`positions`, frames) is its centre of mass, which is the origin for every
             shape centred on it (all but a Polygon or Compound drawn off-centre).
-        velocity : (2,) array_like, optional
+        velocity : (d,) array_like, optional
             Of the centre of mass [m/s]; default at rest.
         angle : float, default 0
-            The shape's turn about its origin [rad], anticlockwise.
-        angular_velocity : float, default 0
-            [rad/s], anticlockwise.
+            2D: the shape's turn about its origin [rad], anticlockwise.
+        orientation : (4,) or (3, 3) array_like, optional
+            3D: the shape's turn about its origin, a unit quaternion ``(w, x, y, z)`` or a
+            rotation matrix (shape to world); default unturned.
+        angular_velocity : float or (3,) array_like, default 0
+            [rad/s]: anticlockwise in 2D, a vector in the world frame in 3D.
         density, mass : float, optional
-            [kg/m^2] or [kg], one of them for a dynamic body (default density 1); neither for
-            a static or kinematic body, which is not moved by impacts.
+            [kg/m^2] (2D) or [kg/m^3] (3D), or [kg], one of them for a dynamic body (default
+            density 1); neither for a static or kinematic body, which is not moved by impacts.
         restitution, material
             As for :meth:`add_spheres`; give the material ``friction=`` for Coulomb friction.
         kind : {"dynamic", "static", "kinematic"}, default "dynamic"
@@ -312,7 +323,8 @@ class World:
         Notes
         -----
         A world with a body added here runs the time-stepped rigid-body engine when
-        ``engine="auto"`` (2D only); disks added with :meth:`add_spheres` join it as circles.
+        ``engine="auto"``; spheres (disks) added with :meth:`add_spheres` join it as balls
+        (circles).
         """
         return int(
             self.add_bodies(
@@ -320,6 +332,7 @@ class World:
                 position,
                 velocity,
                 angles=angle,
+                orientations=orientation,
                 angular_velocities=angular_velocity,
                 density=density,
                 mass=mass,
@@ -331,11 +344,12 @@ class World:
 
     def add_bodies(
         self,
-        shape: Shape2D,
+        shape: Shape2D | Shape3D,
         positions: ArrayLike,
         velocities: ArrayLike | None = None,
         *,
         angles: ArrayLike = 0.0,
+        orientations: ArrayLike | None = None,
         angular_velocities: ArrayLike = 0.0,
         density: float | None = None,
         mass: float | None = None,
@@ -343,26 +357,37 @@ class World:
         material: Material | int | None = None,
         kind: Literal["dynamic", "static", "kinematic"] = "dynamic",
     ) -> NDArray[np.int64]:
-        """Add rigid bodies of one 2D shape; return their indices.
+        """Add rigid bodies of one shape; return their indices.
 
         Parameters
         ----------
-        shape : Shape2D
+        shape : Shape2D or Shape3D
             As for :meth:`add_body`.
-        positions : (n, 2) or (2,) array_like
+        positions : (n, d) or (d,) array_like
             Where each body's shape origin goes [m].
-        velocities : (n, 2) or (2,) array_like, optional
+        velocities : (n, d) or (d,) array_like, optional
             [m/s]; default at rest.
-        angles, angular_velocities : float or (n,) array_like
-            [rad] and [rad/s], anticlockwise; default 0.
+        angles : float or (n,) array_like
+            2D: [rad], anticlockwise; default 0.
+        orientations : (n, 4), (4,), (n, 3, 3) or (3, 3) array_like, optional
+            3D: unit quaternions ``(w, x, y, z)`` or rotation matrices; default unturned.
+        angular_velocities : float or (n,) array_like (2D), (n, 3) or (3,) (3D)
+            [rad/s]; default 0.
         density, mass, restitution, material, kind
             As for :meth:`add_body`, the same for every body.
         """
-        if self.dim != 2:
+        if self.dim == 3:
+            return self._add_bodies_3d(
+                shape, positions, velocities, angles, orientations, angular_velocities,
+                density, mass, restitution, material, kind,
+            )  # fmt: skip
+        if isinstance(shape, Shape3D):
             raise CaromError(
-                "add_body takes 2D shapes; 3D rigid bodies are not in carom yet (spheres: "
-                "add_spheres)"
+                f"{type(shape).__name__} is a 3D shape (carom.shapes3d) and this world is 2D; "
+                f"use carom.shapes, or World(3, ...)"
             )
+        if orientations is not None:
+            raise CaromError("orientations= is for 3D bodies; a 2D body takes angles= [rad]")
         if not isinstance(shape, Shape2D):
             raise CaromError(
                 f"shape must be a carom.shapes shape (Circle, Capsule, Box, Polygon, Compound, "
@@ -412,6 +437,115 @@ class World:
             code,
             mat,
         )
+
+    def _add_bodies_3d(
+        self,
+        shape: Shape2D | Shape3D,
+        positions: ArrayLike,
+        velocities: ArrayLike | None,
+        angles: ArrayLike,
+        orientations: ArrayLike | None,
+        angular_velocities: ArrayLike,
+        density: float | None,
+        mass: float | None,
+        restitution: float | None,
+        material: Material | int | None,
+        kind: str,
+    ) -> NDArray[np.int64]:
+        """:meth:`add_bodies` in 3D."""
+        if isinstance(shape, Plane):
+            raise CaromError(
+                "a Plane is static ground: add it with World.add_plane(point, normal) "
+                f"(here point {(shape.offset * np.asarray(shape.normal)).tolist()}, normal "
+                f"{np.asarray(shape.normal).tolist()})"
+            )
+        if isinstance(shape, Shape2D):
+            raise CaromError(
+                f"{type(shape).__name__} is a 2D shape (carom.shapes) and this world is 3D; "
+                f"use carom.shapes3d, or World(2, ...)"
+            )
+        if not isinstance(shape, Shape3D):
+            raise CaromError(
+                f"shape must be a carom.shapes3d shape (Sphere, Capsule, Box, Hull, Compound) "
+                f"or a carom.meshes.Mesh in a 3D world; got {shape!r}"
+            )
+        if np.any(as_float_array("angles", angles) != 0.0):
+            raise CaromError("angles= is for 2D bodies; a 3D body takes orientations=")
+        if kind not in BODY_KINDS:
+            raise CaromError(f"kind must be one of {tuple(BODY_KINDS)}; got {kind!r}")
+        code = BODY_KINDS[kind]
+        origin = self._rows("position", positions)
+        n = origin.shape[0]
+        v = np.zeros_like(origin) if velocities is None else self._rows("velocity", velocities, n)
+        turns = self._orientations(orientations, n)
+        spin = self._angular(angular_velocities, n)
+        if isinstance(shape, Mesh):
+            if code != BODY_KINDS["static"]:
+                raise CaromError(
+                    "a Mesh is a static surface; add it with kind='static', or cut a closed "
+                    "mesh into convex pieces for a dynamic body: carom.meshes.decompose(path)"
+                )
+            vertices = np.asarray(shape.vertices, float)
+            pieces: tuple[ConvexPiece3D, ...] = tuple(
+                ConvexPiece3D(vertices[t], np.array([[0, 1, 2]]), 0.0)
+                for t in np.asarray(shape.triangles)
+            )
+            centroid = np.zeros(3)
+        else:
+            pieces = shape.pieces()
+        if code == KIND_DYNAMIC:
+            props = shape.mass_properties(
+                1.0 if density is None and mass is None else density, mass=mass
+            )
+            body_mass, inertia, centroid = props.mass, props.inertia, props.centroid
+        else:
+            if density is not None or mass is not None:
+                raise CaromError(
+                    f"a {kind} body is not moved by impacts and has no mass; drop density= "
+                    f"and mass=, or make it dynamic"
+                )
+            if code != BODY_KINDS["kinematic"] and (np.any(v) or np.any(spin)):
+                raise CaromError(
+                    "a static body never moves; drop velocity= and angular_velocity=, or "
+                    'make it kind="kinematic"'
+                )
+            if not isinstance(shape, Mesh):
+                centroid = shape.centroid
+            body_mass, inertia = math.inf, np.diag([math.inf] * 3)
+        matrices = np.array([rotation_matrix(q) for q in turns])
+        centre = origin + matrices @ centroid
+        moved = tuple(piece.moved(np.eye(3), -centroid) for piece in pieces)
+        mat = self._material_index(restitution, material)
+        self._invalidate()
+        name = "ball" if shape.kind == "sphere" else shape.kind
+        return self.bodies.append_bodies(
+            centre, v, turns, spin, moved, SHAPE_CODES[name], body_mass, inertia, code, mat
+        )
+
+    def _orientations(self, value: ArrayLike | None, n: int) -> FloatArray:
+        """``n`` unit quaternions (n, 4) from quaternions or rotation matrices (one for all,
+        or one each); a CaromError names what is wrong."""
+        q = np.zeros((n, 4))
+        q[:, 0] = 1.0
+        if value is None:
+            return q
+        arr = as_float_array("orientations", value)
+        if arr.shape in ((4,), (3, 3)):
+            arr = arr[None]
+        if (
+            arr.ndim not in (2, 3)
+            or arr.shape[1:] not in ((4,), (3, 3))
+            or (arr.shape[0] not in (1, n))
+        ):
+            raise CaromError(
+                f"orientations must be quaternions (n, 4) or (4,), or rotation matrices "
+                f"(n, 3, 3) or (3, 3); got shape {arr.shape} for {n} bodies"
+            )
+        for i in range(n):
+            each = arr[i if arr.shape[0] == n else 0]
+            r = rotation_matrix(each, f"orientations[{i}]")
+            q[i] = _quaternion(r)
+        return q
 
     def add_plane(
         self,
@@ -581,7 +715,7 @@ class World:
         event_driven = self.bodies.spheres_only and self.boundary != "open"
         return "edmd" if event_driven else "rigid"
 
-    def build(self) -> EdmdEngine | RigidEngine:
+    def build(self) -> EdmdEngine | RigidEngine | RigidEngine3D:
         """Build the engine now (running does it when needed), refusing bodies outside the
         box, on the wrong side of a plane, or overlapping; return it."""
         if self._engine is None:
@@ -612,27 +746,34 @@ class World:
                 "engine needs 'walls' or 'periodic'"
             )
 
-    def rigid_parts(self) -> tuple[RigidModel, RigidState, Partners]:
+    def rigid_parts(self) -> tuple[RigidModel | Model3D, RigidState | State3D, Partners]:
         """The rigid engine's view of this world, as the engine would start from it.
 
         Returns
         -------
-        model : RigidModel
+        model : RigidModel or Model3D
             Every body's pieces, mass, inertia, kind and material; the caller's bodies
-            first, then the walls and planes as static slabs.
-        state : RigidState
+            first, then the walls and planes as static slabs (3D: plane pieces).
+        state : RigidState or State3D
             Their positions (centres of mass), velocities, angles and angular velocities.
         partners : Partners
             What each row is: a body, a wall face or a plane (collision records name them).
         """
-        if self.dim != 2:
-            raise CaromError(
-                "the rigid-body engine is 2D; 3D rigid bodies are not in carom yet (3D "
-                "spheres: engine='edmd')"
-            )
         if self.boundary == "periodic":
             raise CaromError(
                 "the rigid-body engine has no periodic boundary; use boundary='walls' or 'open'"
+            )
+        if self.dim == 3:
+            return assemble3d(
+                self.bodies,
+                self.box,
+                self.boundary == "walls",
+                self.walls,
+                self.planes,
+                self.gravity,
+                self.materials,
+                self.combine,
+                self._pair_overrides,
             )
         return assemble(
             self.bodies,
@@ -646,11 +787,17 @@ class World:
             self._pair_overrides,
         )
 
-    def _build_rigid(self) -> RigidEngine:
+    def _build_rigid(self) -> RigidEngine | RigidEngine3D:
         """The rigid engine, once no dynamic body starts overlapping another body, a wall or
         a plane deeper than the linear slop (the solver would throw them apart)."""
         model, state, partners = self.rigid_parts()
-        engine = RigidEngine(model, state, self.rigid_settings, self._time, partners)
+        engine: RigidEngine | RigidEngine3D
+        if isinstance(model, Model3D):
+            assert isinstance(state, State3D)
+            engine = RigidEngine3D(model, state, self.rigid_settings, self._time, partners)
+        else:
+            assert isinstance(state, RigidState)
+            engine = RigidEngine(model, state, self.rigid_settings, self._time, partners)
         a, b, depth = engine.deepest_overlap()
         slop = self.rigid_settings.linear_slop
         if depth > slop:
@@ -669,14 +816,18 @@ class World:
         that a timed run times the simulation alone. Changes nothing."""
         engine = self.build()
         engine.advance(self._time, 0, None)  # no event is processed
-        if self.engine_name == "rigid":
+        if self.engine_name == "rigid" and self.dim == 2:
             from carom.engines.rigid.driver import warm_up
 
-            warm_up()  # the kernels a step calls only on its first impact or sleep, too
+            warm_up()
+        elif self.engine_name == "rigid":
+            from carom.engines.rigid3d.driver import warm_up as warm_up_3d
+
+            warm_up_3d()  # the kernels a step calls only on its first impact or sleep, too
         self.frame()
 
     @property
-    def engine(self) -> EdmdEngine | RigidEngine | None:
+    def engine(self) -> EdmdEngine | RigidEngine | RigidEngine3D | None:
         """The engine, once built (:meth:`build`); None before."""
         return self._engine
 
@@ -999,7 +1150,14 @@ class World:
             return
         if self.engine_name == "rigid":
             model, _, partners = self.rigid_parts()
-            self._engine = RigidEngine.restore(model, self.rigid_settings, partners, engine_arrays)
+            if isinstance(model, Model3D):
+                self._engine = RigidEngine3D.restore(
+                    model, self.rigid_settings, partners, engine_arrays
+                )
+            else:
+                self._engine = RigidEngine.restore(
+                    model, self.rigid_settings, partners, engine_arrays
+                )
         else:
             self._engine = EdmdEngine.restore(
                 self.bodies, self._environment(), self.settings, engine_arrays
@@ -1024,3 +1182,26 @@ def _as_material(name: str, value: Material | float) -> Material:
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
         raise CaromError(f"{name} must be a carom.Material or a restitution; got {value!r}")
     return Material(float(value))
+
+
+def _quaternion(r: FloatArray) -> FloatArray:
+    """The unit quaternion ``(w, x, y, z)``, ``w >= 0``, of a rotation matrix (Shepperd's
+    method: the largest of the four squared components decides, for accuracy)."""
+    t = float(np.trace(r))
+    cases = [t, r[0, 0], r[1, 1], r[2, 2]]
+    k = int(np.argmax(cases))
+    if k == 0:
+        s = 2.0 * math.sqrt(1.0 + t)
+        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+    elif k == 1:
+        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
+        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
+    elif k == 2:
+        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
+        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
+        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
+    out = np.array(q)
+    out /= np.linalg.norm(out)
+    return out if out[0] >= 0.0 else -out

@@ -102,6 +102,8 @@ class RigidScene:
         """Read the world ``build()`` makes, as its rigid engine would start."""
         world = build()
         model, state, _ = world.rigid_parts()
+        if not isinstance(model, RigidModel) or not isinstance(state, RigidState):
+            raise CaromError("carom compare's rigid scenes are 2D; 3D comparisons come later")
         rows = model.body_pieces
         pieces = []
         for body in range(model.kind.shape[0]):

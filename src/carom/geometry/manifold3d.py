@@ -40,6 +40,7 @@ from numba import njit
 __all__ = [
     "MAX_POINTS",
     "OUT_SIZE",
+    "closest_hulls",
     "closest_segment_segment",
     "contact_capsule_capsule",
     "contact_capsule_sphere",
@@ -685,19 +686,21 @@ def contact_hull_hull(
     if count == 0 and max(sep_a, sep_b, sep_e) > 0.0:
         # apart and beside each other (a corner passing a face's edge): the clipped faces do
         # not overlap; the exact closest points decide
-        return _closest_hulls(va, na, sa, ca, cora, ea, vb, nb, sb, cb, corb, eb, margin, out, ids)
+        return closest_hulls(va, na, sa, ca, cora, ea, vb, nb, sb, cb, corb, eb, margin, out, ids)
     return count
 
 
 @njit(cache=True)
-def _closest_hulls(
+def closest_hulls(
     va: np.ndarray, na: np.ndarray, sa: np.ndarray, ca: np.ndarray, cora: np.ndarray,
     ea: np.ndarray, vb: np.ndarray, nb: np.ndarray, sb: np.ndarray, cb: np.ndarray,
     corb: np.ndarray, eb: np.ndarray, margin: float, out: np.ndarray, ids: np.ndarray,
 ) -> int:  # fmt: skip
     """One point at the closest points of two disjoint convex polytopes: the least over A's
     corners against B, B's corners against A, and A's edges against B's (every closest pair
-    of two convex polytopes is one of these)."""
+    of two convex polytopes is one of these). Its separation is their exact distance (the
+    exact impacts advance on it); none when they touch or are further apart than
+    ``margin``."""
     best = np.inf
     on_a = np.zeros(3)
     on_b = np.zeros(3)

@@ -209,7 +209,7 @@ class H5MDWriter:
         shapes = [SHAPE_NAMES[int(code)] for code in world.bodies.shape]
         particles.create_dataset("shape", data=np.array(shapes, dtype=h5py.string_dtype()))
         pieces = particles.create_group("pieces")
-        for name, value in pieces_to_arrays(world.bodies.pieces).items():
+        for name, value in pieces_to_arrays(world.bodies.pieces, self.dim).items():
             pieces.create_dataset(name, data=value)
         pieces["radius"].attrs["unit"] = pieces["vertices"].attrs["unit"] = "m"
         orientation = (self.n,) if self.dim == 2 else (self.n, 4)

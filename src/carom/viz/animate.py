@@ -15,14 +15,14 @@ front. A time stamp and the scene's title are on every frame.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.bodies import PIECE_ARRAYS, pieces_from_arrays
+from carom.bodies import PIECE_ARRAYS, Pieces, pieces_from_arrays
 from carom.errors import CaromError
 from carom.shapes import ConvexPiece
 from carom.viz import require_matplotlib
@@ -186,16 +186,18 @@ class TrajectoryScene:
         periodic: bool,
         radius: FloatArray,
         mass: FloatArray,
-        pieces: list[tuple[ConvexPiece, ...]] | None = None,
+        pieces: Sequence[Pieces] | None = None,
     ) -> None:
         self.dim, self.box, self.periodic = dim, box, periodic
         self.radius = radius
         self.moving = np.isfinite(mass)
         self.speed_scale = 1.0
-        pieces = pieces or [() for _ in range(len(radius))]
+        # 3D rigid bodies are drawn as their bounding balls until shaded polyhedra come
+        flat = cast("list[tuple[ConvexPiece, ...]] | None", pieces if dim == 2 else None)
+        drawn = flat or [() for _ in range(len(radius))]
         #: bodies drawn as shaded disks (spheres), and the outlines of the others
-        self.round = np.array([not body for body in pieces], dtype=bool)
-        self.outlines = Outlines(pieces)
+        self.round = np.array([not body for body in drawn], dtype=bool)
+        self.outlines = Outlines(drawn)
 
     @classmethod
     def read(cls, f: Any) -> TrajectoryScene:
@@ -209,7 +211,9 @@ class TrajectoryScene:
         pieces = (
             None
             if stored is None
-            else pieces_from_arrays({k: stored[k][:] for k in PIECE_ARRAYS}, len(radius))
+            else pieces_from_arrays(
+                {k: stored[k][:] for k in PIECE_ARRAYS if k in stored}, len(radius)
+            )
         )
         return cls(
             int(box.attrs["dimension"]),

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -90,7 +90,7 @@ def assemble(
     n = bodies.n
     pieces: list[tuple[ConvexPiece, ...]] = []
     for i in range(n):
-        own = bodies.pieces[i]
+        own = cast("tuple[ConvexPiece, ...]", bodies.pieces[i])
         pieces.append(own if own else (ConvexPiece(np.zeros((1, 2)), float(bodies.radius[i])),))
     mass = bodies.mass.copy()
     inertia = bodies.inertia

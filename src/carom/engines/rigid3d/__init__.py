@@ -1,0 +1,17 @@
+"""The time-stepped rigid-body engine for 3D bodies with rotation (docs/rigid3d.md).
+
+``model`` (constants and state), ``motion`` (rotations, placing pieces, impulses, free
+flight), ``broadphase`` (swept boxes in a hashed grid), ``contacts`` (manifolds, warm start),
+``solver`` (the soft step in named stages) and ``driver`` (the engine a World runs), in the
+2D engine's design (:mod:`carom.engines.rigid`).
+"""
+
+from carom.jit import kernel_cache
+
+with kernel_cache():
+    from carom.engines.rigid3d import (  # noqa: F401
+        broadphase,
+        contacts,
+        motion,
+        solver,
+    )

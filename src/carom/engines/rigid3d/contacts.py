@@ -1,0 +1,452 @@
+"""Narrow phase in 3D: the contact manifold of every candidate pair, kept as rows of two arrays,
+as the 2D engine's (:mod:`carom.engines.rigid.contacts`).
+
+A contact joins piece ``a`` of body A and piece ``b`` of body B (``a < b``); its normal points
+from B to A (A is pushed along ``+n``), with two unit tangents ``t1 = n x ...`` and
+``t2 = n x t1`` completing a right-handed frame. Each of its one to four points keeps its
+anchors ``r_A = p - x_A`` and ``r_B = p - x_B`` (fixed in the world frame over the step, where
+impulses act), its separation at the start of the step, and the solver's impulses, which
+warm-start the same point (same pieces, same feature id) at the next step; the tangent impulse
+is kept as a world vector, so a turning normal carries it over.
+
+The separation within the step is tracked at the *core anchors*: the point of each body's core
+(a ball's centre, a capsule's segment, a polytope's surface) behind the contact point along the
+normal, ``c_A = r_A + (s/2 + R_A) n`` and ``c_B = r_B - (s/2 + R_B) n`` for radii ``R``. A ball's
+core does not move when it turns, so a rolling ball keeps its separation; the contact point
+itself would rise by ``R (1 - cos phi)`` as it turned by ``phi`` and let the ball sink.
+
+Which points are kept: those within the speculative distance, plus how far the pair can close
+along the normal during the step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from carom.engines.rigid3d.model import PIECE_PLANE, PIECE_POLYTOPE
+from carom.engines.rigid3d.motion import relative_velocity
+from carom.geometry.manifold3d import (
+    MAX_POINTS,
+    OUT_SIZE,
+    contact_capsule_capsule,
+    contact_capsule_sphere,
+    contact_hull_capsule,
+    contact_hull_hull,
+    contact_hull_plane,
+    contact_hull_sphere,
+    contact_segments_plane,
+    contact_sphere_sphere,
+)
+
+__all__ = [
+    "CONTACT_FLOATS",
+    "CONTACT_INTS",
+    "collide_pieces",
+    "extremes",
+    "narrow_phase",
+    "point_offset",
+    "store_impulses",
+    "tangents",
+]
+
+# float columns of a contact row
+F_NX = 0  # normal, from B to A
+F_NY = 1
+F_NZ = 2
+F_T1X = 3  # first tangent
+F_T1Y = 4
+F_T1Z = 5
+F_T2X = 6  # second tangent, n x t1
+F_T2Y = 7
+F_T2Z = 8
+F_MU = 9  # friction coefficient [-]
+F_E = 10  # restitution [-]
+F_ROLL = 11  # rolling resistance [m]
+F_JR1 = 12  # rolling-resistance angular impulse about t1 and t2 [N m s]
+F_JR2 = 13
+POINT0 = 14  # first point's columns; a point has POINT_FLOATS of them
+# a point's columns, from its offset
+P_RAX = 0  # anchor on A [m]
+P_RAY = 1
+P_RAZ = 2
+P_RBX = 3  # anchor on B [m]
+P_RBY = 4
+P_RBZ = 5
+P_BASE = 6  # separation less (c_A - c_B) . n at the step's start [m] (c: core anchors)
+P_NMASS = 7  # effective mass along n [kg]
+P_JN = 8  # accumulated normal impulse [N s]
+P_JT1 = 9  # accumulated tangent impulses along t1, t2 [N s]
+P_JT2 = 10
+P_TOTAL = 11  # normal impulse applied over the step [N s]
+P_VREL = 12  # normal relative speed at the step's start [m/s] (negative: approaching)
+P_SEP = 13  # separation at the step's start [m]
+P_X = 14  # the point [m]
+P_Y = 15
+P_Z = 16
+P_T1MASS = 17  # effective masses along t1, t2 [kg]
+P_T2MASS = 18
+P_KA = 19  # A's core anchor is c_A = r_A + k_A n [m], B's c_B = r_B - k_B n
+P_KB = 20
+POINT_FLOATS = 21
+CONTACT_FLOATS = POINT0 + MAX_POINTS * POINT_FLOATS
+
+# int columns of a contact row
+I_BODY_A = 0
+I_BODY_B = 1
+I_PIECE_A = 2
+I_PIECE_B = 3
+I_COUNT = 4  # points, 1 to 4
+I_ID0 = 5  # feature ids of the points: I_ID0 + j
+I_FLAGS = I_ID0 + MAX_POINTS  # bit 0: solved exactly this step (isolated impact)
+CONTACT_INTS = I_FLAGS + 1
+
+
+@njit(cache=True, inline="always")
+def point_offset(j: int) -> int:
+    """Column of point ``j``'s first float."""
+    return POINT0 + POINT_FLOATS * j
+
+
+@njit(cache=True, inline="always")
+def tangents(nx: float, ny: float, nz: float) -> tuple[float, float, float, float, float, float]:
+    """Two unit tangents ``t1, t2`` with ``(n, t1, t2)`` right-handed: ``t1`` is ``n`` crossed
+    with the axis it is least aligned with (a continuous choice away from the switch)."""
+    if abs(nx) < 0.57735:  # |n_x| below 1/sqrt(3): the x axis is far enough from n
+        # t1 = x_hat x n, normalised
+        ax, ay, az = 0.0, -nz, ny
+    else:
+        # t1 = y_hat x n
+        ax, ay, az = nz, 0.0, -nx
+    norm = math.sqrt(ax * ax + ay * ay + az * az)
+    ax /= norm
+    ay /= norm
+    az /= norm
+    bx = ny * az - nz * ay
+    by = nz * ax - nx * az
+    bz = nx * ay - ny * ax
+    return ax, ay, az, bx, by, bz
+
+
+@njit(cache=True)
+def collide_pieces(
+    pa: int,
+    pb: int,
+    piece_kind: np.ndarray,
+    piece_radius: np.ndarray,
+    piece_vstart: np.ndarray,
+    piece_vcount: np.ndarray,
+    piece_fstart: np.ndarray,
+    piece_fcount: np.ndarray,
+    piece_cstart: np.ndarray,
+    piece_ccount: np.ndarray,
+    piece_estart: np.ndarray,
+    piece_ecount: np.ndarray,
+    vertices: np.ndarray,
+    normals: np.ndarray,
+    face_first: np.ndarray,
+    face_size: np.ndarray,
+    corners: np.ndarray,
+    edges: np.ndarray,
+    margin: float,
+    slop: float,
+    out: np.ndarray,
+    ids: np.ndarray,
+) -> int:
+    """The manifold of placed pieces ``pa`` and ``pb`` (:mod:`carom.geometry.manifold3d`), with
+    its normal from A to B whichever order the kernel takes them in; return the points' count.
+
+    Kernels take the richer shape first (polytope, then capsule, then ball; a plane last);
+    when ``pb`` is the richer one the pieces go in swapped and the normal is turned back.
+    """
+    ka = piece_kind[pa]
+    kb = piece_kind[pb]
+    # rank: plane 0, ball 1, capsule 2, polytope 3; the higher one goes first (planes last)
+    rank_a = 0 if ka == PIECE_PLANE else (3 if ka == PIECE_POLYTOPE else piece_vcount[pa])
+    rank_b = 0 if kb == PIECE_PLANE else (3 if kb == PIECE_POLYTOPE else piece_vcount[pb])
+    swap = rank_b > rank_a
+    p, o = (pb, pa) if swap else (pa, pb)
+    rp = rank_b if swap else rank_a
+    ro = rank_a if swap else rank_b
+    vp = vertices[piece_vstart[p] : piece_vstart[p] + piece_vcount[p]]
+    vo = vertices[piece_vstart[o] : piece_vstart[o] + piece_vcount[o]]
+    count = 0
+    if ro == 0:  # against a plane
+        n = normals[piece_fstart[o]]
+        offset = n[0] * vo[0, 0] + n[1] * vo[0, 1] + n[2] * vo[0, 2]
+        if rp == 3:
+            count = contact_hull_plane(vp, n, offset, margin, out, ids)
+        elif rp > 0:
+            count = contact_segments_plane(vp, piece_radius[p], n, offset, margin, out, ids)
+    elif rp == 3:
+        fs, fc = piece_fstart[p], piece_fcount[p]
+        cs, cc = piece_cstart[p], piece_ccount[p]
+        es, ec = piece_estart[p], piece_ecount[p]
+        np_ = normals[fs : fs + fc]
+        sp = face_first[fs : fs + fc]
+        zp = face_size[fs : fs + fc]
+        cp = corners[cs : cs + cc]
+        ep = edges[es : es + ec]
+        if ro == 3:
+            fs, fc = piece_fstart[o], piece_fcount[o]
+            cs, cc = piece_cstart[o], piece_ccount[o]
+            es, ec = piece_estart[o], piece_ecount[o]
+            count = contact_hull_hull(
+                vp, np_, sp, zp, cp, ep,
+                vo, normals[fs : fs + fc], face_first[fs : fs + fc], face_size[fs : fs + fc],
+                corners[cs : cs + cc], edges[es : es + ec],
+                margin, slop, out, ids,
+            )  # fmt: skip
+        elif ro == 2:
+            count = contact_hull_capsule(
+                vp, np_, sp, zp, cp, ep, vo[0], vo[1], piece_radius[o], margin, slop, out, ids
+            )
+        else:
+            count = contact_hull_sphere(
+                vp, np_, sp, zp, cp, ep, vo[0], piece_radius[o], margin, out, ids
+            )
+    elif rp == 2:
+        if ro == 2:
+            count = contact_capsule_capsule(
+                vp[0], vp[1], piece_radius[p], vo[0], vo[1], piece_radius[o], margin, out, ids
+            )
+        else:
+            count = contact_capsule_sphere(
+                vp[0], vp[1], piece_radius[p], vo[0], piece_radius[o], margin, out, ids
+            )
+    else:
+        count = contact_sphere_sphere(
+            vp[0], piece_radius[p], vo[0], piece_radius[o], margin, out, ids
+        )
+    if swap and count > 0:
+        out[0] = -out[0]
+        out[1] = -out[1]
+        out[2] = -out[2]
+    return count
+
+
+@njit(cache=True, inline="always")
+def find_cached(keys: np.ndarray, count: int, key: int, cursor: int) -> tuple[int, int]:
+    """Row of ``key`` in the sorted ``keys[:count]`` (-1 if absent), searched from ``cursor``
+    on, and where the next search may start (keys asked in increasing order walk the cache
+    once)."""
+    while cursor < count and keys[cursor] < key:
+        cursor += 1
+    row = cursor if cursor < count and keys[cursor] == key else -1
+    return row, cursor
+
+
+@njit(cache=True)
+def narrow_phase(
+    pairs: np.ndarray,
+    n_pairs: int,
+    model_ints: tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+    ],
+    piece_radius: np.ndarray,
+    piece_reach: np.ndarray,
+    vertices: np.ndarray,
+    normals: np.ndarray,
+    face_first: np.ndarray,
+    face_size: np.ndarray,
+    corners: np.ndarray,
+    edges: np.ndarray,
+    material: np.ndarray,
+    e_table: np.ndarray,
+    mu_table: np.ndarray,
+    rolling_table: np.ndarray,
+    x: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    gravity_on: np.ndarray,
+    g: float,
+    dt: float,
+    speculative: float,
+    slop: float,
+    cache_keys: np.ndarray,
+    cache_ids: np.ndarray,
+    cache_impulses: np.ndarray,
+    n_cache: int,
+    cf: np.ndarray,
+    ci: np.ndarray,
+) -> int:  # fmt: skip
+    """Manifolds of the candidate ``pairs`` into contact rows ``cf`` (floats) and ``ci`` (ints).
+
+    ``model_ints`` holds the pieces' ``piece_body, piece_kind, piece_vstart, piece_vcount,
+    piece_fstart, piece_fcount, piece_cstart, piece_ccount, piece_estart, piece_ecount``
+    (:class:`.model.Model3D`). Returns the number of contacts, or
+    minus the number of pairs when the rows may not suffice (the caller grows them and calls
+    again). Impulses found in the cache warm-start the points with the same feature ids.
+    """
+    (
+        piece_body, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount,
+        piece_cstart, piece_ccount, piece_estart, piece_ecount,
+    ) = model_ints  # fmt: skip
+    if ci.shape[0] < n_pairs:
+        return -n_pairs
+    n_pieces = piece_body.shape[0]
+    out = np.empty(OUT_SIZE)
+    ids = np.empty(MAX_POINTS, np.int64)
+    ra = np.empty(3)
+    rb = np.empty(3)
+    m = 0
+    cursor = 0
+    for k in range(n_pairs):
+        pa = pairs[k, 0]
+        pb = pairs[k, 1]
+        ba = piece_body[pa]
+        bb = piece_body[pb]
+        # how far the pair can close during the step: relative speed, spins, gravity
+        dvx = v[ba, 0] - v[bb, 0]
+        dvy = v[ba, 1] - v[bb, 1]
+        dvz = v[ba, 2] - v[bb, 2]
+        closing = math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz)
+        if piece_kind[pa] != PIECE_PLANE:
+            closing += math.sqrt(w[ba, 0] ** 2 + w[ba, 1] ** 2 + w[ba, 2] ** 2) * piece_reach[pa]
+        if piece_kind[pb] != PIECE_PLANE:
+            closing += math.sqrt(w[bb, 0] ** 2 + w[bb, 1] ** 2 + w[bb, 2] ** 2) * piece_reach[pb]
+        if gravity_on[ba] != gravity_on[bb]:
+            closing += g * dt
+        count = collide_pieces(
+            pa, pb, piece_kind, piece_radius, piece_vstart, piece_vcount, piece_fstart,
+            piece_fcount, piece_cstart, piece_ccount, piece_estart, piece_ecount, vertices,
+            normals, face_first, face_size, corners, edges, speculative + closing * dt, slop,
+            out, ids,
+        )  # fmt: skip
+        if count == 0:
+            continue
+        # the kernels' normal runs from A to B; a contact's from B to A
+        nx = -out[0]
+        ny = -out[1]
+        nz = -out[2]
+        kept = 0
+        for j in range(count):
+            px = out[3 + 4 * j]
+            py = out[4 + 4 * j]
+            pz = out[5 + 4 * j]
+            sep = out[6 + 4 * j]
+            ra[0] = px - x[ba, 0]
+            ra[1] = py - x[ba, 1]
+            ra[2] = pz - x[ba, 2]
+            rb[0] = px - x[bb, 0]
+            rb[1] = py - x[bb, 1]
+            rb[2] = pz - x[bb, 2]
+            ux, uy, uz = relative_velocity(ba, bb, ra, rb, v, w)
+            un = ux * nx + uy * ny + uz * nz
+            approach = max(0.0, -un)
+            if gravity_on[ba] != gravity_on[bb]:
+                approach += g * dt
+            if sep > speculative + approach * dt:
+                continue
+            o = point_offset(kept)
+            cf[m, o + P_RAX] = ra[0]
+            cf[m, o + P_RAY] = ra[1]
+            cf[m, o + P_RAZ] = ra[2]
+            cf[m, o + P_RBX] = rb[0]
+            cf[m, o + P_RBY] = rb[1]
+            cf[m, o + P_RBZ] = rb[2]
+            # core anchors: behind the point along n by half the gap and the radius
+            ka = 0.5 * sep + piece_radius[pa]
+            kb = 0.5 * sep + piece_radius[pb]
+            cf[m, o + P_KA] = ka
+            cf[m, o + P_KB] = kb
+            cf[m, o + P_BASE] = sep - (
+                (ra[0] - rb[0]) * nx + (ra[1] - rb[1]) * ny + (ra[2] - rb[2]) * nz + ka + kb
+            )
+            cf[m, o + P_NMASS] = 0.0
+            cf[m, o + P_JN] = 0.0
+            cf[m, o + P_JT1] = 0.0
+            cf[m, o + P_JT2] = 0.0
+            cf[m, o + P_TOTAL] = 0.0
+            cf[m, o + P_VREL] = un
+            cf[m, o + P_SEP] = sep
+            cf[m, o + P_X] = px
+            cf[m, o + P_Y] = py
+            cf[m, o + P_Z] = pz
+            ci[m, I_ID0 + kept] = ids[j]
+            kept += 1
+        if kept == 0:
+            continue
+        t1x, t1y, t1z, t2x, t2y, t2z = tangents(nx, ny, nz)
+        cf[m, F_NX] = nx
+        cf[m, F_NY] = ny
+        cf[m, F_NZ] = nz
+        cf[m, F_T1X] = t1x
+        cf[m, F_T1Y] = t1y
+        cf[m, F_T1Z] = t1z
+        cf[m, F_T2X] = t2x
+        cf[m, F_T2Y] = t2y
+        cf[m, F_T2Z] = t2z
+        ma = material[ba]
+        mb = material[bb]
+        cf[m, F_MU] = mu_table[ma, mb]
+        cf[m, F_E] = e_table[ma, mb]
+        cf[m, F_ROLL] = rolling_table[ma, mb]
+        cf[m, F_JR1] = 0.0
+        cf[m, F_JR2] = 0.0
+        ci[m, I_BODY_A] = ba
+        ci[m, I_BODY_B] = bb
+        ci[m, I_PIECE_A] = pa
+        ci[m, I_PIECE_B] = pb
+        ci[m, I_COUNT] = kept
+        ci[m, I_FLAGS] = 0
+        row, cursor = find_cached(cache_keys, n_cache, pa * n_pieces + pb, cursor)
+        if row >= 0:
+            for j in range(kept):
+                o = point_offset(j)
+                for q in range(MAX_POINTS):
+                    if cache_ids[row, q] == ci[m, I_ID0 + j]:
+                        jt = cache_impulses[row, q]
+                        cf[m, o + P_JN] = jt[0]
+                        cf[m, o + P_JT1] = jt[1] * t1x + jt[2] * t1y + jt[3] * t1z
+                        cf[m, o + P_JT2] = jt[1] * t2x + jt[2] * t2y + jt[3] * t2z
+                        break
+        m += 1
+    return m
+
+
+@njit(cache=True)
+def extremes(cf: np.ndarray, ci: np.ndarray, nc: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each contact's least separation [m] and least normal relative speed [m/s] over its
+    points, (nc,) each (:func:`carom.engines.rigid.islands.plan`)."""
+    closest = np.full(nc, np.inf)
+    closing = np.full(nc, np.inf)
+    for m in range(nc):
+        for j in range(ci[m, I_COUNT]):
+            closest[m] = min(closest[m], cf[m, point_offset(j) + P_SEP])
+            closing[m] = min(closing[m], cf[m, point_offset(j) + P_VREL])
+    return closest, closing
+
+
+@njit(cache=True)
+def store_impulses(
+    cf: np.ndarray,
+    ci: np.ndarray,
+    n_contacts: int,
+    n_pieces: int,
+    cache_keys: np.ndarray,
+    cache_ids: np.ndarray,
+    cache_impulses: np.ndarray,
+) -> int:
+    """Keep each contact's impulses for the next step's warm start (the normal impulse and the
+    tangent impulse as a world vector); return the count. Contacts come in key order."""
+    for m in range(n_contacts):
+        cache_keys[m] = ci[m, I_PIECE_A] * n_pieces + ci[m, I_PIECE_B]
+        for q in range(MAX_POINTS):
+            if q < ci[m, I_COUNT]:
+                o = point_offset(q)
+                j1 = cf[m, o + P_JT1]
+                j2 = cf[m, o + P_JT2]
+                cache_ids[m, q] = ci[m, I_ID0 + q]
+                cache_impulses[m, q, 0] = cf[m, o + P_JN]
+                cache_impulses[m, q, 1] = j1 * cf[m, F_T1X] + j2 * cf[m, F_T2X]
+                cache_impulses[m, q, 2] = j1 * cf[m, F_T1Y] + j2 * cf[m, F_T2Y]
+                cache_impulses[m, q, 3] = j1 * cf[m, F_T1Z] + j2 * cf[m, F_T2Z]
+            else:
+                cache_ids[m, q] = -1
+                for c in range(4):
+                    cache_impulses[m, q, c] = 0.0
+    return n_contacts

@@ -1,0 +1,365 @@
+"""The 3D rigid-body engine's constants (Model3D) and changing arrays (State3D), as flat arrays.
+
+Bodies are numbered as the caller added them. Each body has one or more pieces, stored in the
+body's frame (centred on its centre of mass, the shape's axes): a *round* piece is a core of one
+point (a ball) or two (a capsule) with a radius; a *polytope* piece is a convex polyhedron (a
+box, a hull, a mesh triangle as a flat one) with its faces and edges
+(:func:`carom.geometry.polyhedron.polyhedron_features`); a *plane* piece is static ground.
+
+Piece ``p``'s rows in each flat array run from its ``*_start`` for its ``*_count``: corners in
+``local_vertices`` (V, 3), faces in ``local_normals`` (F, 3) with ``face_first`` and
+``face_size`` (F,) pointing into its corner indices ``corners`` (C,), and ``edges`` (E, 2).
+Indices inside a piece's slices count from the piece's own first row, so a contact kernel
+takes the slices as they are.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from carom.geometry.polyhedron import polyhedron_features, triangle_features
+from carom.laws.kinds import KIND_DYNAMIC
+from carom.shapes3d import ConvexPiece3D
+
+__all__ = [
+    "PIECE_PLANE",
+    "PIECE_POLYTOPE",
+    "PIECE_ROUND",
+    "Model3D",
+    "Piece3D",
+    "State3D",
+    "build_model",
+    "new_state",
+    "plane_piece",
+    "triangle_piece",
+]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: a ball (one core point) or a capsule (two), with a radius
+PIECE_ROUND = 0
+#: a convex polyhedron, or a mesh triangle as a flat one
+PIECE_POLYTOPE = 1
+#: static ground: the half-space below a plane
+PIECE_PLANE = 2
+
+
+class Piece3D(NamedTuple):
+    """One piece as the engine stores it, in the body's frame.
+
+    ``vertices`` (k, 3) [m]; for a polytope its faces (``normals`` (F, 3), ``face_first`` and
+    ``face_size`` (F,) into ``corners``) and ``edges`` (E, 2); for a plane its outward
+    normal as the one face and a point of it as the one vertex.
+    """
+
+    kind: int
+    vertices: FloatArray
+    radius: float
+    normals: FloatArray
+    face_first: IntArray
+    face_size: IntArray
+    corners: IntArray
+    edges: IntArray
+
+
+_NO_INTS = np.zeros(0, np.int64)
+
+
+def piece_of(piece: ConvexPiece3D, offset: FloatArray) -> Piece3D:
+    """A shape's piece moved by ``offset`` (3,) [m] (from the shape's origin to its centre of
+    mass), with its faces and edges if it is a polytope."""
+    v = np.asarray(piece.vertices, float) + offset
+    if v.shape[0] < 4:
+        return Piece3D(
+            PIECE_ROUND,
+            v,
+            float(piece.radius),
+            np.zeros((0, 3)),
+            _NO_INTS,
+            _NO_INTS,
+            _NO_INTS,
+            np.zeros((0, 2), np.int64),
+        )
+    f = polyhedron_features(v, np.asarray(piece.triangles, np.int64))
+    return Piece3D(
+        PIECE_POLYTOPE, v, 0.0, f.normals, f.face_start, f.face_count, f.corners, f.edges
+    )
+
+
+def triangle_piece(corners: FloatArray) -> Piece3D:
+    """A mesh triangle (3, 3) [m] as a flat polytope piece."""
+    v, n, first, count, cor, edges = triangle_features(corners)
+    return Piece3D(PIECE_POLYTOPE, v, 0.0, n, first, count, cor, edges)
+
+
+def plane_piece(normal: FloatArray, offset: float) -> Piece3D:
+    """The plane ``normal . x = offset`` (solid below) as a piece."""
+    n = np.asarray(normal, float).reshape(1, 3)
+    return Piece3D(
+        PIECE_PLANE,
+        n * float(offset),
+        0.0,
+        n.copy(),
+        np.zeros(1, np.int64),
+        np.zeros(1, np.int64),
+        _NO_INTS,
+        np.zeros((0, 2), np.int64),
+    )
+
+
+class Model3D(NamedTuple):
+    """What does not change while the engine runs.
+
+    Attributes
+    ----------
+    kind : (N,) int64
+        KIND_DYNAMIC, KIND_STATIC or KIND_KINEMATIC.
+    mass : (N,) float64
+        [kg]; inf for static and kinematic bodies.
+    inv_mass : (N,) float64
+        [1/kg]; 0 for static and kinematic bodies.
+    inertia, inv_inertia : (N, 3, 3) float64
+        Inertia tensor about the centre of mass in the body's frame [kg m^2], and its inverse
+        (zero for static and kinematic bodies).
+    min_moment : (N,) float64
+        The least principal moment [kg m^2] (inf for static and kinematic bodies): a free
+        body's spin is at most ``sqrt(2 E / min_moment)`` for rotational energy ``E``.
+    material : (N,) int64
+        Index into the pair tables.
+    reach : (N,) float64
+        Farthest point of the body from its centre of mass [m] (inf for a plane).
+    body_pieces : (N + 1,) int64
+        Body i has pieces ``body_pieces[i]`` to ``body_pieces[i + 1]``.
+    piece_body, piece_kind : (P,) int64
+        Each piece's body, and PIECE_ROUND, PIECE_POLYTOPE or PIECE_PLANE.
+    piece_radius, piece_reach : (P,) float64
+        Rounding radius [m]; farthest point from the body's centre of mass [m].
+    piece_vstart, piece_vcount, piece_fstart, piece_fcount, piece_cstart, piece_ccount,
+    piece_estart, piece_ecount : (P,) int64
+        Each piece's rows in the flat arrays below.
+    local_vertices : (V, 3) float64
+        Corners [m], body frame.
+    local_normals : (F, 3) float64
+        Face normals, body frame.
+    face_first, face_size : (F,) int64
+        Each face's first corner and its count, in its piece's ``corners``.
+    corners : (C,) int64
+        Faces' corners, counter-clockwise from outside, as indices into the piece's vertices.
+    edges : (E, 2) int64
+        Each edge's two corners, as indices into the piece's vertices.
+    e_table, mu_table, rolling_table : (M, M) float64
+        Restitution [-], friction [-] and rolling resistance [m] of each pair of materials.
+    gravity : (3,) float64
+        [m/s^2]; acts on dynamic bodies.
+    """
+
+    kind: IntArray
+    mass: FloatArray
+    inv_mass: FloatArray
+    inertia: FloatArray
+    inv_inertia: FloatArray
+    min_moment: FloatArray
+    material: IntArray
+    reach: FloatArray
+    body_pieces: IntArray
+    piece_body: IntArray
+    piece_kind: IntArray
+    piece_radius: FloatArray
+    piece_reach: FloatArray
+    piece_vstart: IntArray
+    piece_vcount: IntArray
+    piece_fstart: IntArray
+    piece_fcount: IntArray
+    piece_cstart: IntArray
+    piece_ccount: IntArray
+    piece_estart: IntArray
+    piece_ecount: IntArray
+    local_vertices: FloatArray
+    local_normals: FloatArray
+    face_first: IntArray
+    face_size: IntArray
+    corners: IntArray
+    edges: IntArray
+    e_table: FloatArray
+    mu_table: FloatArray
+    rolling_table: FloatArray
+    gravity: FloatArray
+
+
+class State3D(NamedTuple):
+    """What changes: pose and motion, sleep, placed pieces and the warm-start cache.
+
+    Attributes
+    ----------
+    x, v : (N, 3) float64
+        Centre of mass [m], velocity [m/s].
+    q : (N, 4) float64
+        Orientation, unit quaternion ``(w, x, y, z)`` body to world.
+    w : (N, 3) float64
+        Angular velocity, world frame [rad/s].
+    awake : (N,) bool
+        Dynamic bodies being simulated (false: asleep).
+    clock : (N,) float64
+        How long each body has been slow enough to sleep [s].
+    island : (N,) int64
+        The island a sleeping body sleeps in (its root body).
+    vertices : (V, 3) float64
+        Corners placed in the world at the start of the next step [m].
+    normals : (F, 3) float64
+        Face normals placed in the world.
+    cache_keys : (K,) int64
+        Contacts of the last step (``a * P + b``), sorted; ``cache_ids`` (K, 4) int64 their
+        points' feature ids, ``cache_impulses`` (K, 4, 4) each point's normal impulse and its
+        tangent impulse as a world vector [N s]; ``cache_count`` (1,) int64 rows used.
+    """
+
+    x: FloatArray
+    v: FloatArray
+    q: FloatArray
+    w: FloatArray
+    awake: NDArray[np.bool_]
+    clock: FloatArray
+    island: IntArray
+    vertices: FloatArray
+    normals: FloatArray
+    cache_keys: IntArray
+    cache_ids: IntArray
+    cache_impulses: FloatArray
+    cache_count: IntArray
+
+
+def build_model(
+    pieces: Sequence[Sequence[Piece3D]],
+    kind: IntArray,
+    mass: FloatArray,
+    inertia: FloatArray,
+    material: IntArray,
+    e_table: FloatArray,
+    mu_table: FloatArray,
+    rolling_table: FloatArray,
+    gravity: FloatArray,
+) -> Model3D:
+    """The Model of N bodies whose ``pieces`` are given in each body's frame (centred on its
+    centre of mass). Static and kinematic bodies must have infinite mass; ``inertia``
+    (N, 3, 3) [kg m^2] is ignored for them."""
+    n = len(pieces)
+    kind = np.asarray(kind, np.int64)
+    mass = np.asarray(mass, float)
+    inertia = np.asarray(inertia, float).reshape(n, 3, 3)
+    body_pieces = np.zeros(n + 1, np.int64)
+    columns: dict[str, list[float | int]] = {
+        name: []
+        for name in (
+            "body", "kind", "radius", "reach", "vs", "vc", "fs", "fc", "cs", "cc", "es", "ec",
+        )
+    }  # fmt: skip
+    verts: list[FloatArray] = [np.zeros((0, 3))]
+    norms: list[FloatArray] = [np.zeros((0, 3))]
+    firsts: list[IntArray] = [_NO_INTS]
+    counts: list[IntArray] = [_NO_INTS]
+    cors: list[IntArray] = [_NO_INTS]
+    edges: list[IntArray] = [np.zeros((0, 2), np.int64)]
+    rows = {"v": 0, "f": 0, "c": 0, "e": 0}
+    reach = np.zeros(n)
+    for i, body in enumerate(pieces):
+        for piece in body:
+            if piece.kind == PIECE_PLANE:
+                far = np.inf
+            else:
+                far = float(np.max(np.linalg.norm(piece.vertices, axis=1))) + piece.radius
+            reach[i] = max(reach[i], far)
+            for key, value in (
+                ("body", i), ("kind", piece.kind), ("radius", piece.radius), ("reach", far),
+                ("vs", rows["v"]), ("vc", piece.vertices.shape[0]),
+                ("fs", rows["f"]), ("fc", piece.normals.shape[0]),
+                ("cs", rows["c"]), ("cc", piece.corners.shape[0]),
+                ("es", rows["e"]), ("ec", piece.edges.shape[0]),
+            ):  # fmt: skip
+                columns[key].append(value)
+            rows["v"] += piece.vertices.shape[0]
+            rows["f"] += piece.normals.shape[0]
+            rows["c"] += piece.corners.shape[0]
+            rows["e"] += piece.edges.shape[0]
+            verts.append(np.asarray(piece.vertices, float))
+            norms.append(np.asarray(piece.normals, float))
+            firsts.append(np.asarray(piece.face_first, np.int64))
+            counts.append(np.asarray(piece.face_size, np.int64))
+            cors.append(np.asarray(piece.corners, np.int64))
+            edges.append(np.asarray(piece.edges, np.int64).reshape(-1, 2))
+        body_pieces[i + 1] = len(columns["body"])
+    dynamic = kind == KIND_DYNAMIC
+    inv_mass = np.zeros(n)
+    inv_mass[dynamic] = 1.0 / mass[dynamic]
+    inv_inertia = np.zeros((n, 3, 3))
+    min_moment = np.full(n, np.inf)
+    if dynamic.any():
+        inv_inertia[dynamic] = np.linalg.inv(inertia[dynamic])
+        min_moment[dynamic] = np.linalg.eigvalsh(inertia[dynamic])[:, 0]
+    inertia = np.where(dynamic[:, None, None], inertia, np.inf)
+
+    def ints(key: str) -> IntArray:
+        return np.array(columns[key], np.int64)
+
+    return Model3D(
+        kind=kind,
+        mass=mass,
+        inv_mass=inv_mass,
+        inertia=inertia,
+        inv_inertia=inv_inertia,
+        min_moment=min_moment,
+        material=np.asarray(material, np.int64),
+        reach=reach,
+        body_pieces=body_pieces,
+        piece_body=ints("body"),
+        piece_kind=ints("kind"),
+        piece_radius=np.array(columns["radius"], float),
+        piece_reach=np.array(columns["reach"], float),
+        piece_vstart=ints("vs"),
+        piece_vcount=ints("vc"),
+        piece_fstart=ints("fs"),
+        piece_fcount=ints("fc"),
+        piece_cstart=ints("cs"),
+        piece_ccount=ints("cc"),
+        piece_estart=ints("es"),
+        piece_ecount=ints("ec"),
+        local_vertices=np.concatenate(verts),
+        local_normals=np.concatenate(norms),
+        face_first=np.concatenate(firsts),
+        face_size=np.concatenate(counts),
+        corners=np.concatenate(cors),
+        edges=np.concatenate(edges),
+        e_table=np.asarray(e_table, float),
+        mu_table=np.asarray(mu_table, float),
+        rolling_table=np.asarray(rolling_table, float),
+        gravity=np.asarray(gravity, float).reshape(3),
+    )
+
+
+def new_state(
+    model: Model3D, x: FloatArray, v: FloatArray, q: FloatArray, w: FloatArray
+) -> State3D:
+    """The State at the start: every dynamic body awake, no contact cached; quaternions are
+    normalised."""
+    n = model.kind.shape[0]
+    q = np.array(q, float).reshape(n, 4)
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    return State3D(
+        x=np.array(x, float).reshape(n, 3),
+        v=np.array(v, float).reshape(n, 3),
+        q=q,
+        w=np.array(w, float).reshape(n, 3),
+        awake=model.kind == KIND_DYNAMIC,
+        clock=np.zeros(n),
+        island=np.arange(n, dtype=np.int64),
+        vertices=np.zeros_like(model.local_vertices),
+        normals=np.zeros_like(model.local_normals),
+        cache_keys=np.zeros(0, np.int64),
+        cache_ids=np.zeros((0, 4), np.int64),
+        cache_impulses=np.zeros((0, 4, 4)),
+        cache_count=np.zeros(1, np.int64),
+    )

@@ -1,0 +1,135 @@
+"""3D rigid bodies in a World: adding them, refusing what cannot be, saving and loading."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import carom
+from carom.errors import CaromError
+from carom.meshes import Mesh
+from carom.shapes import Box as Box2D
+from carom.shapes3d import Box, Capsule, Plane, Sphere, rotation_matrix
+
+
+def _floor_world() -> carom.World:
+    world = carom.World(3, box=[4, 4, 4], boundary="open", gravity=[0, 0, -9.81])
+    world.add_plane([0, 0, 0], [0, 0, 1], material=carom.Material(0.3, friction=0.5))
+    return world
+
+
+def test_a_3d_body_runs_the_3d_rigid_engine() -> None:
+    world = _floor_world()
+    i = world.add_body(Box([0.2, 0.2, 0.2]), [0, 0, 0.5])
+    assert i == 0
+    assert world.engine_name == "rigid"
+    world.run(until=0.1)
+    assert type(world.engine).__name__ == "RigidEngine3D"
+    # 0.1 s of free fall from rest (exact in free flight): z = 0.5 - g t^2 / 2
+    assert world.positions[0, 2] == pytest.approx(0.5 - 9.81 * 0.01 / 2, rel=1e-12)
+    assert world.orientations.shape == (1, 4)
+
+
+def test_orientation_turns_the_shape_about_its_origin() -> None:
+    # a capsule along z turned a quarter turn about y lies along x: its lowest point is its
+    # radius below the centre, and it rests on the floor at that height
+    world = _floor_world()
+    quarter = [math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0]
+    world.add_body(Capsule(1.0, 0.1), [0, 0, 0.1], orientation=quarter)
+    axis = rotation_matrix(world.orientations[0]) @ [0, 0, 1]
+    assert axis == pytest.approx([1, 0, 0], abs=1e-15)
+    world.run(until=0.5)
+    assert world.positions[0, 2] == pytest.approx(0.1, abs=1e-3)
+    # the same turn as a matrix gives the same quaternion
+    other = _floor_world()
+    other.add_body(Capsule(1.0, 0.1), [0, 0, 0.1], orientation=rotation_matrix(quarter))
+    assert other.orientations[0] == pytest.approx(np.array(quarter), abs=1e-15)
+
+
+def test_centre_of_mass_of_an_off_centre_shape_is_the_bodys_position() -> None:
+    # a compound of two unit cubes at x = 0 and x = 1: its centre of mass is at x = 0.5 of
+    # its frame; turned half a turn about z and put at the origin it sits at x = -0.5
+    shape = carom.shapes3d.Compound([Box([1, 1, 1]), (Box([1, 1, 1]), [1.0, 0.0, 0.0])])
+    world = carom.World(3, box=[4, 4, 4], boundary="open")
+    world.add_body(shape, [0, 0, 0], orientation=[0.0, 0.0, 0.0, 1.0])
+    assert world.positions[0] == pytest.approx([-0.5, 0.0, 0.0], abs=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda w: w.add_body(Box([1, 1, 1]), [0, 0, 0], angle=0.3), "angles= is for 2D"),
+        (lambda w: w.add_body(Box([1, 1, 1]), [0, 0, 0], orientation=[1, 0, 0]), "quaternions"),
+        (lambda w: w.add_body(Box([1, 1, 1]), [0, 0, 0], orientation=[0, 0, 0, 0]), "no rotation"),
+        (lambda w: w.add_body(Box2D(1, 1), [0, 0, 0]), "2D shape"),
+        (lambda w: w.add_body(Plane(), [0, 0, 0], kind="static"), "add_plane"),
+        (
+            lambda w: w.add_body(Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]), [0, 0, 0]),
+            "kind='static'",
+        ),
+        (lambda w: w.add_body(Box([1, 1, 1]), [0, 0, 0], kind="static", mass=1.0), "no mass"),
+        (
+            lambda w: w.add_body(Box([1, 1, 1]), [0, 0, 0], angular_velocity=[1, 0]),
+            "angular_velocities",
+        ),
+    ],
+)
+def test_bad_3d_bodies_are_refused_with_the_reason(call, message) -> None:
+    world = carom.World(3, box=[4, 4, 4], boundary="open")
+    with pytest.raises(CaromError, match=message):
+        call(world)
+    assert world.n_bodies == 0  # nothing half-added
+
+
+def test_a_3d_shape_in_a_2d_world_is_refused() -> None:
+    world = carom.World(2, box=[4, 4], boundary="open")
+    with pytest.raises(CaromError, match="3D shape"):
+        world.add_body(Sphere(0.1), [0, 0])
+
+
+def test_overlapping_3d_bodies_are_refused_at_the_start() -> None:
+    world = carom.World(3, box=[4, 4, 4], boundary="open")
+    world.add_body(Box([1, 1, 1]), [0, 0, 0])
+    world.add_body(Box([1, 1, 1]), [0.5, 0, 0])
+    with pytest.raises(CaromError, match=r"overlap by 0\.5 m"):
+        world.run(until=0.1)
+
+
+def test_static_mesh_holds_a_ball() -> None:
+    # a ball dropped on a two-triangle static square comes to rest on it, its centre one
+    # radius above (less the soft contact's 7e-5 m)
+    world = carom.World(3, box=[4, 4, 4], boundary="open", gravity=[0, 0, -9.81])
+    square = Mesh([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    world.add_body(square, [0, 0, 0], kind="static", material=carom.Material(0.0, friction=0.5))
+    world.add_body(Sphere(0.1), [0.2, 0.1, 0.3], material=carom.Material(0.0, friction=0.5))
+    world.run(until=2.0)
+    assert world.positions[1] == pytest.approx([0.2, 0.1, 0.1], abs=1e-4)
+
+
+def test_walls_keep_3d_bodies_in_the_box() -> None:
+    world = carom.World(3, box=[1, 1, 1], boundary="walls", gravity=[0, 0, -9.81])
+    world.add_body(Box([0.1, 0.1, 0.1]), [0.5, 0.5, 0.5], velocity=[3, -2, 1])
+    world.run(until=2.0)
+    assert np.all(world.positions > 0.0)
+    assert np.all(world.positions < 1.0)
+
+
+def test_save_and_load_continue_bit_for_bit(tmp_path: Path) -> None:
+    def build() -> carom.World:
+        world = _floor_world()
+        world.add_body(Box([0.2, 0.3, 0.4]), [0, 0, 0.5], angular_velocity=[1, 2, 3])
+        world.add_body(Sphere(0.1), [0.5, 0, 0.5], material=carom.Material(0.5, rolling=1e-3))
+        return world
+
+    straight = build()
+    straight.run(until=1.0)
+    saved = build()
+    saved.run(until=0.5)
+    saved.save(tmp_path / "w.npz")
+    loaded = carom.World.load(tmp_path / "w.npz")
+    loaded.run(until=1.0)
+    for name in ("positions", "velocities", "orientations", "angular_velocities"):
+        assert np.array_equal(getattr(loaded, name), getattr(straight, name)), name
