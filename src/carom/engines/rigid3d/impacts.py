@@ -39,7 +39,14 @@ from carom.engines.rigid3d.contacts import (
     collide_pieces,
 )
 from carom.engines.rigid3d.model import PIECE_POLYTOPE
-from carom.engines.rigid3d.motion import apply_impulse, fly, matrix, relative_velocity
+from carom.engines.rigid3d.motion import (
+    apply_impulse,
+    fly,
+    place_piece,
+    relative_velocity,
+    spin_energy,
+    world_inverse_row,
+)
 from carom.engines.rigid3d.solver import FLAG_EXACT
 from carom.geometry.manifold3d import MAX_POINTS, OUT_SIZE, closest_hulls
 from carom.laws.rigid_impact import collision_matrix, point_impulse
@@ -62,28 +69,6 @@ def _pieces_of(tau: float, h: float) -> int:
     """Free-flight substeps for ``tau`` [s], none longer than ``h``."""
     count: int = max(1, math.ceil(tau / h))
     return count
-
-
-@njit(cache=True)
-def _place(
-    p: int, x: np.ndarray, q: np.ndarray, body: int, piece_vstart: np.ndarray,
-    piece_vcount: np.ndarray, piece_fstart: np.ndarray, piece_fcount: np.ndarray,
-    local_vertices: np.ndarray, local_normals: np.ndarray, vertices: np.ndarray,
-    normals: np.ndarray,
-) -> None:  # fmt: skip
-    """Place piece ``p`` at row ``body`` of ``x`` and ``q``."""
-    r = np.empty(9)
-    matrix(q, body, r)
-    for k in range(piece_vstart[p], piece_vstart[p] + piece_vcount[p]):
-        lx, ly, lz = local_vertices[k, 0], local_vertices[k, 1], local_vertices[k, 2]
-        vertices[k, 0] = x[body, 0] + r[0] * lx + r[1] * ly + r[2] * lz
-        vertices[k, 1] = x[body, 1] + r[3] * lx + r[4] * ly + r[5] * lz
-        vertices[k, 2] = x[body, 2] + r[6] * lx + r[7] * ly + r[8] * lz
-    for k in range(piece_fstart[p], piece_fstart[p] + piece_fcount[p]):
-        lx, ly, lz = local_normals[k, 0], local_normals[k, 1], local_normals[k, 2]
-        normals[k, 0] = r[0] * lx + r[1] * ly + r[2] * lz
-        normals[k, 1] = r[3] * lx + r[4] * ly + r[5] * lz
-        normals[k, 2] = r[6] * lx + r[7] * ly + r[8] * lz
 
 
 @njit(cache=True)
@@ -313,28 +298,12 @@ def _impact(
 def _kinetic2(
     a: int, b: int, v: np.ndarray, w: np.ndarray, inv_mass: np.ndarray, iw: np.ndarray
 ) -> float:
-    """Kinetic energy of bodies a and b [J], those that move: ``m v^2/2 + w . I w/2``, with
-    ``I = (I^-1)^-1`` from the world inverse inertia ``iw`` by its adjugate."""
+    """Kinetic energy of bodies a and b [J], those that move: ``m v^2/2 + w . I w/2``."""
     energy = 0.0
     for body in (a, b):
         if inv_mass[body] > 0.0:
             energy += 0.5 * (v[body, 0] ** 2 + v[body, 1] ** 2 + v[body, 2] ** 2) / inv_mass[body]
-            # w . I w with I = (I^-1)^-1: solve I^-1 y = w, then w . y
-            k = iw[body].reshape(3, 3)
-            c00 = k[1, 1] * k[2, 2] - k[1, 2] * k[2, 1]
-            c01 = k[1, 2] * k[2, 0] - k[1, 0] * k[2, 2]
-            c02 = k[1, 0] * k[2, 1] - k[1, 1] * k[2, 0]
-            det = k[0, 0] * c00 + k[0, 1] * c01 + k[0, 2] * c02
-            c11 = k[0, 0] * k[2, 2] - k[0, 2] * k[2, 0]
-            c12 = k[0, 1] * k[2, 0] - k[0, 0] * k[2, 1]
-            c22 = k[0, 0] * k[1, 1] - k[0, 1] * k[1, 0]
-            x0, x1, x2 = w[body, 0], w[body, 1], w[body, 2]
-            # the adjugate of a symmetric matrix is symmetric: (I^-1)^-1 = adj / det
-            quad = (
-                c00 * x0 * x0 + c11 * x1 * x1 + c22 * x2 * x2
-                + 2.0 * (c01 * x0 * x1 + c02 * x0 * x2 + c12 * x1 * x2)
-            )  # fmt: skip
-            energy += 0.5 * quad / det
+            energy += 0.5 * spin_energy(iw, body, w)
     return energy
 
 
@@ -372,7 +341,7 @@ def _gap(
                 0, tau, steps, xs, qs, vs, ws, accel[body, 0], accel[body, 1], accel[body, 2],
                 inertia[body : body + 1], inv_inertia[body : body + 1],
             )  # fmt: skip
-        _place(
+        place_piece(
             piece, xs, qs, 0, piece_vstart, piece_vcount, piece_fstart, piece_fcount,
             local_vertices, local_normals, vertices, normals,
         )  # fmt: skip
@@ -418,19 +387,7 @@ def _top_spin(
     spin = math.sqrt(w[body, 0] ** 2 + w[body, 1] ** 2 + w[body, 2] ** 2)
     if inv_mass[body] == 0.0 or spin == 0.0:
         return spin
-    k = iw[body].reshape(3, 3)
-    c00 = k[1, 1] * k[2, 2] - k[1, 2] * k[2, 1]
-    c01 = k[1, 2] * k[2, 0] - k[1, 0] * k[2, 2]
-    c02 = k[1, 0] * k[2, 1] - k[1, 1] * k[2, 0]
-    det = k[0, 0] * c00 + k[0, 1] * c01 + k[0, 2] * c02
-    c11 = k[0, 0] * k[2, 2] - k[0, 2] * k[2, 0]
-    c12 = k[0, 1] * k[2, 0] - k[0, 0] * k[2, 1]
-    c22 = k[0, 0] * k[1, 1] - k[0, 1] * k[1, 0]
-    x0, x1, x2 = w[body, 0], w[body, 1], w[body, 2]
-    twice_energy = (
-        c00 * x0 * x0 + c11 * x1 * x1 + c22 * x2 * x2
-        + 2.0 * (c01 * x0 * x1 + c02 * x0 * x2 + c12 * x1 * x2)
-    ) / det  # fmt: skip
+    twice_energy = spin_energy(iw, body, w)
     # a sliver of margin for the round-off of the adjugate
     return max(spin, math.sqrt(max(twice_energy, 0.0) / min_moment[body]) * (1.0 + 1e-12))
 
@@ -486,7 +443,6 @@ def exact_impacts(
     ids = np.empty(MAX_POINTS, np.int64)
     h = dt / substeps
     iw = np.zeros((x.shape[0], 9))
-    r = np.empty(9)
     logged = 0
     for k in range(n_isolated):
         m = isolated[k]
@@ -502,7 +458,7 @@ def exact_impacts(
         now = 0.0
         for impact in range(MAX_IMPACTS):
             for body in (a, b):
-                _world_inverse(body, q, inv_inertia, iw, r)
+                world_inverse_row(body, q, inv_inertia, iw)
             spin = _top_spin(a, w, inv_mass, iw, min_moment) * reach_a
             spin += _top_spin(b, w, inv_mass, iw, min_moment) * reach_b
             hit = _time_of_impact(
@@ -538,7 +494,7 @@ def exact_impacts(
             if count == 0:
                 break
             for body in (a, b):
-                _world_inverse(body, q, inv_inertia, iw, r)
+                world_inverse_row(body, q, inv_inertia, iw)
             if not _impact(a, b, count, out, touch, e_pair[k], mu_pair[k], x, v, w, inv_mass,
                            iw, log[logged]):  # fmt: skip
                 break
@@ -551,21 +507,6 @@ def exact_impacts(
                     accel[body, 0], accel[body, 1], accel[body, 2], inertia, inv_inertia,
                 )  # fmt: skip
     return logged
-
-
-@njit(cache=True, inline="always")
-def _world_inverse(
-    body: int, q: np.ndarray, inv_inertia: np.ndarray, iw: np.ndarray, r: np.ndarray
-) -> None:
-    """Row ``body`` of ``iw``: its inverse inertia in the world now, ``R I^-1 R^T``."""
-    matrix(q, body, r)
-    for i in range(3):
-        for j in range(3):
-            total = 0.0
-            for k in range(3):
-                for m in range(3):
-                    total += r[3 * i + k] * inv_inertia[body, k, m] * r[3 * j + m]
-            iw[body, 3 * i + j] = total
 
 
 @njit(cache=True)

@@ -32,9 +32,12 @@ __all__ = [
     "free_turn",
     "matrix",
     "mechanical_energy",
+    "place_piece",
     "place_pieces",
     "relative_velocity",
+    "spin_energy",
     "world_inverse_inertia",
+    "world_inverse_row",
 ]
 
 
@@ -55,6 +58,30 @@ def matrix(q: np.ndarray, i: int, r: np.ndarray) -> None:
 
 
 @njit(cache=True)
+def place_piece(
+    p: int, x: np.ndarray, q: np.ndarray, body: int, piece_vstart: np.ndarray,
+    piece_vcount: np.ndarray, piece_fstart: np.ndarray, piece_fcount: np.ndarray,
+    local_vertices: np.ndarray, local_normals: np.ndarray, vertices: np.ndarray,
+    normals: np.ndarray,
+) -> None:  # fmt: skip
+    """Place piece ``p`` at the pose in row ``body`` of ``x`` (centre) and ``q``
+    (quaternion): its corners into ``vertices`` (V, 3), its face normals into ``normals``
+    (F, 3)."""
+    r = np.empty(9)
+    matrix(q, body, r)
+    for k in range(piece_vstart[p], piece_vstart[p] + piece_vcount[p]):
+        lx, ly, lz = local_vertices[k, 0], local_vertices[k, 1], local_vertices[k, 2]
+        vertices[k, 0] = x[body, 0] + r[0] * lx + r[1] * ly + r[2] * lz
+        vertices[k, 1] = x[body, 1] + r[3] * lx + r[4] * ly + r[5] * lz
+        vertices[k, 2] = x[body, 2] + r[6] * lx + r[7] * ly + r[8] * lz
+    for k in range(piece_fstart[p], piece_fstart[p] + piece_fcount[p]):
+        lx, ly, lz = local_normals[k, 0], local_normals[k, 1], local_normals[k, 2]
+        normals[k, 0] = r[0] * lx + r[1] * ly + r[2] * lz
+        normals[k, 1] = r[3] * lx + r[4] * ly + r[5] * lz
+        normals[k, 2] = r[6] * lx + r[7] * ly + r[8] * lz
+
+
+@njit(cache=True)
 def place_pieces(
     x: np.ndarray,
     q: np.ndarray,
@@ -69,43 +96,61 @@ def place_pieces(
     vertices: np.ndarray,
     normals: np.ndarray,
 ) -> None:
-    """Place the pieces of every body with ``which[b]`` true at its pose: corners into
-    ``vertices`` (V, 3), face normals into ``normals`` (F, 3)."""
-    r = np.empty(9)
+    """Place the pieces of every body with ``which[b]`` true at its pose (:func:`place_piece`)."""
     for b in range(x.shape[0]):
         if not which[b]:
             continue
-        matrix(q, b, r)
         for p in range(body_pieces[b], body_pieces[b + 1]):
-            for k in range(piece_vstart[p], piece_vstart[p] + piece_vcount[p]):
-                lx, ly, lz = local_vertices[k, 0], local_vertices[k, 1], local_vertices[k, 2]
-                vertices[k, 0] = x[b, 0] + r[0] * lx + r[1] * ly + r[2] * lz
-                vertices[k, 1] = x[b, 1] + r[3] * lx + r[4] * ly + r[5] * lz
-                vertices[k, 2] = x[b, 2] + r[6] * lx + r[7] * ly + r[8] * lz
-            for k in range(piece_fstart[p], piece_fstart[p] + piece_fcount[p]):
-                lx, ly, lz = local_normals[k, 0], local_normals[k, 1], local_normals[k, 2]
-                normals[k, 0] = r[0] * lx + r[1] * ly + r[2] * lz
-                normals[k, 1] = r[3] * lx + r[4] * ly + r[5] * lz
-                normals[k, 2] = r[6] * lx + r[7] * ly + r[8] * lz
+            place_piece(
+                p, x, q, b, piece_vstart, piece_vcount, piece_fstart, piece_fcount,
+                local_vertices, local_normals, vertices, normals,
+            )  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def world_inverse_row(body: int, q: np.ndarray, inv_inertia: np.ndarray, out: np.ndarray) -> None:
+    """Body ``body``'s inverse inertia in the world now, ``R I^-1 R^T``, into row ``body`` of
+    ``out`` (N, 9) [1/(kg m^2)], row-major."""
+    r = np.empty(9)
+    matrix(q, body, r)
+    for i in range(3):
+        for j in range(3):
+            total = 0.0
+            for k in range(3):
+                rik = r[3 * i + k]
+                if rik == 0.0:
+                    continue
+                for m in range(3):
+                    total += rik * inv_inertia[body, k, m] * r[3 * j + m]
+            out[body, 3 * i + j] = total
 
 
 @njit(cache=True)
 def world_inverse_inertia(q: np.ndarray, inv_inertia: np.ndarray, out: np.ndarray) -> None:
-    """Each body's inverse inertia in the world, ``R I^-1 R^T``, into ``out`` (N, 9)
-    [1/(kg m^2)], row-major."""
-    r = np.empty(9)
+    """Every body's inverse inertia in the world (:func:`world_inverse_row`), into ``out``
+    (N, 9)."""
     for b in range(q.shape[0]):
-        matrix(q, b, r)
-        for i in range(3):
-            for j in range(3):
-                total = 0.0
-                for k in range(3):
-                    rik = r[3 * i + k]
-                    if rik == 0.0:
-                        continue
-                    for m in range(3):
-                        total += rik * inv_inertia[b, k, m] * r[3 * j + m]
-                out[b, 3 * i + j] = total
+        world_inverse_row(b, q, inv_inertia, out)
+
+
+@njit(cache=True, inline="always")
+def spin_energy(iw: np.ndarray, body: int, w: np.ndarray) -> float:
+    """Twice the rotational energy, ``w . I w`` [J], of body ``body`` from its world inverse
+    inertia (row of ``iw``, (N, 9)): ``I = (I^-1)^-1`` by the adjugate (symmetric)."""
+    k = iw[body]
+    c00 = k[4] * k[8] - k[5] * k[7]
+    c01 = k[5] * k[6] - k[3] * k[8]
+    c02 = k[3] * k[7] - k[4] * k[6]
+    det = k[0] * c00 + k[1] * c01 + k[2] * c02
+    c11 = k[0] * k[8] - k[2] * k[6]
+    c12 = k[1] * k[6] - k[0] * k[7]
+    c22 = k[0] * k[4] - k[1] * k[3]
+    x0, x1, x2 = w[body, 0], w[body, 1], w[body, 2]
+    quad: float = (
+        c00 * x0 * x0 + c11 * x1 * x1 + c22 * x2 * x2
+        + 2.0 * (c01 * x0 * x1 + c02 * x0 * x2 + c12 * x1 * x2)
+    ) / det  # fmt: skip
+    return quad
 
 
 @njit(cache=True, inline="always")
