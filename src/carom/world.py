@@ -275,7 +275,7 @@ class World:
 
     def add_body(
         self,
-        shape: Shape2D,
+        shape: Shape2D | Shape3D,
         position: ArrayLike,
         *,
         velocity: ArrayLike | None = None,

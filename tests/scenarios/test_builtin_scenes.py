@@ -37,10 +37,12 @@ RIGID = {
     "rod-drop",
     "tumbler",
 }
+#: the 3D rigid-body scenes (tests/scene/test_rigid3d_scenes.py runs them)
+RIGID3D = {"dominoes-3d", "pyramid-3d", "wall-and-ball"}
 
 
 def test_the_built_in_scenes_are_all_there() -> None:
-    assert set(builtin_scenes()) == EXPECTED | RIGID
+    assert set(builtin_scenes()) == EXPECTED | RIGID | RIGID3D
 
 
 @pytest.mark.parametrize("name", sorted(EXPECTED))

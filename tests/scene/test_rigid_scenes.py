@@ -130,12 +130,22 @@ def test_bad_rigid_bodies_are_named_by_file_and_table(
     assert "scene.toml" in str(caught.value)
 
 
-def test_shapes_are_2d_and_a_lattice_takes_radius_or_body(tmp_path: Path) -> None:
-    text = "[[bodies]]\nshape = 'box'\nsize = [1, 1]\npositions = [[1, 1, 1]]\n"
+def test_shapes_match_the_dimension_and_a_lattice_takes_radius_or_body(tmp_path: Path) -> None:
+    text = "[[bodies]]\nshape = 'polygon'\nvertices = [[0, 0], [1, 0], [0, 1]]\n"
     path = tmp_path / "three.toml"
-    path.write_text("[world]\ndimension = 3\nbox = [5, 5, 5]\n[run]\nuntil = 1.0\n" + text)
-    with pytest.raises(SceneError, match=r"'box' is a 2D shape; 3D worlds take spheres only"):
+    path.write_text(
+        "[world]\ndimension = 3\nbox = [5, 5, 5]\n[run]\nuntil = 1.0\n"
+        + text
+        + "positions = [[1, 1, 1]]\n"
+    )
+    with pytest.raises(SceneError, match=r"'polygon' is a 2D shape; in 3D use ball, box"):
         load_scene(path)
+    with pytest.raises(SceneError, match=r"'hull' is a 3D shape"):
+        scene("[[bodies]]\nshape = 'hull'\nvertices = [[0, 0]]\npositions = [[1, 1]]", tmp=tmp_path)
+    box2d = "[[bodies]]\nshape = 'box'\nsize = [1, 1]\npositions = [[1, 1, 1]]\n"
+    path.write_text("[world]\ndimension = 3\nbox = [5, 5, 5]\n[run]\nuntil = 1.0\n" + box2d)
+    with pytest.raises(SceneError, match=r"a box's size in 3D is \[x, y, z\]"):
+        load_scene(path).build()
     both = "[[lattice]]\nshape = [2, 2]\norigin = [1, 1]\nspacing = 1.0\nradius = 0.1\n"
     with pytest.raises(SceneError, match=r"needs radius = \.\.\. \(spheres\) or body"):
         scene(both + "body = {shape = 'box', size = [0.5, 0.5]}\n", tmp=tmp_path)

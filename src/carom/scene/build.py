@@ -10,7 +10,7 @@ from typing import Any, Literal, cast
 
 import numpy as np
 
-from carom import shapes
+from carom import shapes, shapes3d
 from carom.engines.rigid.settings import RigidSettings
 from carom.errors import CaromError
 from carom.limits import check_body_count
@@ -39,7 +39,11 @@ def build_world(scene: Scene) -> World:
     for index, m in enumerate(scene.materials):
         try:
             materials[m["name"]] = Material(
-                m["restitution"], beta=m["beta"], friction=m["friction"], beta0=m["beta0"]
+                m["restitution"],
+                beta=m["beta"],
+                friction=m["friction"],
+                beta0=m["beta0"],
+                rolling=m["rolling"],
             )
         except CaromError as exc:
             raise where.error(["materials"], str(exc), "", index) from None
@@ -147,6 +151,52 @@ def shape_of(entry: Mapping[str, Any]) -> shapes.Shape2D:
     return shapes.Compound(parts)
 
 
+def shape3d_of(entry: Mapping[str, Any]) -> shapes3d.Shape3D:
+    """The 3D shape a ``[[bodies]]`` entry (or a compound's piece) describes: ``ball``
+    (radius), ``box`` (size = [x, y, z]), ``capsule`` (size = the length between the caps'
+    centres, along z; radius), ``hull`` (vertices = its points) or ``compound`` (pieces, each
+    with an offset = [x, y, z] and an orientation = [w, x, y, z])."""
+    kind = entry["shape"]
+    size = entry.get("size")
+    radius = entry.get("radius")
+    sizes = [] if size is None else size if isinstance(size, list) else [size]
+
+    def need(key: str, value: Any, example: str) -> Any:
+        if value is None:
+            raise CaromError(f"a {kind} needs {key} = {example}")
+        return value
+
+    if kind == "ball":
+        return shapes3d.Sphere(_one("radius", need("radius", radius, "... [m]")))
+    if kind == "box":
+        need("size", size, "[x, y, z] [m]")
+        if len(sizes) != 3:
+            raise CaromError(f"a box's size in 3D is [x, y, z] [m]; got {size!r}")
+        return shapes3d.Box(sizes)
+    if kind == "capsule":
+        need("size", size, "the length between the caps' centres [m]")
+        if len(sizes) != 1:
+            raise CaromError(f"a capsule's size is one length [m]; got {size!r}")
+        return shapes3d.Capsule(sizes[0], _one("radius", need("radius", radius, "... [m]")))
+    if kind == "hull":
+        return shapes3d.Hull(need("vertices", entry.get("vertices"), "[[x, y, z], ...] [m]"))
+    if kind != "compound":
+        raise CaromError(
+            f"a {kind} is a 2D shape; in 3D use ball, box, capsule, hull or compound "
+            f"(or sphere for the event-driven engine's spheres)"
+        )
+    parts: list[Any] = []
+    for k, piece in enumerate(need("pieces", entry.get("pieces"), "[{shape = ...}, ...]")):
+        try:
+            part = shape3d_of(piece)
+        except CaromError as exc:
+            raise CaromError(f"piece {k + 1}: {exc}") from None
+        parts.append(
+            (part, piece.get("offset", [0.0, 0.0, 0.0]), piece.get("orientation", [1.0, 0, 0, 0]))
+        )
+    return shapes3d.Compound(parts)
+
+
 def _one(key: str, value: Any) -> float:
     if isinstance(value, list):
         raise CaromError(f"{key} must be one number for a body of this shape; got {value!r}")
@@ -155,6 +205,11 @@ def _one(key: str, value: Any) -> float:
 
 def _add_shaped(world: World, b: Mapping[str, Any], material: Material | None) -> None:
     """Add the rigid bodies of a ``[[bodies]]`` entry of a shape other than a sphere."""
+    if world.dim == 3:
+        _add_shaped_3d(world, b, material)
+        return
+    if b.get("orientations") is not None:
+        raise CaromError("orientations are for 3D bodies; a 2D body takes angles = ... [rad]")
     shape = shape_of(b)
     kind = b.get("kind") or ("static" if b["static"] else "dynamic")
     positions = b["positions"]
@@ -192,6 +247,47 @@ def _add_shaped(world: World, b: Mapping[str, Any], material: Material | None) -
         )
 
 
+def _add_shaped_3d(world: World, b: Mapping[str, Any], material: Material | None) -> None:
+    """Add the 3D rigid bodies of a ``[[bodies]]`` entry: one shape, one material, per-body
+    positions, velocities, orientations and angular velocities (one for all, or one each)."""
+    shape = shape3d_of(b)
+    kind = b.get("kind") or ("static" if b["static"] else "dynamic")
+    if np.any(np.asarray(b.get("angles", 0.0)) != 0.0):
+        raise CaromError("angles are for 2D bodies; a 3D body takes orientations = [w, x, y, z]")
+    positions = b["positions"]
+    n = len(positions)
+    spins = b.get("angular_velocities", 0.0)
+    spins = [0.0, 0.0, 0.0] if isinstance(spins, int | float) and spins == 0 else spins
+    masses = _per_body("mass", b["mass"], n) if isinstance(b["mass"], list) else [b["mass"]] * n
+    density = b.get("density")
+    if kind == "dynamic" and density is None and b["mass"] is None:
+        density = 1.0
+    common = {"material": material, "kind": cast("Literal['dynamic', 'static', 'kinematic']", kind)}
+    if not isinstance(b["mass"], list):
+        world.add_bodies(
+            shape,
+            positions,
+            None if kind == "static" else b["velocities"],
+            orientations=b.get("orientations"),
+            angular_velocities=spins,
+            density=density,
+            mass=b["mass"],
+            **common,  # type: ignore[arg-type]
+        )
+        return
+    turns = b.get("orientations")
+    for i in range(n):  # a mass per body
+        world.add_body(
+            shape,
+            positions[i],
+            velocity=None if b["velocities"] is None else b["velocities"][i],
+            orientation=turns[i] if turns and isinstance(turns[0], list) else turns,
+            angular_velocity=spins[i] if spins and isinstance(spins[0], list) else spins,
+            mass=masses[i],
+            **common,  # type: ignore[arg-type]
+        )
+
+
 def _per_body(key: str, value: Any, n: int) -> list[Any]:
     if isinstance(value, list):
         if len(value) != n:
@@ -210,7 +306,11 @@ def count_bodies(scene: Scene) -> int:
         rows = p["rows"]
         n += rows * (rows + 1) // 2 if p["layout"] == "triangle" else rows * (p["columns"] or 1)
     for p in scene.pyramid:
-        n += p["rows"] * (p["rows"] + 1) // 2 * math.prod(p["repeat"])
+        rows = p["rows"]
+        if scene.world["dimension"] == 3:
+            n += rows * (rows + 1) * (2 * rows + 1) // 6  # the sum of squares
+        else:
+            n += rows * (rows + 1) // 2 * math.prod(p["repeat"])
     return int(n + sum(g["count"] for g in scene.gas))
 
 
@@ -221,7 +321,7 @@ def _placed_bodies(scene: Scene) -> Iterator[tuple[str, int, dict[str, Any]]]:
     for index, entry in enumerate(scene.bodies):
         yield "bodies", index, entry
     for index, entry in enumerate(scene.pyramid):
-        yield "pyramid", index, _pyramid(entry)
+        yield "pyramid", index, _pyramid(entry, dim)
     for table in GENERATORS:
         if table == "pyramid":
             continue
@@ -252,10 +352,14 @@ def _placed_bodies(scene: Scene) -> Iterator[tuple[str, int, dict[str, Any]]]:
             yield table, index, placed
 
 
-def _pyramid(entry: Mapping[str, Any]) -> dict[str, Any]:
+def _pyramid(entry: Mapping[str, Any], dim: int = 2) -> dict[str, Any]:
     """A ``[[pyramid]]`` as a ``[[bodies]]`` entry of boxes: ``rows`` rows of boxes standing on
     the line through ``base`` (the bottom row's centre, on the ground), ``rows - i`` boxes in
-    row ``i``, ``gap`` apart; repeated ``repeat = [nx, ny]`` times, ``pitch`` apart."""
+    row ``i``, ``gap`` apart; repeated ``repeat = [nx, ny]`` times, ``pitch`` apart. In 3D a
+    square pyramid: ``(rows - i)^2`` boxes in layer ``i``, standing on the plane z = base's z
+    around base's x and y (no repeats)."""
+    if dim == 3:
+        return _pyramid_3d(entry)
     size = entry["size"] if isinstance(entry["size"], list) else [entry["size"]]
     w, h = float(size[0]), float(size[-1])  # one number: a square
     rows, gap = int(entry["rows"]), float(entry["gap"])
@@ -281,6 +385,41 @@ def _pyramid(entry: Mapping[str, Any]) -> dict[str, Any]:
         "shape": "box",
         "size": [w, h],
         "radius": entry["radius"],
+        "positions": positions.tolist(),
+        "velocities": None,
+        "mass": None,
+        "density": entry["density"],
+        "material": entry["material"],
+        "static": False,
+    }
+
+
+def _pyramid_3d(entry: Mapping[str, Any]) -> dict[str, Any]:
+    """A 3D ``[[pyramid]]`` (:func:`_pyramid`)."""
+    size = entry["size"] if isinstance(entry["size"], list) else [entry["size"]]
+    if len(size) == 1:
+        size = size * 3
+    if len(size) != 3:
+        raise CaromError(f"a 3D pyramid's size is one length or [x, y, z] [m]; got {size!r}")
+    if list(entry["repeat"]) not in ([1], [1, 1]):
+        raise CaromError("repeat is for 2D pyramids; place more [[pyramid]] tables in 3D")
+    a, b, c = (float(s) for s in size)
+    rows, gap = int(entry["rows"]), float(entry["gap"])
+    base = np.asarray(entry["base"], float)
+    if base.shape != (3,):
+        raise CaromError(f"a 3D pyramid's base is [x, y, z] [m]; got {entry['base']!r}")
+    offsets = [
+        ((i - (n - 1) / 2.0) * (a + gap), (j - (n - 1) / 2.0) * (b + gap), (layer + 0.5) * c)
+        for layer in range(rows)
+        for n in [rows - layer]
+        for j in range(n)
+        for i in range(n)
+    ]
+    positions = base + np.array(offsets)
+    return {
+        "shape": "box",
+        "size": [a, b, c],
+        "radius": None,
         "positions": positions.tolist(),
         "velocities": None,
         "mass": None,

@@ -189,17 +189,20 @@ class Scene:
                     "",
                     index,
                 )
-        for index in range(len(self.pyramid)):
-            if dim != 2:
-                raise where.error(
-                    ["pyramid"], "stacks boxes, which are 2D", "use it in a 2D world", index
-                )
+        flat = ("circle", "polygon", "segment", "chain")
         for index, entry in enumerate(self.bodies):
-            if entry["shape"] != "sphere" and dim != 2:
+            if entry["shape"] in flat and dim != 2:
                 raise where.error(
                     ["bodies", "shape"],
-                    f"{entry['shape']!r} is a 2D shape; 3D worlds take spheres only",
-                    'use shape = "sphere", or a 2D world',
+                    f"{entry['shape']!r} is a 2D shape",
+                    "in 3D use ball, box, capsule, hull or compound (or sphere), or a 2D world",
+                    index,
+                )
+            if entry["shape"] in ("ball", "hull") and dim != 3:
+                raise where.error(
+                    ["bodies", "shape"],
+                    f"{entry['shape']!r} is a 3D shape",
+                    "in 2D use circle or polygon, or a 3D world",
                     index,
                 )
             for key in ("positions", "velocities"):

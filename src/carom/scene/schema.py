@@ -163,8 +163,8 @@ def _number_or_list(value: Any) -> str | None:
 
 def _size(value: Any) -> str | None:
     items = value if isinstance(value, list) else [value]
-    if not items or len(items) > 2:
-        return f"must be a length or [width, height], got {_show(value)}"
+    if not items or len(items) > 3:
+        return f"must be a length, [width, height] or [x, y, z] lengths, got {_show(value)}"
     for item in items:
         problem = _positive(item)
         if problem:
@@ -199,6 +199,22 @@ def _body(value: Any) -> str | None:
     return problem.replace("piece 1: ", "") if problem else None
 
 
+def _spins(value: Any) -> str | None:
+    """One spin [rad/s] or one per body (2D), or one [wx, wy, wz] or one per body (3D)."""
+    if isinstance(value, list) and value and isinstance(value[0], list):
+        return _rows(value)
+    return _number_or_list(value)
+
+
+def _turns(value: Any) -> str | None:
+    """One quaternion [w, x, y, z] for every body, or one per body."""
+    rows = value if isinstance(value, list) and value and isinstance(value[0], list) else [value]
+    for row in rows:
+        if not isinstance(row, list) or len(row) != 4 or _vector(row):
+            return f"must be a quaternion [w, x, y, z] or a list of them, got {_show(value)}"
+    return None
+
+
 def _region(value: Any) -> str | None:
     if not isinstance(value, list) or len(value) != 2 or any(_vector(c) for c in value):
         return f"must be [[low corner], [high corner]], got {_show(value)}"
@@ -206,9 +222,13 @@ def _region(value: Any) -> str | None:
 
 
 #: shapes of [[bodies]] (docs/scenes.md): spheres for either engine, the rest rigid bodies
-SHAPES = ("sphere", "circle", "capsule", "box", "polygon", "compound", "segment", "chain")
+#: (circle, polygon, segment and chain are 2D; ball and hull 3D; the others either)
+SHAPES = (
+    "sphere", "circle", "capsule", "box", "polygon", "compound", "segment", "chain", "ball",
+    "hull",
+)  # fmt: skip
 #: shapes a compound's pieces may have, and their keys
-PIECE_SHAPES = ("circle", "capsule", "box", "polygon")
+PIECE_SHAPES = ("circle", "capsule", "box", "polygon", "ball", "hull")
 PIECE_KEYS: dict[str, Check] = {
     "shape": _choice(*PIECE_SHAPES),
     "size": _size,
@@ -216,6 +236,7 @@ PIECE_KEYS: dict[str, Check] = {
     "vertices": _rows,
     "offset": _vector,
     "angle": _number,
+    "orientation": _turns,
 }
 
 SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
@@ -246,6 +267,7 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "beta": (_number, False, None),
         "friction": (_number, False, None),
         "beta0": (_number, False, None),
+        "rolling": (_not_negative, False, 0.0),
     },
     "bodies": {
         "shape": (_choice(*SHAPES), False, "sphere"),
@@ -262,7 +284,8 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "loop": (_boolean, False, False),
         "density": (_positive, False, None),
         "angles": (_number_or_list, False, 0.0),
-        "angular_velocities": (_number_or_list, False, 0.0),
+        "orientations": (_turns, False, None),
+        "angular_velocities": (_spins, False, 0.0),
     },
     "row": {
         "count": (_count, True, None),
