@@ -10,8 +10,9 @@ import pytest
 
 import carom
 from carom.errors import CaromError
+from carom.geometry.polyhedron import polyhedron_features
 from carom.scene import find_scene, load_scene
-from carom.shapes3d import rotation_matrix
+from carom.shapes3d import Hull, rotation_matrix
 
 HEADER = """
 [world]
@@ -114,7 +115,9 @@ def test_bad_3d_bodies_are_named_by_file_and_table(tmp_path: Path, body: str, pa
     assert "scene.toml" in str(caught.value)
 
 
-@pytest.mark.parametrize("name", ["dominoes-3d", "pyramid-3d", "wall-and-ball"])
+@pytest.mark.parametrize(
+    "name", ["billiards-3d", "dominoes-3d", "pyramid-3d", "tumbler-3d", "wall-and-ball"]
+)
 def test_each_built_in_3d_scene_runs_a_little(name: str) -> None:
     scene_ = load_scene(find_scene(name))
     assert scene_.scene["title"]
@@ -146,3 +149,39 @@ def test_the_3d_dominoes_all_fall() -> None:
     q = world.orientations[:30]
     tilt = 2.0 * np.degrees(np.arccos(np.clip(np.abs(q[:, 0]), 0, 1)))
     assert np.all(tilt > 45.0)  # every domino lies toppled
+
+
+@pytest.mark.needs_jit  # 240 steps of 217 bodies
+def test_the_3d_tumbler_keeps_its_rocks_inside_the_turning_drum() -> None:
+    # the drum's inner faces are 2 m from its centre; every rock's centre stays within 2 m
+    # less the rock's least depth (its centre of mass to its nearest face), in the drum's own
+    # (turning) frame, to the soft contact's overlap (a few millimetres at most)
+    scene_ = load_scene(find_scene("tumbler-3d"))
+    rock = Hull(scene_.lattice[0]["body"]["vertices"])
+    faces = polyhedron_features(rock.vertices, rock.triangles)
+    depth = float(np.min(faces.offsets - faces.normals @ rock.centroid))
+    world = scene_.build()
+    world.run(until=4.0)
+    drum = rotation_matrix(world.orientations[0])
+    inside = (world.positions[1:] - world.positions[0]) @ drum  # rows: drum-frame coordinates
+    assert np.abs(inside).max() < 2.0 - depth + 0.005
+    # the drum turned 25 degrees a second for 4 s, about y
+    angle = 2.0 * math.degrees(math.acos(min(1.0, abs(float(world.orientations[0, 0])))))
+    assert angle == pytest.approx(100.0, rel=1e-12)
+
+
+def test_billiard_balls_slide_roll_and_stop_on_the_cloth() -> None:
+    # after the break the balls slide, friction (0.2) turns sliding into rolling (the contact
+    # point at rest: v + w x (-R z) = 0), and the cloth's rolling resistance stops them
+    world = load_scene(find_scene("billiards-3d")).build()
+    radius = 0.028575
+    world.run(until=3.0)
+    v, w = world.velocities, world.angular_velocities
+    moving = np.linalg.norm(v, axis=1) > 0.05
+    assert moving.any()
+    slip = v + np.cross(w, [0.0, 0.0, -radius])
+    assert np.abs(slip[moving][:, :2]).max() < 0.01 * np.linalg.norm(v[moving], axis=1).max()
+    world.run(until=10.0)
+    assert np.linalg.norm(world.velocities, axis=1).max() < 1e-3
+    # they stayed on the cloth: centres a radius above it, less the soft contact's sink
+    assert world.positions[:, 2] == pytest.approx(radius, abs=1e-4)
