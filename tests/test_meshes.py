@@ -11,7 +11,15 @@ import pytest
 
 from carom.errors import CaromError
 from carom.geometry.mass3d import polyhedron_integrals
-from carom.meshes import CACHE_SUFFIX, Mesh, decompose, load_mesh
+from carom.meshes import (
+    CACHE_SUFFIX,
+    Mesh,
+    bowl_mesh,
+    decompose,
+    load_mesh,
+    save_obj,
+    torus_mesh,
+)
 from carom.shapes3d import Box
 
 trimesh = pytest.importorskip("trimesh")
@@ -128,3 +136,62 @@ def test_open_and_inward_meshes_cannot_be_solids() -> None:
         decompose(Mesh(piece.vertices, piece.triangles[1:]))
     with pytest.raises(CaromError, match="turn inward"):
         decompose(Mesh(piece.vertices, piece.triangles[:, [0, 2, 1]]))
+
+
+def test_generated_torus_and_bowl(tmp_path: Path) -> None:
+    # the torus generator's polyhedron: the volume of a ring of n sections of a k-gon is
+    # 2 pi^2 R r^2 times (n sin(2 pi/n) / 2 pi) (k sin(2 pi/k) / 2 pi) (Pappus, on polygons)
+    major, minor, n, k = 0.15, 0.04, 16, 8
+    torus = torus_mesh(major, minor, n, k)
+    assert torus.is_closed()
+    solid = polyhedron_integrals(np.asarray(torus.vertices), np.asarray(torus.triangles))
+    shortfall = (n * math.sin(2 * math.pi / n) / (2 * math.pi)) * (
+        k * math.sin(2 * math.pi / k) / (2 * math.pi)
+    )
+    # the polygon's centroid sits off the ring's centre line only through its own symmetry:
+    # none for a regular k-gon, so Pappus holds with the polygon's area and the n-gon's sides
+    area = 0.5 * k * minor**2 * math.sin(2 * math.pi / k)
+    pappus = n * math.sin(2 * math.pi / n) * major * area  # n prisms' frusta, exactly
+    assert solid.volume == pytest.approx(pappus, rel=1e-12)
+    assert pappus == pytest.approx(2 * math.pi**2 * major * minor**2 * shortfall, rel=1e-12)
+    # the bowl: open, every triangle facing its centre (the side bodies stay on)
+    bowl = bowl_mesh(0.5, 24, 6)
+    assert not bowl.is_closed()
+    corners = np.asarray(bowl.vertices)[np.asarray(bowl.triangles)]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    assert np.all(np.einsum("ij,ij->i", normal, -corners.mean(axis=1)) > 0.0)
+    # written as OBJ and read back: the same mesh
+    save_obj(torus, tmp_path / "ring.obj")
+    again = load_mesh(tmp_path / "ring.obj")
+    assert np.asarray(again.triangles).shape == np.asarray(torus.triangles).shape
+    back = polyhedron_integrals(np.asarray(again.vertices), np.asarray(again.triangles))
+    assert back.volume == pytest.approx(solid.volume, rel=1e-10)
+
+
+def test_pieces_go_to_the_users_cache_when_the_folder_cannot_take_them(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # the mesh's folder refuses the cache (here a folder sits where its temporary file would
+    # go); the pieces are kept in $XDG_CACHE_HOME/carom/pieces instead and reused from there
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    folder = tmp_path / "shipped"
+    folder.mkdir()
+    path = folder / "ring.obj"
+    save_obj(torus_mesh(0.15, 0.04, 12, 6), path)
+    (folder / ("ring.obj" + CACHE_SUFFIX + ".partial.npz")).mkdir()
+    body = decompose(path)
+    assert not (folder / ("ring.obj" + CACHE_SUFFIX)).exists()
+    kept = list((tmp_path / "cache" / "carom" / "pieces").glob("*" + CACHE_SUFFIX))
+    assert len(kept) == 1
+
+    def refuse(*args: object, **kwargs: object) -> None:
+        raise AssertionError("CoACD ran again")
+
+    monkeypatch.setattr("carom.meshes._run_coacd", refuse)
+    again = decompose(path)
+    assert len(again.pieces()) == len(body.pieces())
+    # a mesh with no file at all is kept there too
+    monkeypatch.undo()
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    decompose(torus_mesh(0.2, 0.05, 12, 6))
+    assert len(list((tmp_path / "cache" / "carom" / "pieces").glob("*" + CACHE_SUFFIX))) == 2

@@ -29,7 +29,7 @@ from carom.errors import CaromError
 from carom.geometry.mass3d import SolidIntegrals, check_closed, polyhedron_integrals
 from carom.shapes3d import Compound, ConvexPiece3D, Hull, Shape3D
 
-__all__ = ["CACHE_SUFFIX", "Mesh", "decompose", "load_mesh"]
+__all__ = ["CACHE_SUFFIX", "Mesh", "bowl_mesh", "decompose", "load_mesh", "save_obj", "torus_mesh"]
 
 FloatArray = NDArray[np.float64]
 
@@ -167,14 +167,29 @@ def _read_cache(file: Path, key: str) -> list[FloatArray] | None:
     return np.split(np.asarray(points, float), np.cumsum(counts)[:-1])
 
 
-def _write_cache(file: Path, key: str, pieces: list[FloatArray]) -> None:
-    """Keep ``pieces`` in ``file`` (written whole to a temporary file, then renamed)."""
+def _write_cache(file: Path, key: str, pieces: list[FloatArray]) -> bool:
+    """Keep ``pieces`` in ``file`` (written whole to a temporary file, then renamed); False
+    when the folder cannot be written (a mesh shipped in a read-only install)."""
     partial = file.with_name(file.name + ".partial.npz")
     counts = np.array([p.shape[0] for p in pieces], np.int64)
-    np.savez_compressed(
-        partial, format=_CACHE_FORMAT, key=key, points=np.concatenate(pieces), counts=counts
-    )
-    os.replace(partial, file)
+    try:
+        file.parent.mkdir(parents=True, exist_ok=True)
+        np.savez_compressed(
+            partial, format=_CACHE_FORMAT, key=key, points=np.concatenate(pieces), counts=counts
+        )
+        os.replace(partial, file)
+    except OSError:
+        if partial.is_file():
+            partial.unlink()
+        return False
+    return True
+
+
+def _user_cache(key: str) -> Path:
+    """Where pieces are kept when the mesh's own folder cannot be written, or the mesh has
+    no file: ``$XDG_CACHE_HOME/carom/pieces/KEY.npz`` (default ``~/.cache``)."""
+    home = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(home) / "carom" / "pieces" / f"{key[:32]}{CACHE_SUFFIX}"
 
 
 def decompose(
@@ -196,7 +211,9 @@ def decompose(
     seed : int
         CoACD's random seed: the same mesh, threshold and seed give the same pieces.
     cache : bool
-        For a file, keep the pieces beside it (``NAME`` + :data:`CACHE_SUFFIX`) and reuse them.
+        Keep the pieces and reuse them: beside the mesh's file (``NAME`` +
+        :data:`CACHE_SUFFIX`), or in the user's cache (``~/.cache/carom/pieces``, by a hash of
+        the mesh and the settings) when the mesh has no file or its folder cannot be written.
 
     Returns
     -------
@@ -216,12 +233,19 @@ def decompose(
     if not (np.isfinite(threshold) and 0.0 < threshold < 1.0):
         raise CaromError(f"threshold must be in (0, 1); got {threshold!r}")
     key = _key(mesh, threshold, seed)
-    kept = file.with_name(file.name + CACHE_SUFFIX) if file is not None and cache else None
-    pieces = _read_cache(kept, key) if kept is not None else None
+    places = [] if not cache else [_user_cache(key)]
+    if cache and file is not None:
+        places.insert(0, file.with_name(file.name + CACHE_SUFFIX))
+    pieces = None
+    for kept in places:
+        pieces = _read_cache(kept, key)
+        if pieces is not None:
+            break
     if pieces is None:
         pieces = _run_coacd(vertices, triangles, threshold, seed)
-        if kept is not None:
-            _write_cache(kept, key, pieces)
+        for kept in places:  # beside the file if its folder can be written, else the user's
+            if _write_cache(kept, key, pieces):
+                break
     return Compound([Hull(points) for points in pieces], solid=solid)
 
 
@@ -238,3 +262,86 @@ def _run_coacd(
     coacd.set_log_level("error")
     parts = coacd.run_coacd(coacd.Mesh(vertices, triangles), threshold=threshold, seed=seed)
     return [np.asarray(points, float) for points, _faces in parts]
+
+
+def torus_mesh(major: float, minor: float, around: int = 24, across: int = 12) -> Mesh:
+    """A closed polyhedral torus about the z axis: ``around`` sections of the ring, each a
+    regular ``across``-gon of circumradius ``minor`` [m] centred ``major`` [m] from the axis;
+    triangles outward. Its volume is ``2 pi^2 R r^2`` times the polygons' shortfalls
+    ``(n sin(2 pi/n) / 2 pi)`` for each (tests/test_meshes.py)."""
+    if not (0.0 < minor < major) or around < 3 or across < 3:
+        raise CaromError(
+            f"a torus needs 0 < minor < major and at least 3 sections each way; got major "
+            f"{major!r}, minor {minor!r}, {around} x {across}"
+        )
+    u = 2.0 * np.pi * np.arange(around) / around
+    v = 2.0 * np.pi * np.arange(across) / across
+    ring = major + minor * np.cos(v)
+    vertices = np.stack(
+        [
+            np.outer(np.cos(u), ring).ravel(),
+            np.outer(np.sin(u), ring).ravel(),
+            np.tile(minor * np.sin(v), around),
+        ],
+        axis=1,
+    )
+    triangles = []
+    for i in range(around):
+        for j in range(across):
+            a = i * across + j
+            b = ((i + 1) % around) * across + j
+            c = ((i + 1) % around) * across + (j + 1) % across
+            d = i * across + (j + 1) % across
+            triangles += [[a, b, c], [a, c, d]]
+    return Mesh(vertices, np.array(triangles, np.int64))
+
+
+def bowl_mesh(radius: float, around: int = 32, down: int = 8) -> Mesh:
+    """An open hemispherical bowl of ``radius`` [m], rim at z = 0 and bottom at ``-radius``:
+    ``down`` rings of ``around`` corners and the bottom point, triangles facing the inside
+    (where bodies stay, counter-clockwise seen from there). Static only (it has no
+    volume)."""
+    if not radius > 0.0 or around < 3 or down < 1:
+        raise CaromError(
+            f"a bowl needs a positive radius and at least 3 x 1 sections; got {radius!r}, "
+            f"{around} x {down}"
+        )
+    rows = []
+    for k in range(down):
+        polar = 0.5 * np.pi * (1.0 - k / down)  # from the rim (pi/2 from the bottom) down
+        u = 2.0 * np.pi * np.arange(around) / around
+        rows.append(
+            np.stack(
+                [
+                    radius * np.sin(polar) * np.cos(u),
+                    radius * np.sin(polar) * np.sin(u),
+                    np.full(around, -radius * np.cos(polar)),
+                ],
+                axis=1,
+            )
+        )
+    vertices = np.concatenate([*rows, [[0.0, 0.0, -radius]]])
+    bottom = vertices.shape[0] - 1
+    triangles = []
+    for k in range(down - 1):
+        for i in range(around):
+            a = k * around + i
+            b = k * around + (i + 1) % around
+            c = (k + 1) * around + (i + 1) % around
+            d = (k + 1) * around + i
+            triangles += [[a, b, c], [a, c, d]]
+    last = (down - 1) * around
+    for i in range(around):
+        triangles.append([last + i, last + (i + 1) % around, bottom])
+    return Mesh(vertices, np.array(triangles, np.int64))
+
+
+def save_obj(mesh: Mesh, path: str | os.PathLike[str]) -> None:
+    """Write ``mesh`` as a Wavefront OBJ file (vertices to 12 significant digits), whole or
+    not at all."""
+    file = Path(path)
+    lines = [f"v {x:.12g} {y:.12g} {z:.12g}" for x, y, z in np.asarray(mesh.vertices)]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in np.asarray(mesh.triangles)]
+    partial = file.with_name(file.name + ".partial")
+    partial.write_text("\n".join(lines) + "\n")
+    os.replace(partial, file)

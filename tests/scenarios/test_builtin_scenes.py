@@ -38,7 +38,15 @@ RIGID = {
     "tumbler",
 }
 #: the 3D rigid-body scenes (tests/scene/test_rigid3d_scenes.py runs them)
-RIGID3D = {"billiards-3d", "dominoes-3d", "pyramid-3d", "tumbler-3d", "wall-and-ball"}
+RIGID3D = {
+    "billiards-3d",
+    "bowl",
+    "dominoes-3d",
+    "pyramid-3d",
+    "ring-toss",
+    "tumbler-3d",
+    "wall-and-ball",
+}
 
 
 def test_the_built_in_scenes_are_all_there() -> None:

@@ -116,7 +116,16 @@ def test_bad_3d_bodies_are_named_by_file_and_table(tmp_path: Path, body: str, pa
 
 
 @pytest.mark.parametrize(
-    "name", ["billiards-3d", "dominoes-3d", "pyramid-3d", "tumbler-3d", "wall-and-ball"]
+    "name",
+    [
+        "billiards-3d",
+        "bowl",
+        "dominoes-3d",
+        "pyramid-3d",
+        "ring-toss",
+        "tumbler-3d",
+        "wall-and-ball",
+    ],
 )
 def test_each_built_in_3d_scene_runs_a_little(name: str) -> None:
     scene_ = load_scene(find_scene(name))
@@ -185,3 +194,27 @@ def test_billiard_balls_slide_roll_and_stop_on_the_cloth() -> None:
     assert np.linalg.norm(world.velocities, axis=1).max() < 1e-3
     # they stayed on the cloth: centres a radius above it, less the soft contact's sink
     assert world.positions[:, 2] == pytest.approx(radius, abs=1e-4)
+
+
+@pytest.mark.needs_jit  # 240 steps of 64 balls on 264 triangles
+def test_balls_poured_into_the_bowl_settle_inside_it() -> None:
+    # every ball ends at rest inside the bowl (a sphere of 0.5 m about its centre, rim at
+    # z = 0.6): its centre within 0.5 m less its radius of the bowl's centre, below the rim
+    world = load_scene(find_scene("bowl")).build()
+    world.run(until=4.0)
+    balls = world.positions[1:]
+    assert np.linalg.norm(balls - [1.0, 1.0, 0.6], axis=1).max() <= 0.5 - 0.04 + 1e-3
+    assert balls[:, 2].max() < 0.6
+    assert np.linalg.norm(world.velocities, axis=1).max() < 1e-3
+
+
+@pytest.mark.needs_jit  # concave rings: 12 pieces each
+def test_rings_tossed_over_the_pole_fall_around_it() -> None:
+    # the rings (hole 0.11 m in radius) fall around the pole (0.02 m): they end stacked on the
+    # floor with the pole through their holes (centres within the hole's clearance)
+    world = load_scene(find_scene("ring-toss")).build()
+    world.run(until=3.0)
+    rings = world.positions[1:]
+    assert np.hypot(rings[:, 0] - 1.0, rings[:, 1] - 1.0).max() < 0.11 - 0.02
+    assert np.sort(rings[:, 2])[0] == pytest.approx(0.04, abs=1e-3)  # the lowest on the floor
+    assert rings[:, 2].max() < 0.3  # all slid down the pole

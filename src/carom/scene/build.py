@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Mapping
+from pathlib import Path
 from typing import Any, Literal, cast
 
 import numpy as np
@@ -15,6 +16,7 @@ from carom.engines.rigid.settings import RigidSettings
 from carom.errors import CaromError
 from carom.limits import check_body_count
 from carom.materials import Material
+from carom.meshes import Mesh, decompose, load_mesh
 from carom.scene import layouts
 from carom.scene.load import Scene
 from carom.scene.schema import GENERATORS, Locator, SceneError
@@ -70,7 +72,7 @@ def build_world(scene: Scene) -> World:
         material = materials.get(b["material"]) if b["material"] else None
         try:
             if b.get("shape", "sphere") != "sphere":
-                _add_shaped(world, b, material)
+                _add_shaped(world, _with_file(b, scene.source), material)
             elif b["radius"] is None:
                 raise CaromError("radius is required for spheres: add radius = ... [m]")
             elif b["static"] or b.get("kind") == "static":
@@ -151,11 +153,21 @@ def shape_of(entry: Mapping[str, Any]) -> shapes.Shape2D:
     return shapes.Compound(parts)
 
 
-def shape3d_of(entry: Mapping[str, Any]) -> shapes3d.Shape3D:
+def _with_file(entry: dict[str, Any], source: str) -> dict[str, Any]:
+    """``entry`` with its ``file`` (a mesh) resolved against the scene file's folder."""
+    file = entry.get("file")
+    if file is None or Path(file).is_absolute() or source.startswith("<"):
+        return entry
+    return entry | {"file": str(Path(source).parent / file)}
+
+
+def shape3d_of(entry: Mapping[str, Any]) -> shapes3d.Shape3D | Mesh:
     """The 3D shape a ``[[bodies]]`` entry (or a compound's piece) describes: ``ball``
     (radius), ``box`` (size = [x, y, z]), ``capsule`` (size = the length between the caps'
-    centres, along z; radius), ``hull`` (vertices = its points) or ``compound`` (pieces, each
-    with an offset = [x, y, z] and an orientation = [w, x, y, z])."""
+    centres, along z; radius), ``hull`` (vertices = its points), ``compound`` (pieces, each
+    with an offset = [x, y, z] and an orientation = [w, x, y, z]) or ``mesh`` (a ``file``:
+    a static body's surface as it is; a dynamic body's closed mesh cut into convex pieces,
+    :func:`carom.meshes.decompose`, kept beside the file)."""
     kind = entry["shape"]
     size = entry.get("size")
     radius = entry.get("radius")
@@ -180,6 +192,12 @@ def shape3d_of(entry: Mapping[str, Any]) -> shapes3d.Shape3D:
         return shapes3d.Capsule(sizes[0], _one("radius", need("radius", radius, "... [m]")))
     if kind == "hull":
         return shapes3d.Hull(need("vertices", entry.get("vertices"), "[[x, y, z], ...] [m]"))
+    if kind == "mesh":
+        file = need("file", entry.get("file"), '"bowl.obj" (beside the scene file)')
+        dynamic = (entry.get("kind") or ("static" if entry.get("static") else "dynamic")) == (
+            "dynamic"
+        )
+        return decompose(file) if dynamic else load_mesh(file)
     if kind != "compound":
         raise CaromError(
             f"a {kind} is a 2D shape; in 3D use ball, box, capsule, hull or compound "

@@ -198,7 +198,7 @@ class Scene:
                     "in 3D use ball, box, capsule, hull or compound (or sphere), or a 2D world",
                     index,
                 )
-            if entry["shape"] in ("ball", "hull") and dim != 3:
+            if entry["shape"] in ("ball", "hull", "mesh") and dim != 3:
                 raise where.error(
                     ["bodies", "shape"],
                     f"{entry['shape']!r} is a 3D shape",

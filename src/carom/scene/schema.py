@@ -225,7 +225,7 @@ def _region(value: Any) -> str | None:
 #: (circle, polygon, segment and chain are 2D; ball and hull 3D; the others either)
 SHAPES = (
     "sphere", "circle", "capsule", "box", "polygon", "compound", "segment", "chain", "ball",
-    "hull",
+    "hull", "mesh",
 )  # fmt: skip
 #: shapes a compound's pieces may have, and their keys
 PIECE_SHAPES = ("circle", "capsule", "box", "polygon", "ball", "hull")
@@ -285,6 +285,7 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "density": (_positive, False, None),
         "angles": (_number_or_list, False, 0.0),
         "orientations": (_turns, False, None),
+        "file": (_text, False, None),
         "angular_velocities": (_spins, False, 0.0),
     },
     "row": {
