@@ -5,6 +5,10 @@ handed to the encoder one by one, so memory stays flat for MP4 however long the 
 body is a shaded disk: seven nested disks, each smaller, brighter and shifted towards the
 light, which reads as a lit sphere at a glance; a rigid body of another shape is its outline
 (rounded corners drawn as arcs), turned by its angle, with a lighter inset towards the light.
+In 3D a rigid body is drawn as its pieces' shaded faces (flat shading by the light, the faces
+turned away from the camera left out, all faces of the picture drawn far to near): a polytope
+by its own triangles, a ball or capsule tessellated; static and kinematic bodies are
+translucent, so a drum or a bowl shows what it holds.
 Colour is speed (one scale for the whole
 film, shown by the colour bar); static bodies are grey. In 3D the camera looks at the box
 from above and in front, in perspective: bodies are drawn far to near, scaled by their
@@ -25,6 +29,7 @@ from numpy.typing import NDArray
 from carom.bodies import PIECE_ARRAYS, Pieces, pieces_from_arrays
 from carom.errors import CaromError
 from carom.shapes import ConvexPiece
+from carom.shapes3d import ConvexPiece3D, rotation_matrix
 from carom.viz import require_matplotlib
 
 __all__ = ["need_encoder", "write_animation"]
@@ -95,7 +100,7 @@ def write_animation(
         times = f["particles/all/position/time"][:]
         positions = f["particles/all/position/value"]
         velocities = f["particles/all/velocity/value"]
-        angles = f["particles/all/orientation/value"] if scene.dim == 2 else None
+        angles = f["particles/all/orientation/value"]  # angles (2D), quaternions (3D)
         if fps is None:
             dt = float(np.median(np.diff(times))) if len(times) > 1 else 1.0
             fps = min(25.0 if fmt == "gif" else 60.0, max(10.0, 1.0 / dt if dt > 0 else 10.0))
@@ -192,12 +197,12 @@ class TrajectoryScene:
         self.radius = radius
         self.moving = np.isfinite(mass)
         self.speed_scale = 1.0
-        # 3D rigid bodies are drawn as their bounding balls until shaded polyhedra come
-        flat = cast("list[tuple[ConvexPiece, ...]] | None", pieces if dim == 2 else None)
-        drawn = flat or [() for _ in range(len(radius))]
-        #: bodies drawn as shaded disks (spheres), and the outlines of the others
-        self.round = np.array([not body for body in drawn], dtype=bool)
-        self.outlines = Outlines(drawn)
+        every = list(pieces) if pieces else [() for _ in range(len(radius))]
+        flat = cast("list[tuple[ConvexPiece, ...]]", every if dim == 2 else [() for _ in every])
+        #: bodies drawn as shaded disks (spheres), the outlines of 2D bodies, the faces of 3D ones
+        self.round = np.array([not body for body in every], dtype=bool)
+        self.outlines = Outlines(flat)
+        self.facets = Facets(cast("list[tuple[ConvexPiece3D, ...]]", every) if dim == 3 else [])
 
     @classmethod
     def read(cls, f: Any) -> TrajectoryScene:
@@ -287,6 +292,98 @@ class Outlines:
         sizes = [len(strip) for strip in closed]
         points = np.concatenate(closed) if closed else np.zeros((0, 2))
         return points, np.repeat(self.body, sizes), np.cumsum(sizes, dtype=np.int64)[:-1]
+
+
+class Facets:
+    """The faces of the 3D rigid bodies' pieces, in their frames: a polytope's own triangles,
+    a ball as a 12 x 6 globe, a capsule as a globe split at its equator and stretched along
+    its axis (both convex, outward).
+
+    Attributes
+    ----------
+    corners : (T, 3, 3) float64
+        Each triangle's corners in its body's frame [m].
+    body : (T,) int64
+        Each triangle's body.
+    """
+
+    def __init__(self, pieces: list[tuple[ConvexPiece3D, ...]]) -> None:
+        corners: list[FloatArray] = [np.zeros((0, 3, 3))]
+        body: list[NDArray[np.int64]] = [np.zeros(0, np.int64)]
+        for i, shapes in enumerate(pieces):
+            for piece in shapes:
+                triangles = _tessellate(piece)
+                corners.append(triangles)
+                body.append(np.full(len(triangles), i, np.int64))
+        self.corners = np.concatenate(corners)
+        self.body = np.concatenate(body)
+
+    def placed(
+        self, positions: FloatArray, orientations: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """The triangles (T, 3, 3) and their unit outward normals (T, 3) in the world, bodies
+        at ``positions`` (N, 3) [m] turned by quaternions ``orientations`` (N, 4)."""
+        turns = np.zeros((len(orientations), 3, 3))
+        for i, q in enumerate(orientations):
+            turns[i] = rotation_matrix(q)
+        r = turns[self.body]  # (T, 3, 3)
+        world = np.einsum("tij,tkj->tki", r, self.corners) + positions[self.body][:, None, :]
+        normal = np.cross(world[:, 1] - world[:, 0], world[:, 2] - world[:, 0])
+        size = np.linalg.norm(normal, axis=1, keepdims=True)
+        return world, normal / np.where(size > 0.0, size, 1.0)
+
+
+def _globe(around: int = 12, rings: int = 6) -> tuple[FloatArray, NDArray[np.int64]]:
+    """A unit globe's corners (around (rings - 1) + 2, 3) and outward triangles."""
+    polar = np.pi * np.arange(1, rings) / rings
+    u = 2.0 * np.pi * np.arange(around) / around
+    body = np.stack(
+        [
+            np.outer(np.sin(polar), np.cos(u)).ravel(),
+            np.outer(np.sin(polar), np.sin(u)).ravel(),
+            np.repeat(np.cos(polar), around),
+        ],
+        axis=1,
+    )
+    points = np.concatenate([[[0.0, 0.0, 1.0]], body, [[0.0, 0.0, -1.0]]])
+    bottom = len(points) - 1
+    faces = []
+    for i in range(around):
+        j = (i + 1) % around
+        faces.append([0, 1 + i, 1 + j])
+        for k in range(rings - 2):
+            a, b = 1 + k * around + i, 1 + k * around + j
+            c, d = a + around, b + around
+            faces += [[a, c, d], [a, d, b]]
+        last = 1 + (rings - 2) * around
+        faces.append([last + i, bottom, last + j])
+    return points, np.array(faces, np.int64)
+
+
+def _tessellate(piece: ConvexPiece3D) -> FloatArray:
+    """A piece's triangles (T, 3, 3) in its body's frame [m]."""
+    v = np.asarray(piece.vertices, float)
+    if len(v) >= 3:
+        return v[np.asarray(piece.triangles, np.int64)]
+    points, faces = _globe()
+    points = points * piece.radius
+    if len(v) == 1:
+        ball: FloatArray = (points + v[0])[faces]
+        return ball
+    # a capsule: the upper half globe at one end, the lower at the other, along the axis
+    axis = v[1] - v[0]
+    length = float(np.linalg.norm(axis))
+    z = np.array([0.0, 0.0, 1.0])
+    k = np.cross(z, axis / length)
+    c = float(z @ axis) / length
+    if c < -1.0 + 1e-12:
+        turn = np.diag([1.0, -1.0, -1.0])
+    else:
+        skew = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+        turn = np.eye(3) + skew + skew @ skew / (1.0 + c)
+    stretched = points + np.where(points[:, 2:] >= 0.0, 0.5, -0.5) * length * z
+    placed: FloatArray = (stretched @ turn.T + 0.5 * (v[0] + v[1]))[faces]
+    return placed
 
 
 def _place(
@@ -414,6 +511,8 @@ class _Painter:
         self.ax.add_collection(self.disks)
         from matplotlib.collections import PolyCollection
 
+        self.faces: Any = PolyCollection([], linewidths=0.3, zorder=2)
+        self.ax.add_collection(self.faces)
         self.shapes: Any = PolyCollection([], linewidths=0.4, zorder=2)
         self.insets: Any = PolyCollection([], linewidths=0, zorder=2)
         self.ax.add_collection(self.shapes)
@@ -447,6 +546,9 @@ class _Painter:
             self.shapes.set_edgecolor(colour * 0.45)
             self.insets.set_verts(outlines.placed(outlines.inset + shift, positions, turn))
             self.insets.set_facecolor(colour + (1.0 - colour) * 0.12)
+        if self.camera is not None and len(scene.facets.body):
+            turns = np.zeros((len(positions), 4)) if angles is None else np.asarray(angles)
+            self._draw_faces(positions, turns, every)
         positions, velocities = positions[scene.round], velocities[scene.round]
         base = every[scene.round]
         radius = scene.radius[scene.round]
@@ -481,6 +583,39 @@ class _Painter:
         canvas.draw()
         rgba = np.asarray(canvas.buffer_rgba())
         return rgba[..., :3].copy()
+
+    def _draw_faces(
+        self, positions: FloatArray, orientations: FloatArray, colours: FloatArray
+    ) -> None:
+        """The 3D rigid bodies' faces that look at the camera, shaded by the light, far to
+        near (the painter's algorithm), dimmed with distance as the balls are."""
+        assert self.camera is not None
+        facets = self.scene.facets
+        world, normal = facets.placed(np.asarray(positions, float), orientations)
+        middle = world.mean(axis=1)
+        facing = np.einsum("ij,ij->i", normal, self.camera.eye - middle) > 0.0
+        world, normal, middle = world[facing], normal[facing], middle[facing]
+        owner = facets.body[facing]
+        screen, depth = self.camera.project(world.reshape(-1, 3))
+        screen = screen.reshape(-1, 3, 2)
+        centre_depth = depth.reshape(-1, 3).mean(axis=1)
+        order = np.argsort(-centre_depth, kind="stable")  # far first
+        light = np.array([-0.35, -0.45, 0.82])  # from above, front left
+        light /= np.linalg.norm(light)
+        lit = 0.35 + 0.65 * np.clip(normal @ light, 0.0, 1.0)
+        near, far = self.depth_range
+        dim = 1.0 - 0.4 * np.clip((centre_depth - near) / (far - near), 0.0, 1.0)
+        face = np.ones((len(owner), 4))
+        face[:, :3] = np.clip(colours[owner] * (lit * dim)[:, None], 0.0, 1.0)
+        # static and kinematic bodies (a drum, a bowl, the ground) are glass: what they hold
+        # shows through
+        face[~self.scene.moving[owner], 3] = 0.2
+        face = face[order]
+        edge = face.copy()
+        edge[:, :3] *= 0.8
+        self.faces.set_verts(list(screen[order]))
+        self.faces.set_facecolor(face)
+        self.faces.set_edgecolor(edge)
 
     def close(self) -> None:
         self.plt.close(self.fig)
