@@ -133,3 +133,26 @@ def test_save_and_load_continue_bit_for_bit(tmp_path: Path) -> None:
     loaded.run(until=1.0)
     for name in ("positions", "velocities", "orientations", "angular_velocities"):
         assert np.array_equal(getattr(loaded, name), getattr(straight, name)), name
+
+
+def test_observables_use_the_turned_inertia_tensor() -> None:
+    # a 1 x 2 x 3 box turned and spinning about a skew axis: its angular momentum is
+    # R I R^T w (plus the orbit m x × v), its rotational energy w . R I R^T w / 2; the
+    # World's statistics agree with them, to round-off
+    from carom.observables import angular_momentum, rotational_energy
+
+    world = carom.World(3, box=[4, 4, 4], boundary="open")
+    q = np.array([0.8, 0.2, -0.4, 0.4])
+    q /= np.linalg.norm(q)
+    w = np.array([0.3, -1.2, 2.0])
+    world.add_body(Box([1.0, 2.0, 3.0]), [1, 2, 3], velocity=[0.5, 0, 0], orientation=q,
+                   angular_velocity=w, mass=6.0)  # fmt: skip
+    r = rotation_matrix(world.orientations[0])
+    inertia = r @ world.bodies.inertia_tensor[0] @ r.T
+    x, v = world.positions, world.velocities
+    expected = inertia @ w + 6.0 * np.cross(x[0], v[0])
+    got = angular_momentum(world.bodies, x, v, world.angular_velocities, world.orientations)
+    assert got == pytest.approx(expected, rel=1e-14)
+    spin = rotational_energy(world.bodies, world.angular_velocities, world.orientations)
+    assert spin == pytest.approx(0.5 * w @ inertia @ w, rel=1e-14)
+    assert world.stats.kinetic_energy == pytest.approx(spin + 0.5 * 6.0 * 0.25, rel=1e-14)

@@ -35,33 +35,81 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 
-def kinetic_energy(bodies: Bodies, velocities: FloatArray, angular_velocities: FloatArray) -> float:
+def kinetic_energy(
+    bodies: Bodies,
+    velocities: FloatArray,
+    angular_velocities: FloatArray,
+    orientations: FloatArray | None = None,
+) -> float:
     """Kinetic energy [J], translation and rotation, of the moving bodies with these
-    velocities (N, d) [m/s] and angular velocities (N, 3) [rad/s]."""
+    velocities (N, d) [m/s] and angular velocities (N, 3) [rad/s] (3D rigid bodies: at these
+    orientations, :func:`rotational_energy`)."""
     m = bodies.mobile
     v, mass = velocities[m], bodies.mass[m]
     ke = 0.5 * np.sum(mass * np.sum(v * v, axis=1))
-    return float(ke + rotational_energy(bodies, angular_velocities))
+    return float(ke + rotational_energy(bodies, angular_velocities, orientations))
 
 
-def rotational_energy(bodies: Bodies, angular_velocities: FloatArray) -> float:
-    """The rotational part ``sum I w^2 / 2`` [J] of :func:`kinetic_energy`, over the moving
-    bodies with these angular velocities (N, 3) [rad/s]."""
+def _spin_momenta(
+    bodies: Bodies, angular_velocities: FloatArray, orientations: FloatArray | None
+) -> FloatArray:
+    """Each moving body's spin angular momentum ``I w`` (n, 3) [kg m^2/s]: with its full
+    inertia tensor turned to the world, ``R I R^T w``, for 3D bodies at ``orientations``
+    (N, 4); with its moment ``q m a^2`` otherwise (spheres, 2D)."""
     m = bodies.mobile
     spin = angular_velocities[m]
-    return float(0.5 * np.sum(bodies.inertia[m] * np.sum(spin * spin, axis=1)))
+    if bodies.dim != 3 or orientations is None:
+        moments: FloatArray = bodies.inertia[m, None] * spin
+        return moments
+    q = np.asarray(orientations, float)[m]
+    w_, x_, y_, z_ = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    r = np.stack(
+        [
+            np.stack(
+                [1 - 2 * (y_ * y_ + z_ * z_), 2 * (x_ * y_ - w_ * z_), 2 * (x_ * z_ + w_ * y_)], -1
+            ),
+            np.stack(
+                [2 * (x_ * y_ + w_ * z_), 1 - 2 * (x_ * x_ + z_ * z_), 2 * (y_ * z_ - w_ * x_)], -1
+            ),
+            np.stack(
+                [2 * (x_ * z_ - w_ * y_), 2 * (y_ * z_ + w_ * x_), 1 - 2 * (x_ * x_ + y_ * y_)], -1
+            ),
+        ],
+        axis=1,
+    )
+    body_spin = np.einsum("nji,nj->ni", r, spin)  # R^T w
+    turned: FloatArray = np.einsum(
+        "nij,nj->ni", r, np.einsum("nij,nj->ni", bodies.inertia_tensor[m], body_spin)
+    )
+    return turned
+
+
+def rotational_energy(
+    bodies: Bodies, angular_velocities: FloatArray, orientations: FloatArray | None = None
+) -> float:
+    """The rotational part ``sum w . I w / 2`` [J] of :func:`kinetic_energy`, over the moving
+    bodies with these angular velocities (N, 3) [rad/s]; 3D rigid bodies' full inertia
+    tensors need their ``orientations`` (N, 4) (without, each body's mean moment)."""
+    m = bodies.mobile
+    spin = angular_velocities[m]
+    return float(0.5 * np.sum(spin * _spin_momenta(bodies, angular_velocities, orientations)))
 
 
 def angular_momentum(
-    bodies: Bodies, positions: FloatArray, velocities: FloatArray, angular_velocities: FloatArray
+    bodies: Bodies,
+    positions: FloatArray,
+    velocities: FloatArray,
+    angular_velocities: FloatArray,
+    orientations: FloatArray | None = None,
 ) -> FloatArray:
     """Total angular momentum (3,) [kg m^2/s] about the origin of the moving bodies at these
     positions (N, d) [m] with these velocities (N, d) [m/s] and angular velocities (N, 3)
-    [rad/s]: orbital ``sum m x × v`` plus spin ``sum I w`` (2D: only z is nonzero)."""
+    [rad/s]: orbital ``sum m x × v`` plus spin ``sum I w`` (2D: only z is nonzero; 3D rigid
+    bodies' full tensors at their ``orientations`` (N, 4))."""
     m = bodies.mobile
-    x, v, spin = positions[m], velocities[m], angular_velocities[m]
+    x, v = positions[m], velocities[m]
     mass = bodies.mass[m]
-    total: FloatArray = np.sum(bodies.inertia[m, None] * spin, axis=0)
+    total: FloatArray = np.sum(_spin_momenta(bodies, angular_velocities, orientations), axis=0)
     if bodies.dim == 2:
         total[2] += np.sum(mass * (x[:, 0] * v[:, 1] - x[:, 1] * v[:, 0]))
     else:
@@ -167,7 +215,9 @@ class Stats:
     def kinetic_energy(self) -> float:
         """Total kinetic energy now, translation and rotation [J]."""
         frame = self._world.frame()  # one sample of the engine for both
-        return kinetic_energy(self._world.bodies, frame.velocities, frame.angular_velocities)
+        return kinetic_energy(
+            self._world.bodies, frame.velocities, frame.angular_velocities, frame.orientations
+        )
 
     @property
     def momentum(self) -> FloatArray:
@@ -256,16 +306,17 @@ class RunHistory:
         """Record ``frame`` of ``world`` (taken now: the dissipation so far is the world's)."""
         b = world.bodies
         x, v, w = frame.positions, frame.velocities, frame.angular_velocities
+        q = frame.orientations
         self.time.append(frame.time)
-        self.kinetic.append(kinetic_energy(b, v, w))
-        self.rotational.append(rotational_energy(b, w))
+        self.kinetic.append(kinetic_energy(b, v, w, q))
+        self.rotational.append(rotational_energy(b, w, q))
         self.potential.append(potential_energy(b, x, world.gravity))
         counters = world.counters()
         self.dissipated.append(counters.energy_lost)
         self.given.append(counters.energy_given)
         self.work.append(counters.work_done)
         self.momentum.append(momentum(b, v))
-        self.angular_momentum.append(angular_momentum(b, x, v, w))
+        self.angular_momentum.append(angular_momentum(b, x, v, w, q))
         self.collisions.append(counters.collisions + counters.wall_collisions)
 
     def arrays(self) -> dict[str, NDArray[np.float64]]:

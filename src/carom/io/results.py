@@ -111,7 +111,8 @@ def summary(
     stats = world.stats
     now = world.frame()
     b, x, v, w = world.bodies, now.positions, now.velocities, now.angular_velocities
-    ke = kinetic_energy(b, v, w)
+    q = now.orientations
+    ke = kinetic_energy(b, v, w, q)
     pe = potential_energy(b, x, world.gravity)
     e0 = start["kinetic_energy"] + start["potential_energy"]
     closed = e0 + stats.work_done - (ke + pe) - stats.energy_lost + stats.energy_given
@@ -135,7 +136,7 @@ def summary(
             "potential_start_J": start["potential_energy"],
             "potential_end_J": pe,
             "rotational_start_J": start.get("rotational_energy"),
-            "rotational_end_J": rotational_energy(b, w),
+            "rotational_end_J": rotational_energy(b, w, q),
             "dissipated_J": stats.energy_lost,
             giver: stats.energy_given,
             **({"work_by_kinematic_bodies_J": stats.work_done} if rigid else {}),
@@ -148,7 +149,7 @@ def summary(
         "angular_momentum": {
             "about": "origin",
             "start_kg_m2_s": list(start.get("angular_momentum", [])) or None,
-            "end_kg_m2_s": angular_momentum(b, x, v, w).tolist(),
+            "end_kg_m2_s": angular_momentum(b, x, v, w, q).tolist(),
         },
         "temperature_J": stats.temperature,
         "rotational_temperature_J": stats.rotational_temperature,
