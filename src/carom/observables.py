@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from carom.bodies import Bodies
 from carom.engines.base import Counters
+from carom.shapes3d import rotation_matrices
 
 if TYPE_CHECKING:
     from carom.world import Frame, World
@@ -61,22 +62,7 @@ def _spin_momenta(
     if bodies.dim != 3 or orientations is None:
         moments: FloatArray = bodies.inertia[m, None] * spin
         return moments
-    q = np.asarray(orientations, float)[m]
-    w_, x_, y_, z_ = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    r = np.stack(
-        [
-            np.stack(
-                [1 - 2 * (y_ * y_ + z_ * z_), 2 * (x_ * y_ - w_ * z_), 2 * (x_ * z_ + w_ * y_)], -1
-            ),
-            np.stack(
-                [2 * (x_ * y_ + w_ * z_), 1 - 2 * (x_ * x_ + z_ * z_), 2 * (y_ * z_ - w_ * x_)], -1
-            ),
-            np.stack(
-                [2 * (x_ * z_ - w_ * y_), 2 * (y_ * z_ + w_ * x_), 1 - 2 * (x_ * x_ + y_ * y_)], -1
-            ),
-        ],
-        axis=1,
-    )
+    r = rotation_matrices(np.asarray(orientations, float)[m])
     body_spin = np.einsum("nji,nj->ni", r, spin)  # R^T w
     turned: FloatArray = np.einsum(
         "nij,nj->ni", r, np.einsum("nij,nj->ni", bodies.inertia_tensor[m], body_spin)

@@ -48,6 +48,7 @@ __all__ = [
     "Plane",
     "Shape3D",
     "Sphere",
+    "rotation_matrices",
     "rotation_matrix",
 ]
 
@@ -98,6 +99,24 @@ def rotation_matrix(rotation: ArrayLike, name: str = "rotation") -> FloatArray:
             raise CaromError(f"{name}: a 3x3 matrix must be a rotation (orthonormal, det +1)")
         return r.copy()
     raise CaromError(f"{name} must be a quaternion (w, x, y, z) or a 3x3 matrix; got {rotation!r}")
+
+
+def rotation_matrices(quaternions: ArrayLike) -> FloatArray:
+    """Rotation matrices (n, 3, 3) of unit quaternions ``(w, x, y, z)`` (n, 4), as they are
+    (not normalised: for orientations an engine keeps unit)."""
+    q = np.asarray(quaternions, float).reshape(-1, 4)
+    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    out = np.empty((len(q), 3, 3))
+    out[:, 0, 0] = 1 - 2 * (y * y + z * z)
+    out[:, 0, 1] = 2 * (x * y - w * z)
+    out[:, 0, 2] = 2 * (x * z + w * y)
+    out[:, 1, 0] = 2 * (x * y + w * z)
+    out[:, 1, 1] = 1 - 2 * (x * x + z * z)
+    out[:, 1, 2] = 2 * (y * z - w * x)
+    out[:, 2, 0] = 2 * (x * z - w * y)
+    out[:, 2, 1] = 2 * (y * z + w * x)
+    out[:, 2, 2] = 1 - 2 * (x * x + y * y)
+    return out
 
 
 @dataclass(frozen=True)

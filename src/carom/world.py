@@ -54,7 +54,7 @@ from carom.materials import COMBINE_RULES, CombineRule, Material, pair_table
 from carom.meshes import Mesh
 from carom.observables import Stats
 from carom.shapes import SHAPE_CODES, Shape2D, check_inertia_factor, default_inertia_factor
-from carom.shapes3d import ConvexPiece3D, Plane, Shape3D, rotation_matrix
+from carom.shapes3d import ConvexPiece3D, Plane, Shape3D, rotation_matrices, rotation_matrix
 
 __all__ = ["LOG_LIMIT", "Frame", "Material", "World"]
 
@@ -407,16 +407,7 @@ class World:
             )
             body_mass, inertia, centroid = props.mass, props.inertia, props.centroid
         else:
-            if density is not None or mass is not None:
-                raise CaromError(
-                    f"a {kind} body is not moved by impacts and has no mass; drop density= "
-                    f"and mass=, or make it dynamic"
-                )
-            if code != BODY_KINDS["kinematic"] and (np.any(v) or np.any(spin)):
-                raise CaromError(
-                    "a static body never moves; drop velocity= and angular_velocity=, or "
-                    'make it kind="kinematic"'
-                )
+            _check_still(kind, density, mass, v, spin)
             body_mass, inertia, centroid = math.inf, math.inf, shape.centroid
         c, s = np.cos(turn), np.sin(turn)
         centre = origin + np.stack(
@@ -499,21 +490,11 @@ class World:
             )
             body_mass, inertia, centroid = props.mass, props.inertia, props.centroid
         else:
-            if density is not None or mass is not None:
-                raise CaromError(
-                    f"a {kind} body is not moved by impacts and has no mass; drop density= "
-                    f"and mass=, or make it dynamic"
-                )
-            if code != BODY_KINDS["kinematic"] and (np.any(v) or np.any(spin)):
-                raise CaromError(
-                    "a static body never moves; drop velocity= and angular_velocity=, or "
-                    'make it kind="kinematic"'
-                )
+            _check_still(kind, density, mass, v, spin)
             if not isinstance(shape, Mesh):
                 centroid = shape.centroid
             body_mass, inertia = math.inf, np.diag([math.inf] * 3)
-        matrices = np.array([rotation_matrix(q) for q in turns])
-        centre = origin + matrices @ centroid
+        centre = origin + rotation_matrices(turns) @ centroid
         moved = tuple(piece.moved(np.eye(3), -centroid) for piece in pieces)
         mat = self._material_index(restitution, material)
         self._invalidate()
@@ -1205,3 +1186,18 @@ def _quaternion(r: FloatArray) -> FloatArray:
     out = np.array(q)
     out /= np.linalg.norm(out)
     return out if out[0] >= 0.0 else -out
+
+
+def _check_still(kind: str, density: float | None, mass: float | None, v: FloatArray,
+                 spin: FloatArray) -> None:  # fmt: skip
+    """Refuse a mass for a static or kinematic body, and motion for a static one."""
+    if density is not None or mass is not None:
+        raise CaromError(
+            f"a {kind} body is not moved by impacts and has no mass; drop density= and mass=, "
+            f"or make it dynamic"
+        )
+    if kind == "static" and (np.any(v) or np.any(spin)):
+        raise CaromError(
+            "a static body never moves; drop velocity= and angular_velocity=, or make it "
+            'kind="kinematic"'
+        )

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from carom.bodies import PIECE_ARRAYS, Pieces, pieces_from_arrays
 from carom.errors import CaromError
 from carom.shapes import ConvexPiece
-from carom.shapes3d import ConvexPiece3D, rotation_matrix
+from carom.shapes3d import ConvexPiece3D, rotation_matrices
 from carom.viz import require_matplotlib
 
 __all__ = ["need_encoder", "write_animation"]
@@ -323,10 +323,7 @@ class Facets:
     ) -> tuple[FloatArray, FloatArray]:
         """The triangles (T, 3, 3) and their unit outward normals (T, 3) in the world, bodies
         at ``positions`` (N, 3) [m] turned by quaternions ``orientations`` (N, 4)."""
-        turns = np.zeros((len(orientations), 3, 3))
-        for i, q in enumerate(orientations):
-            turns[i] = rotation_matrix(q)
-        r = turns[self.body]  # (T, 3, 3)
+        r = rotation_matrices(orientations)[self.body]  # (T, 3, 3)
         world = np.einsum("tij,tkj->tki", r, self.corners) + positions[self.body][:, None, :]
         normal = np.cross(world[:, 1] - world[:, 0], world[:, 2] - world[:, 0])
         size = np.linalg.norm(normal, axis=1, keepdims=True)

@@ -25,10 +25,10 @@ from carom.bodies import KIND_STATIC, Bodies
 from carom.engines.base import KIND_PAIR, KIND_PLANE, KIND_WALL
 from carom.engines.rigid.model import RigidModel, RigidState, build_model, new_state
 from carom.errors import CaromError
-from carom.materials import CombineRule, Material, pair_table
+from carom.materials import CombineRule, Material, combine, pair_table
 from carom.shapes import ConvexPiece
 
-__all__ = ["Partners", "assemble", "check_material"]
+__all__ = ["Partners", "assemble", "check_material", "pair_arrays"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -50,6 +50,35 @@ def check_material(where: str, material: Material) -> None:
             f"{where}: {material} has a tangential restitution (beta or beta0), which only the "
             f"event-driven engine's sphere laws know; rigid bodies take friction= (Coulomb)"
         )
+
+
+def pair_arrays(
+    materials: Sequence[Material],
+    rule: CombineRule,
+    overrides: Mapping[tuple[int, int], float],
+    extra: Sequence[Material],
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Restitution [-], friction [-] and rolling resistance [m] of every pair of the bodies'
+    ``materials`` (combined by ``rule``, ``overrides`` kept) and of the walls' and planes'
+    ``extra`` materials after them, (M + E, M + E) each. A wall's or plane's coefficients are
+    its own, not combined with the body's."""
+    mats = list(materials) or [Material()]
+    table = pair_table(mats, rule, overrides)
+    n_mat, m = table.e.shape[0], len(extra)
+    e = np.zeros((n_mat + m, n_mat + m))
+    mu = np.zeros_like(e)
+    roll = np.zeros_like(e)
+    e[:n_mat, :n_mat] = table.e
+    mu[:n_mat, :n_mat] = table.friction
+    for i, a in enumerate(mats):
+        for j, b in enumerate(mats):
+            roll[i, j] = combine(rule, a.rolling, b.rolling)
+    for k, mat in enumerate(extra):
+        row = n_mat + k
+        e[row, :] = e[:, row] = mat.restitution
+        mu[row, :] = mu[:, row] = mat.friction or 0.0
+        roll[row, :] = roll[:, row] = mat.rolling
+    return e, mu, roll
 
 
 def _slab(centre: FloatArray, angle: float, width: float, height: float) -> ConvexPiece:
@@ -132,17 +161,8 @@ def assemble(
         partner_index.append(k)
 
     m = len(extra_pieces)
-    table = pair_table(list(materials), combine, overrides)
-    e_body, mu_body = table.e, table.friction
-    n_mat = e_body.shape[0]
-    e = np.zeros((n_mat + m, n_mat + m))
-    mu = np.zeros_like(e)
-    e[:n_mat, :n_mat] = e_body
-    mu[:n_mat, :n_mat] = mu_body
-    for k, mat in enumerate(extra_materials):
-        row = n_mat + k
-        e[row, :] = e[:, row] = mat.restitution
-        mu[row, :] = mu[:, row] = mat.friction or 0.0
+    e, mu, _ = pair_arrays(materials, combine, overrides, extra_materials)
+    n_mat = e.shape[0] - m
     model = build_model(
         pieces + extra_pieces,
         np.concatenate([kind, np.full(m, KIND_STATIC, np.int64)]),

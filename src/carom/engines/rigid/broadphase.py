@@ -27,7 +27,15 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["FAT", "MAX_CELLS", "find_pairs", "piece_boxes", "refit", "select_pairs"]
+__all__ = [
+    "FAT",
+    "MAX_CELLS",
+    "find_pairs",
+    "piece_boxes",
+    "refit",
+    "select_pairs",
+    "wanted_pair",
+]
 
 #: a box covering more cells than this is tested against every box instead of gridded
 MAX_CELLS = 16
@@ -110,7 +118,7 @@ def _overlap(boxes: np.ndarray, a: int, b: int) -> bool:
 
 
 @njit(cache=True, inline="always")
-def _wanted(
+def wanted_pair(
     piece_body: np.ndarray, active: np.ndarray, dynamic: np.ndarray, a: int, b: int
 ) -> bool:
     """A pair worth a manifold: two bodies, one of them active, one of them dynamic."""
@@ -205,7 +213,7 @@ def find_pairs(
             a = entries[i]
             for j in range(i + 1, start[h + 1]):
                 b = entries[j]
-                if not _wanted(piece_body, active, dynamic, a, b) or not _overlap(boxes, a, b):
+                if not wanted_pair(piece_body, active, dynamic, a, b) or not _overlap(boxes, a, b):
                     continue
                 # report from the bucket of the overlap's lower-left cell only
                 cx = math.floor(max(boxes[a, 0], boxes[b, 0]) * inv)
@@ -222,7 +230,7 @@ def find_pairs(
         for b in range(n):
             if b == a or (big[b] and b < a):
                 continue  # two big pieces: once
-            if not _wanted(piece_body, active, dynamic, a, b) or not _overlap(boxes, a, b):
+            if not wanted_pair(piece_body, active, dynamic, a, b) or not _overlap(boxes, a, b):
                 continue
             if count < capacity:
                 pairs[count, 0] = min(a, b)
@@ -311,7 +319,7 @@ def select_pairs(
     for k in range(n_candidates):
         a = candidates[k, 0]
         b = candidates[k, 1]
-        if _wanted(piece_body, active, dynamic, a, b) and _overlap(boxes, a, b):
+        if wanted_pair(piece_body, active, dynamic, a, b) and _overlap(boxes, a, b):
             pairs[count, 0] = a
             pairs[count, 1] = b
             count += 1

@@ -40,7 +40,104 @@ FloatArray = NDArray[np.float64]
 STOP_CHECK_STEPS = 64
 
 
-class RigidEngine:
+class SteppedEngine:
+    """What the 2D and 3D rigid engines share: the clock in whole steps, advancing to a time,
+    and the running totals (collisions with bodies and with walls or planes, the energy
+    ledger) that :meth:`counters` reports and a checkpoint keeps. A subclass sets ``dt``,
+    ``partners`` and ``n_bodies`` and defines ``step``."""
+
+    start: float
+    steps: int
+    dt: float
+    n_bodies: int
+    partners: Partners
+
+    def _start_totals(self, time: float) -> None:
+        self.start = float(time)
+        self.steps = 0
+        self._collisions = 0
+        self._wall_collisions = 0
+        self._energy_lost = 0.0
+        self._energy_given = 0.0
+        self._work_done = 0.0
+
+    def step(self, sink: Sink | None = None) -> None:
+        raise NotImplementedError
+
+    @property
+    def time(self) -> float:
+        """The clock [s]: the start plus whole steps."""
+        return self.start + self.steps * self.dt
+
+    def advance(
+        self,
+        until: float,
+        max_events: int,
+        sink: Sink | None,
+        stop: Callable[[], bool] | None = None,
+    ) -> bool:
+        """Step until the clock reaches ``until`` [s] (to within a millionth of a step);
+        ``max_events`` bounds the steps. Impacts solved exactly go to ``sink``."""
+        target = math.floor((until - self.start) / self.dt + 1e-6)
+        todo = min(max(target - self.steps, 0), max_events)
+        for k in range(todo):
+            self.step(sink)
+            if stop is not None and (k + 1) % STOP_CHECK_STEPS == 0 and stop():
+                return False
+        return True
+
+    def counters(self) -> Counters:
+        return Counters(
+            self.steps,
+            self._collisions,
+            self._wall_collisions,
+            0,
+            0,
+            0.0,
+            self._energy_lost,
+            0,
+            self._energy_given,
+            self._work_done,
+        )
+
+    def resting(self) -> NDArray[np.int64]:
+        return np.full(self.n_bodies, -1, np.int64)
+
+    def _totals(self) -> dict[str, NDArray[Any]]:
+        """The clock and the running totals, for :meth:`arrays`."""
+        return {
+            "steps": np.array([self.steps]),
+            "start": np.array([self.start]),
+            "totals": np.array(
+                [
+                    self._collisions,
+                    self._wall_collisions,
+                    self._energy_lost,
+                    self._energy_given,
+                    self._work_done,
+                ]
+            ),
+        }
+
+    def _restore_totals(self, arrays: dict[str, NDArray[Any]]) -> None:
+        """Take the clock and totals back from :meth:`_totals`' arrays."""
+        self.steps = int(arrays["steps"][0])
+        collisions, walls, lost, given, work = (float(t) for t in arrays["totals"])
+        self._collisions, self._wall_collisions = int(collisions), int(walls)
+        self._energy_lost, self._energy_given, self._work_done = lost, given, work
+
+    def _count(self, partner: NDArray[np.int64], lost: float, work: float) -> NDArray[np.int8]:
+        """Count exact impacts against ``partner`` rows and add their ledger; return what
+        each partner is (KIND_PAIR, KIND_WALL, KIND_PLANE)."""
+        against = self.partners.kind[partner]
+        self._wall_collisions += int(np.count_nonzero(against != KIND_PAIR))
+        self._collisions += int(np.count_nonzero(against == KIND_PAIR))
+        self._energy_lost += lost
+        self._work_done += work
+        return against
+
+
+class RigidEngine(SteppedEngine):
     """The time-stepped engine for 2D rigid bodies with rotation.
 
     Parameters
@@ -80,8 +177,7 @@ class RigidEngine:
         self.model = model
         self.state = state
         self.settings = settings
-        self.start = float(time)
-        self.steps = 0
+        self._start_totals(time)
         self.dt = settings.dt
         n = model.kind.shape[0]
         if partners is None:
@@ -110,12 +206,6 @@ class RigidEngine:
         self._accel[self._dynamic] = model.gravity
         self._g = float(np.hypot(*model.gravity))
         self.n_contacts = 0
-        self._collisions = 0
-        self._wall_collisions = 0
-        self._energy_lost = 0.0
-        self._energy_given = 0.0
-        self._work_done = 0.0
-        self._virial = 0.0
         # place everything once: static pieces never move again
         motion.place_pieces(
             state.x,
@@ -132,66 +222,15 @@ class RigidEngine:
 
     # -- the Engine protocol --------------------------------------------------------------
 
-    @property
-    def time(self) -> float:
-        """The clock [s]: the start plus whole steps."""
-        return self.start + self.steps * self.dt
-
-    def advance(
-        self,
-        until: float,
-        max_events: int,
-        sink: Sink | None,
-        stop: Callable[[], bool] | None = None,
-    ) -> bool:
-        """Step until the clock reaches ``until`` [s] (to within a millionth of a step);
-        ``max_events`` bounds the steps. Impacts solved exactly go to ``sink``."""
-        target = math.floor((until - self.start) / self.dt + 1e-6)
-        todo = min(max(target - self.steps, 0), max_events)
-        for k in range(todo):
-            self.step(sink)
-            if stop is not None and (k + 1) % STOP_CHECK_STEPS == 0 and stop():
-                return False
-        return True
-
     def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         s, n = self.state, self.n_bodies
         w = np.zeros((n, 3))
         w[:, 2] = s.omega[:n]
         return s.x[:n].copy(), s.v[:n].copy(), s.angle[:n].reshape(-1, 1).copy(), w
 
-    def counters(self) -> Counters:
-        return Counters(
-            self.steps,
-            self._collisions,
-            self._wall_collisions,
-            0,
-            0,
-            self._virial,
-            self._energy_lost,
-            0,
-            self._energy_given,
-            self._work_done,
-        )
-
-    def resting(self) -> NDArray[np.int64]:
-        return np.full(self.n_bodies, -1, np.int64)
-
     def arrays(self) -> dict[str, NDArray[Any]]:
         s = self.state
-        return {name: np.array(value) for name, value in s._asdict().items()} | {
-            "steps": np.array([self.steps]),
-            "start": np.array([self.start]),
-            "totals": np.array(
-                [
-                    self._collisions,
-                    self._wall_collisions,
-                    self._energy_lost,
-                    self._energy_given,
-                    self._work_done,
-                ]
-            ),
-        }
+        return {name: np.array(value) for name, value in s._asdict().items()} | self._totals()
 
     @classmethod
     def restore(
@@ -205,10 +244,7 @@ class RigidEngine:
         state = RigidState(*(np.array(arrays[name]) for name in RigidState._fields))
         start = float(arrays["start"][0])
         engine = cls(model, state, settings, start, partners)
-        engine.steps = int(arrays["steps"][0])
-        collisions, walls, lost, given, work = (float(t) for t in arrays["totals"])
-        engine._collisions, engine._wall_collisions = int(collisions), int(walls)
-        engine._energy_lost, engine._energy_given, engine._work_done = lost, given, work
+        engine._restore_totals(arrays)
         return engine
 
     def deepest_overlap(self) -> tuple[int, int, float]:
@@ -496,11 +532,7 @@ class RigidEngine:
     def _book(self, log: FloatArray, sink: Sink | None) -> None:
         """Count the exact impacts and hand them to ``sink`` as collision records."""
         partner = log[:, 2].astype(np.int64)
-        against = self.partners.kind[partner]
-        self._wall_collisions += int(np.count_nonzero(against != KIND_PAIR))
-        self._collisions += int(np.count_nonzero(against == KIND_PAIR))
-        self._energy_lost += float(np.sum(log[:, 9]))
-        self._work_done += float(np.sum(log[:, 10]))
+        against = self._count(partner, float(np.sum(log[:, 9])), float(np.sum(log[:, 10])))
         if sink is None:
             return
         records = np.zeros(log.shape[0], COLLISION_DTYPE)

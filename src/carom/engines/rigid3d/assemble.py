@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from carom.bodies import KIND_STATIC, Bodies
 from carom.engines.base import KIND_PAIR, KIND_PLANE, KIND_WALL
-from carom.engines.rigid.assemble import Partners, check_material
+from carom.engines.rigid.assemble import Partners, check_material, pair_arrays
 from carom.engines.rigid3d.model import (
     Model3D,
     Piece3D,
@@ -26,7 +26,7 @@ from carom.engines.rigid3d.model import (
     plane_piece,
     triangle_piece,
 )
-from carom.materials import CombineRule, Material, combine, pair_table
+from carom.materials import CombineRule, Material
 from carom.shapes3d import Box, ConvexPiece3D
 
 __all__ = ["assemble3d", "engine_pieces"]
@@ -108,22 +108,8 @@ def assemble3d(
         partner_index.append(k)
 
     m = len(extra)
-    mats = list(materials) or [Material()]
-    table = pair_table(mats, rule, overrides)
-    n_mat = table.e.shape[0]
-    e = np.zeros((n_mat + m, n_mat + m))
-    mu = np.zeros_like(e)
-    roll = np.zeros_like(e)
-    e[:n_mat, :n_mat] = table.e
-    mu[:n_mat, :n_mat] = table.friction
-    for i, a in enumerate(mats):
-        for j, b in enumerate(mats):
-            roll[i, j] = combine(rule, a.rolling, b.rolling)
-    for k, mat in enumerate(extra_materials):
-        row = n_mat + k
-        e[row, :] = e[:, row] = mat.restitution
-        mu[row, :] = mu[:, row] = mat.friction or 0.0
-        roll[row, :] = roll[:, row] = mat.rolling
+    e, mu, roll = pair_arrays(materials, rule, overrides, extra_materials)
+    n_mat = e.shape[0] - m
     inertia = np.concatenate([bodies.inertia_tensor, np.zeros((m, 3, 3))])
     model = build_model(
         pieces + extra,

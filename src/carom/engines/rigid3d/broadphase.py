@@ -21,6 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.engines.rigid.broadphase import wanted_pair
 from carom.engines.rigid3d.model import PIECE_PLANE
 
 __all__ = ["MAX_CELLS", "find_pairs", "piece_boxes"]
@@ -103,17 +104,6 @@ def _overlap(boxes: np.ndarray, a: int, b: int) -> bool:
         and boxes[b, 2] <= boxes[a, 5]
     )
     return overlap
-
-
-@njit(cache=True, inline="always")
-def _wanted(
-    piece_body: np.ndarray, active: np.ndarray, dynamic: np.ndarray, a: int, b: int
-) -> bool:
-    """A pair worth a manifold: two bodies, one of them active, one of them dynamic."""
-    ba = piece_body[a]
-    bb = piece_body[b]
-    wanted: bool = ba != bb and (active[ba] or active[bb]) and (dynamic[ba] or dynamic[bb])
-    return wanted
 
 
 @njit(cache=True, inline="always")
@@ -210,7 +200,7 @@ def find_pairs(
             a = entries[i]
             for j in range(i + 1, start[h + 1]):
                 b = entries[j]
-                if not _wanted(piece_body, active, dynamic, a, b) or not _overlap(boxes, a, b):
+                if not wanted_pair(piece_body, active, dynamic, a, b) or not _overlap(boxes, a, b):
                     continue
                 # report from the bucket of the overlap's lowest cell only
                 cx = math.floor(max(boxes[a, 0], boxes[b, 0]) * inv)
@@ -228,7 +218,7 @@ def find_pairs(
         for b in range(n):
             if b == a or (big[b] and b < a):
                 continue  # two big pieces: once
-            if not _wanted(piece_body, active, dynamic, a, b) or not _overlap(boxes, a, b):
+            if not wanted_pair(piece_body, active, dynamic, a, b) or not _overlap(boxes, a, b):
                 continue
             if count < capacity:
                 pairs[count, 0] = min(a, b)

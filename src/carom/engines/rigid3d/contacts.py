@@ -26,6 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.engines.rigid.contacts import find_cached
 from carom.engines.rigid3d.model import PIECE_PLANE, PIECE_POLYTOPE
 from carom.engines.rigid3d.motion import relative_velocity
 from carom.geometry.manifold3d import (
@@ -225,17 +226,6 @@ def collide_pieces(
         out[1] = -out[1]
         out[2] = -out[2]
     return count
-
-
-@njit(cache=True, inline="always")
-def find_cached(keys: np.ndarray, count: int, key: int, cursor: int) -> tuple[int, int]:
-    """Row of ``key`` in the sorted ``keys[:count]`` (-1 if absent), searched from ``cursor``
-    on, and where the next search may start (keys asked in increasing order walk the cache
-    once)."""
-    while cursor < count and keys[cursor] < key:
-        cursor += 1
-    row = cursor if cursor < count and keys[cursor] == key else -1
-    return row, cursor
 
 
 @njit(cache=True)

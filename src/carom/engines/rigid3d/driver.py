@@ -22,15 +22,15 @@ The settings are the 2D engine's (:class:`carom.engines.rigid.settings.RigidSett
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, Counters, Sink
+from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, Sink
 from carom.engines.rigid import islands
 from carom.engines.rigid.assemble import Partners
+from carom.engines.rigid.driver import SteppedEngine
 from carom.engines.rigid.settings import RigidSettings
 from carom.engines.rigid3d import broadphase, contacts, impacts, motion, solver
 from carom.engines.rigid3d.model import Model3D, State3D
@@ -41,8 +41,6 @@ __all__ = ["RigidEngine3D", "grid_cell"]
 
 FloatArray = NDArray[np.float64]
 
-#: steps between looks at a run's stop request
-STOP_CHECK_STEPS = 64
 #: a touching pair whose every point separates faster than this fraction of the restitution
 #: threshold has just bounced: it flies apart on the exact path (free flight keeps its angular
 #: momentum exactly), not through the solver. Resting contacts never separate that fast.
@@ -61,7 +59,7 @@ def grid_cell(model: Model3D) -> float:
     return cell if cell > 0.0 and math.isfinite(cell) else 1.0
 
 
-class RigidEngine3D:
+class RigidEngine3D(SteppedEngine):
     """The time-stepped engine for 3D rigid bodies.
 
     Parameters
@@ -95,8 +93,7 @@ class RigidEngine3D:
         self.model = model
         self.state = state
         self.settings = settings
-        self.start = float(time)
-        self.steps = 0
+        self._start_totals(time)
         self.dt = settings.dt
         n = model.kind.shape[0]
         if partners is None:
@@ -122,11 +119,6 @@ class RigidEngine3D:
         self._accel = np.zeros((n, 3))
         self._accel[self._dynamic] = model.gravity
         self.n_contacts = 0
-        self._collisions = 0
-        self._wall_collisions = 0
-        self._energy_lost = 0.0
-        self._energy_given = 0.0
-        self._work_done = 0.0
         everyone = np.ones(n, np.bool_)
         self._place(everyone)
         still = np.zeros((n, 3))
@@ -134,58 +126,15 @@ class RigidEngine3D:
 
     # -- the Engine protocol --------------------------------------------------------------
 
-    @property
-    def time(self) -> float:
-        """The clock [s]: the start plus whole steps."""
-        return self.start + self.steps * self.dt
-
-    def advance(
-        self,
-        until: float,
-        max_events: int,
-        sink: Sink | None,
-        stop: Callable[[], bool] | None = None,
-    ) -> bool:
-        """Step until the clock reaches ``until`` [s] (to within a millionth of a step);
-        ``max_events`` bounds the steps."""
-        target = math.floor((until - self.start) / self.dt + 1e-6)
-        todo = min(max(target - self.steps, 0), max_events)
-        for k in range(todo):
-            self.step(sink)
-            if stop is not None and (k + 1) % STOP_CHECK_STEPS == 0 and stop():
-                return False
-        return True
-
     def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Positions (n, 3), velocities (n, 3), quaternions (n, 4), angular velocities (n, 3)
         of the caller's bodies."""
         s, n = self.state, self.n_bodies
         return s.x[:n].copy(), s.v[:n].copy(), s.q[:n].copy(), s.w[:n].copy()
 
-    def counters(self) -> Counters:
-        return Counters(
-            self.steps, self._collisions, self._wall_collisions, 0, 0, 0.0, self._energy_lost,
-            0, self._energy_given, self._work_done,
-        )  # fmt: skip
-
-    def resting(self) -> NDArray[np.int64]:
-        return np.full(self.n_bodies, -1, np.int64)
-
     def arrays(self) -> dict[str, NDArray[Any]]:
         s = self.state
-        return {name: np.array(value) for name, value in s._asdict().items()} | {
-            "steps": np.array([self.steps]),
-            "start": np.array([self.start]),
-            "totals": np.array(
-                [
-                    self._collisions,
-                    self._wall_collisions,
-                    self._energy_lost,
-                    self._energy_given,
-                    self._work_done,
-                ]
-            ),
-        }
+        return {name: np.array(value) for name, value in s._asdict().items()} | self._totals()
 
     @classmethod
     def restore(
@@ -198,10 +147,7 @@ class RigidEngine3D:
         """The engine that wrote ``arrays`` (:meth:`arrays`), to continue bit for bit."""
         state = State3D(*(np.array(arrays[name]) for name in State3D._fields))
         engine = cls(model, state, settings, float(arrays["start"][0]), partners)
-        engine.steps = int(arrays["steps"][0])
-        collisions, walls, lost, given, work = (float(t) for t in arrays["totals"])
-        engine._collisions, engine._wall_collisions = int(collisions), int(walls)
-        engine._energy_lost, engine._energy_given, engine._work_done = lost, given, work
+        engine._restore_totals(arrays)
         return engine
 
     def deepest_overlap(self) -> tuple[int, int, float]:
@@ -373,10 +319,7 @@ class RigidEngine3D:
     def _book(self, log: FloatArray, sink: Sink | None) -> None:
         """Count the exact impacts and hand them to ``sink`` as collision records."""
         partner = log[:, 2].astype(np.int64)
-        against = self.partners.kind[partner]
-        self._wall_collisions += int(np.count_nonzero(against != KIND_PAIR))
-        self._collisions += int(np.count_nonzero(against == KIND_PAIR))
-        self._energy_lost += float(np.sum(log[:, 11]))
+        against = self._count(partner, float(np.sum(log[:, 11])), 0.0)
         if sink is None:
             return
         records = np.zeros(log.shape[0], COLLISION_DTYPE)
