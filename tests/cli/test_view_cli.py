@@ -126,3 +126,45 @@ def test_rigid_bodies_are_replayed_as_their_turned_outlines(tmp_path: Path) -> N
         lz += inertia * w[k, rod, 2]
         assert data["/angular_momentum/z"][k]["scalars"] == pytest.approx(lz, rel=1e-12, abs=1e-15)
     assert turned > 0  # the rod did turn on landing: the check saw it turned
+
+
+def test_3d_rigid_bodies_are_replayed_as_meshes_that_move(tmp_path: Path) -> None:
+    # box-edge-3d: a 0.4 x 0.3 x 0.2 m box lands on an edge on a static slab and turns. Its
+    # mesh is logged once in its own frame (12 triangles whose corners are the box's eight,
+    # (+-0.2, +-0.15, +-0.1) m, normals outward); its pose every frame is the trajectory's
+    # centre and quaternion; the slab, which never moves, has one static pose.
+    out = tmp_path / "run"
+    done = carom("run", "box-edge-3d", "--out", out, "--until", "0.4", "--animation", "none")
+    assert done.returncode == 0, done.stderr
+    done = carom("view", out, CI="true")
+    assert done.returncode == 0, done.stderr
+    data = _read(out / "recording.rrd")
+    with h5py.File(out / "trajectory.h5", "r") as f:
+        x = f["particles/all/position/value"][()]
+        q = f["particles/all/orientation/value"][()]
+        mass = f["particles/all/mass"][()]
+    box, slab = (
+        int(np.flatnonzero(np.isfinite(mass))[0]),
+        int(np.flatnonzero(~np.isfinite(mass))[0]),
+    )
+    mesh = data[f"/world/meshes/{box}"]
+    shape = mesh[-1]  # the static part: the mesh itself
+    corners = np.stack(shape["vertex_positions"])
+    assert corners.shape == (36, 3)
+    # every triangle corner is a box corner (float32: 1e-7 m covers half an ulp)
+    np.testing.assert_allclose(np.abs(corners), [[0.2, 0.15, 0.1]] * 36, rtol=0, atol=1e-7)
+    normals = np.stack(shape["vertex_normals"]).reshape(12, 3, 3)[:, 0]
+    centres = corners.reshape(12, 3, 3).mean(axis=1)
+    assert np.all(np.sum(normals * centres, axis=1) > 0.0)  # outward
+    frames = sorted(k for k in mesh if k >= 0)
+    assert frames == list(range(x.shape[0]))
+    turned = 0
+    for k in frames:
+        np.testing.assert_allclose(np.ravel(mesh[k]["translation"]), x[k, box], rtol=1e-6)
+        xyzw = np.ravel(mesh[k]["quaternion"])
+        np.testing.assert_allclose(xyzw, q[k, box][[1, 2, 3, 0]], rtol=0, atol=1e-7)
+        turned += abs(abs(float(q[k, box] @ q[0, box])) - 1.0) > 1e-4
+    assert turned > 0  # it did turn on landing
+    still = data[f"/world/meshes/{slab}"]
+    assert sorted(still) == [-1]  # one static pose and mesh, no frames
+    np.testing.assert_allclose(np.ravel(still[-1]["translation"]), x[0, slab], rtol=1e-6)

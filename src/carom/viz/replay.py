@@ -1,9 +1,11 @@
 """Interactive replays in the rerun viewer (the ``view`` extra: ``pip install 'carom[view]'``).
 
 :func:`write_recording` turns the H5MD trajectory that ``carom run`` wrote into a rerun
-recording (``.rrd``): the box, every sphere (a disk in 2D) coloured by speed, every rigid
+recording (``.rrd``): the box, every sphere (a disk in 2D) coloured by speed, every 2D rigid
 body of another shape as its outline turned by its angle (a circle with a spoke, so that its
-turning shows), coloured alike (static bodies grey), velocities as arrows, and the energies
+turning shows), coloured alike (static bodies grey), every 3D rigid body as a shaded mesh of
+its pieces' faces (logged once, then moved and turned frame by frame; static and kinematic
+bodies translucent grey), velocities as arrows, and the energies
 (translational and rotational kinetic apart) and the angular momentum against time, all on
 two timelines, ``frame`` (the frame number) and ``time`` (simulated seconds). The viewer's
 timeline scrubs, plays and loops it.
@@ -27,6 +29,15 @@ __all__ = ["RECORDING", "can_show", "need_rerun", "open_viewer", "write_recordin
 RECORDING = "recording.rrd"
 #: entity paths in the recording
 BOX, BODIES, SHAPES, VELOCITIES = "world/box", "world/bodies", "world/shapes", "world/velocities"
+#: each 3D rigid body's mesh is logged under this path, then its number
+MESHES = "world/meshes"
+#: colours of the 3D rigid bodies' meshes (RGBA), dynamic ones in turn; the still ones grey
+MESH_COLOURS = np.array(
+    [[76, 114, 176, 255], [221, 132, 82, 255], [85, 168, 104, 255], [196, 78, 82, 255],
+     [129, 114, 179, 255], [147, 120, 96, 255], [218, 139, 195, 255], [204, 185, 116, 255]],
+    np.uint8,
+)  # fmt: skip
+STILL_COLOUR = np.array([150, 150, 150, 90], np.uint8)
 ENERGY, ANGULAR_MOMENTUM = "energy", "angular_momentum"
 
 
@@ -125,6 +136,8 @@ def _log_all(rr: Any, stream: Any, f: Any) -> None:
     spin = observed["angular_momentum/value"][:]
     axes = range(3) if scene.dim == 3 else (2,)
     spheres = bool(np.any(round_))
+    if scene.dim == 3 and len(scene.facets.body):
+        _log_meshes(rr, stream, scene, times, positions[:], np.asarray(angles[:], float))
     for k in range(len(times)):
         stream.set_time("frame", sequence=k)
         stream.set_time("time", duration=float(times[k]))
@@ -147,6 +160,48 @@ def _log_all(rr: Any, stream: Any, f: Any) -> None:
         for axis in axes:
             value = float(spin[k, axis])
             stream.log(f"{ANGULAR_MOMENTUM}/{'xyz'[axis]}", rr.Scalars(value))
+
+
+def _log_meshes(rr: Any, stream: Any, scene: Any, times: Any, x: Any, q: Any) -> None:
+    """Each 3D rigid body's faces as one flat-shaded mesh in its frame, logged once, and its
+    pose (translation and quaternion) on both timelines, all frames in one column; a body
+    that never moves gets one static pose. x (frames, N, 3) [m]; q (frames, N, 4)
+    ``(w, x, y, z)``."""
+    facets = scene.facets
+    frames = np.arange(len(times))
+    dynamic = 0
+    for body in np.unique(facets.body):
+        triangles = facets.corners[facets.body == body]  # (t, 3, 3), body frame
+        normal = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+        size = np.linalg.norm(normal, axis=1, keepdims=True)
+        normal = np.repeat(normal / np.where(size > 0.0, size, 1.0), 3, axis=0)
+        if scene.moving[body]:
+            colour = MESH_COLOURS[dynamic % len(MESH_COLOURS)]
+            dynamic += 1
+        else:
+            colour = STILL_COLOUR
+        path = f"{MESHES}/{int(body)}"
+        mesh = rr.Mesh3D(
+            vertex_positions=triangles.reshape(-1, 3),
+            triangle_indices=np.arange(3 * len(triangles), dtype=np.uint32).reshape(-1, 3),
+            vertex_normals=normal,
+            albedo_factor=colour,
+        )
+        where = np.asarray(x[:, body], float)
+        turn = q[:, body][:, [1, 2, 3, 0]]  # rerun's order: (x, y, z, w)
+        if np.all(where == where[0]) and np.all(turn == turn[0]):
+            pose = rr.Transform3D(translation=where[0], quaternion=rr.Quaternion(xyzw=turn[0]))
+            stream.log(path, mesh, pose, static=True)
+            continue
+        stream.log(path, mesh, static=True)
+        stream.send_columns(
+            path,
+            indexes=[
+                rr.TimeColumn("frame", sequence=frames),
+                rr.TimeColumn("time", duration=np.asarray(times, float)),
+            ],
+            columns=rr.Transform3D.columns(translation=where, quaternion=turn),
+        )
 
 
 def can_show() -> bool:
