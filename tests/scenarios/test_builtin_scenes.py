@@ -37,13 +37,19 @@ RIGID = {
     "rod-drop",
     "tumbler",
 }
-#: the 3D rigid-body scenes (tests/scene/test_rigid3d_scenes.py runs them)
+#: the 3D rigid-body scenes (tests/scene/test_rigid3d_scenes.py runs them; the impacts and
+#: the bullets are carom compare's, tests/compare/test_rigid3d_compare.py)
 RIGID3D = {
     "billiards-3d",
     "bowl",
+    "box-corner-3d",
+    "box-edge-3d",
+    "bullet-3d",
     "dominoes-3d",
     "pyramid-3d",
     "ring-toss",
+    "rod-drop-3d",
+    "spin-ball-3d",
     "tumbler-3d",
     "wall-and-ball",
 }

@@ -120,9 +120,14 @@ def test_bad_3d_bodies_are_named_by_file_and_table(tmp_path: Path, body: str, pa
     [
         "billiards-3d",
         "bowl",
+        "box-corner-3d",
+        "box-edge-3d",
+        "bullet-3d",
         "dominoes-3d",
         "pyramid-3d",
         "ring-toss",
+        "rod-drop-3d",
+        "spin-ball-3d",
         "tumbler-3d",
         "wall-and-ball",
     ],
@@ -136,7 +141,8 @@ def test_each_built_in_3d_scene_runs_a_little(name: str) -> None:
     assert world.dim == 3
     world.run(until=0.2)
     assert np.all(np.isfinite(world.positions))
-    assert world.positions[:, 2].min() > 0.0  # nothing fell through the floor
+    moving = np.isfinite(world.masses)  # the impact scenes' ground is a static slab below 0
+    assert world.positions[moving, 2].min() > 0.0  # nothing fell through the floor
 
 
 @pytest.mark.needs_jit  # 600 steps of 385 boxes

@@ -10,12 +10,19 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from tqdm import tqdm
 
 from carom.compare.closed_form import Expectation, expectation
 from carom.compare.engines import ENGINES, EngineEntry, engine
 from carom.compare.monitor import Monitor
 from carom.compare.rigid import ImpactCheck, RigidMonitor, RigidScene, impact_expectation
+from carom.compare.rigid3d import (
+    ImpactCheck3D,
+    RigidMonitor3D,
+    RigidScene3D,
+    impact_expectation3d,
+)
 from carom.compare.spec import PeerScene
 from carom.errors import CaromError
 from carom.scene import Scene, find_scene, load_scene
@@ -88,10 +95,10 @@ def _runs_json(engines: dict[str, dict[str, Any]], skipped: dict[str, str]) -> d
 
 def peer_scene(
     scene: str | Path | Scene, until: float | None = None, name: str | None = None
-) -> PeerScene | RigidScene:
+) -> PeerScene | RigidScene | RigidScene3D:
     """The scene of a built-in scene name, a scene file or a :class:`Scene`, as the engines
-    take it: a :class:`PeerScene` of spheres, or a :class:`RigidScene` when the scene runs
-    carom's rigid-body engine."""
+    take it: a :class:`PeerScene` of spheres, or a :class:`RigidScene` (2D) or
+    :class:`RigidScene3D` when the scene runs carom's rigid-body engine."""
     if not isinstance(scene, Scene):
         path = find_scene(scene)
         name = name or path.stem
@@ -101,7 +108,8 @@ def peer_scene(
     title = scene.scene.get("title") or name
     world = scene.build()
     if world.engine_name == "rigid":
-        return RigidScene.from_world(
+        rigid = RigidScene3D if world.dim == 3 else RigidScene
+        return rigid.from_world(
             lambda: world, name, until if until is not None else run["until"], title
         )
     return PeerScene.from_world(
@@ -119,9 +127,9 @@ class RigidComparison:
 
     Attributes
     ----------
-    scene : RigidScene
+    scene : RigidScene or RigidScene3D
         The scene every engine ran.
-    expected : ImpactCheck or None
+    expected : ImpactCheck or ImpactCheck3D or None
         The closed form of a body landing on flat ground, when the scene is one.
     engines : dict
         Per engine name: ``version``, ``dt_s``, ``settings``, ``notes``, ``setup_s``,
@@ -131,8 +139,8 @@ class RigidComparison:
         Engines asked for but not run, with the reason.
     """
 
-    scene: RigidScene
-    expected: ImpactCheck | None
+    scene: RigidScene | RigidScene3D
+    expected: ImpactCheck | ImpactCheck3D | None
     engines: dict[str, dict[str, Any]]
     skipped: dict[str, str]
 
@@ -147,7 +155,7 @@ class RigidComparison:
         return {
             "scene": self.scene.name,
             "title": self.title,
-            "dimension": 2,
+            "dimension": self.scene.dim,
             "bodies": self.scene.n,
             "until_s": self.scene.until,
             "closed_form": None if check is None else check.source,
@@ -159,7 +167,7 @@ class RigidComparison:
                     "impact_time_s": check.impact_time,
                     "time_s": check.time,
                     "velocity_m_s": check.velocity.tolist(),
-                    "omega_rad_s": check.omega,
+                    "omega_rad_s": np.asarray(check.omega).tolist(),
                 }
             ],
             **_runs_json(self.engines, self.skipped),
@@ -172,7 +180,7 @@ def default_engines(dim: int, kind: str = "spheres") -> list[str]:
 
 
 def compare(
-    scene: str | Path | Scene | PeerScene | RigidScene,
+    scene: str | Path | Scene | PeerScene | RigidScene | RigidScene3D,
     engines: Sequence[str] | None = None,
     *,
     until: float | None = None,
@@ -215,8 +223,12 @@ def compare(
     >>> result.expected.checks[0].velocities.tolist()  # the spheres swap velocities [m/s]
     [[-1.0, 0.0], [1.0, 0.0]]
     """
-    spec = scene if isinstance(scene, PeerScene | RigidScene) else peer_scene(scene, until)
-    kind = "rigid" if isinstance(spec, RigidScene) else "spheres"
+    spec = (
+        scene
+        if isinstance(scene, PeerScene | RigidScene | RigidScene3D)
+        else peer_scene(scene, until)
+    )
+    kind = "rigid" if isinstance(spec, RigidScene | RigidScene3D) else "spheres"
     asked = engines is not None
     names = list(engines) if engines is not None else default_engines(spec.dim, kind)
     chosen: list[EngineEntry] = []
@@ -234,6 +246,12 @@ def compare(
         check = impact_expectation(spec, spec.dt)  # every engine steps at the scene's rate
         rigid = {e.name: run_rigid(e, spec, check, progress) for e in chosen}
         return RigidComparison(spec, check, rigid, skipped)
+    if isinstance(spec, RigidScene3D):
+        # the peers step at their own documented rates; the check waits for the slowest
+        slowest = max([spec.dt, *(e.rigid_dt(spec) for e in chosen)])
+        check3 = impact_expectation3d(spec, slowest)
+        rigid = {e.name: run_rigid(e, spec, check3, progress) for e in chosen}
+        return RigidComparison(spec, check3, rigid, skipped)
     expected = expectation(spec)
     runs = {}
     for e in chosen:
@@ -253,14 +271,25 @@ DENSE_BODIES = 1000
 
 
 def run_rigid(
-    e: EngineEntry, scene: RigidScene, expected: ImpactCheck | None, progress: bool | None
+    e: EngineEntry,
+    scene: RigidScene | RigidScene3D,
+    expected: ImpactCheck | ImpactCheck3D | None,
+    progress: bool | None,
 ) -> dict[str, Any]:
     """Set ``e`` up for a rigid scene, step it to ``until``; time only the steps."""
     dense = scene.n > DENSE_BODIES
+
+    def watch(dt: float) -> RigidMonitor | RigidMonitor3D:
+        if isinstance(scene, RigidScene3D):
+            assert expected is None or isinstance(expected, ImpactCheck3D)
+            return RigidMonitor3D(scene, expected, dt)
+        assert expected is None or isinstance(expected, ImpactCheck)
+        return RigidMonitor(scene, expected, dt)
+
     return _run(
         e,
         scene,
-        lambda dt: RigidMonitor(scene, expected, dt),
+        watch,
         max(1, round(0.1 * scene.settings.rate)) if dense else 1,
         progress,
     )
@@ -268,8 +297,8 @@ def run_rigid(
 
 def _run(
     e: EngineEntry,
-    scene: PeerScene | RigidScene,
-    watch: Callable[[float], Monitor | RigidMonitor],
+    scene: PeerScene | RigidScene | RigidScene3D,
+    watch: Callable[[float], Monitor | RigidMonitor | RigidMonitor3D],
     stride: int,
     progress: bool | None,
 ) -> dict[str, Any]:
@@ -309,6 +338,7 @@ def _run(
         "setup_s": setup,
         "wall_s": wall,
         "ms_per_step": 1e3 * wall / steps,
+        "ms_per_simulated_s": 1e3 * wall / (steps * sim.dt),
         "simulated_s": steps * sim.dt,
         "steps": steps,
         "metrics": monitor.result(),

@@ -85,11 +85,11 @@ def format_rigid_table(comparison: RigidComparison) -> str:
     spec = comparison.scene
     check = comparison.expected
     lines = [
-        f"{spec.name}: {_bodies(spec.n)}, 2D rigid, {spec.until:g} s simulated at "
-        f"{1.0 / spec.dt:g} Hz",
+        f"{spec.name}: {_bodies(spec.n)}, {spec.dim}D rigid, {spec.until:g} s simulated "
+        f"(carom at {1.0 / spec.dt:g} Hz)",
         f"closed form: {check.source if check is not None else 'none'}",
         "",
-        f"{'engine':<7} {'version':<8} {'v err':>8} {'w err':>8} {'E gained':>8} "
+        f"{'engine':<9} {'version':<8} {'Hz':>5} {'v err':>8} {'w err':>8} {'E gained':>8} "
         f"{'overlap':>8} {'through':>7} {'top moved':>9} {'max turn':>8} {'ms/step':>8} "
         f"{'/ carom':>7}",
     ]
@@ -97,22 +97,25 @@ def format_rigid_table(comparison: RigidComparison) -> str:
         m = run["metrics"]
         ratio = _to_carom(comparison.engines, run)
         lines.append(
-            f"{name:<7} {run['version']:<8} {format_number(m['velocity_error']):>8} "
+            f"{name:<9} {run['version']:<8} {1.0 / run['dt_s']:>5.4g} "
+            f"{format_number(m['velocity_error']):>8} "
             f"{format_number(m['omega_error']):>8} {format_number(m['energy_gain']):>8} "
             f"{format_number(m['max_overlap_m']):>8} {m['bodies_through_static']:>7} "
             f"{m['top_drift_m']:>8.3g}m {m['max_rotation_deg']:>7.3g}° "
             f"{run['ms_per_step']:>8.3g} {ratio:>7}"
         )
     for name, why in comparison.skipped.items():
-        lines.append(f"{name:<7} skipped: {why}")
+        lines.append(f"{name:<9} skipped: {why}")
     lines += [
         "",
-        "v err, w err: |v - v_exact| and |w - w_exact| x reach, over the contact point's "
-        "approach speed, after the impact; E gained: largest rise of kinetic plus potential "
-        "energy over E(0); overlap: deepest overlap seen [m] (carom's exact geometry on each "
-        "engine's poses); through: bodies whose centre crossed a static body; top moved: the "
-        "highest body's distance from its start at the end; max turn: largest rotation of any "
-        "body; ms/step: time inside the step calls per step, and its ratio to carom's",
+        "Hz: the engine's steps per second; v err, w err: |v - v_exact| and |w - w_exact| x "
+        "reach, over the contact point's approach speed, after the impact; E gained: "
+        "largest rise of kinetic plus potential energy over E(0); overlap: deepest overlap "
+        "seen [m] (carom's exact geometry on each engine's poses); through: bodies whose "
+        "centre crossed a static body; top moved: the highest body's distance from its start "
+        "at the end; max turn: largest rotation of any body; ms/step: time inside the step "
+        "calls per step; / carom: time inside the step calls "
+        "for the whole run over carom's (the same simulated time)",
     ]
     return "\n".join(lines)
 
@@ -150,7 +153,10 @@ def plot_rigid(comparison: RigidComparison, path: Path) -> None:
     energy_ax.set(xlabel="time [s]", ylabel="[J]", title="kinetic energy: translation, rotation")
     energy_ax.legend(fontsize=7)
     momentum_ax.set(
-        xlabel="time [s]", ylabel="[kg m^2/s]", title="angular momentum about the origin"
+        xlabel="time [s]",
+        ylabel="[kg m^2/s]",
+        title="angular momentum about the origin"
+        + (" (magnitude)" if comparison.scene.dim == 3 else ""),
     )
     momentum_ax.legend(fontsize=8)
     overlap_ax.set(
@@ -168,7 +174,8 @@ def plot_rigid(comparison: RigidComparison, path: Path) -> None:
             va="bottom",
             fontsize=8,
         )
-    fig.suptitle(f"{comparison.title}: {_bodies(comparison.scene.n)}, 2D rigid", fontsize=12)
+    dim = comparison.scene.dim
+    fig.suptitle(f"{comparison.title}: {_bodies(comparison.scene.n)}, {dim}D rigid", fontsize=12)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 

@@ -21,7 +21,7 @@ import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -35,6 +35,9 @@ from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.laws.point_impulse import impulse
 from carom.shapes import ConvexPiece
 from carom.world import World
+
+if TYPE_CHECKING:
+    from carom.compare.rigid3d import RigidScene3D
 
 __all__ = [
     "ImpactCheck",
@@ -171,7 +174,7 @@ class RigidScene:
 
 
 def shape_coefficients(
-    scene: RigidScene, table: FloatArray, rule: str, engine: str, quantity: str
+    scene: RigidScene | RigidScene3D, table: FloatArray, rule: str, engine: str, quantity: str
 ) -> tuple[FloatArray, list[str]]:
     """Per-material coefficients that reproduce ``table`` under a peer's mixing rule.
 

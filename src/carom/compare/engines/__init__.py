@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from carom.compare.rigid import RigidScene
+from carom.compare.rigid3d import RigidScene3D
 from carom.compare.spec import PeerScene
 from carom.errors import CaromError
 
@@ -65,9 +66,12 @@ class EngineEntry:
         for rigid bodies.
     kinds : tuple of str
         The scenes it takes: ``"spheres"`` (a :class:`PeerScene`), ``"rigid"`` (a
-        :class:`~carom.compare.rigid.RigidScene`).
+        :class:`~carom.compare.rigid.RigidScene` in 2D, a
+        :class:`~carom.compare.rigid3d.RigidScene3D` in 3D).
     import_name : str
         Its module's name, when not the distribution's.
+    rigid_dims : tuple of int
+        Dimensions of the rigid scenes it takes (default: ``dims``).
     """
 
     name: str
@@ -76,6 +80,7 @@ class EngineEntry:
     module: str
     kinds: tuple[str, ...] = ("spheres",)
     import_name: str = ""
+    rigid_dims: tuple[int, ...] = ()
 
     def missing(self) -> str | None:
         """None when installed, else why not and how to install it."""
@@ -92,15 +97,26 @@ class EngineEntry:
         if problem is None and kind not in self.kinds:
             what = {"spheres": "spheres and disks", "rigid": "rigid bodies of any shape"}
             problem = f"{self.name} is compared on {what[self.kinds[0]]} only"
+        rigid_dims = self.rigid_dims or self.dims
+        if problem is None and kind == "rigid" and dim not in rigid_dims:
+            dims = " and ".join(f"{d}D" for d in rigid_dims)
+            problem = f"{self.name} is compared on rigid bodies in {dims} only"
         return problem
+
+    def rigid_dt(self, scene: RigidScene | RigidScene3D) -> float:
+        """The step [s] the engine takes on a rigid scene: its module's ``RIGID_DT`` (its
+        documentation's advice) or the scene's rate."""
+        module = importlib.import_module(self.module)
+        return float(getattr(module, "RIGID_DT", scene.dt))
 
     def version(self) -> str:
         return importlib.metadata.version(self.distribution)
 
-    def start(self, scene: PeerScene | RigidScene) -> Any:
+    def start(self, scene: PeerScene | RigidScene | RigidScene3D) -> Any:
         """Set the engine up for ``scene`` (a :class:`Simulation`; for a rigid scene its
-        ``state()`` also gives angles and angular velocities)."""
-        kind = "rigid" if isinstance(scene, RigidScene) else "spheres"
+        ``state()`` also gives angles (3D: quaternions ``(w, x, y, z)``) and angular
+        velocities)."""
+        kind = "rigid" if isinstance(scene, RigidScene | RigidScene3D) else "spheres"
         problem = self.unable(scene.dim, kind)
         if problem is not None:
             raise CaromError(f"{problem}; scene {scene.name!r} is {scene.dim}D {kind}")
@@ -118,8 +134,29 @@ ENGINES: dict[str, EngineEntry] = {
         EngineEntry(
             "pymunk", "pymunk", (2,), "carom.compare.engines.pymunk_engine", ("spheres", "rigid")
         ),
-        EngineEntry("pybullet", "pybullet", (2, 3), "carom.compare.engines.pybullet_engine"),
-        EngineEntry("mujoco", "mujoco", (2, 3), "carom.compare.engines.mujoco_engine"),
+        EngineEntry(
+            "pybullet",
+            "pybullet",
+            (2, 3),
+            "carom.compare.engines.pybullet_engine",
+            ("spheres", "rigid"),
+            rigid_dims=(3,),
+        ),
+        EngineEntry(
+            "mujoco",
+            "mujoco",
+            (2, 3),
+            "carom.compare.engines.mujoco_engine",
+            ("spheres", "rigid"),
+            rigid_dims=(3,),
+        ),
+        EngineEntry(
+            "rapier3d",
+            "rapier3d",
+            (3,),
+            "carom.compare.engines.rapier_engine",
+            ("rigid",),
+        ),
         EngineEntry(
             "box2d", "box2d", (2,), "carom.compare.engines.box2d_engine", ("rigid",), "Box2D"
         ),

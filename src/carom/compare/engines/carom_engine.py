@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from carom.compare.rigid import RigidScene
+from carom.compare.rigid3d import RigidScene3D
 from carom.compare.spec import PeerScene
 from carom.world import Frame
 
@@ -56,8 +57,9 @@ class CaromRigidSimulation:
     """carom's rigid-body engine stepping at the scene's rate (its settings as the scene
     gives them; exact isolated impacts on)."""
 
-    def __init__(self, scene: RigidScene) -> None:
+    def __init__(self, scene: RigidScene | RigidScene3D) -> None:
         world = scene.world()
+        self.dim = scene.dim
         self.dt = scene.dt
         world.prepare()  # the kernels compile (or load from the cache) outside the timing
         self._frame: Frame = world.frame()
@@ -83,12 +85,15 @@ class CaromRigidSimulation:
         self._frame = next(self._frames)
 
     def state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Centres, velocities, angles (2D) or quaternions ``(w, x, y, z)`` (3D), and
+        angular velocities (2D: about z; 3D: vectors in the world frame)."""
         f = self._frame
-        return f.positions, f.velocities, np.asarray(f.orientations), f.angular_velocities[:, 2]
+        spin = f.angular_velocities if self.dim == 3 else f.angular_velocities[:, 2]
+        return f.positions, f.velocities, np.asarray(f.orientations), spin
 
     def close(self) -> None:
         pass
 
 
-def start_rigid(scene: RigidScene) -> CaromRigidSimulation:
+def start_rigid(scene: RigidScene | RigidScene3D) -> CaromRigidSimulation:
     return CaromRigidSimulation(scene)

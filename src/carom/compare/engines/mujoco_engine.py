@@ -24,8 +24,9 @@ import numpy as np
 
 from carom.compare.spec import PeerScene
 from carom.errors import CaromError
+from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
 
-__all__ = ["damping_ratio", "start"]
+__all__ = ["damping_ratio", "start", "start_rigid"]
 
 DT = 0.002
 
@@ -140,3 +141,211 @@ class MujocoSimulation:
 
 def start(scene: PeerScene) -> MujocoSimulation:
     return MujocoSimulation(scene)
+
+
+# --- 3D rigid bodies --------------------------------------------------------------------
+
+#: the step on rigid scenes [s]: MuJoCo's default
+RIGID_DT = DT
+
+
+def _numbers(values: Any) -> str:
+    return " ".join(repr(float(c)) for c in np.ravel(values))
+
+
+class MujocoRigidSimulation:
+    """A 3D rigid scene in MuJoCo, as its Modeling chapter builds bodies.
+
+    * Each dynamic body a ``freejoint`` body with carom's mass and full inertia tensor
+      (``<inertial fullinertia>``) and its pieces as geoms: ``box``, ``sphere``, ``capsule``
+      (``fromto``), ``mesh`` (MuJoCo collides a mesh as its convex hull) and ``plane``;
+      static bodies' geoms in the world body. A concave static mesh is refused: MuJoCo would
+      fill it in.
+    * Friction: MuJoCo takes the larger of the two geoms' (condim 3); per-material values
+      reproduce the scene's pairs, else the scene is refused. condim 1 when nothing has
+      friction.
+    * Restitution: none in MuJoCo; for ``e > 0`` the Modeling chapter's recipe, ``solref``
+      ``(-stiffness, -damping)`` with the damping of a damped oscillator that bounces back
+      with ``e`` (one restitution for every pair). For ``e = 0`` MuJoCo's default ``solref``.
+    * A kinematic body is a ``mocap`` body, set to its pose before every step (MuJoCo's way
+      to move a body it does not simulate).
+    * ``implicitfast``, which the changelog (2.3.3) recommends for all new models; the
+      default 0.002 s step, solver and pyramidal cone.
+    """
+
+    def __init__(self, scene: Any) -> None:
+        from carom.compare.rigid import shape_coefficients
+        from carom.compare.rigid3d import primitives
+
+        parts = [primitives(scene, i) for i in range(scene.bodies)]
+        for i, own in enumerate(parts):
+            if any(part.shape == "mesh" for part in own):
+                raise CaromError(
+                    f"MuJoCo: body {i} of scene {scene.name!r} is a static triangle mesh; "
+                    f"MuJoCo collides a mesh as its convex hull, which would fill it in; "
+                    f"leave MuJoCo out of this scene"
+                )
+        pairs = scene.needed_pairs()
+        values = sorted({float(scene.restitution[a, b]) for a, b in pairs})
+        if len(values) > 1:
+            raise CaromError(
+                f"MuJoCo: scene {scene.name!r} has pairs with different restitutions "
+                f"{values}; MuJoCo's solref recipe gives one; give every pair one restitution"
+            )
+        e = values[0] if values else 0.0
+        mu, notes = shape_coefficients(scene, scene.friction, "max", "MuJoCo", "friction")
+        frictionless = not np.any(mu > 0.0)
+        condim = 1 if frictionless else 3
+        stiffness = 1.0 / (2.0 * RIGID_DT) ** 2
+        if e > 0.0:
+            damping = 2.0 * damping_ratio(e) * math.sqrt(stiffness)
+            solref = f' solref="{-stiffness!r} {-damping!r}"'
+        else:
+            solref = ""
+        assets: list[str] = []
+        world: list[str] = []
+        bodies: list[str] = []
+        self.n = scene.n
+        self.scene = scene
+        self.time = 0.0
+        for i in range(scene.bodies):
+            m = int(scene.material[i])
+            common = f' condim="{condim}" friction="{float(mu[m])!r} 0 0"{solref}'
+            geoms = []
+            for k, part in enumerate(parts[i]):
+                geoms.append(self._geom(part, f"b{i}p{k}", common, assets))
+            if scene.kind[i] == KIND_DYNAMIC:
+                inertia = scene.inertia[i]
+                full = [inertia[0, 0], inertia[1, 1], inertia[2, 2]]
+                full += [inertia[0, 1], inertia[0, 2], inertia[1, 2]]
+                bodies.append(
+                    f'<body pos="{_numbers(scene.position[i])}" '
+                    f'quat="{_numbers(scene.orientation[i])}"><freejoint/>'
+                    f'<inertial pos="0 0 0" mass="{float(scene.mass[i])!r}" '
+                    f'fullinertia="{_numbers(full)}"/>{"".join(geoms)}</body>'
+                )
+            else:
+                mocap = ' mocap="true"' if scene.kind[i] == KIND_KINEMATIC else ""
+                world.append(
+                    f'<body pos="{_numbers(scene.position[i])}" '
+                    f'quat="{_numbers(scene.orientation[i])}"{mocap}>{"".join(geoms)}</body>'
+                )
+        xml = (
+            f'<mujoco model="{scene.name}"><compiler angle="radian"/>'
+            f'<option timestep="{RIGID_DT!r}" gravity="{_numbers(scene.gravity)}" '
+            f'integrator="implicitfast"/>'
+            f"<asset>{''.join(assets)}</asset>"
+            f"<worldbody>{''.join(world)}{''.join(bodies)}</worldbody></mujoco>"
+        )
+        self.model = model = mujoco.MjModel.from_xml_string(xml)
+        self.data = data = mujoco.MjData(model)
+        self._joints = [int(model.body_jntadr[b]) for b in range(model.nbody)]
+        free = [b for b in range(model.nbody) if model.body_jntnum[b] > 0]
+        self._qpos = np.array([model.jnt_qposadr[model.body_jntadr[b]] for b in free])
+        self._qvel = np.array([model.jnt_dofadr[model.body_jntadr[b]] for b in free])
+        self._rows = np.nonzero(scene.kind[: scene.n] == KIND_DYNAMIC)[0]
+        # the mocap bodies in the order MuJoCo numbers them (the world body's children first)
+        self._mocap = [int(row) for row in np.nonzero(scene.kind == KIND_KINEMATIC)[0]]
+        for row, qv in zip(self._rows, self._qvel, strict=True):
+            data.qvel[qv : qv + 3] = scene.velocity[row]  # world frame
+            r = _matrix(scene.orientation[row])
+            data.qvel[qv + 3 : qv + 6] = r.T @ scene.omega[row]  # a free joint: body frame
+        mujoco.mj_forward(model, data)
+        self._static_x = scene.position[: scene.n].copy()
+        self._static_q = scene.orientation[: scene.n].copy()
+        self.dt = RIGID_DT
+        opt = model.opt
+        self.settings: dict[str, Any] = {
+            "dt_s": float(opt.timestep),
+            "integrator": mujoco.mjtIntegrator(opt.integrator).name,
+            "solver": mujoco.mjtSolver(opt.solver).name,
+            "iterations": int(opt.iterations),
+            "tolerance": float(opt.tolerance),
+            "cone": mujoco.mjtCone(opt.cone).name,
+            "condim": condim,
+            "friction_per_material": mu.tolist(),
+            "solref": model.geom_solref[0].tolist() if model.ngeom else None,
+            "solimp": model.geom_solimp[0].tolist() if model.ngeom else None,
+            "restitution": e,
+        }
+        self.notes = [
+            *notes,
+            "implicitfast integrator (recommended for all new models since 2.3.3); MuJoCo's "
+            "default step 0.002 s, solver and cone",
+            "carom's mass and full inertia tensor for each body (<inertial fullinertia>)",
+            (
+                f"restitution {e:g} by solref = (-stiffness, -damping), the Modeling chapter's "
+                f"recipe, stiffness 1 / (2 dt)^2"
+                if e > 0.0
+                else "restitution 0: MuJoCo's default solref (0.02 s, critical damping)"
+            ),
+        ]
+
+    @staticmethod
+    def _geom(part: Any, name: str, common: str, assets: list[str]) -> str:
+        """One primitive as an MJCF geom (a hull's mesh goes into ``assets``)."""
+        if part.shape == "box":
+            return (
+                f'<geom type="box" pos="{_numbers(part.centre)}" size="{_numbers(part.half)}"'
+                f"{common}/>"
+            )
+        if part.shape == "sphere":
+            return (
+                f'<geom type="sphere" pos="{_numbers(part.centre)}" '
+                f'size="{float(part.radius)!r}"{common}/>'
+            )
+        if part.shape == "capsule":
+            return (
+                f'<geom type="capsule" fromto="{_numbers(part.ends)}" '
+                f'size="{float(part.radius)!r}"{common}/>'
+            )
+        if part.shape == "hull":
+            assets.append(f'<mesh name="{name}" vertex="{_numbers(part.vertices)}"/>')
+            return f'<geom type="mesh" mesh="{name}"{common}/>'
+        return (
+            f'<geom type="plane" size="0 0 1" pos="{_numbers(part.normal * part.offset)}" '
+            f'zaxis="{_numbers(part.normal)}"{common}/>'
+        )
+
+    def step(self) -> None:
+        self.time += self.dt
+        for k, row in enumerate(self._mocap):
+            x, q = self.scene.kinematic_pose(row, self.time)
+            self.data.mocap_pos[k] = x
+            self.data.mocap_quat[k] = q
+        mujoco.mj_step(self.model, self.data)
+
+    def state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        n = self.n
+        x, q = self._static_x.copy(), self._static_q.copy()
+        v, w = np.zeros((n, 3)), np.zeros((n, 3))
+        for k, kin in enumerate(self._mocap):
+            if kin < n:
+                x[kin], q[kin] = self.data.mocap_pos[k], self.data.mocap_quat[k]
+                v[kin], w[kin] = self.scene.velocity[kin], self.scene.omega[kin]
+        qpos, qvel = self.data.qpos, self.data.qvel
+        for row, qp, qv in zip(self._rows, self._qpos, self._qvel, strict=True):
+            x[row] = qpos[qp : qp + 3]
+            q[row] = qpos[qp + 3 : qp + 7]
+            v[row] = qvel[qv : qv + 3]
+            w[row] = _matrix(q[row]) @ qvel[qv + 3 : qv + 6]
+        return x, v, q, w
+
+    def close(self) -> None:
+        pass
+
+
+def _matrix(q: np.ndarray) -> np.ndarray:
+    """The rotation matrix (3, 3) of a unit quaternion ``(w, x, y, z)``."""
+    w, x, y, z = (float(c) for c in q / np.linalg.norm(q))
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def start_rigid(scene: Any) -> MujocoRigidSimulation:
+    return MujocoRigidSimulation(scene)

@@ -25,8 +25,10 @@ from typing import Any
 import numpy as np
 
 from carom.compare.spec import PeerScene, factor_restitution
+from carom.errors import CaromError
+from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
 
-__all__ = ["start"]
+__all__ = ["start", "start_rigid"]
 
 
 @contextmanager
@@ -161,3 +163,271 @@ class PybulletSimulation:
 
 def start(scene: PeerScene) -> PybulletSimulation:
     return PybulletSimulation(scene)
+
+
+# --- 3D rigid bodies --------------------------------------------------------------------
+
+#: the step on rigid scenes [s]: the Quickstart Guide's "best to keep it at 240 Hz"
+RIGID_DT = DT
+
+
+def _xyzw(q: np.ndarray) -> list[float]:
+    """A carom quaternion ``(w, x, y, z)`` in Bullet's order ``(x, y, z, w)``."""
+    return [float(q[1]), float(q[2]), float(q[3]), float(q[0])]
+
+
+class PybulletRigidSimulation:
+    """A 3D rigid scene in Bullet, built as the Quickstart Guide builds bodies.
+
+    * Each body a ``createMultiBody`` of its shapes: ``GEOM_BOX``, ``GEOM_SPHERE``,
+      ``GEOM_CAPSULE``, ``GEOM_MESH`` from vertices (a convex hull; a static triangle mesh
+      with ``GEOM_FORCE_CONCAVE_TRIMESH``), ``GEOM_PLANE``; several shapes through
+      ``createCollisionShapeArray``.
+    * carom's mass and inertia tensor: the inertial frame at the centre of mass along the
+      principal axes (``baseInertialFrameOrientation``), ``localInertiaDiagonal`` the
+      principal moments.
+    * Bullet multiplies the two surfaces' restitution and friction: per-body coefficients
+      reproduce the scene's pairs (:func:`carom.compare.rigid.shape_coefficients`);
+      rolling and spinning friction 0, damping 0 (its default 0.04 would slow every body).
+    * A kinematic body is a body of mass 0 with its velocities (``resetBaseVelocity``), which
+      Bullet moves without simulating; it is set to its exact pose where each step starts
+      (``resetBasePositionAndOrientation``).
+    * Sleeping as in the scene (``activationState``). Everything else at Bullet's defaults:
+      240 Hz, its solver iterations, contact margins, CCD off.
+    """
+
+    def __init__(self, scene: Any) -> None:
+        from carom.compare.rigid import shape_coefficients
+        from carom.compare.rigid3d import primitives, principal_frame, quaternion_product
+
+        e, notes = shape_coefficients(
+            scene, scene.restitution, "product", "pybullet", "restitution"
+        )
+        mu, mu_notes = shape_coefficients(scene, scene.friction, "product", "pybullet", "friction")
+        self.client = client = p.connect(p.DIRECT)
+        p.setGravity(*[float(g) for g in scene.gravity], physicsClientId=client)
+        p.setTimeStep(RIGID_DT, physicsClientId=client)
+        still = not np.any(scene.gravity)
+        if still:
+            p.setPhysicsEngineParameter(restitutionVelocityThreshold=0.0, physicsClientId=client)
+        self.n = scene.n
+        self.scene = scene
+        self.time = 0.0
+        self.ids: list[int] = []
+        self._principal: list[np.ndarray] = []
+        for i in range(scene.bodies):
+            shape = self._shape(scene, primitives(scene, i), i)
+            dynamic = bool(scene.kind[i] == KIND_DYNAMIC)
+            moments, frame = principal_frame(scene.inertia[i]) if dynamic else (None, None)
+            body = p.createMultiBody(
+                baseMass=float(scene.mass[i]) if dynamic else 0.0,
+                baseCollisionShapeIndex=shape,
+                basePosition=[float(c) for c in scene.position[i]],
+                baseOrientation=_xyzw(scene.orientation[i]),
+                baseInertialFramePosition=[0.0, 0.0, 0.0],
+                baseInertialFrameOrientation=_xyzw(frame)
+                if frame is not None
+                else [0.0, 0.0, 0.0, 1.0],
+                physicsClientId=client,
+            )
+            m = int(scene.material[i])
+            extra: dict[str, Any] = {}
+            if moments is not None:
+                extra["localInertiaDiagonal"] = [float(c) for c in moments]
+            if dynamic:
+                extra["activationState"] = (
+                    p.ACTIVATION_STATE_ENABLE_SLEEPING
+                    if scene.settings.sleep
+                    else p.ACTIVATION_STATE_DISABLE_SLEEPING
+                )
+            p.changeDynamics(
+                body,
+                -1,
+                restitution=float(e[m]),
+                lateralFriction=float(mu[m]),
+                rollingFriction=0.0,
+                spinningFriction=0.0,
+                linearDamping=0.0,
+                angularDamping=0.0,
+                physicsClientId=client,
+                **extra,
+            )
+            if dynamic or scene.kind[i] == KIND_KINEMATIC:
+                p.resetBaseVelocity(
+                    body,
+                    linearVelocity=[float(c) for c in scene.velocity[i]],
+                    angularVelocity=[float(c) for c in scene.omega[i]],
+                    physicsClientId=client,
+                )
+            self.ids.append(body)
+            # the body frame from the inertial frame Bullet reports: q_body = q_inertial f*
+            turn = frame if frame is not None else np.array([1.0, 0.0, 0.0, 0.0])
+            self._principal.append(turn * np.array([1.0, -1.0, -1.0, -1.0]))
+        self._product = quaternion_product
+        self.dt = RIGID_DT
+        self.settings: dict[str, Any] = {
+            "dt_s": RIGID_DT,
+            **p.getPhysicsEngineParameters(physicsClientId=client),
+            "restitutionVelocityThreshold_m_s": 0.0 if still else "default",
+            "restitution_per_material": e.tolist(),
+            "friction_per_material": mu.tolist(),
+            "combine": "product (Bullet's rule)",
+            "rolling_spinning_friction": 0.0,
+            "linear_angular_damping": 0.0,
+            "ccd": "off (Bullet's default)",
+            "sleep": bool(scene.settings.sleep),
+        }
+        self.notes = [
+            *notes,
+            *mu_notes,
+            "dt = 1/240 s, Bullet's default and the Quickstart Guide's advice",
+            "carom's mass and full inertia tensor (principal moments and axes) for each body",
+            "damping set from 0.04 (default) to 0; everything else at Bullet's defaults, CCD off",
+        ]
+        if np.any(scene.rolling > 0.0):
+            self.notes.append("the scene's rolling resistance is not given to Bullet")
+
+    def _shape(self, scene: Any, parts: list[Any], body: int) -> int:
+        """One collision shape of a body's primitives."""
+        client = self.client
+        if len(parts) == 1:
+            return self._one(parts[0], client)
+        kinds, radii, halves, lengths, where, turns = [], [], [], [], [], []
+        for part in parts:
+            if part.shape not in ("box", "sphere", "capsule"):
+                raise CaromError(
+                    f"pybullet: body {body} of scene {scene.name!r} is a compound with a "
+                    f"{part.shape} piece, which carom compare builds only from boxes, spheres "
+                    f"and capsules; compare a scene of single convex bodies"
+                )
+            centre, turn, length = _frame_of(part)
+            kinds.append(
+                {"box": p.GEOM_BOX, "sphere": p.GEOM_SPHERE, "capsule": p.GEOM_CAPSULE}[part.shape]
+            )
+            radii.append(float(part.radius))
+            halves.append([float(c) for c in part.half])
+            lengths.append(length)
+            where.append(centre)
+            turns.append(turn)
+        return int(
+            p.createCollisionShapeArray(
+                shapeTypes=kinds,
+                radii=radii,
+                halfExtents=halves,
+                lengths=lengths,
+                collisionFramePositions=where,
+                collisionFrameOrientations=turns,
+                physicsClientId=client,
+            )
+        )
+
+    @staticmethod
+    def _one(part: Any, client: int) -> int:
+        centre, turn, length = _frame_of(part)
+        frame = {"collisionFramePosition": centre, "collisionFrameOrientation": turn}
+        if part.shape == "box":
+            return int(
+                p.createCollisionShape(
+                    p.GEOM_BOX,
+                    halfExtents=[float(c) for c in part.half],
+                    physicsClientId=client,
+                    **frame,
+                )
+            )
+        if part.shape == "sphere":
+            return int(
+                p.createCollisionShape(
+                    p.GEOM_SPHERE, radius=float(part.radius), physicsClientId=client, **frame
+                )
+            )
+        if part.shape == "capsule":
+            return int(
+                p.createCollisionShape(
+                    p.GEOM_CAPSULE,
+                    radius=float(part.radius),
+                    height=length,
+                    physicsClientId=client,
+                    **frame,
+                )
+            )
+        if part.shape == "hull":
+            return int(
+                p.createCollisionShape(
+                    p.GEOM_MESH, vertices=part.vertices.tolist(), physicsClientId=client
+                )
+            )
+        if part.shape == "mesh":
+            return int(
+                p.createCollisionShape(
+                    p.GEOM_MESH,
+                    vertices=part.vertices.tolist(),
+                    indices=part.triangles.ravel().tolist(),
+                    flags=p.GEOM_FORCE_CONCAVE_TRIMESH,
+                    physicsClientId=client,
+                )
+            )
+        return int(
+            p.createCollisionShape(
+                p.GEOM_PLANE,
+                planeNormal=[float(c) for c in part.normal],
+                collisionFramePosition=[float(c) for c in part.normal * part.offset],
+                physicsClientId=client,
+            )
+        )
+
+    def step(self) -> None:
+        # Bullet moves a body of mass 0 by its velocity in the step: set it where the step
+        # starts, so that no error accumulates
+        for row in self.scene.kinematic:
+            x, q = self.scene.kinematic_pose(int(row), self.time)
+            p.resetBasePositionAndOrientation(
+                self.ids[row], [float(c) for c in x], _xyzw(q), physicsClientId=self.client
+            )
+            p.resetBaseVelocity(
+                self.ids[row],
+                linearVelocity=[float(c) for c in self.scene.velocity[row]],
+                angularVelocity=[float(c) for c in self.scene.omega[row]],
+                physicsClientId=self.client,
+            )
+        p.stepSimulation(physicsClientId=self.client)
+        self.time += self.dt
+
+    def state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        n, client = self.n, self.client
+        x, v, w = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
+        q = np.empty((n, 4))
+        for k in range(n):
+            body = self.ids[k]
+            pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=client)
+            lin, ang = p.getBaseVelocity(body, physicsClientId=client)
+            x[k], v[k], w[k] = pos, lin, ang
+            q[k] = (orn[3], orn[0], orn[1], orn[2])
+        q = self._product(q, np.array(self._principal[:n]))
+        return x, v, q, w
+
+    def close(self) -> None:
+        p.disconnect(physicsClientId=self.client)
+
+
+def _frame_of(part: Any) -> tuple[list[float], list[float], float]:
+    """A primitive's frame in its body (position, Bullet quaternion) and a capsule's length
+    between its caps' centres (Bullet's capsules lie along z)."""
+    if part.shape != "capsule":
+        return [float(c) for c in part.centre], [0.0, 0.0, 0.0, 1.0], 0.0
+    a, b = part.ends
+    axis = b - a
+    length = float(np.linalg.norm(axis))
+    z = axis / length
+    # the shortest turn from z to the axis
+    w = 1.0 + float(z[2])
+    if w < 1e-12:
+        turn = [1.0, 0.0, 0.0, 0.0]  # half a turn about x
+    else:
+        q = np.array([-z[1], z[0], 0.0, w])
+        q /= np.linalg.norm(q)
+        turn = [float(c) for c in q]
+    return [float(c) for c in 0.5 * (a + b)], turn, length
+
+
+def start_rigid(scene: Any) -> PybulletRigidSimulation:
+    return PybulletRigidSimulation(scene)

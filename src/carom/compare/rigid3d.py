@@ -1,0 +1,753 @@
+"""3D rigid bodies in ``carom compare``: the scene as plain data, the closed form, the yardstick.
+
+A :class:`RigidScene3D` is what carom's 3D rigid-body engine starts from
+(:meth:`World.rigid_parts`): every body's pieces in its own frame (centre of mass at the
+origin), mass, inertia tensor, kind, pose and velocities, and the restitution and friction of
+every pair of materials. :func:`primitives` names each body's pieces as the peers' shapes
+(sphere, capsule, box, convex hull, triangle mesh, plane), so every peer builds the same
+bodies.
+
+:func:`impact_expectation3d` gives the closed form of one body landing on level ground (a box
+on an edge or a corner, a rod on its end, a spinning ball): the time of impact from free
+fall, then Newton's restitution at the touching points with the full inertia tensor
+(Hecker's impulse with Coulomb friction for one point, :func:`carom.laws.rigid_impact.
+point_impulse`; the exact frictionless normal impulses for two to four), then torque-free
+flight with the angular momentum kept. :class:`RigidMonitor3D` measures every engine from its
+poses and velocities alone: energies, angular momentum, overlap (carom's exact geometry on
+the poses each engine reports), bodies whose centre passed through a static body, the top
+body's drift and the largest rotation.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from carom.compare.spec import steps_to
+from carom.engines.rigid.settings import RigidSettings
+from carom.engines.rigid3d.driver import RigidEngine3D
+from carom.engines.rigid3d.impacts import normal_lcp
+from carom.engines.rigid3d.model import (
+    PIECE_PLANE,
+    PIECE_ROUND,
+    Model3D,
+    Piece3D,
+    State3D,
+    new_state,
+)
+from carom.engines.rigid3d.motion import free_turn
+from carom.errors import CaromError
+from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
+from carom.laws.rigid_impact import collision_matrix, point_impulse
+from carom.shapes3d import rotation_matrices
+from carom.world import World
+
+__all__ = [
+    "ImpactCheck3D",
+    "Primitive",
+    "RigidMonitor3D",
+    "RigidScene3D",
+    "impact_expectation3d",
+    "matrix_quaternion",
+    "path_enters",
+    "primitives",
+    "principal_frame",
+    "quaternion_product",
+    "world_momentum",
+]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: at most this many points of the series are kept per engine
+SERIES_POINTS = 1500
+#: the closed form's post-impact flight is searched for a second contact at this step [s]
+FLIGHT_STEP = 1e-4
+#: two corners within this height of each other [m] land together (an edge or face lands)
+LEVEL = 1e-12
+#: a box's corners lie on two planes per axis to within this [m]
+BOX_TOLERANCE = 1e-12
+
+
+@dataclass(frozen=True)
+class RigidScene3D:
+    """A 3D scene of rigid bodies as plain data, every body as carom's 3D engine sees it.
+
+    Attributes
+    ----------
+    name, title : str
+        The scene's name and title.
+    n : int
+        The caller's bodies: the first ``n`` rows. The rows after them are the box's walls
+        (static slabs) and the planes.
+    pieces : tuple of tuple of Piece3D
+        Each body's pieces in its frame (centre of mass at the origin) [m].
+    settings : RigidSettings
+        carom's engine settings (rate, substeps, sleep).
+    model, start : Model3D, State3D
+        carom's engine's constants and its state at the start; the properties below read
+        them: ``kind`` (B,), ``mass`` (B,) [kg] and ``inertia`` (B, 3, 3) [kg m^2] (inf for
+        static and kinematic bodies), ``material`` (B,), ``restitution`` and ``friction``
+        (M, M) [-], ``gravity`` (3,) [m/s^2], ``position`` and ``velocity`` (B, 3) [m],
+        [m/s] (centres of mass), ``orientation`` (B, 4) unit quaternions ``(w, x, y, z)``,
+        ``omega`` (B, 3) [rad/s] in the world frame.
+    until : float
+        Simulated time [s].
+    world : callable
+        A fresh copy of the scene's :class:`World`, not yet run.
+    """
+
+    name: str
+    title: str
+    n: int
+    pieces: tuple[tuple[Piece3D, ...], ...]
+    settings: RigidSettings
+    until: float
+    model: Model3D = field(compare=False, repr=False)
+    start: State3D = field(compare=False, repr=False)
+    world: Callable[[], World] = field(compare=False, repr=False)
+
+    dim = 3
+
+    @classmethod
+    def from_world(
+        cls, build: Callable[[], World], name: str, until: float, title: str = ""
+    ) -> RigidScene3D:
+        """Read the 3D world ``build()`` makes, as its rigid engine would start."""
+        world = build()
+        model, state, _ = world.rigid_parts()
+        if not isinstance(model, Model3D) or not isinstance(state, State3D):
+            raise CaromError("RigidScene3D takes a 3D world; a 2D one is a RigidScene")
+        m = model
+        pieces = []
+        for body in range(m.kind.shape[0]):
+            own = []
+            for p in range(int(m.body_pieces[body]), int(m.body_pieces[body + 1])):
+                vs, vc = int(m.piece_vstart[p]), int(m.piece_vcount[p])
+                fs, fc = int(m.piece_fstart[p]), int(m.piece_fcount[p])
+                cs, cc = int(m.piece_cstart[p]), int(m.piece_ccount[p])
+                es, ec = int(m.piece_estart[p]), int(m.piece_ecount[p])
+                own.append(
+                    Piece3D(
+                        int(m.piece_kind[p]),
+                        m.local_vertices[vs : vs + vc].copy(),
+                        float(m.piece_radius[p]),
+                        m.local_normals[fs : fs + fc].copy(),
+                        m.face_first[fs : fs + fc].copy(),
+                        m.face_size[fs : fs + fc].copy(),
+                        m.corners[cs : cs + cc].copy(),
+                        m.edges[es : es + ec].copy(),
+                    )
+                )
+            pieces.append(tuple(own))
+        return cls(
+            name=name,
+            title=title or name,
+            n=world.n_bodies,
+            pieces=tuple(pieces),
+            settings=world.rigid_settings,
+            until=float(until),
+            model=model,
+            start=state,
+            world=functools.partial(copy.deepcopy, world),
+        )
+
+    kind = property(lambda self: self.model.kind)
+    mass = property(lambda self: self.model.mass)
+    inertia = property(lambda self: self.model.inertia)
+    material = property(lambda self: self.model.material)
+    restitution = property(lambda self: self.model.e_table)
+    friction = property(lambda self: self.model.mu_table)
+    rolling = property(lambda self: self.model.rolling_table)
+    gravity = property(lambda self: self.model.gravity)
+    position = property(lambda self: self.start.x)
+    velocity = property(lambda self: self.start.v)
+    orientation = property(lambda self: self.start.q)
+    omega = property(lambda self: self.start.w)
+
+    @property
+    def bodies(self) -> int:
+        """Every row: the caller's bodies, walls and planes."""
+        return int(self.kind.shape[0])
+
+    @property
+    def dt(self) -> float:
+        """carom's step [s]."""
+        return self.settings.dt
+
+    def steps(self, dt: float) -> int:
+        """Steps of ``dt`` [s] that reach ``until``."""
+        return steps_to(self.until, dt)
+
+    def energy(
+        self, x: FloatArray, v: FloatArray, q: FloatArray, w: FloatArray
+    ) -> tuple[float, float, float]:
+        """Translational and rotational kinetic energy and potential energy [J] of the
+        dynamic bodies among the first ``n`` (centres and velocities (n, 3), quaternions
+        (n, 4), angular velocities (n, 3) in the world frame)."""
+        dyn = self.kind[: self.n] == KIND_DYNAMIC
+        m = self.mass[: self.n][dyn]
+        translation = 0.5 * float(np.sum(m * np.sum(v[dyn] ** 2, axis=1)))
+        spin = world_momentum(self.inertia[: self.n][dyn], q[dyn], w[dyn])
+        rotation = 0.5 * float(np.sum(spin * w[dyn]))
+        potential = -float(np.sum(m * (x[dyn] @ self.gravity)))
+        return translation, rotation, potential
+
+    def needed_pairs(self) -> list[tuple[int, int]]:
+        """Pairs of materials that can meet: a dynamic body's material with any other
+        body's (a material with itself only when two bodies have it)."""
+        count = np.bincount(self.material, minlength=self.restitution.shape[0])
+        dynamic = sorted(set(self.material[self.kind == KIND_DYNAMIC].tolist()))
+        every = sorted(set(self.material.tolist()))
+        return [(a, b) for a in dynamic for b in every if a != b or count[a] >= 2]
+
+    @property
+    def kinematic(self) -> IntArray:
+        """The rows of the kinematic bodies (moved at constant velocities)."""
+        return np.nonzero(self.kind == KIND_KINEMATIC)[0]
+
+    def kinematic_pose(self, body: int, time: float) -> tuple[FloatArray, FloatArray]:
+        """Where a kinematic body is at ``time`` [s]: its centre (3,) [m], moved at its
+        constant velocity, and its orientation (4,), turned at its constant angular velocity
+        (world frame) about its centre."""
+        x = self.position[body] + self.velocity[body] * time
+        w = self.omega[body]
+        speed = float(np.linalg.norm(w))
+        if speed == 0.0:
+            return x, self.orientation[body].copy()
+        half = 0.5 * speed * time
+        turn = np.concatenate([[math.cos(half)], math.sin(half) * w / speed])
+        return x, quaternion_product(turn, self.orientation[body])
+
+
+def world_momentum(inertia: FloatArray, q: FloatArray, w: FloatArray) -> FloatArray:
+    """Spin angular momentum ``R I R^T w`` (n, 3) [kg m^2/s] of bodies with body-frame
+    tensors (n, 3, 3), orientations (n, 4) and world angular velocities (n, 3)."""
+    r = rotation_matrices(q)
+    body = np.einsum("nji,nj->ni", r, w)
+    return np.asarray(np.einsum("nij,nj->ni", r, np.einsum("nij,nj->ni", inertia, body)), float)
+
+
+@dataclass(frozen=True)
+class Primitive:
+    """One piece of a body as the peers' shapes name it, in the body's frame.
+
+    Attributes
+    ----------
+    shape : {"sphere", "capsule", "box", "hull", "mesh", "plane"}
+    centre : (3,) float64
+        A sphere's or box's centre [m] (a box's faces are parallel to the body's axes).
+    half : (3,) float64
+        A box's half sides [m].
+    radius : float
+        A sphere's or capsule's radius; a rounded hull's rounding [m].
+    ends : (2, 3) float64
+        A capsule's segment [m].
+    vertices : (k, 3) float64
+        A hull's corners or a mesh's vertices [m].
+    triangles : (t, 3) int64
+        A mesh's triangles, counter-clockwise from outside.
+    normal : (3,) float64
+        A plane's outward normal (solid below ``normal . x = offset``).
+    offset : float
+        A plane's offset [m].
+    """
+
+    shape: str
+    centre: FloatArray = field(default_factory=lambda: np.zeros(3))
+    half: FloatArray = field(default_factory=lambda: np.zeros(3))
+    radius: float = 0.0
+    ends: FloatArray = field(default_factory=lambda: np.zeros((2, 3)))
+    vertices: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
+    triangles: IntArray = field(default_factory=lambda: np.zeros((0, 3), np.int64))
+    normal: FloatArray = field(default_factory=lambda: np.zeros(3))
+    offset: float = 0.0
+
+
+def _box(v: FloatArray) -> Primitive | None:
+    """The box whose corners are ``v`` (8, 3), if they are an axis-aligned box's."""
+    if v.shape[0] != 8:
+        return None
+    low, high = v.min(axis=0), v.max(axis=0)
+    on_face = (np.abs(v - low) <= BOX_TOLERANCE) | (np.abs(v - high) <= BOX_TOLERANCE)
+    if not np.all(on_face):
+        return None
+    corners = {tuple(row) for row in (np.abs(v - high) <= BOX_TOLERANCE).tolist()}
+    if len(corners) != 8:
+        return None
+    return Primitive("box", centre=0.5 * (low + high), half=0.5 * (high - low))
+
+
+def primitives(scene: RigidScene3D, body: int) -> list[Primitive]:
+    """Body ``body``'s pieces as the peers' shapes, in its frame: round pieces as spheres and
+    capsules, axis-aligned boxes as boxes, other polytopes as convex hulls, a static body's
+    triangles as one mesh, planes as planes."""
+    out: list[Primitive] = []
+    mesh_v: list[FloatArray] = []
+    for piece in scene.pieces[body]:
+        v = piece.vertices
+        if piece.kind == PIECE_PLANE:
+            normal = piece.normals[0]
+            out.append(Primitive("plane", normal=normal.copy(), offset=float(v[0] @ normal)))
+        elif piece.kind == PIECE_ROUND:
+            if v.shape[0] == 1:
+                out.append(Primitive("sphere", centre=v[0].copy(), radius=piece.radius))
+            else:
+                out.append(Primitive("capsule", ends=v[:2].copy(), radius=piece.radius))
+        elif v.shape[0] == 3 and piece.normals.shape[0] == 2:  # a mesh's flat triangle
+            mesh_v.append(v)
+        else:
+            box = _box(v) if piece.radius == 0.0 else None
+            out.append(box or Primitive("hull", vertices=v.copy(), radius=piece.radius))
+    if mesh_v:
+        triangles = np.arange(3 * len(mesh_v), dtype=np.int64).reshape(-1, 3)
+        out.append(Primitive("mesh", vertices=np.concatenate(mesh_v), triangles=triangles))
+    return out
+
+
+def principal_frame(inertia: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Principal moments (3,) [kg m^2] and the quaternion ``(w, x, y, z)`` that turns the
+    principal axes into the body's frame, of a body-frame tensor (3, 3); identity when the
+    tensor is already diagonal."""
+    if np.all(inertia == np.diag(np.diag(inertia))):
+        return np.diag(inertia).copy(), np.array([1.0, 0.0, 0.0, 0.0])
+    moments, axes = np.linalg.eigh(inertia)
+    if np.linalg.det(axes) < 0.0:
+        axes[:, 2] = -axes[:, 2]
+    return moments, matrix_quaternion(axes)
+
+
+def matrix_quaternion(r: FloatArray) -> FloatArray:
+    """The unit quaternion ``(w, x, y, z)`` of a rotation matrix (3, 3) (Shepperd's method)."""
+    trace = float(np.trace(r))
+    if trace > 0.0:
+        s = 2.0 * math.sqrt(trace + 1.0)
+        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+    else:
+        k = int(np.argmax(np.diag(r)))
+        i, j = (k + 1) % 3, (k + 2) % 3
+        s = 2.0 * math.sqrt(1.0 + r[k, k] - r[i, i] - r[j, j])
+        q = [0.0, 0.0, 0.0, 0.0]
+        q[0] = (r[j, i] - r[i, j]) / s
+        q[1 + k] = 0.25 * s
+        q[1 + i] = (r[i, k] + r[k, i]) / s
+        q[1 + j] = (r[j, k] + r[k, j]) / s
+    out = np.array(q, float)
+    return np.asarray(out / np.linalg.norm(out), float)
+
+
+def quaternion_product(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Hamilton products ``a b`` of quaternions (..., 4) ``(w, x, y, z)``."""
+    aw, ax, ay, az = np.moveaxis(np.asarray(a, float), -1, 0)
+    bw, bx, by, bz = np.moveaxis(np.asarray(b, float), -1, 0)
+    return np.stack(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ],
+        axis=-1,
+    )
+
+
+def turned_angle(q: FloatArray, q0: FloatArray) -> FloatArray:
+    """The angle [rad] (n,) of the rotation from orientations ``q0`` to ``q`` (n, 4)."""
+    dot = np.abs(np.sum(np.asarray(q) * np.asarray(q0), axis=1))
+    return np.asarray(2.0 * np.arccos(np.clip(dot, 0.0, 1.0)), float)
+
+
+@dataclass(frozen=True)
+class ImpactCheck3D:
+    """The closed form of one body landing on level ground.
+
+    Attributes
+    ----------
+    body : int
+        The falling body.
+    impact_time : float
+        When its lowest point reaches the ground [s] (free fall).
+    time : float
+        When the engines are checked [s]: after the impact, before any second contact.
+    velocity : (3,) float64
+        Centre-of-mass velocity at ``time`` [m/s].
+    omega : (3,) float64
+        Angular velocity at ``time`` [rad/s], world frame (torque-free flight after the
+        impact keeps the angular momentum).
+    points : int
+        Points that touch at the impact (1 a corner or a ball, 2 an edge, 3-4 a face).
+    speed : float
+        Approach speed of the contact points at the impact [m/s] (the error scale).
+    reach : float
+        Farthest point of the body from its centre [m] (turns ω errors into speeds).
+    source : str
+        What the closed form is.
+    """
+
+    body: int
+    impact_time: float
+    time: float
+    velocity: FloatArray
+    omega: FloatArray
+    points: int
+    speed: float
+    reach: float
+    source: str
+
+
+def _lowest(
+    scene: RigidScene3D, body: int, q: FloatArray, up: FloatArray
+) -> tuple[FloatArray, float]:
+    """The body's lowest points (k, 3) relative to its centre, turned by ``q`` (4,), and
+    their height along ``up`` relative to the centre [m]."""
+    r = rotation_matrices(q[None, :])[0]
+    points: list[FloatArray] = []
+    for piece in scene.pieces[body]:
+        points.append(piece.vertices @ r.T - piece.radius * up)
+    every = np.concatenate(points)
+    height = every @ up
+    low = float(height.min())
+    return every[height <= low + LEVEL], low
+
+
+def _ground(scene: RigidScene3D, feet: FloatArray, up: FloatArray) -> tuple[int, float]:
+    """The static body whose level top lies under every point of ``feet`` (k, 3) [m]
+    (world), highest first, and its height along ``up``; (-1, -inf) if none."""
+    best, top = -1, -math.inf
+    below = float(np.min(feet @ up))
+    for other in np.nonzero(scene.kind == KIND_STATIC)[0]:
+        r = rotation_matrices(scene.orientation[other][None, :])[0]
+        for piece in scene.pieces[int(other)]:
+            normals = piece.normals @ r.T
+            corners = piece.vertices @ r.T + scene.position[other]
+            if piece.kind == PIECE_PLANE:
+                if abs(float(normals[0] @ up) - 1.0) > LEVEL:
+                    continue
+                height = float(corners[0] @ up)
+            else:
+                faces = np.nonzero(np.abs(normals @ up - 1.0) <= LEVEL)[0]
+                if faces.shape[0] != 1 or piece.kind == PIECE_ROUND:
+                    continue
+                f = int(faces[0])
+                first, size = int(piece.face_first[f]), int(piece.face_size[f])
+                ring = corners[piece.corners[first : first + size]]
+                height = float(ring[0] @ up) + piece.radius
+                # every foot inside the face's polygon, seen from above
+                for a, b in zip(ring, np.roll(ring, -1, axis=0), strict=True):
+                    side = np.cross(b - a, feet - a) @ up
+                    if np.any(side < -LEVEL):
+                        height = -math.inf
+                        break
+            if top < height <= below + LEVEL:
+                best, top = int(other), height
+    return best, top
+
+
+def _flight(
+    scene: RigidScene3D, body: int, q: FloatArray, w: FloatArray, tau: float
+) -> tuple[FloatArray, FloatArray]:
+    """Orientation and angular velocity after ``tau`` [s] of torque-free flight (the world
+    angular momentum kept)."""
+    qq, ww = q.reshape(1, 4).copy(), w.reshape(1, 3).copy()
+    inertia = scene.inertia[body][None]
+    inverse = np.linalg.inv(scene.inertia[body])[None]
+    if tau > 0.0:
+        free_turn(0, tau, 1, qq, ww, inertia, inverse)
+    return qq[0], ww[0]
+
+
+def impact_expectation3d(scene: RigidScene3D, step: float) -> ImpactCheck3D | None:
+    """The closed form when one dynamic body falls onto level ground.
+
+    The ground is the static plane, or the static polytope's level top face, under the
+    body's lowest points. They reach it at the free-fall time. One point (a corner, a ball,
+    a capsule's end): Hecker's impulse with the full inertia tensor and Coulomb friction
+    (sticking, sliding or the cone's edge). Two to four points (an edge or a face): the
+    exact normal impulses of the frictionless problem (each point's Newton restitution,
+    none pulling), so only when the pair has no friction. Then torque-free flight; the
+    check waits two steps of ``step`` and must come before any second contact. None when
+    the scene is not of this kind; a body that spins before the impact must be a ball.
+
+    Parameters
+    ----------
+    scene : RigidScene3D
+    step : float
+        The largest step of the engines compared [s]: the check waits two of them.
+    """
+    dyn = np.nonzero(scene.kind == KIND_DYNAMIC)[0]
+    g_norm = float(np.linalg.norm(scene.gravity))
+    if dyn.shape[0] != 1 or np.any(scene.kind == KIND_KINEMATIC) or g_norm == 0.0:
+        return None
+    body = int(dyn[0])
+    up = -scene.gravity / g_norm
+    x0, v0 = scene.position[body], scene.velocity[body]
+    q0, w0 = scene.orientation[body], scene.omega[body]
+    ball = len(scene.pieces[body]) == 1 and scene.pieces[body][0].vertices.shape[0] == 1
+    if np.any(w0 != 0.0) and not ball:
+        return None  # a spinning body's lowest point changes as it falls
+    feet, low = _lowest(scene, body, q0, up)
+    ground, top = _ground(scene, feet + x0, up)
+    if ground < 0:
+        return None
+    a, b = int(scene.material[body]), int(scene.material[ground])
+    e, mu = float(scene.restitution[a, b]), float(scene.friction[a, b])
+    drop = float(x0 @ up) + low - top
+    vu = float(v0 @ up)
+    t_hit = (vu + math.sqrt(vu * vu + 2.0 * g_norm * drop)) / g_norm
+    v_hit = v0 + scene.gravity * t_hit
+    mass = float(scene.mass[body])
+    inv_inertia = np.linalg.inv(scene.inertia[body])
+    r0 = rotation_matrices(q0[None, :])[0]
+    iw = r0 @ inv_inertia @ r0.T  # the world inverse tensor at the impact
+    u = v_hit[None, :] + np.cross(w0, feet)  # the points' velocities
+    count = feet.shape[0]
+    no_body = np.zeros((3, 3))
+    if count == 1:
+        k = collision_matrix(1.0 / mass, iw, feet[0], 0.0, no_body, np.zeros(3))
+        impulses = point_impulse(u[0], up, k, e, mu)[None, :]
+        law = "Hecker's impulse with Coulomb friction"
+    else:
+        if mu > 0.0 or count > 4:
+            return None  # friction at several points: not this closed form
+        kk = np.empty((count, count))
+        for i in range(count):
+            for j in range(count):
+                # normal velocity change at point i per unit normal impulse at point j
+                turn = iw @ np.cross(feet[j], up)
+                kk[i, j] = 1.0 / mass + float(up @ np.cross(turn, feet[i]))
+        bias = (1.0 + e) * (u @ up)
+        lam = np.zeros(count)
+        if not normal_lcp(kk, bias, count, lam):
+            return None
+        impulses = lam[:, None] * up[None, :]
+        law = f"the exact frictionless impulses at {count} points"
+    v_after = v_hit + impulses.sum(axis=0) / mass
+    w_after = w0 + iw @ np.sum(np.cross(feet, impulses), axis=0)
+    # the flight after the impact, until the body reaches the ground again
+    t_next = scene.until
+    t = t_hit + FLIGHT_STEP
+    x_hit = x0 + v0 * t_hit + 0.5 * scene.gravity * t_hit**2
+    q, w = q0.copy(), w_after.copy()
+    while t < scene.until:
+        q, w = _flight(scene, body, q, w, FLIGHT_STEP)
+        tau = t - t_hit
+        centre = x_hit + v_after * tau + 0.5 * scene.gravity * tau**2
+        _, low_now = _lowest(scene, body, q, up)
+        if float(centre @ up) + low_now <= top:
+            t_next = t
+            break
+        t += FLIGHT_STEP
+    first = math.ceil((t_hit + 2.0 * step) / step) * step
+    if first > t_next - step:
+        return None
+    _, w_check = _flight(scene, body, q0, w_after, first - t_hit)
+    velocity = v_after + scene.gravity * (first - t_hit)
+    reach = float(scene.model.reach[body])
+    speed = float(np.max(np.abs(u @ up)))
+    return ImpactCheck3D(
+        body=body,
+        impact_time=t_hit,
+        time=first,
+        velocity=velocity,
+        omega=w_check,
+        points=count,
+        speed=max(speed, 1e-300),
+        reach=reach,
+        source=(
+            f"free fall onto level ground, then Newton's restitution e = {e:g} with the "
+            f"full inertia tensor ({law}, mu = {mu:g}), then torque-free flight"
+        ),
+    )
+
+
+class RigidMonitor3D:
+    """The same yardstick for every engine, fed the poses and velocities after each step.
+
+    Parameters
+    ----------
+    scene : RigidScene3D
+    expected : ImpactCheck3D or None
+    dt : float
+        The interval between observations [s].
+    """
+
+    def __init__(self, scene: RigidScene3D, expected: ImpactCheck3D | None, dt: float) -> None:
+        self.scene = scene
+        self.expected = expected
+        n = scene.n
+        self._dynamic = dyn = np.nonzero(scene.kind[:n] == KIND_DYNAMIC)[0]
+        self._q0 = scene.orientation[dyn].copy()
+        up = -scene.gravity / max(float(np.linalg.norm(scene.gravity)), 1e-300)
+        heights = scene.position[dyn] @ up if np.any(up) else scene.position[dyn, 2]
+        self._top = int(dyn[np.argmax(heights)]) if dyn.shape[0] else -1
+        self._size = _extent(scene.pieces[self._top]) if self._top >= 0 else 1.0
+        # the static pieces' faces in the world (they never move): (normals, offsets)
+        self._walls: list[tuple[FloatArray, FloatArray]] = []
+        for body in np.nonzero(scene.kind == KIND_STATIC)[0]:
+            r = rotation_matrices(scene.orientation[body][None, :])[0]
+            for piece in scene.pieces[int(body)]:
+                if piece.kind == PIECE_ROUND or piece.vertices.shape[0] == 3:
+                    continue  # a centre never crosses a round core or a flat triangle
+                normals = piece.normals @ r.T
+                corners = piece.vertices @ r.T + scene.position[body]
+                plane = piece.kind == PIECE_PLANE
+                first = corners if plane else corners[piece.corners[piece.face_first]]
+                offsets = np.sum(normals * first, axis=1)
+                self._walls.append((normals, offsets))
+        # a copy of carom's engine, only to measure overlaps of the poses it is given
+        settings = RigidSettings(rate=scene.settings.rate, sleep=False, exact_impacts=False)
+        m = scene.model
+        self._probe = RigidEngine3D(
+            m,
+            new_state(m, scene.position, scene.velocity, scene.orientation, scene.omega),
+            settings,
+        )
+        self._every_overlap = max(1, round(0.1 / dt))  # overlaps: ten times a second
+        self._every = max(1, math.ceil(scene.until / dt / SERIES_POINTS))
+        self._previous: FloatArray | None = None
+        self.steps = 0
+        self.max_overlap = 0.0
+        self.through: set[int] = set()
+        self.max_top = 0.0
+        self.top_drift = 0.0
+        self.max_rotation = 0.0
+        self.final_rotation = 0.0
+        self.energy0: float | None = None
+        self.energy_gain = 0.0
+        self.final: tuple[float, float, float] = (0.0, 0.0, 0.0)
+        self._best: tuple[float, FloatArray, FloatArray] = (math.inf, np.zeros(3), np.zeros(3))
+        self.series: dict[str, list[float]] = {
+            "time": [],
+            "translation": [],
+            "rotation": [],
+            "potential": [],
+            "angular_momentum": [],
+            "overlap": [],
+        }
+
+    def observe(
+        self, time: float, x: FloatArray, v: FloatArray, q: FloatArray, w: FloatArray
+    ) -> None:
+        """Take the state of the first ``n`` bodies after a step (time [s]; x, v (n, 3);
+        q (n, 4) ``(w, x, y, z)``; w (n, 3) world frame [rad/s])."""
+        scene, dyn = self.scene, self._dynamic
+        translation, rotation, potential = scene.energy(x, v, q, w)
+        total = translation + rotation + potential
+        if self.energy0 is None:
+            self.energy0 = total
+        self.energy_gain = max(self.energy_gain, total - self.energy0)
+        self.final = (translation, rotation, potential)
+        turned = turned_angle(q[dyn], self._q0) if dyn.shape[0] else np.zeros(1)
+        self.final_rotation = float(turned.max())
+        self.max_rotation = max(self.max_rotation, self.final_rotation)
+        if self._top >= 0:
+            self.top_drift = float(np.linalg.norm(x[self._top] - scene.position[self._top]))
+            self.max_top = max(self.max_top, self.top_drift)
+        if self._previous is not None:
+            self._passed(self._previous[dyn], x[dyn], dyn)
+        self._previous = x.copy()
+        overlap = math.nan
+        if self.steps % self._every_overlap == 0:
+            overlap = self._overlap(x, q)
+            self.max_overlap = max(self.max_overlap, overlap)
+        if self.expected is not None:
+            check = self.expected
+            gap = abs(time - check.time)
+            if gap < self._best[0]:
+                moved = v[check.body] + scene.gravity * (check.time - time)
+                self._best = (gap, moved, np.array(w[check.body], float))
+        if self.steps % self._every == 0:
+            m = scene.mass[: scene.n][dyn]
+            spin = world_momentum(scene.inertia[: scene.n][dyn], q[dyn], w[dyn])
+            orbit = m[:, None] * np.cross(x[dyn], v[dyn])
+            self.series["time"].append(time)
+            self.series["translation"].append(translation)
+            self.series["rotation"].append(rotation)
+            self.series["potential"].append(potential)
+            self.series["angular_momentum"].append(
+                float(np.linalg.norm(np.sum(spin + orbit, axis=0)))
+            )
+            self.series["overlap"].append(overlap)
+        self.steps += 1
+
+    def _overlap(self, x: FloatArray, q: FloatArray) -> float:
+        """Deepest overlap [m] of the poses, by carom's exact contact geometry."""
+        state = self._probe.state
+        n = self.scene.n
+        state.x[:n] = x
+        state.q[:n] = q / np.linalg.norm(q, axis=1, keepdims=True)
+        state.awake[:] = True
+        return self._probe.deepest_overlap()[2]
+
+    def _passed(self, before: FloatArray, after: FloatArray, rows: IntArray) -> None:
+        """Note the bodies whose centre's path in the step entered a static piece's core."""
+        for normals, offsets in self._walls:
+            hit = path_enters(before, after, normals, offsets)
+            self.through.update(int(i) for i in rows[hit])
+
+    def result(self) -> dict[str, Any]:
+        """The measurements, as JSON-ready numbers (docs/compare.md)."""
+        velocity_error = omega_error = None
+        if self.expected is not None:
+            check = self.expected
+            _, v, w = self._best
+            velocity_error = float(np.linalg.norm(v - check.velocity)) / check.speed
+            omega_error = float(np.linalg.norm(w - check.omega)) * check.reach / check.speed
+        e0 = self.energy0 if self.energy0 is not None else 0.0
+        scale = abs(e0) if e0 != 0.0 else 1.0
+        return {
+            "velocity_error": velocity_error,
+            "omega_error": omega_error,
+            "energy_gain": self.energy_gain / scale,
+            "final_energy_J": {
+                "translation": self.final[0],
+                "rotation": self.final[1],
+                "potential": self.final[2],
+            },
+            "max_overlap_m": self.max_overlap,
+            "tunnelled": bool(self.through),
+            "bodies_through_static": len(self.through),
+            "top_body": self._top,
+            "top_drift_m": self.top_drift,
+            "top_drift_per_size": self.top_drift / self._size,
+            "max_top_drift_m": self.max_top,
+            "max_rotation_deg": math.degrees(self.max_rotation),
+            "final_rotation_deg": math.degrees(self.final_rotation),
+            "samples": self.steps,
+        }
+
+
+def _extent(pieces: tuple[Piece3D, ...]) -> float:
+    """A body's size [m]: the longest side of its bounding box in its own frame."""
+    corners = np.concatenate([p.vertices for p in pieces])
+    radius = max(p.radius for p in pieces)
+    return float(np.max(corners.max(axis=0) - corners.min(axis=0)) + 2.0 * radius)
+
+
+def path_enters(
+    before: FloatArray, after: FloatArray, normals: FloatArray, offsets: FloatArray
+) -> NDArray[np.bool_]:
+    """Which paths ``before[i] -> after[i]`` (n, 3) enter the convex region
+    ``normals . x <= offsets`` (a polytope's faces, or a plane's one), clipped face by face
+    (Cyrus-Beck); a path that starts inside does not count."""
+    d = after - before
+    low = np.zeros(before.shape[0])
+    high = np.ones(before.shape[0])
+    start_out = np.zeros(before.shape[0], bool)
+    for normal, offset in zip(normals, offsets, strict=True):
+        start = before @ normal - offset  # > 0: outside this face
+        start_out |= start > 0.0
+        rate = d @ normal
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = -start / rate
+        low = np.where(rate < 0.0, np.maximum(low, t), low)
+        high = np.where(rate > 0.0, np.minimum(high, t), high)
+        high = np.where((rate == 0.0) & (start > 0.0), -1.0, high)
+    return np.asarray(start_out & (low < high))
