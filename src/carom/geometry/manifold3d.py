@@ -164,20 +164,21 @@ def closest_segment_segment(
     ``q0 + t (q1 - q0)`` of two segments (Ericson 2005, sec. 5.1.9: the unclamped minimum of
     ``|p(s) - q(t)|^2``, clamped to the square edge by edge; for parallel segments any s
     works, and s = 0 is taken)."""
-    d1 = p1 - p0
-    d2 = q1 - q0
-    r = p0 - q0
-    a = _dot(d1, d1)
-    e = _dot(d2, d2)
-    f = _dot(d2, r)
+    # in scalars (no arrays are made: this runs for every edge pair of two polytopes)
+    d1x, d1y, d1z = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
+    d2x, d2y, d2z = q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2]
+    rx, ry, rz = p0[0] - q0[0], p0[1] - q0[1], p0[2] - q0[2]
+    a = d1x * d1x + d1y * d1y + d1z * d1z
+    e = d2x * d2x + d2y * d2y + d2z * d2z
+    f = d2x * rx + d2y * ry + d2z * rz
     if a == 0.0 and e == 0.0:
         return 0.0, 0.0
     if a == 0.0:
         return 0.0, min(max(f / e, 0.0), 1.0)
-    c = _dot(d1, r)
+    c = d1x * rx + d1y * ry + d1z * rz
     if e == 0.0:
         return min(max(-c / a, 0.0), 1.0), 0.0
-    b = _dot(d1, d2)
+    b = d1x * d2x + d1y * d2y + d1z * d2z
     denominator = a * e - b * b  # |d1 x d2|^2 >= 0
     s = (
         min(max((b * f - c * e) / denominator, 0.0), 1.0)
@@ -702,17 +703,18 @@ def closest_hulls(
     exact impacts advance on it); none when they touch or are further apart than
     ``margin``."""
     best = np.inf
-    on_a = np.zeros(3)
-    on_b = np.zeros(3)
+    ax = ay = az = bx = by = bz = 0.0  # the closest points on A and on B
     feature = 0
     for i in range(va.shape[0]):
-        d, q, f = _closest_on_hull(vb, nb, sb, cb, corb, eb, va[i])
+        d, qx, qy, qz, f = _closest_on_hull(vb, nb, sb, cb, corb, eb, va[i, 0], va[i, 1], va[i, 2])
         if d < best:
-            best, on_a, on_b, feature = d, va[i].copy(), q, (2 << 50) | (i << 25) | f
+            best, feature = d, (2 << 50) | (i << 25) | f
+            ax, ay, az, bx, by, bz = va[i, 0], va[i, 1], va[i, 2], qx, qy, qz
     for j in range(vb.shape[0]):
-        d, q, f = _closest_on_hull(va, na, sa, ca, cora, ea, vb[j])
+        d, qx, qy, qz, f = _closest_on_hull(va, na, sa, ca, cora, ea, vb[j, 0], vb[j, 1], vb[j, 2])
         if d < best:
-            best, on_a, on_b, feature = d, q, vb[j].copy(), (3 << 50) | (j << 25) | f
+            best, feature = d, (3 << 50) | (j << 25) | f
+            ax, ay, az, bx, by, bz = qx, qy, qz, vb[j, 0], vb[j, 1], vb[j, 2]
     for i in range(ea.shape[0]):
         p0 = va[ea[i, 0]]
         p1 = va[ea[i, 1]]
@@ -720,60 +722,71 @@ def closest_hulls(
             q0 = vb[eb[j, 0]]
             q1 = vb[eb[j, 1]]
             s, t = closest_segment_segment(p0, p1, q0, q1)
-            p = p0 + s * (p1 - p0)
-            q = q0 + t * (q1 - q0)
-            dd = q - p
-            d = math.sqrt(_dot(dd, dd))
+            px = p0[0] + s * (p1[0] - p0[0])
+            py = p0[1] + s * (p1[1] - p0[1])
+            pz = p0[2] + s * (p1[2] - p0[2])
+            qx = q0[0] + t * (q1[0] - q0[0])
+            qy = q0[1] + t * (q1[1] - q0[1])
+            qz = q0[2] + t * (q1[2] - q0[2])
+            dx, dy, dz = qx - px, qy - py, qz - pz
+            d = math.sqrt(dx * dx + dy * dy + dz * dz)
             if d < best:
-                best, on_a, on_b, feature = d, p, q, (1 << 50) | (i << 20) | j
+                best, feature = d, (1 << 50) | (i << 20) | j
+                ax, ay, az, bx, by, bz = px, py, pz, qx, qy, qz
     if best > margin or not best > 0.0:
         return 0
-    n = (on_b - on_a) / best
-    m = 0.5 * (on_a + on_b)
-    out[0], out[1], out[2] = n[0], n[1], n[2]
-    _point(out, ids, 0, m[0], m[1], m[2], best, feature)
+    out[0], out[1], out[2] = (bx - ax) / best, (by - ay) / best, (bz - az) / best
+    _point(out, ids, 0, 0.5 * (ax + bx), 0.5 * (ay + by), 0.5 * (az + bz), best, feature)
     return 1
 
 
 @njit(cache=True)
 def _closest_on_hull(
     va: np.ndarray, na: np.ndarray, sa: np.ndarray, ca: np.ndarray, cora: np.ndarray,
-    ea: np.ndarray, b: np.ndarray,
-) -> tuple[float, np.ndarray, int]:  # fmt: skip
-    """Distance [m] from a point ``b`` on or outside a convex polytope to it, the nearest
-    point, and its feature: a face whose plane ``b`` is on or above and whose foot falls
-    inside it (id: the face), or else an edge (id: ``1 << 20`` plus the edge)."""
+    ea: np.ndarray, bx: float, by: float, bz: float,
+) -> tuple[float, float, float, float, int]:  # fmt: skip
+    """Distance [m] from a point ``(bx, by, bz)`` on or outside a convex polytope to it, the
+    nearest point (x, y, z), and its feature: a face whose plane the point is on or above and
+    whose foot falls inside it (id: the face), or else an edge (id: ``1 << 20`` plus the
+    edge). In scalars: no arrays are made."""
     best = np.inf
-    closest = np.zeros(3)
+    cx = cy = cz = 0.0
     feature = 0
     for f in range(na.shape[0]):
-        n = na[f]
-        h = _dot(n, b) - _dot(n, va[cora[sa[f]]])
+        nx, ny, nz = na[f, 0], na[f, 1], na[f, 2]
+        first = va[cora[sa[f]]]
+        h = (nx * bx + ny * by + nz * bz) - (nx * first[0] + ny * first[1] + nz * first[2])
         if h < 0.0:
             continue
-        foot = b - h * n
+        fx, fy, fz = bx - h * nx, by - h * ny, bz - h * nz
         inside = True
         for k in range(ca[f]):
             r0 = va[cora[sa[f] + k]]
             r1 = va[cora[sa[f] + (k + 1) % ca[f]]]
-            if _dot(np.cross(r1 - r0, n), foot - r0) > 0.0:
+            ex, ey, ez = r1[0] - r0[0], r1[1] - r0[1], r1[2] - r0[2]
+            # (r1 - r0) x n, the side's outward normal in the face's plane
+            sx, sy, sz = ey * nz - ez * ny, ez * nx - ex * nz, ex * ny - ey * nx
+            if sx * (fx - r0[0]) + sy * (fy - r0[1]) + sz * (fz - r0[2]) > 0.0:
                 inside = False
                 break
         if inside and h < best:
             best = h
-            closest = foot
+            cx, cy, cz = fx, fy, fz
             feature = f
     for e in range(ea.shape[0]):
         p0 = va[ea[e, 0]]
         p1 = va[ea[e, 1]]
-        q = p0 + _on_segment(p0, p1, b[0], b[1], b[2]) * (p1 - p0)
-        d = b - q
-        distance = math.sqrt(_dot(d, d))
+        t = _on_segment(p0, p1, bx, by, bz)
+        qx = p0[0] + t * (p1[0] - p0[0])
+        qy = p0[1] + t * (p1[1] - p0[1])
+        qz = p0[2] + t * (p1[2] - p0[2])
+        dx, dy, dz = bx - qx, by - qy, bz - qz
+        distance = math.sqrt(dx * dx + dy * dy + dz * dz)
         if distance < best:
             best = distance
-            closest = q
+            cx, cy, cz = qx, qy, qz
             feature = (1 << 20) | e
-    return best, closest, feature
+    return best, cx, cy, cz, feature
 
 
 @njit(cache=True)
@@ -803,7 +816,8 @@ def contact_hull_sphere(
         out[0], out[1], out[2] = n[0], n[1], n[2]
         _point(out, ids, 0, m[0], m[1], m[2], highest - rb, top)
         return 1
-    best, closest, feature = _closest_on_hull(va, na, sa, ca, cora, ea, b)
+    best, cx, cy, cz, feature = _closest_on_hull(va, na, sa, ca, cora, ea, b[0], b[1], b[2])
+    closest = np.array([cx, cy, cz])
     sep = best - rb
     if sep > margin:
         return 0
@@ -902,7 +916,8 @@ def contact_hull_capsule(
         feature = -1
         for j in range(2):
             end = b0 if j == 0 else b1
-            d, q, f = _closest_on_hull(va, na, sa, ca, cora, ea, end)
+            d, qx, qy, qz, f = _closest_on_hull(va, na, sa, ca, cora, ea, end[0], end[1], end[2])
+            q = np.array([qx, qy, qz])
             if d < best:
                 best = d
                 closest = q
