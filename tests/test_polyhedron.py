@@ -18,7 +18,7 @@ def test_a_box_has_six_square_faces_and_twelve_edges() -> None:
     features = polyhedron_features(piece.vertices, piece.triangles)
     assert features.normals.shape == (6, 3)
     assert list(features.face_count) == [4] * 6
-    assert features.edges.shape == (12, 2)
+    assert features.edges.shape == (12, 4)  # two corners, then the two faces that meet
     # each face's plane is half the box's size out along its normal
     half = np.abs(features.normals) @ np.array([0.5, 1.0, 1.5])
     assert features.offsets == pytest.approx(half, abs=1e-15)
@@ -45,3 +45,10 @@ def test_faces_of_random_hulls_are_planar_counterclockwise_and_close_a_sphere(
         assert np.all(turn @ f.normals[face] > 0.0)
         # outward: every corner of the hull on or below the face's plane
         assert np.all(hull.vertices @ f.normals[face] <= f.offsets[face] + 1e-9 * size)
+    # each edge joins two different faces, and it is a side of each (consecutive corners)
+    for a, b, f0, f1 in f.edges.tolist():
+        assert f0 != f1
+        for face in (f0, f1):
+            ring = f.corners[f.face_start[face] : f.face_start[face] + f.face_count[face]]
+            sides = {frozenset(pair) for pair in zip(ring, np.roll(ring, -1), strict=True)}
+            assert frozenset((a, b)) in sides

@@ -559,27 +559,169 @@ def _support_edge(
         cx, cy, cz = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
         if cx * cx + cy * cy + cz * cz > _PARALLEL * uu * (wx * wx + wy * wy + wz * wz):
             continue
-        a = e[i, 0]
-        b = e[i, 1]
-        if (
-            abs(v[a, 0] * x + v[a, 1] * y + v[a, 2] * z - level) <= tol
-            and abs(v[b, 0] * x + v[b, 1] * y + v[b, 2] * z - level) <= tol
-        ):
+        if _at_level(v, e, i, x, y, z, level, tol):
             return i
     return -1
 
 
 @njit(cache=True)
+def _gauss_edge_separation(
+    va: np.ndarray, ea: np.ndarray, vb: np.ndarray, eb: np.ndarray,
+    na: np.ndarray, nb: np.ndarray, floor: float,
+) -> tuple[float, int, int, float, float, float]:  # fmt: skip
+    """:func:`_edge_separation` over the edge pairs that make a face of the Minkowski
+    difference A - B: edge i of A, between faces with normals a and b, and edge j of B,
+    between c and d, when the arc a-b and the arc -c to -d cross on the unit sphere. An edge
+    between a face and its own back (a mesh triangle, whose arc is a half circle) is always
+    tried. Axes that separate by ``floor`` [m] or less are passed over before any square
+    root (the face axes already do as well); -inf with no edges above the floor."""
+    best = -np.inf
+    best_i = -1
+    best_j = -1
+    bx = by = bz = 0.0
+    top_a = bottom_b = 0.0
+    # A's centre (the mean of its corners: inside it), to turn each axis outward
+    cx = cy = cz = 0.0
+    for k in range(va.shape[0]):
+        cx += va[k, 0]
+        cy += va[k, 1]
+        cz += va[k, 2]
+    cx /= va.shape[0]
+    cy /= va.shape[0]
+    cz /= va.shape[0]
+    for i in range(ea.shape[0]):
+        fa0 = ea[i, 2]
+        fa1 = ea[i, 3]
+        a0, a1, a2 = na[fa0, 0], na[fa0, 1], na[fa0, 2]
+        b0, b1, b2 = na[fa1, 0], na[fa1, 1], na[fa1, 2]
+        # b x a: the arc's pole
+        px = b1 * a2 - b2 * a1
+        py = b2 * a0 - b0 * a2
+        pz = b0 * a1 - b1 * a0
+        # a face and its own back (a mesh triangle): the arc is a half circle
+        flat_a = 1.0 + (a0 * b0 + a1 * b1 + a2 * b2) <= 0.5 * _PARALLEL
+        ux, uy, uz = _edge(va, ea, i)
+        uu = ux * ux + uy * uy + uz * uz
+        for j in range(eb.shape[0]):
+            fb0 = eb[j, 2]
+            fb1 = eb[j, 3]
+            c0, c1, c2 = nb[fb0, 0], nb[fb0, 1], nb[fb0, 2]
+            d0, d1, d2 = nb[fb1, 0], nb[fb1, 1], nb[fb1, 2]
+            flat_b = 1.0 + (c0 * d0 + c1 * d1 + c2 * d2) <= 0.5 * _PARALLEL
+            if not (flat_a or flat_b):
+                # do -c and -d lie on either side of the plane of arc a-b (most pairs fail
+                # here), and a and b on either side of the arc from -c to -d, whose pole is
+                # (-d) x (-c) = d x c, on the same side as each other's arcs?
+                cba = -(c0 * px + c1 * py + c2 * pz)
+                dba = -(d0 * px + d1 * py + d2 * pz)
+                if cba * dba >= 0.0:
+                    continue
+                qx = d1 * c2 - d2 * c1
+                qy = d2 * c0 - d0 * c2
+                qz = d0 * c1 - d1 * c0
+                adc = a0 * qx + a1 * qy + a2 * qz
+                bdc = b0 * qx + b1 * qy + b2 * qz
+                if not (adc * bdc < 0.0 and cba * bdc > 0.0):
+                    continue
+            wx, wy, wz = _edge(vb, eb, j)
+            x, y, z = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
+            length2 = x * x + y * y + z * z
+            if length2 <= _PARALLEL * uu * (wx * wx + wy * wy + wz * wz):
+                continue  # parallel edges: their plane's normal is a face axis already
+            if flat_a or flat_b:
+                # a flat piece's edge need not be a support edge: the extents decide
+                scale = 1.0 / math.sqrt(length2)
+                x, y, z = x * scale, y * scale, z * scale
+                low_a, high_a = _extent(va, x, y, z)
+                low_b, high_b = _extent(vb, x, y, z)
+                if low_b - high_a >= low_a - high_b:  # B ahead of A along the axis
+                    sep = low_b - high_a
+                else:  # behind: turn the axis round
+                    sep = low_a - high_b
+                    x, y, z = -x, -y, -z
+                    low_b, high_a = -high_b, -low_a
+            else:
+                # a face of A - B: the edges are the supports, the axis points out of A at
+                # its edge (away from A's centre), and the gap is between the edges' lines
+                pa = ea[i, 0]
+                pb = eb[j, 0]
+                if (va[pa, 0] - cx) * x + (va[pa, 1] - cy) * y + (va[pa, 2] - cz) * z < 0.0:
+                    x, y, z = -x, -y, -z
+                gap = (
+                    (vb[pb, 0] - va[pa, 0]) * x
+                    + (vb[pb, 1] - va[pa, 1]) * y
+                    + (vb[pb, 2] - va[pa, 2]) * z
+                )  # the separation times |x, y, z|
+                if floor >= 0.0:
+                    if gap <= 0.0 or gap * gap <= floor * floor * length2:
+                        continue
+                elif gap < 0.0 and gap * gap >= floor * floor * length2:
+                    continue
+                scale = 1.0 / math.sqrt(length2)
+                x, y, z = x * scale, y * scale, z * scale
+                high_a = va[pa, 0] * x + va[pa, 1] * y + va[pa, 2] * z
+                low_b = vb[pb, 0] * x + vb[pb, 1] * y + vb[pb, 2] * z
+                sep = low_b - high_a
+            if sep > best:
+                best, best_i, best_j = sep, i, j
+                bx, by, bz = x, y, z
+                top_a, bottom_b = high_a, low_b
+    if best_i < 0:
+        return best, -1, -1, 0.0, 0.0, 0.0
+    # a solid's crossing edges are its support edges along the axis; a flat piece's edges,
+    # always tried, may not be: then a parallel edge at the support level is looked up
+    tol = 1e-9 * _size(va, vb)
+    if not _at_level(va, ea, best_i, bx, by, bz, top_a, tol):
+        best_i = _support_edge(va, ea, best_i, bx, by, bz, top_a, tol)
+    if not _at_level(vb, eb, best_j, bx, by, bz, bottom_b, tol):
+        best_j = _support_edge(vb, eb, best_j, bx, by, bz, bottom_b, tol)
+    if best_i < 0 or best_j < 0:
+        return best, -1, -1, bx, by, bz
+    return best, best_i, best_j, bx, by, bz
+
+
+@njit(cache=True, inline="always")
+def _size(va: np.ndarray, vb: np.ndarray) -> float:
+    """The largest |x| + |y| + |z| of two corner sets [m] (a round-off scale)."""
+    size = 0.0
+    for k in range(va.shape[0]):
+        size = max(size, abs(va[k, 0]) + abs(va[k, 1]) + abs(va[k, 2]))
+    for k in range(vb.shape[0]):
+        size = max(size, abs(vb[k, 0]) + abs(vb[k, 1]) + abs(vb[k, 2]))
+    return size
+
+
+@njit(cache=True, inline="always")
+def _at_level(
+    v: np.ndarray, e: np.ndarray, i: int, x: float, y: float, z: float, level: float, tol: float
+) -> bool:
+    """Whether both corners of edge i lie at ``level`` along (x, y, z), within ``tol``."""
+    a = e[i, 0]
+    b = e[i, 1]
+    level_a: float = v[a, 0] * x + v[a, 1] * y + v[a, 2] * z
+    level_b: float = v[b, 0] * x + v[b, 1] * y + v[b, 2] * z
+    return abs(level_a - level) <= tol and abs(level_b - level) <= tol
+
+
+@njit(cache=True)
 def _edge_separation(
-    va: np.ndarray, ea: np.ndarray, vb: np.ndarray, eb: np.ndarray
-) -> tuple[float, int, int, float, float, float]:
-    """The largest separation along the cross product of an edge direction of A and one of
-    B, the support edges along it (-1 if none: a degenerate axis), and the axis, from A to B.
+    va: np.ndarray, ea: np.ndarray, vb: np.ndarray, eb: np.ndarray,
+    na: np.ndarray, nb: np.ndarray, floor: float,
+) -> tuple[float, int, int, float, float, float]:  # fmt: skip
+    """The largest separation along the cross product of an edge of A and one of B, the
+    support edges along it (-1 if none: a degenerate axis), and the axis, from A to B.
 
     Along an axis the two bodies' extents are intervals; their gap, whichever lies ahead,
-    is the separation (negative: the overlap). Only distinct directions are crossed (a box
-    pair: 3 x 3 axes, not 12 x 12), and only the best axis's support edges are looked up.
+    is the separation (negative: the overlap). When both edge lists name the two faces at
+    each edge (``(E, 4)``, with the face normals ``na``, ``nb``), only the pairs whose arcs
+    cross on the Gauss map are tried (Gregorius, GDC 2013): those axes are the faces of the
+    Minkowski difference, among which the deepest overlap always lies, and the two edges are
+    then the support edges; axes separating by ``floor`` or less are passed over. Otherwise
+    only distinct directions are crossed (a box pair: 3 x 3 axes, not 12 x 12) and the
+    support edges are looked up for the best axis.
     """
+    if ea.shape[1] == 4 and eb.shape[1] == 4:
+        return _gauss_edge_separation(va, ea, vb, eb, na, nb, floor)
     dir_a = np.empty(ea.shape[0], np.int64)
     dir_b = np.empty(eb.shape[0], np.int64)
     na_ = _directions(va, ea, dir_a)
@@ -614,12 +756,7 @@ def _edge_separation(
                 high_a, low_b = high_a_, low_b_
     if best_i < 0:
         return best, -1, -1, 0.0, 0.0, 0.0
-    size = 0.0
-    for k in range(va.shape[0]):
-        size = max(size, abs(va[k, 0]) + abs(va[k, 1]) + abs(va[k, 2]))
-    for k in range(vb.shape[0]):
-        size = max(size, abs(vb[k, 0]) + abs(vb[k, 1]) + abs(vb[k, 2]))
-    tol = 1e-9 * size  # round-off of a corner's level along the axis [m]
+    tol = 1e-9 * _size(va, vb)  # round-off of a corner's level along the axis [m]
     edge_a = _support_edge(va, ea, best_i, bx, by, bz, high_a, tol)
     edge_b = _support_edge(vb, eb, best_j, bx, by, bz, low_b, tol)
     if edge_a < 0 or edge_b < 0:
@@ -639,7 +776,7 @@ def contact_hull_hull(
 
     Each polyhedron is given placed: corners ``v`` (k, 3) [m], face normals ``n`` (F, 3),
     faces' first corner ``s`` and corner count ``c`` (F,) into ``cor`` (vertex indices,
-    counter-clockwise from outside), and edges ``e`` (E, 2)
+    counter-clockwise from outside), and edges ``e`` (E, 4: two corners, two faces)
     (:func:`carom.geometry.polyhedron.polyhedron_features`, turned and moved).
 
     The axis of largest separation decides (Gottschalk's separating-axis test, as Gregorius
@@ -660,7 +797,8 @@ def contact_hull_hull(
     sep_b, face_b = _face_separation(vb, nb, sb, corb, va)
     if sep_b > margin:
         return 0
-    sep_e, edge_a, edge_b, ax, ay, az = _edge_separation(va, ea, vb, eb)
+    # edge axes matter only where they separate more than every face axis
+    sep_e, edge_a, edge_b, ax, ay, az = _edge_separation(va, ea, vb, eb, na, nb, max(sep_a, sep_b))
     if sep_e > margin:
         return 0
     tie = 0.1 * slop
@@ -905,7 +1043,7 @@ def contact_hull_capsule(
     ends = np.empty((2, 3))
     ends[0] = b0
     ends[1] = b1
-    sep_e, edge, _, ax, ay, az = _edge_separation(va, ea, ends, _ONE_EDGE)
+    sep_e, edge, _, ax, ay, az = _edge_separation(va, ea, ends, _ONE_EDGE, na, na, -np.inf)
     if max(sep_f, sep_e) - rb > margin:
         return 0
     if max(sep_f, sep_e) > 0.0:

@@ -35,8 +35,10 @@ class PolyhedronFeatures:
         Face f's corners are ``corners[face_start[f] : face_start[f] + face_count[f]]``.
     corners : (C,) int64
         Vertex indices, face by face, counter-clockwise seen from outside.
-    edges : (E, 2) int64
-        Each edge once, as its two vertex indices.
+    edges : (E, 4) int64
+        Each edge once: its two vertex indices (the lower first) and the two faces that meet
+        at it (their arc on the Gauss map prunes the separating-axis test,
+        :func:`carom.geometry.manifold3d.contact_hull_hull`).
     """
 
     normals: FloatArray
@@ -101,19 +103,22 @@ def polyhedron_features(vertices: FloatArray, triangles: IntArray) -> Polyhedron
         starts.append(len(corners))
         counts.append(ids.size)
         corners.extend(int(i) for i in ids[order])
-    edges: set[tuple[int, int]] = set()
+    faces_at: dict[tuple[int, int], list[int]] = {}
     for f in range(len(planes)):
         ring = corners[starts[f] : starts[f] + counts[f]]
         for k in range(len(ring)):
             a, b = ring[k], ring[(k + 1) % len(ring)]
-            edges.add((min(a, b), max(a, b)))
+            faces_at.setdefault((min(a, b), max(a, b)), []).append(f)
+    if any(len(meeting) != 2 for meeting in faces_at.values()):
+        raise ValueError("a convex polyhedron's every edge joins two faces; this surface is open")
+    edges = [(a, b, *faces_at[a, b]) for a, b in sorted(faces_at)]
     return PolyhedronFeatures(
         face_normals,
         offsets,
         np.array(starts, np.int64),
         np.array(counts, np.int64),
         np.array(corners, np.int64),
-        np.array(sorted(edges), np.int64).reshape(-1, 2),
+        np.array(edges, np.int64).reshape(-1, 4),
     )
 
 
@@ -122,12 +127,13 @@ def triangle_features(
 ) -> tuple[FloatArray, FloatArray, IntArray, IntArray, IntArray, IntArray]:
     """A mesh triangle as a flat convex polytope, in the placed form the contact kernels take
     (:func:`carom.geometry.manifold3d.contact_hull_hull` and the like, as body B): corners
-    (3, 3) [m]; two faces, the front (counter-clockwise) and the back; three edges.
+    (3, 3) [m]; two faces, the front (counter-clockwise) and the back; three edges, each
+    joining the two faces.
 
     Returns
     -------
     vertices, normals, face_start, face_count, corners, edges
-        (3, 3), (2, 3), (2,), (2,), (6,), (3, 2).
+        (3, 3), (2, 3), (2,), (2,), (6,), (3, 4).
     """
     v = np.asarray(corners, float)
     n = np.cross(v[1] - v[0], v[2] - v[0])
@@ -138,5 +144,5 @@ def triangle_features(
         np.array([0, 3], np.int64),
         np.array([3, 3], np.int64),
         np.array([0, 1, 2, 0, 2, 1], np.int64),
-        np.array([[0, 1], [1, 2], [0, 2]], np.int64),
+        np.array([[0, 1, 0, 1], [1, 2, 0, 1], [0, 2, 0, 1]], np.int64),
     )

@@ -8,7 +8,8 @@ box, a hull, a mesh triangle as a flat one) with its faces and edges
 
 Piece ``p``'s rows in each flat array run from its ``*_start`` for its ``*_count``: corners in
 ``local_vertices`` (V, 3), faces in ``local_normals`` (F, 3) with ``face_first`` and
-``face_size`` (F,) pointing into its corner indices ``corners`` (C,), and ``edges`` (E, 2).
+``face_size`` (F,) pointing into its corner indices ``corners`` (C,), and ``edges`` (E, 4)
+(two corners, two faces).
 Indices inside a piece's slices count from the piece's own first row, so a contact kernel
 takes the slices as they are.
 """
@@ -53,7 +54,8 @@ class Piece3D(NamedTuple):
     """One piece as the engine stores it, in the body's frame.
 
     ``vertices`` (k, 3) [m]; for a polytope its faces (``normals`` (F, 3), ``face_first`` and
-    ``face_size`` (F,) into ``corners``) and ``edges`` (E, 2); for a plane its outward
+    ``face_size`` (F,) into ``corners``) and ``edges`` (E, 4: two corners, the two faces that
+    meet there); for a plane its outward
     normal as the one face and a point of it as the one vertex.
     """
 
@@ -83,7 +85,7 @@ def piece_of(piece: ConvexPiece3D, offset: FloatArray) -> Piece3D:
             _NO_INTS,
             _NO_INTS,
             _NO_INTS,
-            np.zeros((0, 2), np.int64),
+            np.zeros((0, 4), np.int64),
         )
     f = polyhedron_features(v, np.asarray(piece.triangles, np.int64))
     return Piece3D(
@@ -108,7 +110,7 @@ def plane_piece(normal: FloatArray, offset: float) -> Piece3D:
         np.zeros(1, np.int64),
         np.zeros(1, np.int64),
         _NO_INTS,
-        np.zeros((0, 2), np.int64),
+        np.zeros((0, 4), np.int64),
     )
 
 
@@ -150,8 +152,9 @@ class Model3D(NamedTuple):
         Each face's first corner and its count, in its piece's ``corners``.
     corners : (C,) int64
         Faces' corners, counter-clockwise from outside, as indices into the piece's vertices.
-    edges : (E, 2) int64
-        Each edge's two corners, as indices into the piece's vertices.
+    edges : (E, 4) int64
+        Each edge's two corners, as indices into the piece's vertices, and the two faces that
+        meet at it, as indices into the piece's faces.
     e_table, mu_table, rolling_table : (M, M) float64
         Restitution [-], friction [-] and rolling resistance [m] of each pair of materials.
     gravity : (3,) float64
@@ -263,7 +266,7 @@ def build_model(
     firsts: list[IntArray] = [_NO_INTS]
     counts: list[IntArray] = [_NO_INTS]
     cors: list[IntArray] = [_NO_INTS]
-    edges: list[IntArray] = [np.zeros((0, 2), np.int64)]
+    edges: list[IntArray] = [np.zeros((0, 4), np.int64)]
     rows = {"v": 0, "f": 0, "c": 0, "e": 0}
     reach = np.zeros(n)
     for i, body in enumerate(pieces):
@@ -290,7 +293,7 @@ def build_model(
             firsts.append(np.asarray(piece.face_first, np.int64))
             counts.append(np.asarray(piece.face_size, np.int64))
             cors.append(np.asarray(piece.corners, np.int64))
-            edges.append(np.asarray(piece.edges, np.int64).reshape(-1, 2))
+            edges.append(np.asarray(piece.edges, np.int64).reshape(-1, 4))
         body_pieces[i + 1] = len(columns["body"])
     dynamic = kind == KIND_DYNAMIC
     inv_mass = np.zeros(n)
