@@ -162,7 +162,7 @@ def softness(hertz: float, zeta: float, h: float) -> tuple[float, float, float]:
 
 
 @njit(cache=True)
-def color_groups(ci: np.ndarray, nc: int, inv_mass: np.ndarray) -> np.ndarray:
+def color_groups(ci: np.ndarray, nc: int, inv_mass: np.ndarray, flags: int = I_FLAGS) -> np.ndarray:
     """The contacts in groups of :data:`LANES`, no two of a group sharing a body that moves.
 
     Greedy colouring in row order: a contact takes the lowest colour that neither of its
@@ -173,11 +173,14 @@ def color_groups(ci: np.ndarray, nc: int, inv_mass: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     ci : (M, CONTACT_INTS) int64
-        Contact rows (:mod:`.contacts`); rows flagged exact are left out.
+        Contact rows (:mod:`.contacts`; the 3D engine's share the body columns); rows flagged
+        exact are left out.
     nc : int
         Rows in use.
     inv_mass : (N,) float64
         Inverse masses [1/kg].
+    flags : int
+        The column of the rows' flags (the 3D rows keep it further on).
 
     Returns
     -------
@@ -190,7 +193,7 @@ def color_groups(ci: np.ndarray, nc: int, inv_mass: np.ndarray) -> np.ndarray:
     color = np.full(nc, -1, np.int64)
     counts = np.zeros(COLORS + 1, np.int64)
     for m in range(nc):
-        if ci[m, I_FLAGS] & FLAG_EXACT:
+        if ci[m, flags] & FLAG_EXACT:
             continue
         a = ci[m, I_BODY_A]
         b = ci[m, I_BODY_B]

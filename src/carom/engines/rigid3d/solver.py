@@ -26,8 +26,20 @@ rolling-resistance coefficient: the torque needed to roll a body is ``c_r`` time
 The inverse inertia in the world frame is taken at the step's start and kept over its
 substeps for the impulses, as Box2D does with its bodies' inertia.
 
-Contacts are solved one after another in row order (Gauss-Seidel). Vectors are multiplied in
-scalars, never with ``@`` (Numba's ``@`` calls BLAS through SciPy).
+**Layout: colours and lanes**, as in 2D (:mod:`carom.engines.rigid.solver`, Box2D v3's
+graph colouring and wide solver): the contacts are coloured so that no two of a colour share a
+body that impulses move (:func:`carom.engines.rigid.solver.color_groups`), each colour cut into
+groups of ``LANES = 16`` contacts; a group's rows (its normal and tangents, softness, both
+bodies' inverse masses and world inverse tensors, and each of its four points' anchors,
+masses and impulses) are copied into one small buffer with its bodies' velocities, moves and
+turns since the step began, and every stage runs over the sixteen lanes at once, which the
+compiler turns into vector instructions. A contact of fewer than four points fills the rest
+with points that never touch. The lanes of a group are independent, so this is Gauss-Seidel
+in colour order: per contact, the same arithmetic as one contact after another. Each body's
+velocity, angular velocity, move and turn share one row of the solver's state; padding lanes
+join a dummy body that nothing moves.
+
+Vectors are multiplied in scalars, never with ``@`` (Numba's ``@`` calls BLAS through SciPy).
 """
 
 from __future__ import annotations
@@ -37,7 +49,7 @@ import math
 import numpy as np
 from numba import njit
 
-from carom.engines.rigid.solver import softness
+from carom.engines.rigid.solver import LANE_MATH, LANES, color_groups, softness
 from carom.engines.rigid3d.contacts import (
     F_E,
     F_JR1,
@@ -78,10 +90,61 @@ from carom.engines.rigid3d.motion import (
     relative_velocity,
     world_inverse_inertia,
 )
+from carom.geometry.manifold3d import MAX_POINTS
 
 __all__ = ["FLAG_EXACT", "solve_step"]
 
 FLAG_EXACT = 1  # the contact was solved exactly this step (an isolated impact)
+
+# rows of a group (each LANES wide, row r from r * LANES on): the contact's ...
+R_N = 0  # normal (3 rows), from B to A
+R_T1 = 3  # first tangent (3)
+R_T2 = 6  # second tangent (3)
+R_MU = 9
+R_RATE = 10  # soft bias rate [1/s]
+R_MSCALE = 11  # soft mass scale [-]
+R_ISCALE = 12  # soft impulse scale [-]
+R_IMA = 13  # body A's inverse mass [1/kg]
+R_IMB = 14
+R_IWA = 15  # body A's inverse inertia in the world, row-major (9 rows) [1/(kg m^2)]
+R_IWB = 24
+R_ROLL = 33  # rolling resistance [m]
+R_JR1 = 34  # rolling impulse about t1, t2 [N m s]
+R_JR2 = 35
+R_RM1 = 36  # angular effective masses about t1, t2 [kg m^2]
+R_RM2 = 37
+R_POINT = 38  # point p's rows start at R_POINT + p * POINT_ROWS
+Q_RA = 0  # anchor on A (3) [m]
+Q_RB = 3  # anchor on B (3)
+Q_KA = 6  # core anchors along n [m]
+Q_KB = 7
+Q_BASE = 8
+Q_NMASS = 9
+Q_T1MASS = 10
+Q_T2MASS = 11
+Q_JN = 12
+Q_JT1 = 13
+Q_JT2 = 14
+Q_TOTAL = 15
+POINT_ROWS = 16
+GROUP_ROWS = R_POINT + MAX_POINTS * POINT_ROWS
+# ... then, in the working buffer only, its two bodies' velocities, moves and turns
+B_VA = GROUP_ROWS  # velocity of A (3) [m/s]
+B_WA = GROUP_ROWS + 3  # angular velocity of A (3) [rad/s]
+B_VB = GROUP_ROWS + 6
+B_WB = GROUP_ROWS + 9
+B_D = GROUP_ROWS + 12  # A's move less B's since the step began (3) [m]
+B_TA = GROUP_ROWS + 15  # A's turn since the step began, row-major (9)
+B_TB = GROUP_ROWS + 24
+BUFFER_ROWS = GROUP_ROWS + 33
+# columns of a body's row in the solver's state (N+1, STATE_COLS)
+S_V = 0  # velocity (3)
+S_W = 3  # angular velocity (3)
+S_D = 6  # move since the step began (3)
+S_T = 9  # turn since the step began, row-major (9)
+STATE_COLS = 18
+#: a point that is not there: never touching, never pushed
+ABSENT_BASE = 1e30
 
 
 @njit(cache=True, inline="always")
@@ -125,28 +188,6 @@ def _angular_mass(a: int, b: int, dx: float, dy: float, dz: float, iw: np.ndarra
     return 1.0 / k if k > 0.0 else 0.0
 
 
-@njit(cache=True)
-def _prepare(cf: np.ndarray, ci: np.ndarray, nc: int, inv_mass: np.ndarray, iw: np.ndarray) -> None:
-    """Each point's effective masses along the normal and the tangents, and a zero total."""
-    for m in range(nc):
-        a = ci[m, I_BODY_A]
-        b = ci[m, I_BODY_B]
-        for j in range(ci[m, I_COUNT]):
-            o = point_offset(j)
-            r_a = cf[m, o + P_RAX : o + P_RAX + 3]
-            r_b = cf[m, o + P_RAX + 3 : o + P_RAX + 6]
-            cf[m, o + P_NMASS] = _mass_along(
-                a, b, r_a, r_b, cf[m, F_NX], cf[m, F_NY], cf[m, F_NZ], inv_mass, iw
-            )
-            cf[m, o + P_T1MASS] = _mass_along(
-                a, b, r_a, r_b, cf[m, F_T1X], cf[m, F_T1Y], cf[m, F_T1Z], inv_mass, iw
-            )
-            cf[m, o + P_T2MASS] = _mass_along(
-                a, b, r_a, r_b, cf[m, F_T2X], cf[m, F_T2Y], cf[m, F_T2Z], inv_mass, iw
-            )
-            cf[m, o + P_TOTAL] = 0.0
-
-
 @njit(cache=True, inline="always")
 def _fixed_work(
     a: int, b: int, px: float, py: float, pz: float, r_a: np.ndarray, r_b: np.ndarray,
@@ -179,163 +220,6 @@ def _turn_angular(
     w[b, 0] -= iw[b, 0] * jx + iw[b, 1] * jy + iw[b, 2] * jz
     w[b, 1] -= iw[b, 3] * jx + iw[b, 4] * jy + iw[b, 5] * jz
     w[b, 2] -= iw[b, 6] * jx + iw[b, 7] * jy + iw[b, 8] * jz
-
-
-@njit(cache=True)
-def _warm_start(
-    cf: np.ndarray, ci: np.ndarray, nc: int, inv_mass: np.ndarray, iw: np.ndarray,
-    v: np.ndarray, w: np.ndarray, work: np.ndarray,
-) -> None:  # fmt: skip
-    """Apply every point's impulse, and each contact's rolling impulse, from the last substep
-    (or step) again."""
-    for m in range(nc):
-        if ci[m, I_FLAGS] & FLAG_EXACT:
-            continue
-        a = ci[m, I_BODY_A]
-        b = ci[m, I_BODY_B]
-        for j in range(ci[m, I_COUNT]):
-            o = point_offset(j)
-            jn = cf[m, o + P_JN]
-            j1 = cf[m, o + P_JT1]
-            j2 = cf[m, o + P_JT2]
-            px = jn * cf[m, F_NX] + j1 * cf[m, F_T1X] + j2 * cf[m, F_T2X]
-            py = jn * cf[m, F_NY] + j1 * cf[m, F_T1Y] + j2 * cf[m, F_T2Y]
-            pz = jn * cf[m, F_NZ] + j1 * cf[m, F_T1Z] + j2 * cf[m, F_T2Z]
-            cf[m, o + P_TOTAL] += jn
-            r_a = cf[m, o + P_RAX : o + P_RAX + 3]
-            r_b = cf[m, o + P_RAX + 3 : o + P_RAX + 6]
-            work[0] += _fixed_work(a, b, px, py, pz, r_a, r_b, inv_mass, v, w)
-            apply_impulse(a, b, px, py, pz, r_a, r_b, inv_mass, iw, v, w)
-        r1 = cf[m, F_JR1]
-        r2 = cf[m, F_JR2]
-        if r1 != 0.0 or r2 != 0.0:
-            _turn_angular(
-                a, b,
-                r1 * cf[m, F_T1X] + r2 * cf[m, F_T2X],
-                r1 * cf[m, F_T1Y] + r2 * cf[m, F_T2Y],
-                r1 * cf[m, F_T1Z] + r2 * cf[m, F_T2Z],
-                iw, w,
-            )  # fmt: skip
-
-
-@njit(cache=True)
-def _solve(
-    cf: np.ndarray, ci: np.ndarray, nc: int, inv_mass: np.ndarray, iw: np.ndarray,
-    v: np.ndarray, w: np.ndarray, moved: np.ndarray, turned: np.ndarray, inv_h: float,
-    use_bias: bool, soft_moving: tuple[float, float, float],
-    soft_fixed: tuple[float, float, float], push_speed: float, work: np.ndarray,
-) -> None:  # fmt: skip
-    """One Gauss-Seidel pass over the contacts: normal impulses, friction, rolling resistance.
-    ``moved`` (N, 3) and ``turned`` (N, 9) are each body's move and turn since the step
-    began."""
-    for m in range(nc):
-        if ci[m, I_FLAGS] & FLAG_EXACT:
-            continue
-        a = ci[m, I_BODY_A]
-        b = ci[m, I_BODY_B]
-        nx = cf[m, F_NX]
-        ny = cf[m, F_NY]
-        nz = cf[m, F_NZ]
-        fixed = inv_mass[a] == 0.0 or inv_mass[b] == 0.0
-        rate, soft_mass, soft_impulse = soft_fixed if fixed else soft_moving
-        count = ci[m, I_COUNT]
-        load = 0.0
-        for j in range(count):
-            o = point_offset(j)
-            r_a = cf[m, o + P_RAX : o + P_RAX + 3]
-            r_b = cf[m, o + P_RAX + 3 : o + P_RAX + 6]
-            # the separation now: core anchors turned by each body's turn since the step began
-            ta, tb = turned[a], turned[b]
-            ka = cf[m, o + P_KA]
-            kb = cf[m, o + P_KB]
-            ax, ay, az = r_a[0] + ka * nx, r_a[1] + ka * ny, r_a[2] + ka * nz
-            bx, by, bz = r_b[0] - kb * nx, r_b[1] - kb * ny, r_b[2] - kb * nz
-            sx = (
-                (moved[a, 0] - moved[b, 0])
-                + (ta[0] * ax + ta[1] * ay + ta[2] * az)
-                - (tb[0] * bx + tb[1] * by + tb[2] * bz)
-            )
-            sy = (
-                (moved[a, 1] - moved[b, 1])
-                + (ta[3] * ax + ta[4] * ay + ta[5] * az)
-                - (tb[3] * bx + tb[4] * by + tb[5] * bz)
-            )
-            sz = (
-                (moved[a, 2] - moved[b, 2])
-                + (ta[6] * ax + ta[7] * ay + ta[8] * az)
-                - (tb[6] * bx + tb[7] * by + tb[8] * bz)
-            )
-            s = cf[m, o + P_BASE] + sx * nx + sy * ny + sz * nz
-            spec = s > 0.0  # speculative: close the gap, no more
-            soft = use_bias and not spec
-            mass_scale = soft_mass if soft else 1.0
-            impulse_scale = soft_impulse if soft else 0.0
-            if spec:
-                bias = s * inv_h
-            elif use_bias:
-                bias = max(mass_scale * rate * s, -push_speed)
-            else:
-                bias = 0.0
-            ux, uy, uz = relative_velocity(a, b, r_a, r_b, v, w)
-            un = ux * nx + uy * ny + uz * nz
-            jn = cf[m, o + P_JN]
-            dj = -cf[m, o + P_NMASS] * (mass_scale * un + bias) - impulse_scale * jn
-            new = max(jn + dj, 0.0)
-            dj = new - jn
-            cf[m, o + P_JN] = new
-            cf[m, o + P_TOTAL] += dj
-            load += new
-            work[0] += _fixed_work(a, b, dj * nx, dj * ny, dj * nz, r_a, r_b, inv_mass, v, w)
-            apply_impulse(a, b, dj * nx, dj * ny, dj * nz, r_a, r_b, inv_mass, iw, v, w)
-        t1x, t1y, t1z = cf[m, F_T1X], cf[m, F_T1Y], cf[m, F_T1Z]
-        t2x, t2y, t2z = cf[m, F_T2X], cf[m, F_T2Y], cf[m, F_T2Z]
-        mu = cf[m, F_MU]
-        for j in range(count):
-            o = point_offset(j)
-            r_a = cf[m, o + P_RAX : o + P_RAX + 3]
-            r_b = cf[m, o + P_RAX + 3 : o + P_RAX + 6]
-            ux, uy, uz = relative_velocity(a, b, r_a, r_b, v, w)
-            j1 = cf[m, o + P_JT1]
-            j2 = cf[m, o + P_JT2]
-            n1 = j1 - cf[m, o + P_T1MASS] * (ux * t1x + uy * t1y + uz * t1z)
-            n2 = j2 - cf[m, o + P_T2MASS] * (ux * t2x + uy * t2y + uz * t2z)
-            limit = mu * cf[m, o + P_JN]
-            size2 = n1 * n1 + n2 * n2
-            if size2 > limit * limit:
-                scale = limit / math.sqrt(size2)
-                n1 *= scale
-                n2 *= scale
-            d1 = n1 - j1
-            d2 = n2 - j2
-            cf[m, o + P_JT1] = n1
-            cf[m, o + P_JT2] = n2
-            px = d1 * t1x + d2 * t2x
-            py = d1 * t1y + d2 * t2y
-            pz = d1 * t1z + d2 * t2z
-            work[0] += _fixed_work(a, b, px, py, pz, r_a, r_b, inv_mass, v, w)
-            apply_impulse(a, b, px, py, pz, r_a, r_b, inv_mass, iw, v, w)
-        roll = cf[m, F_ROLL]
-        if roll > 0.0:
-            wx = w[a, 0] - w[b, 0]
-            wy = w[a, 1] - w[b, 1]
-            wz = w[a, 2] - w[b, 2]
-            j1 = cf[m, F_JR1]
-            j2 = cf[m, F_JR2]
-            n1 = j1 - _angular_mass(a, b, t1x, t1y, t1z, iw) * (wx * t1x + wy * t1y + wz * t1z)
-            n2 = j2 - _angular_mass(a, b, t2x, t2y, t2z, iw) * (wx * t2x + wy * t2y + wz * t2z)
-            limit = roll * load
-            size2 = n1 * n1 + n2 * n2
-            if size2 > limit * limit:
-                scale = limit / math.sqrt(size2) if size2 > 0.0 else 0.0
-                n1 *= scale
-                n2 *= scale
-            d1 = n1 - j1
-            d2 = n2 - j2
-            cf[m, F_JR1] = n1
-            cf[m, F_JR2] = n2
-            _turn_angular(
-                a, b, d1 * t1x + d2 * t2x, d1 * t1y + d2 * t2y, d1 * t1z + d2 * t2z, iw, w
-            )
 
 
 @njit(cache=True)
@@ -399,6 +283,450 @@ def _axis_angle(ax: float, ay: float, az: float, out: np.ndarray) -> None:
 
 
 @njit(cache=True)
+def _pack(
+    cf: np.ndarray, ci: np.ndarray, lanes: np.ndarray, inv_mass: np.ndarray, iw: np.ndarray,
+    state: np.ndarray, soft_moving: tuple[float, float, float],
+    soft_fixed: tuple[float, float, float], group: np.ndarray, pair: np.ndarray,
+    kinematic: np.ndarray,
+) -> None:  # fmt: skip
+    """Copy the contacts of ``lanes`` into ``group`` (G, GROUP_ROWS * LANES), with each
+    point's effective masses along the normal and the tangents, and the rolling masses; their
+    bodies into ``pair`` (G, 2 * LANES); ``kinematic[g]``: a lane of group g touches a moving
+    body of infinite mass. Padding lanes join the dummy body (the state's last row)."""
+    dummy = state.shape[0] - 1
+    for g in range(lanes.shape[0]):
+        kinematic[g] = False
+        for lane in range(LANES):
+            m = lanes[g, lane]
+            if m < 0:
+                pair[g, lane] = dummy
+                pair[g, LANES + lane] = dummy
+                for r in range(GROUP_ROWS):
+                    group[g, r * LANES + lane] = 0.0
+                for p in range(MAX_POINTS):
+                    q = R_POINT + p * POINT_ROWS
+                    group[g, (q + Q_BASE) * LANES + lane] = ABSENT_BASE
+                continue
+            a = ci[m, I_BODY_A]
+            b = ci[m, I_BODY_B]
+            pair[g, lane] = a
+            pair[g, LANES + lane] = b
+            fixed = inv_mass[a] == 0.0 or inv_mass[b] == 0.0
+            rate, mass_scale, impulse_scale = soft_fixed if fixed else soft_moving
+            for k in range(3):
+                group[g, (R_N + k) * LANES + lane] = cf[m, F_NX + k]
+                group[g, (R_T1 + k) * LANES + lane] = cf[m, F_T1X + k]
+                group[g, (R_T2 + k) * LANES + lane] = cf[m, F_T2X + k]
+            group[g, R_MU * LANES + lane] = cf[m, F_MU]
+            group[g, R_RATE * LANES + lane] = rate
+            group[g, R_MSCALE * LANES + lane] = mass_scale
+            group[g, R_ISCALE * LANES + lane] = impulse_scale
+            group[g, R_IMA * LANES + lane] = inv_mass[a]
+            group[g, R_IMB * LANES + lane] = inv_mass[b]
+            for k in range(9):
+                group[g, (R_IWA + k) * LANES + lane] = iw[a, k]
+                group[g, (R_IWB + k) * LANES + lane] = iw[b, k]
+            group[g, R_ROLL * LANES + lane] = cf[m, F_ROLL]
+            group[g, R_JR1 * LANES + lane] = cf[m, F_JR1]
+            group[g, R_JR2 * LANES + lane] = cf[m, F_JR2]
+            group[g, R_RM1 * LANES + lane] = _angular_mass(
+                a, b, cf[m, F_T1X], cf[m, F_T1Y], cf[m, F_T1Z], iw
+            )
+            group[g, R_RM2 * LANES + lane] = _angular_mass(
+                a, b, cf[m, F_T2X], cf[m, F_T2Y], cf[m, F_T2Z], iw
+            )
+            count = ci[m, I_COUNT]
+            for p in range(MAX_POINTS):
+                q = R_POINT + p * POINT_ROWS
+                if p >= count:
+                    for r in range(POINT_ROWS):
+                        group[g, (q + r) * LANES + lane] = 0.0
+                    group[g, (q + Q_BASE) * LANES + lane] = ABSENT_BASE
+                    continue
+                o = point_offset(p)
+                r_a = cf[m, o + P_RAX : o + P_RAX + 3]
+                r_b = cf[m, o + P_RAX + 3 : o + P_RAX + 6]
+                for k in range(3):
+                    group[g, (q + Q_RA + k) * LANES + lane] = r_a[k]
+                    group[g, (q + Q_RB + k) * LANES + lane] = r_b[k]
+                group[g, (q + Q_KA) * LANES + lane] = cf[m, o + P_KA]
+                group[g, (q + Q_KB) * LANES + lane] = cf[m, o + P_KB]
+                group[g, (q + Q_BASE) * LANES + lane] = cf[m, o + P_BASE]
+                group[g, (q + Q_NMASS) * LANES + lane] = _mass_along(
+                    a, b, r_a, r_b, cf[m, F_NX], cf[m, F_NY], cf[m, F_NZ], inv_mass, iw
+                )
+                group[g, (q + Q_T1MASS) * LANES + lane] = _mass_along(
+                    a, b, r_a, r_b, cf[m, F_T1X], cf[m, F_T1Y], cf[m, F_T1Z], inv_mass, iw
+                )
+                group[g, (q + Q_T2MASS) * LANES + lane] = _mass_along(
+                    a, b, r_a, r_b, cf[m, F_T2X], cf[m, F_T2Y], cf[m, F_T2Z], inv_mass, iw
+                )
+                group[g, (q + Q_JN) * LANES + lane] = cf[m, o + P_JN]
+                group[g, (q + Q_JT1) * LANES + lane] = cf[m, o + P_JT1]
+                group[g, (q + Q_JT2) * LANES + lane] = cf[m, o + P_JT2]
+                group[g, (q + Q_TOTAL) * LANES + lane] = 0.0
+            for body in (a, b):
+                if inv_mass[body] == 0.0:
+                    for k in range(6):
+                        if state[body, S_V + k] != 0.0:
+                            kinematic[g] = True
+
+
+@njit(cache=True)
+def _unpack(group: np.ndarray, lanes: np.ndarray, ci: np.ndarray, cf: np.ndarray) -> None:
+    """Copy each point's impulses, its total and its normal mass, and the rolling impulses,
+    back to its contact row."""
+    for g in range(lanes.shape[0]):
+        for lane in range(LANES):
+            m = lanes[g, lane]
+            if m < 0:
+                continue
+            cf[m, F_JR1] = group[g, R_JR1 * LANES + lane]
+            cf[m, F_JR2] = group[g, R_JR2 * LANES + lane]
+            for p in range(ci[m, I_COUNT]):
+                q = R_POINT + p * POINT_ROWS
+                o = point_offset(p)
+                cf[m, o + P_JN] = group[g, (q + Q_JN) * LANES + lane]
+                cf[m, o + P_JT1] = group[g, (q + Q_JT1) * LANES + lane]
+                cf[m, o + P_JT2] = group[g, (q + Q_JT2) * LANES + lane]
+                cf[m, o + P_TOTAL] = group[g, (q + Q_TOTAL) * LANES + lane]
+                cf[m, o + P_NMASS] = group[g, (q + Q_NMASS) * LANES + lane]
+                cf[m, o + P_T1MASS] = group[g, (q + Q_T1MASS) * LANES + lane]
+                cf[m, o + P_T2MASS] = group[g, (q + Q_T2MASS) * LANES + lane]
+
+
+@njit(cache=True, inline="always")
+def _gather(
+    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray
+) -> None:
+    """Group g and its bodies' velocities into the working buffer (BUFFER_ROWS * LANES)."""
+    for k in range(GROUP_ROWS * LANES):  # one flat run: the compiler moves it in vectors
+        buf[k] = group[g, k]
+    for lane in range(LANES):
+        a = pair[g, lane]
+        b = pair[g, LANES + lane]
+        for k in range(3):
+            buf[(B_VA + k) * LANES + lane] = state[a, S_V + k]
+            buf[(B_WA + k) * LANES + lane] = state[a, S_W + k]
+            buf[(B_VB + k) * LANES + lane] = state[b, S_V + k]
+            buf[(B_WB + k) * LANES + lane] = state[b, S_W + k]
+
+
+@njit(cache=True, inline="always")
+def _gather_all(
+    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray
+) -> None:
+    """Group g and its bodies' velocities, moves and turns since the step began into the
+    working buffer."""
+    _gather(buf, group, pair, g, state)
+    for lane in range(LANES):
+        a = pair[g, lane]
+        b = pair[g, LANES + lane]
+        for k in range(3):
+            buf[(B_D + k) * LANES + lane] = state[a, S_D + k] - state[b, S_D + k]
+        for k in range(9):
+            buf[(B_TA + k) * LANES + lane] = state[a, S_T + k]
+            buf[(B_TB + k) * LANES + lane] = state[b, S_T + k]
+
+
+@njit(cache=True, inline="always")
+def _scatter(
+    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray
+) -> None:
+    """The impulses back to group g, the velocities back to its bodies. Lanes sharing a body
+    of infinite mass write back the value they all read."""
+    for p in range(MAX_POINTS):
+        q = R_POINT + p * POINT_ROWS
+        for r in (Q_JN, Q_JT1, Q_JT2, Q_TOTAL):
+            for lane in range(LANES):
+                group[g, (q + r) * LANES + lane] = buf[(q + r) * LANES + lane]
+    for lane in range(LANES):
+        group[g, R_JR1 * LANES + lane] = buf[R_JR1 * LANES + lane]
+        group[g, R_JR2 * LANES + lane] = buf[R_JR2 * LANES + lane]
+    for lane in range(LANES):
+        a = pair[g, lane]
+        b = pair[g, LANES + lane]
+        for k in range(3):
+            state[a, S_V + k] = buf[(B_VA + k) * LANES + lane]
+            state[a, S_W + k] = buf[(B_WA + k) * LANES + lane]
+            state[b, S_V + k] = buf[(B_VB + k) * LANES + lane]
+            state[b, S_W + k] = buf[(B_WB + k) * LANES + lane]
+
+
+@njit(cache=True, inline="always")
+def _spin(
+    buf: np.ndarray, lane: int, row: int, jx: float, jy: float, jz: float
+) -> tuple[float, float, float]:
+    """The world inverse tensor in rows ``row`` to ``row + 8`` (one lane) times (jx, jy, jz)."""
+    return (
+        buf[row * LANES + lane] * jx + buf[(row + 1) * LANES + lane] * jy
+        + buf[(row + 2) * LANES + lane] * jz,
+        buf[(row + 3) * LANES + lane] * jx + buf[(row + 4) * LANES + lane] * jy
+        + buf[(row + 5) * LANES + lane] * jz,
+        buf[(row + 6) * LANES + lane] * jx + buf[(row + 7) * LANES + lane] * jy
+        + buf[(row + 8) * LANES + lane] * jz,
+    )  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def _push(buf: np.ndarray, lane: int, q: int, px: float, py: float, pz: float) -> None:
+    """Impulse ``P`` on A at point q's ``r_A`` and ``-P`` on B at its ``r_B`` (one lane; as
+    :func:`.motion.apply_impulse`)."""
+    ma = buf[R_IMA * LANES + lane]
+    mb = buf[R_IMB * LANES + lane]
+    rax = buf[(q + Q_RA) * LANES + lane]
+    ray = buf[(q + Q_RA + 1) * LANES + lane]
+    raz = buf[(q + Q_RA + 2) * LANES + lane]
+    rbx = buf[(q + Q_RB) * LANES + lane]
+    rby = buf[(q + Q_RB + 1) * LANES + lane]
+    rbz = buf[(q + Q_RB + 2) * LANES + lane]
+    buf[B_VA * LANES + lane] += ma * px
+    buf[(B_VA + 1) * LANES + lane] += ma * py
+    buf[(B_VA + 2) * LANES + lane] += ma * pz
+    dx, dy, dz = _spin(
+        buf, lane, R_IWA, ray * pz - raz * py, raz * px - rax * pz, rax * py - ray * px
+    )
+    buf[B_WA * LANES + lane] += dx
+    buf[(B_WA + 1) * LANES + lane] += dy
+    buf[(B_WA + 2) * LANES + lane] += dz
+    buf[B_VB * LANES + lane] -= mb * px
+    buf[(B_VB + 1) * LANES + lane] -= mb * py
+    buf[(B_VB + 2) * LANES + lane] -= mb * pz
+    dx, dy, dz = _spin(
+        buf, lane, R_IWB, rby * pz - rbz * py, rbz * px - rbx * pz, rbx * py - rby * px
+    )
+    buf[B_WB * LANES + lane] -= dx
+    buf[(B_WB + 1) * LANES + lane] -= dy
+    buf[(B_WB + 2) * LANES + lane] -= dz
+
+
+@njit(cache=True, inline="always")
+def _point_velocity(
+    buf: np.ndarray, lane: int, v: int, w: int, r: int
+) -> tuple[float, float, float]:
+    """``v + w x r`` of one body (rows ``v``, ``w``) at a point's anchor (rows ``r``)."""
+    rx = buf[r * LANES + lane]
+    ry = buf[(r + 1) * LANES + lane]
+    rz = buf[(r + 2) * LANES + lane]
+    wx = buf[w * LANES + lane]
+    wy = buf[(w + 1) * LANES + lane]
+    wz = buf[(w + 2) * LANES + lane]
+    return (
+        buf[v * LANES + lane] + wy * rz - wz * ry,
+        buf[(v + 1) * LANES + lane] + wz * rx - wx * rz,
+        buf[(v + 2) * LANES + lane] + wx * ry - wy * rx,
+    )
+
+
+@njit(cache=True, inline="always")
+def _slip(buf: np.ndarray, lane: int, q: int) -> tuple[float, float, float]:
+    """Velocity [m/s] of A's point at point q's ``r_A`` less B's at its ``r_B`` (one lane;
+    as :func:`.motion.relative_velocity`)."""
+    ax, ay, az = _point_velocity(buf, lane, B_VA, B_WA, q + Q_RA)
+    bx, by, bz = _point_velocity(buf, lane, B_VB, B_WB, q + Q_RB)
+    return ax - bx, ay - by, az - bz
+
+
+@njit(cache=True)
+def _group_work(buf: np.ndarray, group: np.ndarray, g: int, warm: bool) -> float:
+    """Work [J] done on group g's lanes by their bodies of infinite mass, for the impulses
+    the buffer holds beyond what ``group`` held (all of them, if ``warm``): the impulse on
+    the other body times the fixed body's velocity at the point (:func:`_fixed_work`); such a
+    body's velocity is the same before and after."""
+    total = 0.0
+    for lane in range(LANES):
+        for p in range(MAX_POINTS):
+            q = R_POINT + p * POINT_ROWS
+            dn = buf[(q + Q_JN) * LANES + lane]
+            d1 = buf[(q + Q_JT1) * LANES + lane]
+            d2 = buf[(q + Q_JT2) * LANES + lane]
+            if not warm:
+                dn -= group[g, (q + Q_JN) * LANES + lane]
+                d1 -= group[g, (q + Q_JT1) * LANES + lane]
+                d2 -= group[g, (q + Q_JT2) * LANES + lane]
+            px = py = pz = 0.0
+            for k, j in ((R_N, dn), (R_T1, d1), (R_T2, d2)):
+                px += j * buf[k * LANES + lane]
+                py += j * buf[(k + 1) * LANES + lane]
+                pz += j * buf[(k + 2) * LANES + lane]
+            if buf[R_IMA * LANES + lane] == 0.0:
+                ux, uy, uz = _point_velocity(buf, lane, B_VA, B_WA, q + Q_RA)
+                total -= px * ux + py * uy + pz * uz
+            if buf[R_IMB * LANES + lane] == 0.0:
+                ux, uy, uz = _point_velocity(buf, lane, B_VB, B_WB, q + Q_RB)
+                total += px * ux + py * uy + pz * uz
+    return total
+
+
+@njit(cache=True, fastmath=LANE_MATH)
+def _warm_start(
+    group: np.ndarray, pair: np.ndarray, kinematic: np.ndarray, state: np.ndarray,
+    work: np.ndarray,
+) -> None:  # fmt: skip
+    """Apply every point's impulse, and each contact's rolling impulse, from the last
+    substep (or step) again."""
+    buf = np.empty(BUFFER_ROWS * LANES)
+    for g in range(group.shape[0]):
+        _gather(buf, group, pair, g, state)
+        for p in range(MAX_POINTS):
+            q = R_POINT + p * POINT_ROWS
+            for lane in range(LANES):
+                jn = buf[(q + Q_JN) * LANES + lane]
+                j1 = buf[(q + Q_JT1) * LANES + lane]
+                j2 = buf[(q + Q_JT2) * LANES + lane]
+                px = (
+                    jn * buf[R_N * LANES + lane] + j1 * buf[R_T1 * LANES + lane]
+                    + j2 * buf[R_T2 * LANES + lane]
+                )  # fmt: skip
+                py = (
+                    jn * buf[(R_N + 1) * LANES + lane] + j1 * buf[(R_T1 + 1) * LANES + lane]
+                    + j2 * buf[(R_T2 + 1) * LANES + lane]
+                )  # fmt: skip
+                pz = (
+                    jn * buf[(R_N + 2) * LANES + lane] + j1 * buf[(R_T1 + 2) * LANES + lane]
+                    + j2 * buf[(R_T2 + 2) * LANES + lane]
+                )  # fmt: skip
+                buf[(q + Q_TOTAL) * LANES + lane] += jn
+                _push(buf, lane, q, px, py, pz)
+        for lane in range(LANES):
+            _roll(buf, lane, buf[R_JR1 * LANES + lane], buf[R_JR2 * LANES + lane])
+        if kinematic[g]:
+            work[0] += _group_work(buf, group, g, True)
+        _scatter(buf, group, pair, g, state)
+
+
+@njit(cache=True, inline="always")
+def _roll(buf: np.ndarray, lane: int, d1: float, d2: float) -> None:
+    """Angular impulse ``d1 t1 + d2 t2`` on A and its opposite on B (one lane)."""
+    jx = d1 * buf[R_T1 * LANES + lane] + d2 * buf[R_T2 * LANES + lane]
+    jy = d1 * buf[(R_T1 + 1) * LANES + lane] + d2 * buf[(R_T2 + 1) * LANES + lane]
+    jz = d1 * buf[(R_T1 + 2) * LANES + lane] + d2 * buf[(R_T2 + 2) * LANES + lane]
+    dx, dy, dz = _spin(buf, lane, R_IWA, jx, jy, jz)
+    buf[B_WA * LANES + lane] += dx
+    buf[(B_WA + 1) * LANES + lane] += dy
+    buf[(B_WA + 2) * LANES + lane] += dz
+    dx, dy, dz = _spin(buf, lane, R_IWB, jx, jy, jz)
+    buf[B_WB * LANES + lane] -= dx
+    buf[(B_WB + 1) * LANES + lane] -= dy
+    buf[(B_WB + 2) * LANES + lane] -= dz
+
+
+@njit(cache=True, fastmath=LANE_MATH)
+def _solve(
+    group: np.ndarray, pair: np.ndarray, kinematic: np.ndarray, state: np.ndarray,
+    inv_h: float, use_bias: bool, push_speed: float, work: np.ndarray,
+) -> None:  # fmt: skip
+    """One Gauss-Seidel pass over the groups: normal impulses, friction, rolling resistance,
+    lane by lane. ``state`` (N+1, STATE_COLS: velocity, angular velocity, move and turn since
+    the step began) has a row for each body and one for the padding lanes' dummy;
+    ``work[0]`` gathers what kinematic bodies do."""
+    buf = np.empty(BUFFER_ROWS * LANES)
+    load = np.empty(LANES)
+    for g in range(group.shape[0]):
+        _gather_all(buf, group, pair, g, state)
+        for lane in range(LANES):
+            load[lane] = 0.0
+        for p in range(MAX_POINTS):
+            q = R_POINT + p * POINT_ROWS
+            for lane in range(LANES):
+                nx = buf[R_N * LANES + lane]
+                ny = buf[(R_N + 1) * LANES + lane]
+                nz = buf[(R_N + 2) * LANES + lane]
+                ka = buf[(q + Q_KA) * LANES + lane]
+                kb = buf[(q + Q_KB) * LANES + lane]
+                # the separation now: core anchors turned by each body's turn since the step
+                # began
+                ax = buf[(q + Q_RA) * LANES + lane] + ka * nx
+                ay = buf[(q + Q_RA + 1) * LANES + lane] + ka * ny
+                az = buf[(q + Q_RA + 2) * LANES + lane] + ka * nz
+                bx = buf[(q + Q_RB) * LANES + lane] - kb * nx
+                by = buf[(q + Q_RB + 1) * LANES + lane] - kb * ny
+                bz = buf[(q + Q_RB + 2) * LANES + lane] - kb * nz
+                tax, tay, taz = _spin(buf, lane, B_TA, ax, ay, az)
+                tbx, tby, tbz = _spin(buf, lane, B_TB, bx, by, bz)
+                sx = buf[B_D * LANES + lane] + tax - tbx
+                sy = buf[(B_D + 1) * LANES + lane] + tay - tby
+                sz = buf[(B_D + 2) * LANES + lane] + taz - tbz
+                s = buf[(q + Q_BASE) * LANES + lane] + sx * nx + sy * ny + sz * nz
+                spec = s > 0.0  # speculative: close the gap, no more
+                soft = use_bias and not spec
+                mass_scale = buf[R_MSCALE * LANES + lane] if soft else 1.0
+                impulse_scale = buf[R_ISCALE * LANES + lane] if soft else 0.0
+                if spec:
+                    bias = s * inv_h
+                elif use_bias:
+                    bias = max(mass_scale * buf[R_RATE * LANES + lane] * s, -push_speed)
+                else:
+                    bias = 0.0
+                ux, uy, uz = _slip(buf, lane, q)
+                un = ux * nx + uy * ny + uz * nz
+                jn = buf[(q + Q_JN) * LANES + lane]
+                dj = (
+                    -buf[(q + Q_NMASS) * LANES + lane] * (mass_scale * un + bias)
+                    - impulse_scale * jn
+                )
+                new = max(jn + dj, 0.0)
+                dj = new - jn
+                buf[(q + Q_JN) * LANES + lane] = new
+                buf[(q + Q_TOTAL) * LANES + lane] += dj
+                load[lane] += new
+                _push(buf, lane, q, dj * nx, dj * ny, dj * nz)
+        for p in range(MAX_POINTS):
+            q = R_POINT + p * POINT_ROWS
+            for lane in range(LANES):
+                t1x = buf[R_T1 * LANES + lane]
+                t1y = buf[(R_T1 + 1) * LANES + lane]
+                t1z = buf[(R_T1 + 2) * LANES + lane]
+                t2x = buf[R_T2 * LANES + lane]
+                t2y = buf[(R_T2 + 1) * LANES + lane]
+                t2z = buf[(R_T2 + 2) * LANES + lane]
+                ux, uy, uz = _slip(buf, lane, q)
+                j1 = buf[(q + Q_JT1) * LANES + lane]
+                j2 = buf[(q + Q_JT2) * LANES + lane]
+                n1 = j1 - buf[(q + Q_T1MASS) * LANES + lane] * (ux * t1x + uy * t1y + uz * t1z)
+                n2 = j2 - buf[(q + Q_T2MASS) * LANES + lane] * (ux * t2x + uy * t2y + uz * t2z)
+                limit = buf[R_MU * LANES + lane] * buf[(q + Q_JN) * LANES + lane]
+                size2 = n1 * n1 + n2 * n2
+                if size2 > limit * limit:
+                    scale = limit / math.sqrt(size2)
+                    n1 *= scale
+                    n2 *= scale
+                d1 = n1 - j1
+                d2 = n2 - j2
+                buf[(q + Q_JT1) * LANES + lane] = n1
+                buf[(q + Q_JT2) * LANES + lane] = n2
+                _push(buf, lane, q, d1 * t1x + d2 * t2x, d1 * t1y + d2 * t2y, d1 * t1z + d2 * t2z)
+        for lane in range(LANES):
+            roll = buf[R_ROLL * LANES + lane]
+            if roll > 0.0:
+                wx = buf[B_WA * LANES + lane] - buf[B_WB * LANES + lane]
+                wy = buf[(B_WA + 1) * LANES + lane] - buf[(B_WB + 1) * LANES + lane]
+                wz = buf[(B_WA + 2) * LANES + lane] - buf[(B_WB + 2) * LANES + lane]
+                t1x = buf[R_T1 * LANES + lane]
+                t1y = buf[(R_T1 + 1) * LANES + lane]
+                t1z = buf[(R_T1 + 2) * LANES + lane]
+                t2x = buf[R_T2 * LANES + lane]
+                t2y = buf[(R_T2 + 1) * LANES + lane]
+                t2z = buf[(R_T2 + 2) * LANES + lane]
+                j1 = buf[R_JR1 * LANES + lane]
+                j2 = buf[R_JR2 * LANES + lane]
+                n1 = j1 - buf[R_RM1 * LANES + lane] * (wx * t1x + wy * t1y + wz * t1z)
+                n2 = j2 - buf[R_RM2 * LANES + lane] * (wx * t2x + wy * t2y + wz * t2z)
+                limit = roll * load[lane]
+                size2 = n1 * n1 + n2 * n2
+                if size2 > limit * limit:
+                    scale = limit / math.sqrt(size2) if size2 > 0.0 else 0.0
+                    n1 *= scale
+                    n2 *= scale
+                buf[R_JR1 * LANES + lane] = n1
+                buf[R_JR2 * LANES + lane] = n2
+                _roll(buf, lane, n1 - j1, n2 - j2)
+        if kinematic[g]:
+            work[0] += _group_work(buf, group, g, False)
+        _scatter(buf, group, pair, g, state)
+
+
+@njit(cache=True)
 def solve_step(
     cf: np.ndarray,
     ci: np.ndarray,
@@ -438,49 +766,63 @@ def solve_step(
     n = x.shape[0]
     iw = np.zeros((n, 9))
     world_inverse_inertia(q, inv_inertia, iw)
-    moved = np.zeros((n, 3))
-    turned = np.zeros((n, 9))
+    # every body's row, and a last one for the padding lanes' dummy (at rest, infinite mass)
+    state = np.zeros((n + 1, STATE_COLS))
+    for i in range(n):
+        for k in range(3):
+            state[i, S_V + k] = v[i, k]
+            state[i, S_W + k] = w[i, k]
+    for i in range(n + 1):
+        state[i, S_T] = state[i, S_T + 4] = state[i, S_T + 8] = 1.0
     start = np.empty((n, 9))  # each body's rotation at the step's start
     r = np.empty(9)
-    for i in range(n):
-        turned[i, 0] = turned[i, 4] = turned[i, 8] = 1.0
     for i in bodies:
         matrix(q, i, r)
         start[i] = r
-    _prepare(cf, ci, nc, inv_mass, iw)
+    lanes = color_groups(ci, nc, inv_mass, I_FLAGS)
+    groups = lanes.shape[0]
+    group = np.empty((groups, GROUP_ROWS * LANES))
+    pair = np.empty((groups, 2 * LANES), np.int64)
+    kinematic = np.empty(groups, np.bool_)
+    _pack(cf, ci, lanes, inv_mass, iw, state, soft_moving, soft_fixed, group, pair, kinematic)
+    turned = np.empty(9)
     elapsed = 0.0
     for _ in range(substeps):
         for i in bodies:
             if gravity_on[i]:
-                v[i, 0] += h * g[0]
-                v[i, 1] += h * g[1]
-                v[i, 2] += h * g[2]
-        _warm_start(cf, ci, nc, inv_mass, iw, v, w, work)
-        _solve(
-            cf, ci, nc, inv_mass, iw, v, w, moved, turned, 1.0 / h, True, soft_moving,
-            soft_fixed, push_speed, work,
-        )  # fmt: skip
+                for k in range(3):
+                    state[i, S_V + k] += h * g[k]
+        _warm_start(group, pair, kinematic, state, work)
+        _solve(group, pair, kinematic, state, 1.0 / h, True, push_speed, work)
         for i in bodies:
             for k in range(3):
+                v[i, k] = state[i, S_V + k]
+                w[i, k] = state[i, S_W + k]
                 x[i, k] += h * v[i, k]
-                moved[i, k] += h * v[i, k]
+                state[i, S_D + k] += h * v[i, k]
             free_turn(i, h, 1, q, w, inertia, inv_inertia)
+            for k in range(3):
+                state[i, S_W + k] = w[i, k]  # the spin that carries the angular momentum
             # the turn since the step began: R(q) R(q_start)^T
             matrix(q, i, r)
             s0 = start[i]
             for a in range(3):
                 for c in range(3):
-                    turned[i, 3 * a + c] = (
+                    state[i, S_T + 3 * a + c] = (
                         r[3 * a] * s0[3 * c] + r[3 * a + 1] * s0[3 * c + 1]
                         + r[3 * a + 2] * s0[3 * c + 2]
                     )  # fmt: skip
         elapsed += h
         for i in movers:  # kinematic bodies: their own steady motion (the driver moves them)
             for k in range(3):
-                moved[i, k] = elapsed * v[i, k]
-            _axis_angle(w[i, 0] * elapsed, w[i, 1] * elapsed, w[i, 2] * elapsed, turned[i])
-        _solve(
-            cf, ci, nc, inv_mass, iw, v, w, moved, turned, 1.0 / h, False, soft_moving,
-            soft_fixed, push_speed, work,
-        )  # fmt: skip
+                state[i, S_D + k] = elapsed * v[i, k]
+            _axis_angle(w[i, 0] * elapsed, w[i, 1] * elapsed, w[i, 2] * elapsed, turned)
+            for k in range(9):
+                state[i, S_T + k] = turned[k]
+        _solve(group, pair, kinematic, state, 1.0 / h, False, push_speed, work)
+    for i in bodies:
+        for k in range(3):
+            v[i, k] = state[i, S_V + k]
+            w[i, k] = state[i, S_W + k]
+    _unpack(group, lanes, ci, cf)
     _restitution(cf, ci, nc, restitution_threshold, inv_mass, iw, v, w, work)
