@@ -686,41 +686,41 @@ def _solve(
                 n1 = j1 - buf[(q + Q_T1MASS) * LANES + lane] * (ux * t1x + uy * t1y + uz * t1z)
                 n2 = j2 - buf[(q + Q_T2MASS) * LANES + lane] * (ux * t2x + uy * t2y + uz * t2z)
                 limit = buf[R_MU * LANES + lane] * buf[(q + Q_JN) * LANES + lane]
-                size2 = n1 * n1 + n2 * n2
-                if size2 > limit * limit:
-                    scale = limit / math.sqrt(size2)
-                    n1 *= scale
-                    n2 *= scale
+                # back into the cone |j_t| <= limit: scaled by limit / |j_t| beyond it, by
+                # exactly 1 within it (no branch: the lanes stay in vector registers)
+                size = math.sqrt(n1 * n1 + n2 * n2)
+                scale = limit / max(size, limit, 1e-300)
+                n1 *= scale
+                n2 *= scale
                 d1 = n1 - j1
                 d2 = n2 - j2
                 buf[(q + Q_JT1) * LANES + lane] = n1
                 buf[(q + Q_JT2) * LANES + lane] = n2
                 _push(buf, lane, q, d1 * t1x + d2 * t2x, d1 * t1y + d2 * t2y, d1 * t1z + d2 * t2z)
         for lane in range(LANES):
-            roll = buf[R_ROLL * LANES + lane]
-            if roll > 0.0:
-                wx = buf[B_WA * LANES + lane] - buf[B_WB * LANES + lane]
-                wy = buf[(B_WA + 1) * LANES + lane] - buf[(B_WB + 1) * LANES + lane]
-                wz = buf[(B_WA + 2) * LANES + lane] - buf[(B_WB + 2) * LANES + lane]
-                t1x = buf[R_T1 * LANES + lane]
-                t1y = buf[(R_T1 + 1) * LANES + lane]
-                t1z = buf[(R_T1 + 2) * LANES + lane]
-                t2x = buf[R_T2 * LANES + lane]
-                t2y = buf[(R_T2 + 1) * LANES + lane]
-                t2z = buf[(R_T2 + 2) * LANES + lane]
-                j1 = buf[R_JR1 * LANES + lane]
-                j2 = buf[R_JR2 * LANES + lane]
-                n1 = j1 - buf[R_RM1 * LANES + lane] * (wx * t1x + wy * t1y + wz * t1z)
-                n2 = j2 - buf[R_RM2 * LANES + lane] * (wx * t2x + wy * t2y + wz * t2z)
-                limit = roll * load[lane]
-                size2 = n1 * n1 + n2 * n2
-                if size2 > limit * limit:
-                    scale = limit / math.sqrt(size2) if size2 > 0.0 else 0.0
-                    n1 *= scale
-                    n2 *= scale
-                buf[R_JR1 * LANES + lane] = n1
-                buf[R_JR2 * LANES + lane] = n2
-                _roll(buf, lane, n1 - j1, n2 - j2)
+            # rolling resistance, in every lane (no branch: a lane without it has a zero limit
+            # and keeps a zero impulse)
+            wx = buf[B_WA * LANES + lane] - buf[B_WB * LANES + lane]
+            wy = buf[(B_WA + 1) * LANES + lane] - buf[(B_WB + 1) * LANES + lane]
+            wz = buf[(B_WA + 2) * LANES + lane] - buf[(B_WB + 2) * LANES + lane]
+            t1x = buf[R_T1 * LANES + lane]
+            t1y = buf[(R_T1 + 1) * LANES + lane]
+            t1z = buf[(R_T1 + 2) * LANES + lane]
+            t2x = buf[R_T2 * LANES + lane]
+            t2y = buf[(R_T2 + 1) * LANES + lane]
+            t2z = buf[(R_T2 + 2) * LANES + lane]
+            j1 = buf[R_JR1 * LANES + lane]
+            j2 = buf[R_JR2 * LANES + lane]
+            n1 = j1 - buf[R_RM1 * LANES + lane] * (wx * t1x + wy * t1y + wz * t1z)
+            n2 = j2 - buf[R_RM2 * LANES + lane] * (wx * t2x + wy * t2y + wz * t2z)
+            limit = buf[R_ROLL * LANES + lane] * load[lane]
+            size = math.sqrt(n1 * n1 + n2 * n2)
+            scale = limit / max(size, limit, 1e-300)
+            n1 *= scale
+            n2 *= scale
+            buf[R_JR1 * LANES + lane] = n1
+            buf[R_JR2 * LANES + lane] = n2
+            _roll(buf, lane, n1 - j1, n2 - j2)
         if kinematic[g]:
             work[0] += _group_work(buf, group, g, False)
         _scatter(buf, group, pair, g, state)
