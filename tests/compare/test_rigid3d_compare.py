@@ -314,3 +314,11 @@ def test_2d_rigid_scenes_are_not_for_the_3d_peers():
     _need("pybullet")
     with pytest.raises(CaromError, match="rigid bodies in 3D only"):
         compare("rod-drop", ["pybullet"])
+
+
+def test_each_dimension_of_rigid_bodies_has_its_own_peers():
+    from carom.compare.driver import default_engines
+
+    assert default_engines(2, "rigid") == ["carom", "pymunk", "box2d"]
+    assert default_engines(3, "rigid") == ["carom", "pybullet", "mujoco", "rapier3d"]
+    assert default_engines(3, "spheres") == ["carom", "pybullet", "mujoco"]

@@ -176,7 +176,7 @@ class RigidComparison:
 
 def default_engines(dim: int, kind: str = "spheres") -> list[str]:
     """carom and every peer that simulates ``dim`` dimensions of ``kind`` bodies."""
-    return [e.name for e in ENGINES.values() if dim in e.dims and kind in e.kinds]
+    return [e.name for e in ENGINES.values() if e.takes(dim, kind)]
 
 
 def compare(

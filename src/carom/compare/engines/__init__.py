@@ -103,6 +103,12 @@ class EngineEntry:
             problem = f"{self.name} is compared on rigid bodies in {dims} only"
         return problem
 
+    def takes(self, dim: int, kind: str = "spheres") -> bool:
+        """Whether the engine simulates ``dim`` dimensions of ``kind`` bodies (installed or
+        not)."""
+        dims = (self.rigid_dims or self.dims) if kind == "rigid" else self.dims
+        return dim in dims and kind in self.kinds
+
     def rigid_dt(self, scene: RigidScene | RigidScene3D) -> float:
         """The step [s] the engine takes on a rigid scene: its module's ``RIGID_DT`` (its
         documentation's advice) or the scene's rate."""
