@@ -120,6 +120,20 @@ def machine() -> str:
     )
 
 
+def record(title: str, body: str, details: tuple[str, ...] = ()) -> None:
+    """Append a run to RESULTS.md: a heading with ``title`` and the time, the machine, the
+    commit and the command that ran (this script and its arguments), ``details`` (one line
+    each), then ``body``."""
+    command = " ".join(["python", f"benchmarks/{Path(sys.argv[0]).name}", *sys.argv[1:]])
+    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    with RESULTS.open("a") as handle:
+        handle.write(f"\n## {title}, {stamp}\n\n")
+        handle.write(f"- machine: {machine()}\n- commit: {commit()}\n- command: `{command}`\n")
+        for line in details:
+            handle.write(f"- {line}\n")
+        handle.write("\n" + body)
+
+
 def commit() -> str:
     try:
         return subprocess.run(
@@ -190,16 +204,14 @@ def main() -> None:
     print(verdict)
     if args.no_record:
         return
-    command = "python benchmarks/edmd.py " + " ".join(sys.argv[1:])
-    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    with RESULTS.open("a") as handle:
-        handle.write(f"\n## edmd: event-driven engine, {stamp}\n\n")
-        handle.write(f"- machine: {machine()}\n- commit: {commit()}\n- command: `{command}`\n")
-        handle.write(
-            f"- compile: {cold:.1f} s to the first result with an empty kernel cache, "
-            f"{warm:.2f} s from the cache (excluded below)\n\n"
-        )
-        handle.write(report + "\n" + verdict)
+    record(
+        "edmd: event-driven engine",
+        report + "\n" + verdict,
+        (
+            f"compile: {cold:.1f} s to the first result with an empty kernel cache, "
+            f"{warm:.2f} s from the cache (excluded below)",
+        ),
+    )
 
 
 if __name__ == "__main__":

@@ -21,7 +21,6 @@ Needs the compare extra: pip install -e '.[compare]'.
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 import sys
 import tomllib
 from pathlib import Path
@@ -29,7 +28,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from edmd import RESULTS, commit, machine
+from edmd import record
 
 from carom.compare import Comparison, compare, peer_scene
 from carom.compare.engines import ENGINES
@@ -148,14 +147,12 @@ def main() -> None:
     print(table + "\n\n" + "\n".join(verdict))
     if args.no_record:
         return
-    command = " ".join(["python benchmarks/peers.py", *sys.argv[1:]])
-    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     versions = ", ".join(f"{e.name} {e.version()}" for e in ENGINES.values())
-    with RESULTS.open("a") as handle:
-        handle.write(f"\n## peers: carom beside pymunk, pybullet and MuJoCo, {stamp}\n\n")
-        handle.write(f"- machine: {machine()}\n- commit: {commit()}\n- command: `{command}`\n")
-        handle.write(f"- engines: {versions}\n\n")
-        handle.write(table + "\n\n" + "\n".join(verdict) + "\n")
+    record(
+        "peers: carom beside pymunk, pybullet and MuJoCo",
+        table + "\n\n" + "\n".join(verdict) + "\n",
+        (f"engines: {versions}",),
+    )
 
 
 if __name__ == "__main__":

@@ -23,7 +23,6 @@ Needs the compare extra: pip install -e '.[compare]'.
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 import shutil
 import statistics
 import subprocess
@@ -34,7 +33,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from edmd import RESULTS, commit, machine
+from edmd import record
 
 from carom.compare import compare, peer_scene
 from carom.compare.engines import ENGINES
@@ -160,12 +159,7 @@ def main() -> None:
     print(table + "\n\n" + "\n".join(verdict))
     if args.no_record:
         return
-    command = " ".join(["python benchmarks/rigid2d.py", *sys.argv[1:]])
-    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    with RESULTS.open("a") as handle:
-        handle.write(f"\n## rigid2d: carom beside pymunk and Box2D 2.3, {stamp}\n\n")
-        handle.write(f"- machine: {machine()}\n- commit: {commit()}\n- command: `{command}`\n\n")
-        handle.write(table + "\n\n" + "\n".join(verdict) + "\n")
+    record("rigid2d: carom beside pymunk and Box2D 2.3", table + "\n\n" + "\n".join(verdict) + "\n")
 
 
 if __name__ == "__main__":

@@ -22,7 +22,6 @@ Needs the compare extra: pip install -e '.[compare]'.
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 import os
 import statistics
 import sys
@@ -32,7 +31,7 @@ from typing import Any
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from edmd import RESULTS, commit, machine
+from edmd import record
 
 from carom.compare import compare, peer_scene
 from carom.compare.engines import ENGINES
@@ -112,12 +111,10 @@ def main() -> None:
     print(table + "\n\n" + "\n".join(verdict))
     if args.no_record:
         return
-    command = " ".join(["python benchmarks/rigid3d.py", *sys.argv[1:]])
-    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    with RESULTS.open("a") as handle:
-        handle.write(f"\n## rigid3d: carom beside pybullet, MuJoCo and Rapier, {stamp}\n\n")
-        handle.write(f"- machine: {machine()}\n- commit: {commit()}\n- command: `{command}`\n\n")
-        handle.write(table + "\n\n" + "\n".join(verdict) + "\n")
+    record(
+        "rigid3d: carom beside pybullet, MuJoCo and Rapier",
+        table + "\n\n" + "\n".join(verdict) + "\n",
+    )
 
 
 if __name__ == "__main__":

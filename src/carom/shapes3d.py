@@ -48,6 +48,7 @@ __all__ = [
     "Plane",
     "Shape3D",
     "Sphere",
+    "matrix_quaternion",
     "rotation_matrices",
     "rotation_matrix",
 ]
@@ -117,6 +118,29 @@ def rotation_matrices(quaternions: ArrayLike) -> FloatArray:
     out[:, 2, 1] = 2 * (y * z + w * x)
     out[:, 2, 2] = 1 - 2 * (x * x + y * y)
     return out
+
+
+def matrix_quaternion(r: FloatArray) -> FloatArray:
+    """The unit quaternion ``(w, x, y, z)``, ``w >= 0``, of a rotation matrix (Shepperd's
+    method: the largest of the four squared components decides, for accuracy)."""
+    t = float(np.trace(r))
+    cases = [t, r[0, 0], r[1, 1], r[2, 2]]
+    k = int(np.argmax(cases))
+    if k == 0:
+        s = 2.0 * math.sqrt(1.0 + t)
+        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+    elif k == 1:
+        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
+        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
+    elif k == 2:
+        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
+        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
+        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
+    out = np.array(q)
+    out /= np.linalg.norm(out)
+    return out if out[0] >= 0.0 else -out
 
 
 @dataclass(frozen=True)

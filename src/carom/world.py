@@ -54,7 +54,14 @@ from carom.materials import COMBINE_RULES, CombineRule, Material, pair_table
 from carom.meshes import Mesh
 from carom.observables import Stats
 from carom.shapes import SHAPE_CODES, Shape2D, check_inertia_factor, default_inertia_factor
-from carom.shapes3d import ConvexPiece3D, Plane, Shape3D, rotation_matrices, rotation_matrix
+from carom.shapes3d import (
+    ConvexPiece3D,
+    Plane,
+    Shape3D,
+    matrix_quaternion,
+    rotation_matrices,
+    rotation_matrix,
+)
 
 __all__ = ["LOG_LIMIT", "Frame", "Material", "World"]
 
@@ -525,7 +532,7 @@ class World:
         for i in range(n):
             each = arr[i if arr.shape[0] == n else 0]
             r = rotation_matrix(each, f"orientations[{i}]")
-            q[i] = _quaternion(r)
+            q[i] = matrix_quaternion(r)
         return q
 
     def add_plane(
@@ -1163,29 +1170,6 @@ def _as_material(name: str, value: Material | float) -> Material:
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
         raise CaromError(f"{name} must be a carom.Material or a restitution; got {value!r}")
     return Material(float(value))
-
-
-def _quaternion(r: FloatArray) -> FloatArray:
-    """The unit quaternion ``(w, x, y, z)``, ``w >= 0``, of a rotation matrix (Shepperd's
-    method: the largest of the four squared components decides, for accuracy)."""
-    t = float(np.trace(r))
-    cases = [t, r[0, 0], r[1, 1], r[2, 2]]
-    k = int(np.argmax(cases))
-    if k == 0:
-        s = 2.0 * math.sqrt(1.0 + t)
-        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
-    elif k == 1:
-        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
-        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
-    elif k == 2:
-        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
-        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
-    else:
-        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
-        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
-    out = np.array(q)
-    out /= np.linalg.norm(out)
-    return out if out[0] >= 0.0 else -out
 
 
 def _check_still(kind: str, density: float | None, mass: float | None, v: FloatArray,

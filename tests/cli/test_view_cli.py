@@ -31,16 +31,22 @@ def _read(recording: Path) -> dict[str, dict[int, dict[str, np.ndarray]]]:
     return entities
 
 
-@pytest.mark.parametrize(("scene", "dim"), [("newtons-cradle", 2), ("rain-3d", 3)])
-def test_the_recording_holds_the_run(tmp_path: Path, scene: str, dim: int) -> None:
+def _replayed(tmp_path: Path, scene: str, until: str) -> tuple[Path, dict]:
+    """Run ``scene`` to ``until`` into tmp_path/run, then ``carom view`` it with no display;
+    the output folder and the recording read back."""
     out = tmp_path / "run"
-    done = carom("run", scene, "--out", out, "--until", "0.6", "--animation", "none")
+    done = carom("run", scene, "--out", out, "--until", until, "--animation", "none")
     assert done.returncode == 0, done.stderr
     done = carom("view", out, CI="true")
     assert done.returncode == 0, done.stderr
     # CI has no display: the recording is written and its path said
     assert f"wrote {out / 'recording.rrd'} (no display here)" in done.stdout
-    data = _read(out / "recording.rrd")
+    return out, _read(out / "recording.rrd")
+
+
+@pytest.mark.parametrize(("scene", "dim"), [("newtons-cradle", 2), ("rain-3d", 3)])
+def test_the_recording_holds_the_run(tmp_path: Path, scene: str, dim: int) -> None:
+    out, data = _replayed(tmp_path, scene, "0.6")
     with h5py.File(out / "trajectory.h5", "r") as f:
         x = f["particles/all/position/value"][()]
         v = f["particles/all/velocity/value"][()]
@@ -88,12 +94,7 @@ def test_rigid_bodies_are_replayed_as_their_turned_outlines(tmp_path: Path) -> N
     # rod-drop: a 1 m x 5 cm rod (mass 1 kg) falls at 30 degrees onto a static floor slab and
     # turns on landing: every frame's rod outline must be its four corners (+-0.5, +-0.025) m
     # about its centre, turned by the trajectory's angle, closed back to the first.
-    out = tmp_path / "run"
-    done = carom("run", "rod-drop", "--out", out, "--until", "0.6", "--animation", "none")
-    assert done.returncode == 0, done.stderr
-    done = carom("view", out, CI="true")
-    assert done.returncode == 0, done.stderr
-    data = _read(out / "recording.rrd")
+    out, data = _replayed(tmp_path, "rod-drop", "0.6")
     with h5py.File(out / "trajectory.h5", "r") as f:
         x = f["particles/all/position/value"][()]
         v = f["particles/all/velocity/value"][()]
@@ -133,12 +134,7 @@ def test_3d_rigid_bodies_are_replayed_as_meshes_that_move(tmp_path: Path) -> Non
     # mesh is logged once in its own frame (12 triangles whose corners are the box's eight,
     # (+-0.2, +-0.15, +-0.1) m, normals outward); its pose every frame is the trajectory's
     # centre and quaternion; the slab, which never moves, has one static pose.
-    out = tmp_path / "run"
-    done = carom("run", "box-edge-3d", "--out", out, "--until", "0.4", "--animation", "none")
-    assert done.returncode == 0, done.stderr
-    done = carom("view", out, CI="true")
-    assert done.returncode == 0, done.stderr
-    data = _read(out / "recording.rrd")
+    out, data = _replayed(tmp_path, "box-edge-3d", "0.4")
     with h5py.File(out / "trajectory.h5", "r") as f:
         x = f["particles/all/position/value"][()]
         q = f["particles/all/orientation/value"][()]

@@ -19,7 +19,6 @@ from carom.compare.engines import ENGINES
 from carom.compare.report import format_table, write_comparison
 from carom.compare.rigid3d import (
     RigidScene3D,
-    matrix_quaternion,
     path_enters,
     primitives,
     principal_frame,
@@ -27,7 +26,7 @@ from carom.compare.rigid3d import (
 )
 from carom.errors import CaromError
 from carom.scene import Scene
-from carom.shapes3d import rotation_matrices
+from carom.shapes3d import matrix_quaternion, rotation_matrices
 
 PEERS = ["pybullet", "mujoco", "rapier3d"]
 IMPACTS = ["box-edge-3d", "box-corner-3d", "rod-drop-3d", "spin-ball-3d"]

@@ -30,6 +30,7 @@ from carom.compare.spec import steps_to
 from carom.engines.rigid.driver import RigidEngine
 from carom.engines.rigid.model import RigidModel, RigidState, new_state
 from carom.engines.rigid.settings import RigidSettings
+from carom.engines.rigid3d.model import Piece3D
 from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.laws.point_impulse import impulse
@@ -37,12 +38,15 @@ from carom.shapes import ConvexPiece
 from carom.world import World
 
 if TYPE_CHECKING:
-    from carom.compare.rigid3d import RigidScene3D
+    from carom.compare.rigid3d import ImpactCheck3D, RigidScene3D
 
 __all__ = [
     "ImpactCheck",
     "RigidMonitor",
     "RigidScene",
+    "RigidSceneBase",
+    "Yardstick",
+    "extent",
     "impact_expectation",
     "shape_coefficients",
 ]
@@ -58,8 +62,54 @@ FLIGHT_STEP = 1e-4
 LEVEL = 1e-12
 
 
+class RigidSceneBase:
+    """What a 2D and a 3D rigid scene read alike off carom's engine: its constants
+    (``model``) and its state at the start (``start``), the run's ``until`` [s] and the
+    engine's ``settings``. Properties: ``kind`` (B,), ``mass`` [kg] and ``inertia``,
+    ``material`` (B,), ``restitution`` and ``friction`` (M, M) [-], ``gravity`` [m/s^2],
+    ``position`` and ``velocity`` [m], [m/s] (centres of mass)."""
+
+    name: str
+    until: float
+    settings: RigidSettings
+    model: Any
+    start: Any
+
+    kind = property(lambda self: self.model.kind)
+    mass = property(lambda self: self.model.mass)
+    inertia = property(lambda self: self.model.inertia)
+    material = property(lambda self: self.model.material)
+    restitution = property(lambda self: self.model.e_table)
+    friction = property(lambda self: self.model.mu_table)
+    gravity = property(lambda self: self.model.gravity)
+    position = property(lambda self: self.start.x)
+    velocity = property(lambda self: self.start.v)
+
+    @property
+    def bodies(self) -> int:
+        """Every row: the caller's bodies, walls and planes."""
+        return int(self.kind.shape[0])
+
+    @property
+    def dt(self) -> float:
+        """carom's step [s]."""
+        return self.settings.dt
+
+    def steps(self, dt: float) -> int:
+        """Steps of ``dt`` [s] that reach ``until``."""
+        return steps_to(self.until, dt)
+
+    def needed_pairs(self) -> list[tuple[int, int]]:
+        """Pairs of materials that can meet: a dynamic body's material with any other
+        body's (a material with itself only when two bodies have it)."""
+        count = np.bincount(self.material, minlength=self.restitution.shape[0])
+        dynamic = sorted(set(self.material[self.kind == KIND_DYNAMIC].tolist()))
+        every = sorted(set(self.material.tolist()))
+        return [(a, b) for a in dynamic for b in every if a != b or count[a] >= 2]
+
+
 @dataclass(frozen=True)
-class RigidScene:
+class RigidScene(RigidSceneBase):
     """A 2D scene of rigid bodies as plain data, every body as carom's rigid engine sees it.
 
     Attributes
@@ -128,31 +178,8 @@ class RigidScene:
             world=functools.partial(copy.deepcopy, world),
         )
 
-    kind = property(lambda self: self.model.kind)
-    mass = property(lambda self: self.model.mass)
-    inertia = property(lambda self: self.model.inertia)
-    material = property(lambda self: self.model.material)
-    restitution = property(lambda self: self.model.e_table)
-    friction = property(lambda self: self.model.mu_table)
-    gravity = property(lambda self: self.model.gravity)
-    position = property(lambda self: self.start.x)
-    velocity = property(lambda self: self.start.v)
     angle = property(lambda self: self.start.angle)
     omega = property(lambda self: self.start.omega)
-
-    @property
-    def bodies(self) -> int:
-        """Every row: the caller's bodies, walls and planes."""
-        return int(self.kind.shape[0])
-
-    @property
-    def dt(self) -> float:
-        """carom's step [s]; every peer steps at the same rate."""
-        return self.settings.dt
-
-    def steps(self, dt: float) -> int:
-        """Steps of ``dt`` [s] that reach ``until``."""
-        return steps_to(self.until, dt)
 
     def energy(self, x: FloatArray, v: FloatArray, omega: FloatArray) -> tuple[float, float, float]:
         """Translational and rotational kinetic energy and potential energy [J] of the
@@ -163,14 +190,6 @@ class RigidScene:
         rotation = 0.5 * float(np.sum(inertia * omega[dyn] ** 2))
         potential = -float(np.sum(m * (x[dyn] @ self.gravity)))
         return translation, rotation, potential
-
-    def needed_pairs(self) -> list[tuple[int, int]]:
-        """Pairs of materials that can meet: a dynamic body's material with any other
-        body's (a material with itself only when two bodies have it)."""
-        count = np.bincount(self.material, minlength=self.restitution.shape[0])
-        dynamic = sorted(set(self.material[self.kind == KIND_DYNAMIC].tolist()))
-        every = sorted(set(self.material.tolist()))
-        return [(a, b) for a in dynamic for b in every if a != b or count[a] >= 2]
 
 
 def shape_coefficients(
@@ -388,40 +407,29 @@ def impact_expectation(scene: RigidScene, step: float) -> ImpactCheck | None:
     )
 
 
-class RigidMonitor:
-    """The same yardstick for every engine, fed the poses and velocities after each step.
+class Yardstick:
+    """What the 2D and 3D monitors measure alike, from the poses and velocities each engine
+    reports after a step: energies and their largest gain, the largest rotation, the top
+    body's drift, bodies through static ones, the deepest overlap (ten times a simulated
+    second), the state at the closed form's check, and the series to plot.
 
-    Parameters
-    ----------
-    scene : RigidScene
-    expected : ImpactCheck or None
-    dt : float
-        The engine's step [s].
+    A monitor sets its own geometry up, calls :meth:`_begin`, and gives the five measures
+    that differ with the dimension: :meth:`_energy`, :meth:`_turns`, :meth:`_momentum`,
+    :meth:`_overlap` and :meth:`_passed`. Orientations (``turn``) are angles in 2D and
+    quaternions in 3D; angular velocities (``spin``) scalars in 2D and vectors in 3D.
     """
 
-    def __init__(self, scene: RigidScene, expected: ImpactCheck | None, dt: float) -> None:
-        self.scene = scene
-        self.expected = expected
-        n = scene.n
-        self._dynamic = np.nonzero(scene.kind[:n] == KIND_DYNAMIC)[0]
-        dyn = self._dynamic
-        self._angle0 = scene.angle[dyn].copy()
-        self._top = int(dyn[np.argmax(scene.position[dyn, 1])]) if dyn.shape[0] else -1
-        self._size = _extent(scene.pieces[self._top]) if self._top >= 0 else 1.0
-        # the static pieces in world coordinates (they never move)
-        self._walls = [
-            piece
-            for body in np.nonzero(scene.kind == KIND_STATIC)[0]
-            for piece in _placed(scene, int(body))
-        ]
-        # a copy of carom's engine, only to measure overlaps of the poses it is given
-        settings = RigidSettings(rate=scene.settings.rate, sleep=False, exact_impacts=False)
-        m = scene.model
-        self._probe = RigidEngine(
-            m, new_state(m, scene.position, scene.velocity, scene.angle, scene.omega), settings
-        )
+    scene: RigidScene | RigidScene3D
+    expected: ImpactCheck | ImpactCheck3D | None
+
+    def _begin(self, dt: float, dynamic: IntArray, top: int, size: float) -> None:
+        """The counters and series, for observations ``dt`` [s] apart of the ``dynamic``
+        bodies (indices), of which ``top`` (-1: none) of size ``size`` [m] is watched."""
+        self._dynamic = dynamic
+        self._top = top
+        self._size = size
         self._every_overlap = max(1, round(0.1 / dt))  # overlaps: ten times a second
-        self._every = max(1, math.ceil(scene.until / dt / SERIES_POINTS))
+        self._every = max(1, math.ceil(self.scene.until / dt / SERIES_POINTS))
         self._previous: FloatArray | None = None
         self.steps = 0
         self.max_overlap = 0.0
@@ -433,7 +441,11 @@ class RigidMonitor:
         self.energy0: float | None = None
         self.energy_gain = 0.0
         self.final: tuple[float, float, float] = (0.0, 0.0, 0.0)
-        self._best: tuple[float, FloatArray, float] = (math.inf, np.zeros(2), 0.0)
+        self._best: tuple[float, FloatArray, FloatArray] = (
+            math.inf,
+            np.zeros(self.scene.dim),
+            np.zeros(0),
+        )
         self.series: dict[str, list[float]] = {
             "time": [],
             "translation": [],
@@ -443,19 +455,41 @@ class RigidMonitor:
             "overlap": [],
         }
 
+    def _energy(
+        self, x: FloatArray, v: FloatArray, turn: FloatArray, spin: FloatArray
+    ) -> tuple[float, float, float]:
+        """Translational and rotational kinetic and potential energy [J]."""
+        raise NotImplementedError
+
+    def _turns(self, turn: FloatArray) -> FloatArray:
+        """How far each dynamic body has turned since the start [rad]."""
+        raise NotImplementedError
+
+    def _momentum(self, x: FloatArray, v: FloatArray, turn: FloatArray, spin: FloatArray) -> float:
+        """The angular momentum about the origin [kg m^2/s] (3D: its magnitude)."""
+        raise NotImplementedError
+
+    def _overlap(self, x: FloatArray, turn: FloatArray) -> float:
+        """Deepest overlap [m] of the poses, by carom's exact contact geometry."""
+        raise NotImplementedError
+
+    def _passed(self, before: FloatArray, after: FloatArray, rows: IntArray) -> None:
+        """Note the bodies whose centre's path in the step entered a static piece's core."""
+        raise NotImplementedError
+
     def observe(
-        self, time: float, x: FloatArray, v: FloatArray, angle: FloatArray, omega: FloatArray
+        self, time: float, x: FloatArray, v: FloatArray, turn: FloatArray, spin: FloatArray
     ) -> None:
-        """Take the state of the first ``n`` bodies after a step (time [s]; x, v (n, 2);
-        angle, omega (n,))."""
+        """Take the state of the first ``n`` bodies after a step (time [s]; centres and
+        velocities (n, d); orientations and angular velocities as the scene keeps them)."""
         scene, dyn = self.scene, self._dynamic
-        translation, rotation, potential = scene.energy(x, v, omega)
+        translation, rotation, potential = self._energy(x, v, turn, spin)
         total = translation + rotation + potential
         if self.energy0 is None:
             self.energy0 = total
         self.energy_gain = max(self.energy_gain, total - self.energy0)
         self.final = (translation, rotation, potential)
-        turned = np.abs(angle[dyn] - self._angle0) if dyn.shape[0] else np.zeros(1)
+        turned = self._turns(turn) if dyn.shape[0] else np.zeros(1)
         self.final_rotation = float(turned.max())
         self.max_rotation = max(self.max_rotation, self.final_rotation)
         if self._top >= 0:
@@ -466,40 +500,22 @@ class RigidMonitor:
         self._previous = x.copy()
         overlap = math.nan
         if self.steps % self._every_overlap == 0:
-            overlap = self._overlap(x, angle)
+            overlap = self._overlap(x, turn)
             self.max_overlap = max(self.max_overlap, overlap)
         if self.expected is not None:
             check = self.expected
             gap = abs(time - check.time)
             if gap < self._best[0]:
                 moved = v[check.body] + scene.gravity * (check.time - time)
-                self._best = (gap, moved, float(omega[check.body]))
+                self._best = (gap, moved, np.array(spin[check.body], float))
         if self.steps % self._every == 0:
-            m = scene.mass[: scene.n][dyn]
-            spin = scene.inertia[: scene.n][dyn] * omega[dyn]
-            orbit = m * (x[dyn, 0] * v[dyn, 1] - x[dyn, 1] * v[dyn, 0])
             self.series["time"].append(time)
             self.series["translation"].append(translation)
             self.series["rotation"].append(rotation)
             self.series["potential"].append(potential)
-            self.series["angular_momentum"].append(float(np.sum(spin + orbit)))
+            self.series["angular_momentum"].append(self._momentum(x, v, turn, spin))
             self.series["overlap"].append(overlap)
         self.steps += 1
-
-    def _overlap(self, x: FloatArray, angle: FloatArray) -> float:
-        """Deepest overlap [m] of the poses, by carom's exact contact geometry."""
-        state = self._probe.state
-        n = self.scene.n
-        state.x[:n] = x
-        state.angle[:n] = angle
-        state.awake[:] = True
-        return self._probe.deepest_overlap()[2]
-
-    def _passed(self, before: FloatArray, after: FloatArray, rows: IntArray) -> None:
-        """Note the bodies whose centre's path in the step crossed a static piece's core."""
-        for piece in self._walls:
-            hit = _segments_cross(before, after, piece.vertices)
-            self.through.update(int(i) for i in rows[hit])
 
     def result(self) -> dict[str, Any]:
         """The measurements, as JSON-ready numbers (docs/compare.md)."""
@@ -508,7 +524,8 @@ class RigidMonitor:
             check = self.expected
             _, v, w = self._best
             velocity_error = float(np.linalg.norm(v - check.velocity)) / check.speed
-            omega_error = abs(w - check.omega) * check.reach / check.speed
+            miss = float(np.linalg.norm(np.atleast_1d(w - check.omega)))  # 2D: |w - w_exact|
+            omega_error = miss * check.reach / check.speed
         e0 = self.energy0 if self.energy0 is not None else 0.0
         scale = abs(e0) if e0 != 0.0 else 1.0
         return {
@@ -533,7 +550,70 @@ class RigidMonitor:
         }
 
 
-def _extent(pieces: tuple[ConvexPiece, ...]) -> float:
+class RigidMonitor(Yardstick):
+    """The same yardstick for every engine, fed the poses and velocities after each step
+    (:class:`Yardstick`; angles and angular velocities about z).
+
+    Parameters
+    ----------
+    scene : RigidScene
+    expected : ImpactCheck or None
+    dt : float
+        The engine's step [s].
+    """
+
+    scene: RigidScene
+
+    def __init__(self, scene: RigidScene, expected: ImpactCheck | None, dt: float) -> None:
+        self.scene = scene
+        self.expected = expected
+        dyn = np.nonzero(scene.kind[: scene.n] == KIND_DYNAMIC)[0]
+        self._angle0 = scene.angle[dyn].copy()
+        top = int(dyn[np.argmax(scene.position[dyn, 1])]) if dyn.shape[0] else -1
+        self._begin(dt, dyn, top, extent(scene.pieces[top]) if top >= 0 else 1.0)
+        # the static pieces in world coordinates (they never move)
+        self._walls = [
+            piece
+            for body in np.nonzero(scene.kind == KIND_STATIC)[0]
+            for piece in _placed(scene, int(body))
+        ]
+        # a copy of carom's engine, only to measure overlaps of the poses it is given
+        settings = RigidSettings(rate=scene.settings.rate, sleep=False, exact_impacts=False)
+        m = scene.model
+        self._probe = RigidEngine(
+            m, new_state(m, scene.position, scene.velocity, scene.angle, scene.omega), settings
+        )
+
+    def _energy(
+        self, x: FloatArray, v: FloatArray, turn: FloatArray, spin: FloatArray
+    ) -> tuple[float, float, float]:
+        return self.scene.energy(x, v, spin)
+
+    def _turns(self, turn: FloatArray) -> FloatArray:
+        return np.asarray(np.abs(turn[self._dynamic] - self._angle0), float)
+
+    def _momentum(self, x: FloatArray, v: FloatArray, turn: FloatArray, spin: FloatArray) -> float:
+        scene, dyn = self.scene, self._dynamic
+        m = scene.mass[: scene.n][dyn]
+        own = scene.inertia[: scene.n][dyn] * spin[dyn]
+        orbit = m * (x[dyn, 0] * v[dyn, 1] - x[dyn, 1] * v[dyn, 0])
+        return float(np.sum(own + orbit))
+
+    def _overlap(self, x: FloatArray, turn: FloatArray) -> float:
+        state = self._probe.state
+        n = self.scene.n
+        state.x[:n] = x
+        state.angle[:n] = turn
+        state.awake[:] = True
+        return self._probe.deepest_overlap()[2]
+
+    def _passed(self, before: FloatArray, after: FloatArray, rows: IntArray) -> None:
+        for piece in self._walls:
+            hit = _segments_cross(before, after, piece.vertices)
+            self.through.update(int(i) for i in rows[hit])
+
+
+def extent(pieces: tuple[ConvexPiece, ...] | tuple[Piece3D, ...]) -> float:
     """A body's size [m]: the longer side of its bounding box in its own frame."""
     corners = np.concatenate([p.vertices for p in pieces])
     radius = max(p.radius for p in pieces)

@@ -25,12 +25,11 @@ import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.compare.spec import steps_to
+from carom.compare.rigid import RigidSceneBase, Yardstick, extent
 from carom.engines.rigid.settings import RigidSettings
 from carom.engines.rigid3d.driver import RigidEngine3D
 from carom.engines.rigid3d.impacts import normal_lcp
@@ -44,9 +43,10 @@ from carom.engines.rigid3d.model import (
 )
 from carom.engines.rigid3d.motion import free_turn
 from carom.errors import CaromError
+from carom.geometry.rotation import turn
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.laws.rigid_impact import collision_matrix, point_impulse
-from carom.shapes3d import rotation_matrices
+from carom.shapes3d import matrix_quaternion, rotation_matrices
 from carom.world import World
 
 __all__ = [
@@ -55,7 +55,6 @@ __all__ = [
     "RigidMonitor3D",
     "RigidScene3D",
     "impact_expectation3d",
-    "matrix_quaternion",
     "path_enters",
     "primitives",
     "principal_frame",
@@ -66,8 +65,6 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-#: at most this many points of the series are kept per engine
-SERIES_POINTS = 1500
 #: the closed form's post-impact flight is searched for a second contact at this step [s]
 FLIGHT_STEP = 1e-4
 #: two corners within this height of each other [m] land together (an edge or face lands)
@@ -77,7 +74,7 @@ BOX_TOLERANCE = 1e-12
 
 
 @dataclass(frozen=True)
-class RigidScene3D:
+class RigidScene3D(RigidSceneBase):
     """A 3D scene of rigid bodies as plain data, every body as carom's 3D engine sees it.
 
     Attributes
@@ -159,32 +156,9 @@ class RigidScene3D:
             world=functools.partial(copy.deepcopy, world),
         )
 
-    kind = property(lambda self: self.model.kind)
-    mass = property(lambda self: self.model.mass)
-    inertia = property(lambda self: self.model.inertia)
-    material = property(lambda self: self.model.material)
-    restitution = property(lambda self: self.model.e_table)
-    friction = property(lambda self: self.model.mu_table)
     rolling = property(lambda self: self.model.rolling_table)
-    gravity = property(lambda self: self.model.gravity)
-    position = property(lambda self: self.start.x)
-    velocity = property(lambda self: self.start.v)
     orientation = property(lambda self: self.start.q)
     omega = property(lambda self: self.start.w)
-
-    @property
-    def bodies(self) -> int:
-        """Every row: the caller's bodies, walls and planes."""
-        return int(self.kind.shape[0])
-
-    @property
-    def dt(self) -> float:
-        """carom's step [s]."""
-        return self.settings.dt
-
-    def steps(self, dt: float) -> int:
-        """Steps of ``dt`` [s] that reach ``until``."""
-        return steps_to(self.until, dt)
 
     def energy(
         self, x: FloatArray, v: FloatArray, q: FloatArray, w: FloatArray
@@ -200,14 +174,6 @@ class RigidScene3D:
         potential = -float(np.sum(m * (x[dyn] @ self.gravity)))
         return translation, rotation, potential
 
-    def needed_pairs(self) -> list[tuple[int, int]]:
-        """Pairs of materials that can meet: a dynamic body's material with any other
-        body's (a material with itself only when two bodies have it)."""
-        count = np.bincount(self.material, minlength=self.restitution.shape[0])
-        dynamic = sorted(set(self.material[self.kind == KIND_DYNAMIC].tolist()))
-        every = sorted(set(self.material.tolist()))
-        return [(a, b) for a in dynamic for b in every if a != b or count[a] >= 2]
-
     @property
     def kinematic(self) -> IntArray:
         """The rows of the kinematic bodies (moved at constant velocities)."""
@@ -218,13 +184,10 @@ class RigidScene3D:
         constant velocity, and its orientation (4,), turned at its constant angular velocity
         (world frame) about its centre."""
         x = self.position[body] + self.velocity[body] * time
+        q = self.orientation[body : body + 1].copy()
         w = self.omega[body]
-        speed = float(np.linalg.norm(w))
-        if speed == 0.0:
-            return x, self.orientation[body].copy()
-        half = 0.5 * speed * time
-        turn = np.concatenate([[math.cos(half)], math.sin(half) * w / speed])
-        return x, quaternion_product(turn, self.orientation[body])
+        turn(q, 0, w[0], w[1], w[2], time, 3)  # as the engine turns it
+        return x, q[0]
 
 
 def world_momentum(inertia: FloatArray, q: FloatArray, w: FloatArray) -> FloatArray:
@@ -322,25 +285,6 @@ def principal_frame(inertia: FloatArray) -> tuple[FloatArray, FloatArray]:
     if np.linalg.det(axes) < 0.0:
         axes[:, 2] = -axes[:, 2]
     return moments, matrix_quaternion(axes)
-
-
-def matrix_quaternion(r: FloatArray) -> FloatArray:
-    """The unit quaternion ``(w, x, y, z)`` of a rotation matrix (3, 3) (Shepperd's method)."""
-    trace = float(np.trace(r))
-    if trace > 0.0:
-        s = 2.0 * math.sqrt(trace + 1.0)
-        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
-    else:
-        k = int(np.argmax(np.diag(r)))
-        i, j = (k + 1) % 3, (k + 2) % 3
-        s = 2.0 * math.sqrt(1.0 + r[k, k] - r[i, i] - r[j, j])
-        q = [0.0, 0.0, 0.0, 0.0]
-        q[0] = (r[j, i] - r[i, j]) / s
-        q[1 + k] = 0.25 * s
-        q[1 + i] = (r[i, k] + r[k, i]) / s
-        q[1 + j] = (r[j, k] + r[k, j]) / s
-    out = np.array(q, float)
-    return np.asarray(out / np.linalg.norm(out), float)
 
 
 def quaternion_product(a: FloatArray, b: FloatArray) -> FloatArray:
@@ -567,8 +511,10 @@ def impact_expectation3d(scene: RigidScene3D, step: float) -> ImpactCheck3D | No
     )
 
 
-class RigidMonitor3D:
-    """The same yardstick for every engine, fed the poses and velocities after each step.
+class RigidMonitor3D(Yardstick):
+    """The same yardstick for every engine, fed the poses and velocities after each step
+    (:class:`carom.compare.rigid.Yardstick`; quaternions ``(w, x, y, z)`` and angular
+    velocities in the world frame).
 
     Parameters
     ----------
@@ -578,16 +524,17 @@ class RigidMonitor3D:
         The interval between observations [s].
     """
 
+    scene: RigidScene3D
+
     def __init__(self, scene: RigidScene3D, expected: ImpactCheck3D | None, dt: float) -> None:
         self.scene = scene
         self.expected = expected
-        n = scene.n
-        self._dynamic = dyn = np.nonzero(scene.kind[:n] == KIND_DYNAMIC)[0]
+        dyn = np.nonzero(scene.kind[: scene.n] == KIND_DYNAMIC)[0]
         self._q0 = scene.orientation[dyn].copy()
         up = -scene.gravity / max(float(np.linalg.norm(scene.gravity)), 1e-300)
         heights = scene.position[dyn] @ up if np.any(up) else scene.position[dyn, 2]
-        self._top = int(dyn[np.argmax(heights)]) if dyn.shape[0] else -1
-        self._size = _extent(scene.pieces[self._top]) if self._top >= 0 else 1.0
+        top = int(dyn[np.argmax(heights)]) if dyn.shape[0] else -1
+        self._begin(dt, dyn, top, extent(scene.pieces[top]) if top >= 0 else 1.0)
         # the static pieces' faces in the world (they never move): (normals, offsets)
         self._walls: list[tuple[FloatArray, FloatArray]] = []
         for body in np.nonzero(scene.kind == KIND_STATIC)[0]:
@@ -609,126 +556,34 @@ class RigidMonitor3D:
             new_state(m, scene.position, scene.velocity, scene.orientation, scene.omega),
             settings,
         )
-        self._every_overlap = max(1, round(0.1 / dt))  # overlaps: ten times a second
-        self._every = max(1, math.ceil(scene.until / dt / SERIES_POINTS))
-        self._previous: FloatArray | None = None
-        self.steps = 0
-        self.max_overlap = 0.0
-        self.through: set[int] = set()
-        self.max_top = 0.0
-        self.top_drift = 0.0
-        self.max_rotation = 0.0
-        self.final_rotation = 0.0
-        self.energy0: float | None = None
-        self.energy_gain = 0.0
-        self.final: tuple[float, float, float] = (0.0, 0.0, 0.0)
-        self._best: tuple[float, FloatArray, FloatArray] = (math.inf, np.zeros(3), np.zeros(3))
-        self.series: dict[str, list[float]] = {
-            "time": [],
-            "translation": [],
-            "rotation": [],
-            "potential": [],
-            "angular_momentum": [],
-            "overlap": [],
-        }
 
-    def observe(
-        self, time: float, x: FloatArray, v: FloatArray, q: FloatArray, w: FloatArray
-    ) -> None:
-        """Take the state of the first ``n`` bodies after a step (time [s]; x, v (n, 3);
-        q (n, 4) ``(w, x, y, z)``; w (n, 3) world frame [rad/s])."""
+    def _energy(
+        self, x: FloatArray, v: FloatArray, turn: FloatArray, spin: FloatArray
+    ) -> tuple[float, float, float]:
+        return self.scene.energy(x, v, turn, spin)
+
+    def _turns(self, turn: FloatArray) -> FloatArray:
+        return turned_angle(turn[self._dynamic], self._q0)
+
+    def _momentum(self, x: FloatArray, v: FloatArray, turn: FloatArray, spin: FloatArray) -> float:
         scene, dyn = self.scene, self._dynamic
-        translation, rotation, potential = scene.energy(x, v, q, w)
-        total = translation + rotation + potential
-        if self.energy0 is None:
-            self.energy0 = total
-        self.energy_gain = max(self.energy_gain, total - self.energy0)
-        self.final = (translation, rotation, potential)
-        turned = turned_angle(q[dyn], self._q0) if dyn.shape[0] else np.zeros(1)
-        self.final_rotation = float(turned.max())
-        self.max_rotation = max(self.max_rotation, self.final_rotation)
-        if self._top >= 0:
-            self.top_drift = float(np.linalg.norm(x[self._top] - scene.position[self._top]))
-            self.max_top = max(self.max_top, self.top_drift)
-        if self._previous is not None:
-            self._passed(self._previous[dyn], x[dyn], dyn)
-        self._previous = x.copy()
-        overlap = math.nan
-        if self.steps % self._every_overlap == 0:
-            overlap = self._overlap(x, q)
-            self.max_overlap = max(self.max_overlap, overlap)
-        if self.expected is not None:
-            check = self.expected
-            gap = abs(time - check.time)
-            if gap < self._best[0]:
-                moved = v[check.body] + scene.gravity * (check.time - time)
-                self._best = (gap, moved, np.array(w[check.body], float))
-        if self.steps % self._every == 0:
-            m = scene.mass[: scene.n][dyn]
-            spin = world_momentum(scene.inertia[: scene.n][dyn], q[dyn], w[dyn])
-            orbit = m[:, None] * np.cross(x[dyn], v[dyn])
-            self.series["time"].append(time)
-            self.series["translation"].append(translation)
-            self.series["rotation"].append(rotation)
-            self.series["potential"].append(potential)
-            self.series["angular_momentum"].append(
-                float(np.linalg.norm(np.sum(spin + orbit, axis=0)))
-            )
-            self.series["overlap"].append(overlap)
-        self.steps += 1
+        m = scene.mass[: scene.n][dyn]
+        own = world_momentum(scene.inertia[: scene.n][dyn], turn[dyn], spin[dyn])
+        orbit = m[:, None] * np.cross(x[dyn], v[dyn])
+        return float(np.linalg.norm(np.sum(own + orbit, axis=0)))
 
-    def _overlap(self, x: FloatArray, q: FloatArray) -> float:
-        """Deepest overlap [m] of the poses, by carom's exact contact geometry."""
+    def _overlap(self, x: FloatArray, turn: FloatArray) -> float:
         state = self._probe.state
         n = self.scene.n
         state.x[:n] = x
-        state.q[:n] = q / np.linalg.norm(q, axis=1, keepdims=True)
+        state.q[:n] = turn / np.linalg.norm(turn, axis=1, keepdims=True)
         state.awake[:] = True
         return self._probe.deepest_overlap()[2]
 
     def _passed(self, before: FloatArray, after: FloatArray, rows: IntArray) -> None:
-        """Note the bodies whose centre's path in the step entered a static piece's core."""
         for normals, offsets in self._walls:
             hit = path_enters(before, after, normals, offsets)
             self.through.update(int(i) for i in rows[hit])
-
-    def result(self) -> dict[str, Any]:
-        """The measurements, as JSON-ready numbers (docs/compare.md)."""
-        velocity_error = omega_error = None
-        if self.expected is not None:
-            check = self.expected
-            _, v, w = self._best
-            velocity_error = float(np.linalg.norm(v - check.velocity)) / check.speed
-            omega_error = float(np.linalg.norm(w - check.omega)) * check.reach / check.speed
-        e0 = self.energy0 if self.energy0 is not None else 0.0
-        scale = abs(e0) if e0 != 0.0 else 1.0
-        return {
-            "velocity_error": velocity_error,
-            "omega_error": omega_error,
-            "energy_gain": self.energy_gain / scale,
-            "final_energy_J": {
-                "translation": self.final[0],
-                "rotation": self.final[1],
-                "potential": self.final[2],
-            },
-            "max_overlap_m": self.max_overlap,
-            "tunnelled": bool(self.through),
-            "bodies_through_static": len(self.through),
-            "top_body": self._top,
-            "top_drift_m": self.top_drift,
-            "top_drift_per_size": self.top_drift / self._size,
-            "max_top_drift_m": self.max_top,
-            "max_rotation_deg": math.degrees(self.max_rotation),
-            "final_rotation_deg": math.degrees(self.final_rotation),
-            "samples": self.steps,
-        }
-
-
-def _extent(pieces: tuple[Piece3D, ...]) -> float:
-    """A body's size [m]: the longest side of its bounding box in its own frame."""
-    corners = np.concatenate([p.vertices for p in pieces])
-    radius = max(p.radius for p in pieces)
-    return float(np.max(corners.max(axis=0) - corners.min(axis=0)) + 2.0 * radius)
 
 
 def path_enters(

@@ -25,10 +25,25 @@ import numpy as np
 from carom.compare.spec import PeerScene
 from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
+from carom.shapes3d import rotation_matrices
 
 __all__ = ["damping_ratio", "start", "start_rigid"]
 
 DT = 0.002
+
+
+def _options(model: Any) -> dict[str, Any]:
+    """The model's step, integrator, solver, iterations, tolerance and friction cone, by
+    MuJoCo's names."""
+    opt = model.opt
+    return {
+        "dt_s": float(opt.timestep),
+        "integrator": mujoco.mjtIntegrator(opt.integrator).name,
+        "solver": mujoco.mjtSolver(opt.solver).name,
+        "iterations": int(opt.iterations),
+        "tolerance": float(opt.tolerance),
+        "cone": mujoco.mjtCone(opt.cone).name,
+    }
 
 
 def damping_ratio(e: float) -> float:
@@ -98,15 +113,9 @@ class MujocoSimulation:
         qvel[:, :dim] = scene.velocities  # a free joint's linear velocity is in world axes
         mujoco.mj_forward(model, data)
         self.dt = DT
-        opt = model.opt
         self.settings: dict[str, Any] = {
-            "dt_s": float(opt.timestep),
-            "integrator": mujoco.mjtIntegrator(opt.integrator).name,
-            "solver": mujoco.mjtSolver(opt.solver).name,
-            "iterations": int(opt.iterations),
-            "tolerance": float(opt.tolerance),
-            "cone": mujoco.mjtCone(opt.cone).name,
-            "noslip_iterations": int(opt.noslip_iterations),
+            **_options(model),
+            "noslip_iterations": int(model.opt.noslip_iterations),
             "condim": 1,
             "solref_body_first": model.geom_solref[2 * dim].tolist(),
             "solref_walls": model.geom_solref[: 2 * dim].tolist(),
@@ -248,20 +257,14 @@ class MujocoRigidSimulation:
         self._mocap = [int(row) for row in np.nonzero(scene.kind == KIND_KINEMATIC)[0]]
         for row, qv in zip(self._rows, self._qvel, strict=True):
             data.qvel[qv : qv + 3] = scene.velocity[row]  # world frame
-            r = _matrix(scene.orientation[row])
+            r = rotation_matrices(scene.orientation[row])[0]
             data.qvel[qv + 3 : qv + 6] = r.T @ scene.omega[row]  # a free joint: body frame
         mujoco.mj_forward(model, data)
         self._static_x = scene.position[: scene.n].copy()
         self._static_q = scene.orientation[: scene.n].copy()
         self.dt = RIGID_DT
-        opt = model.opt
         self.settings: dict[str, Any] = {
-            "dt_s": float(opt.timestep),
-            "integrator": mujoco.mjtIntegrator(opt.integrator).name,
-            "solver": mujoco.mjtSolver(opt.solver).name,
-            "iterations": int(opt.iterations),
-            "tolerance": float(opt.tolerance),
-            "cone": mujoco.mjtCone(opt.cone).name,
+            **_options(model),
             "condim": condim,
             "friction_per_material": mu.tolist(),
             "solref": model.geom_solref[0].tolist() if model.ngeom else None,
@@ -328,23 +331,11 @@ class MujocoRigidSimulation:
             x[row] = qpos[qp : qp + 3]
             q[row] = qpos[qp + 3 : qp + 7]
             v[row] = qvel[qv : qv + 3]
-            w[row] = _matrix(q[row]) @ qvel[qv + 3 : qv + 6]
+            w[row] = rotation_matrices(q[row])[0] @ qvel[qv + 3 : qv + 6]
         return x, v, q, w
 
     def close(self) -> None:
         pass
-
-
-def _matrix(q: np.ndarray) -> np.ndarray:
-    """The rotation matrix (3, 3) of a unit quaternion ``(w, x, y, z)``."""
-    w, x, y, z = (float(c) for c in q / np.linalg.norm(q))
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 def start_rigid(scene: Any) -> MujocoRigidSimulation:

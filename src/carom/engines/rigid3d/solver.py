@@ -527,6 +527,21 @@ def _slip(buf: np.ndarray, lane: int, q: int) -> tuple[float, float, float]:
     return ax - bx, ay - by, az - bz
 
 
+@njit(cache=True, inline="always")
+def _impulse(
+    buf: np.ndarray, lane: int, jn: float, j1: float, j2: float
+) -> tuple[float, float, float]:
+    """The impulse ``jn n + j1 t1 + j2 t2`` [N s] of one lane's contact, as a vector."""
+    return (
+        jn * buf[R_N * LANES + lane] + j1 * buf[R_T1 * LANES + lane]
+        + j2 * buf[R_T2 * LANES + lane],
+        jn * buf[(R_N + 1) * LANES + lane] + j1 * buf[(R_T1 + 1) * LANES + lane]
+        + j2 * buf[(R_T2 + 1) * LANES + lane],
+        jn * buf[(R_N + 2) * LANES + lane] + j1 * buf[(R_T1 + 2) * LANES + lane]
+        + j2 * buf[(R_T2 + 2) * LANES + lane],
+    )  # fmt: skip
+
+
 @njit(cache=True)
 def _group_work(buf: np.ndarray, group: np.ndarray, g: int, warm: bool) -> float:
     """Work [J] done on group g's lanes by their bodies of infinite mass, for the impulses
@@ -544,11 +559,7 @@ def _group_work(buf: np.ndarray, group: np.ndarray, g: int, warm: bool) -> float
                 dn -= group[g, (q + Q_JN) * LANES + lane]
                 d1 -= group[g, (q + Q_JT1) * LANES + lane]
                 d2 -= group[g, (q + Q_JT2) * LANES + lane]
-            px = py = pz = 0.0
-            for k, j in ((R_N, dn), (R_T1, d1), (R_T2, d2)):
-                px += j * buf[k * LANES + lane]
-                py += j * buf[(k + 1) * LANES + lane]
-                pz += j * buf[(k + 2) * LANES + lane]
+            px, py, pz = _impulse(buf, lane, dn, d1, d2)
             if buf[R_IMA * LANES + lane] == 0.0:
                 ux, uy, uz = _point_velocity(buf, lane, B_VA, B_WA, q + Q_RA)
                 total -= px * ux + py * uy + pz * uz
@@ -574,18 +585,7 @@ def _warm_start(
                 jn = buf[(q + Q_JN) * LANES + lane]
                 j1 = buf[(q + Q_JT1) * LANES + lane]
                 j2 = buf[(q + Q_JT2) * LANES + lane]
-                px = (
-                    jn * buf[R_N * LANES + lane] + j1 * buf[R_T1 * LANES + lane]
-                    + j2 * buf[R_T2 * LANES + lane]
-                )  # fmt: skip
-                py = (
-                    jn * buf[(R_N + 1) * LANES + lane] + j1 * buf[(R_T1 + 1) * LANES + lane]
-                    + j2 * buf[(R_T2 + 1) * LANES + lane]
-                )  # fmt: skip
-                pz = (
-                    jn * buf[(R_N + 2) * LANES + lane] + j1 * buf[(R_T1 + 2) * LANES + lane]
-                    + j2 * buf[(R_T2 + 2) * LANES + lane]
-                )  # fmt: skip
+                px, py, pz = _impulse(buf, lane, jn, j1, j2)
                 buf[(q + Q_TOTAL) * LANES + lane] += jn
                 _push(buf, lane, q, px, py, pz)
         for lane in range(LANES):
