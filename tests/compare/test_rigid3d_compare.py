@@ -76,7 +76,8 @@ def test_the_box_edge_closed_form_is_the_textbook_one():
     (y, z) = (-0.15, -0.1) turned: r_y = (-0.15 + 0.1) / sqrt 2, r_z = -(0.15 + 0.1) /
     sqrt 2. The edge's two ends lie symmetric about the centre along x, so they share the
     impulse: the total is j = (1 + e) m v / (1 + m r_y^2 / I_xx), I_xx = m (0.3^2 + 0.2^2)
-    / 12, and the box spins about x at w_x = r_y j / I_xx (a principal axis: constant)."""
+    / 12 (Hecker's 3D formula, PHYSICS.md section 2, with r x n along x), and the box spins
+    about x at w_x = r_y j / I_xx (a principal axis: constant by Euler's equations)."""
     scene = peer_scene("box-edge-3d")
     check = compare(scene, ["carom"]).expected
     assert check is not None
@@ -100,7 +101,8 @@ def test_the_spinning_ball_closed_form_follows_coulomb():
     """A ball (I = 2/5 m R^2) landing with backspin slides through the impact (the rolling
     rule would need more than mu times the normal impulse): the normal impulse is (1 + e)
     m |v_z|, the tangential one mu times it against the slip, and the spin changes by
-    R x P / I. The check waits in flight, where both stay constant."""
+    R x P / I (Coulomb friction in Walton's model, PHYSICS.md section 3, on its sliding
+    branch). The check waits in flight, where both stay constant."""
     scene = peer_scene("spin-ball-3d")
     check = compare(scene, ["carom"]).expected
     assert check is not None
