@@ -6,7 +6,9 @@ its position ``out[3 + 4j : 6 + 4j]`` [m], midway between the two surfaces, and 
 ``out[6 + 4j]`` [m] (the gap along ``n``; negative when they overlap); ``ids[j]`` names the
 features that made the point, so the solver can warm-start it next step. It returns the number
 of points; none when the shapes are further apart than ``margin`` [m] (speculative contact
-reaches that far).
+reaches that far). Returning none for that reason, hull-hull and hull-sphere write a lower
+bound of the gap [m] into ``out[6]`` (what the separating axis showed), so the caller can tell
+how far the pair may move before it can touch; the others leave ``out`` as it was.
 
 Round shapes are cores with a radius (a sphere is a point, a capsule a segment), so their
 manifolds are closed forms on closest points of cores:
@@ -793,13 +795,16 @@ def contact_hull_hull(
     """
     sep_a, face_a = _face_separation(va, na, sa, cora, vb)
     if sep_a > margin:
+        out[6] = sep_a  # a separating axis: the gap is at least this
         return 0
     sep_b, face_b = _face_separation(vb, nb, sb, corb, va)
     if sep_b > margin:
+        out[6] = sep_b
         return 0
     # edge axes matter only where they separate more than every face axis
     sep_e, edge_a, edge_b, ax, ay, az = _edge_separation(va, ea, vb, eb, na, nb, max(sep_a, sep_b))
     if sep_e > margin:
+        out[6] = sep_e
         return 0
     tie = 0.1 * slop
     if edge_a >= 0 and sep_e > max(sep_a, sep_b) + tie:
@@ -947,7 +952,8 @@ def contact_hull_sphere(
             highest = h
             top = f
     if highest - rb > margin:
-        return 0  # a face plane separates them by more than the margin
+        out[6] = highest - rb  # a face plane separates them by more than the margin
+        return 0
     if highest < 0.0:  # the centre is inside (a flat polytope, a mesh triangle, has no inside)
         n = na[top]
         m = b - 0.5 * (rb + highest) * n  # midway between b - rb n and the face, b - highest n

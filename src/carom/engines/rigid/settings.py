@@ -42,6 +42,12 @@ class RigidSettings:
     linear_slop : float, default 0.005
         Length below which contact is considered made [m]; speculative contacts reach
         ``4 linear_slop`` ahead.
+    manifold_reuse : float, default 0.1
+        How far two bodies in contact may move relative to each other, as a fraction of
+        ``linear_slop``, before their contact manifold is made again (3D; 0.5 mm by default):
+        below it the manifold is kept and only its separations are measured anew, as Rapier
+        and Bullet do (:mod:`carom.engines.rigid3d.contacts`). 0 makes every manifold anew
+        every step.
     exact_impacts : bool, default True
         Split a step at the time of impact of an isolated pair (found by conservative
         advancement) and apply Newton's restitution there exactly (docs/rigid.md).
@@ -61,6 +67,7 @@ class RigidSettings:
     push_speed: float = 3.0
     restitution_threshold: float = 1.0
     linear_slop: float = 0.005
+    manifold_reuse: float = 0.1
     exact_impacts: bool = True
     sleep: bool = True
     sleep_speed: float = 0.05
@@ -78,10 +85,14 @@ class RigidSettings:
             value = getattr(self, name)
             if not (_real(value) and math.isfinite(value) and value > low):
                 raise CaromError(f"{name} must be a positive number [{unit}]; got {value!r}")
-        for name in ("restitution_threshold", "sleep_speed"):
+        for name, unit in (
+            ("restitution_threshold", "m/s"),
+            ("sleep_speed", "m/s"),
+            ("manifold_reuse", "-"),
+        ):
             value = getattr(self, name)
             if not (_real(value) and math.isfinite(value) and value >= 0.0):
-                raise CaromError(f"{name} must be a number >= 0 [m/s]; got {value!r}")
+                raise CaromError(f"{name} must be a number >= 0 [{unit}]; got {value!r}")
         s = self.substeps
         if isinstance(s, bool) or not isinstance(s, int | np.integer) or not 1 <= s <= 64:
             raise CaromError(f"substeps must be a whole number from 1 to 64; got {s!r}")

@@ -17,6 +17,19 @@ itself would rise by ``R (1 - cos phi)`` as it turned by ``phi`` and let the bal
 
 Which points are kept: those within the speculative distance, plus how far the pair can close
 along the normal during the step.
+
+**Manifolds are kept from step to step** (as Rapier and Bullet keep theirs): each pair's
+manifold is stored with the pose of one body in the other's frame when it was made, its points
+as material points of each body (in each body's frame) and its normal in the frame body's
+frame. While the pair's relative pose stays within ``reuse`` [m] of that pose (the farthest any
+point of the moving piece can have gone: the centre's shift plus its reach times the change
+of the rotation matrix), the manifold is rebuilt from those points at the bodies' new poses,
+with each point's separation measured anew along the normal, instead of running the
+separating-axis test and the clipping again; a manifold made apart is made again once a point
+touches. A pair found apart with a known lower bound of the gap (a separating axis) is not
+tested again until it has moved enough to come within the margin. A resting stack is then
+tested once, not every step; anything that moves more than ``reuse`` in a step is tested
+every step as before.
 """
 
 from __future__ import annotations
@@ -27,8 +40,19 @@ import numpy as np
 from numba import njit
 
 from carom.engines.rigid.contacts import find_cached
-from carom.engines.rigid3d.model import PIECE_PLANE, PIECE_POLYTOPE
-from carom.engines.rigid3d.motion import relative_velocity
+from carom.engines.rigid3d.model import (
+    M_COUNT,
+    M_GAP,
+    M_ID0,
+    M_N,
+    M_POINT,
+    M_R,
+    M_SEP,
+    M_T,
+    PIECE_PLANE,
+    PIECE_POLYTOPE,
+)
+from carom.engines.rigid3d.motion import matrix, relative_velocity
 from carom.geometry.manifold3d import (
     MAX_POINTS,
     OUT_SIZE,
@@ -228,6 +252,108 @@ def collide_pieces(
     return count
 
 
+@njit(cache=True, inline="always")
+def _relative_pose(f: int, o: int, x: np.ndarray, rot: np.ndarray, pose: np.ndarray) -> None:
+    """Body ``o``'s centre and rotation in body ``f``'s frame into ``pose`` (12,):
+    ``R_f^T (x_o - x_f)`` and ``R_f^T R_o`` row-major (``rot`` (N, 9): each body's rotation)."""
+    dx = x[o, 0] - x[f, 0]
+    dy = x[o, 1] - x[f, 1]
+    dz = x[o, 2] - x[f, 2]
+    for i in range(3):
+        pose[M_T + i] = rot[f, i] * dx + rot[f, 3 + i] * dy + rot[f, 6 + i] * dz
+        for j in range(3):
+            pose[M_R + 3 * i + j] = (
+                rot[f, i] * rot[o, j] + rot[f, 3 + i] * rot[o, 3 + j]
+                + rot[f, 6 + i] * rot[o, 6 + j]
+            )  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def _moved(pose: np.ndarray, kept: np.ndarray, reach: float) -> float:
+    """How far [m] any point within ``reach`` of the other body's centre can have gone, in the
+    frame body's frame, between the pose ``kept`` was made at and ``pose``: the centre's shift
+    plus ``reach`` times the change of the rotation matrix (its Frobenius norm bounds its
+    2-norm)."""
+    shift = 0.0
+    for i in range(3):
+        shift += (pose[M_T + i] - kept[M_T + i]) ** 2
+    turn = 0.0
+    for i in range(9):
+        turn += (pose[M_R + i] - kept[M_R + i]) ** 2
+    return math.sqrt(shift) + reach * math.sqrt(turn)
+
+
+@njit(cache=True)
+def _keep(
+    row: np.ndarray, ints: np.ndarray, pose: np.ndarray, count: int, out: np.ndarray,
+    ids: np.ndarray, a: int, b: int, f: int, x: np.ndarray, rot: np.ndarray,
+) -> None:  # fmt: skip
+    """A manifold just made (``count`` points in ``out``, ``ids``, normal from A to B) into a
+    kept row (``row`` MANIFOLD_FLOATS, ``ints`` MANIFOLD_INTS) at ``pose``: each point's
+    places on the two surfaces, ``p -/+ (s/2) n``, in A's and B's frames; the normal in
+    frame body ``f``'s. With no points, ``out[6]`` is the lower bound of the gap."""
+    for i in range(12):
+        row[i] = pose[i]
+    ints[M_COUNT] = count
+    if count == 0:
+        row[M_GAP] = out[6]
+        return
+    nx, ny, nz = out[0], out[1], out[2]
+    for i in range(3):
+        row[M_N + i] = rot[f, i] * nx + rot[f, 3 + i] * ny + rot[f, 6 + i] * nz
+    for j in range(count):
+        half = 0.5 * out[6 + 4 * j]
+        row[M_SEP + j] = out[6 + 4 * j]
+        ints[M_ID0 + j] = ids[j]
+        ax = out[3 + 4 * j] - half * nx - x[a, 0]
+        ay = out[4 + 4 * j] - half * ny - x[a, 1]
+        az = out[5 + 4 * j] - half * nz - x[a, 2]
+        bx = out[3 + 4 * j] + half * nx - x[b, 0]
+        by = out[4 + 4 * j] + half * ny - x[b, 1]
+        bz = out[5 + 4 * j] + half * nz - x[b, 2]
+        o = M_POINT + 6 * j
+        for i in range(3):
+            row[o + i] = rot[a, i] * ax + rot[a, 3 + i] * ay + rot[a, 6 + i] * az
+            row[o + 3 + i] = rot[b, i] * bx + rot[b, 3 + i] * by + rot[b, 6 + i] * bz
+
+
+@njit(cache=True)
+def _rebuild(
+    row: np.ndarray, ints: np.ndarray, a: int, b: int, f: int, x: np.ndarray, rot: np.ndarray,
+    out: np.ndarray, ids: np.ndarray,
+) -> bool:  # fmt: skip
+    """The kept manifold ``row`` at the bodies' poses now into ``out`` and ``ids``: its
+    normal turned with frame body ``f``, each point midway between its two material points,
+    its separation their gap along the normal. False (nothing to keep) if it was made apart
+    and a point now touches: the features that touch are then found again."""
+    count = ints[M_COUNT]
+    nx = rot[f, 0] * row[M_N] + rot[f, 1] * row[M_N + 1] + rot[f, 2] * row[M_N + 2]
+    ny = rot[f, 3] * row[M_N] + rot[f, 4] * row[M_N + 1] + rot[f, 5] * row[M_N + 2]
+    nz = rot[f, 6] * row[M_N] + rot[f, 7] * row[M_N + 1] + rot[f, 8] * row[M_N + 2]
+    apart = True
+    touches = False
+    for j in range(count):
+        o = M_POINT + 6 * j
+        la0, la1, la2 = row[o], row[o + 1], row[o + 2]
+        lb0, lb1, lb2 = row[o + 3], row[o + 4], row[o + 5]
+        ax = x[a, 0] + rot[a, 0] * la0 + rot[a, 1] * la1 + rot[a, 2] * la2
+        ay = x[a, 1] + rot[a, 3] * la0 + rot[a, 4] * la1 + rot[a, 5] * la2
+        az = x[a, 2] + rot[a, 6] * la0 + rot[a, 7] * la1 + rot[a, 8] * la2
+        bx = x[b, 0] + rot[b, 0] * lb0 + rot[b, 1] * lb1 + rot[b, 2] * lb2
+        by = x[b, 1] + rot[b, 3] * lb0 + rot[b, 4] * lb1 + rot[b, 5] * lb2
+        bz = x[b, 2] + rot[b, 6] * lb0 + rot[b, 7] * lb1 + rot[b, 8] * lb2
+        sep = (bx - ax) * nx + (by - ay) * ny + (bz - az) * nz
+        apart = apart and row[M_SEP + j] > 0.0
+        touches = touches or sep <= 0.0
+        out[3 + 4 * j] = 0.5 * (ax + bx)
+        out[4 + 4 * j] = 0.5 * (ay + by)
+        out[5 + 4 * j] = 0.5 * (az + bz)
+        out[6 + 4 * j] = sep
+        ids[j] = ints[M_ID0 + j]
+    out[0], out[1], out[2] = nx, ny, nz
+    return not (apart and touches)
+
+
 @njit(cache=True)
 def narrow_phase(
     pairs: np.ndarray,
@@ -249,6 +375,7 @@ def narrow_phase(
     mu_table: np.ndarray,
     rolling_table: np.ndarray,
     x: np.ndarray,
+    q: np.ndarray,
     v: np.ndarray,
     w: np.ndarray,
     gravity_on: np.ndarray,
@@ -256,10 +383,13 @@ def narrow_phase(
     dt: float,
     speculative: float,
     slop: float,
+    reuse: float,
     cache_keys: np.ndarray,
     cache_ids: np.ndarray,
     cache_impulses: np.ndarray,
     n_cache: int,
+    previous: tuple[np.ndarray, np.ndarray, np.ndarray, int],
+    made: tuple[np.ndarray, np.ndarray, np.ndarray],
     cf: np.ndarray,
     ci: np.ndarray,
 ) -> int:  # fmt: skip
@@ -270,20 +400,32 @@ def narrow_phase(
     (:class:`.model.Model3D`). Returns the number of contacts, or
     minus the number of pairs when the rows may not suffice (the caller grows them and calls
     again). Impulses found in the cache warm-start the points with the same feature ids.
+
+    ``previous`` holds the manifolds of the last step (keys (K,) sorted, ints (K, MANIFOLD_INTS),
+    floats (K, MANIFOLD_FLOATS), rows used), reused while a pair has moved less than ``reuse``
+    [m] (module docstring; 0: never); ``made`` receives this step's, one row per pair, for the
+    caller to keep once the step is taken.
     """
     (
         piece_body, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount,
         piece_cstart, piece_ccount, piece_estart, piece_ecount,
     ) = model_ints  # fmt: skip
-    if ci.shape[0] < n_pairs:
+    kept_keys, kept_ints, kept_floats, n_kept = previous
+    made_keys, made_ints, made_floats = made
+    if ci.shape[0] < n_pairs or made_keys.shape[0] < n_pairs:
         return -n_pairs
     n_pieces = piece_body.shape[0]
     out = np.empty(OUT_SIZE)
     ids = np.empty(MAX_POINTS, np.int64)
     ra = np.empty(3)
     rb = np.empty(3)
+    pose = np.empty(12)
+    rot = np.empty((x.shape[0], 9))
+    for i in range(x.shape[0]):
+        matrix(q, i, rot[i])
     m = 0
     cursor = 0
+    kept_cursor = 0
     for k in range(n_pairs):
         pa = pairs[k, 0]
         pb = pairs[k, 1]
@@ -300,12 +442,37 @@ def narrow_phase(
             closing += math.sqrt(w[bb, 0] ** 2 + w[bb, 1] ** 2 + w[bb, 2] ** 2) * piece_reach[pb]
         if gravity_on[ba] != gravity_on[bb]:
             closing += g * dt
-        count = collide_pieces(
-            pa, pb, piece_kind, piece_radius, piece_vstart, piece_vcount, piece_fstart,
-            piece_fcount, piece_cstart, piece_ccount, piece_estart, piece_ecount, vertices,
-            normals, face_first, face_size, corners, edges, speculative + closing * dt, slop,
-            out, ids,
-        )  # fmt: skip
+        margin = speculative + closing * dt
+        # the kept manifold, if the pair has not moved too far since it was made
+        key = pa * n_pieces + pb
+        if piece_reach[pa] >= piece_reach[pb]:
+            frame, other, reach = ba, bb, piece_reach[pb]
+        else:
+            frame, other, reach = bb, ba, piece_reach[pa]
+        _relative_pose(frame, other, x, rot, pose)
+        row, kept_cursor = find_cached(kept_keys, n_kept, key, kept_cursor)
+        count = -1
+        if row >= 0:
+            moved = _moved(pose, kept_floats[row], reach)
+            if kept_ints[row, M_COUNT] == 0:
+                if kept_floats[row, M_GAP] - moved > margin:
+                    count = 0
+            elif moved < reuse and _rebuild(
+                kept_floats[row], kept_ints[row], ba, bb, frame, x, rot, out, ids
+            ):
+                count = kept_ints[row, M_COUNT]
+        made_keys[k] = key
+        if count >= 0:
+            made_floats[k] = kept_floats[row]
+            made_ints[k] = kept_ints[row]
+        else:
+            out[6] = -np.inf  # no bound on the gap unless the kernel finds one
+            count = collide_pieces(
+                pa, pb, piece_kind, piece_radius, piece_vstart, piece_vcount, piece_fstart,
+                piece_fcount, piece_cstart, piece_ccount, piece_estart, piece_ecount, vertices,
+                normals, face_first, face_size, corners, edges, margin, slop, out, ids,
+            )  # fmt: skip
+            _keep(made_floats[k], made_ints[k], pose, count, out, ids, ba, bb, frame, x, rot)
         if count == 0:
             continue
         # the kernels' normal runs from A to B; a contact's from B to A
@@ -387,9 +554,9 @@ def narrow_phase(
         if row >= 0:
             for j in range(kept):
                 o = point_offset(j)
-                for q in range(MAX_POINTS):
-                    if cache_ids[row, q] == ci[m, I_ID0 + j]:
-                        jt = cache_impulses[row, q]
+                for c in range(MAX_POINTS):
+                    if cache_ids[row, c] == ci[m, I_ID0 + j]:
+                        jt = cache_impulses[row, c]
                         cf[m, o + P_JN] = jt[0]
                         cf[m, o + P_JT1] = jt[1] * t1x + jt[2] * t1y + jt[3] * t1z
                         cf[m, o + P_JT2] = jt[1] * t2x + jt[2] * t2y + jt[3] * t2z

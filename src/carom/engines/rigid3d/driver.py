@@ -33,7 +33,7 @@ from carom.engines.rigid.assemble import Partners
 from carom.engines.rigid.driver import SteppedEngine
 from carom.engines.rigid.settings import RigidSettings
 from carom.engines.rigid3d import broadphase, contacts, impacts, motion, solver
-from carom.engines.rigid3d.model import Model3D, State3D
+from carom.engines.rigid3d.model import Model3D, State3D, empty_manifolds
 from carom.geometry.rotation import turn
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 
@@ -104,6 +104,9 @@ class RigidEngine3D(SteppedEngine):
         self._pairs = np.zeros((max(64, 4 * n), 2), np.int64)
         self._cf = np.zeros((max(64, 2 * n), contacts.CONTACT_FLOATS))
         self._ci = np.zeros((max(64, 2 * n), contacts.CONTACT_INTS), np.int64)
+        made = empty_manifolds(self._ci.shape[0])
+        self._made = (made["manifold_keys"], made["manifold_ints"], made["manifold_floats"])
+        self._made_count = 0
         self._boxes = np.zeros((model.piece_body.shape[0], 6))
         self._dynamic = model.kind == KIND_DYNAMIC
         self._kinematic = model.kind == KIND_KINEMATIC
@@ -145,7 +148,10 @@ class RigidEngine3D(SteppedEngine):
         arrays: dict[str, NDArray[Any]],
     ) -> RigidEngine3D:
         """The engine that wrote ``arrays`` (:meth:`arrays`), to continue bit for bit."""
-        state = State3D(*(np.array(arrays[name]) for name in State3D._fields))
+        kept = empty_manifolds(0)  # a checkpoint written before manifolds were kept
+        state = State3D(
+            *(np.array(arrays[name] if name in arrays else kept[name]) for name in State3D._fields)
+        )
         engine = cls(model, state, settings, float(arrays["start"][0]), partners)
         engine._restore_totals(arrays)
         return engine
@@ -200,19 +206,24 @@ class RigidEngine3D(SteppedEngine):
                 break
             self._pairs = np.zeros((2 * -n_pairs, 2), np.int64)
         speculative = 4.0 * st.linear_slop
+        kept = (s.manifold_keys, s.manifold_ints, s.manifold_floats, int(s.manifold_count[0]))
         while True:
             nc = contacts.narrow_phase(
                 self._pairs, n_pairs, self._ints, m.piece_radius, m.piece_reach,
                 s.vertices, s.normals, m.face_first, m.face_size, m.corners, m.edges,
-                m.material, m.e_table, m.mu_table, m.rolling_table, s.x, s.v, s.w,
-                self._dynamic, self._g, self.dt, speculative, st.linear_slop, s.cache_keys,
-                s.cache_ids, s.cache_impulses, int(s.cache_count[0]), self._cf, self._ci,
+                m.material, m.e_table, m.mu_table, m.rolling_table, s.x, s.q, s.v, s.w,
+                self._dynamic, self._g, self.dt, speculative, st.linear_slop,
+                st.manifold_reuse * st.linear_slop, s.cache_keys, s.cache_ids,
+                s.cache_impulses, int(s.cache_count[0]), kept, self._made, self._cf, self._ci,
             )  # fmt: skip
             if nc >= 0:
+                self._made_count = n_pairs
                 return int(nc)
             size = 2 * -nc
             self._cf = np.zeros((size, contacts.CONTACT_FLOATS))
             self._ci = np.zeros((size, contacts.CONTACT_INTS), np.int64)
+            made = empty_manifolds(size)
+            self._made = (made["manifold_keys"], made["manifold_ints"], made["manifold_floats"])
 
     def step(self, sink: Sink | None = None) -> None:
         """Advance one step of ``dt`` [s]."""
@@ -279,6 +290,11 @@ class RigidEngine3D(SteppedEngine):
             self._cf, self._ci, nc, m.piece_body.shape[0], s.cache_keys, s.cache_ids,
             s.cache_impulses,
         )  # fmt: skip
+        # keep this step's manifolds for the next; the last step's rows take the next ones
+        keys, ints, floats = self._made
+        self._made = (s.manifold_keys, s.manifold_ints, s.manifold_floats)
+        self.state = s = s._replace(manifold_keys=keys, manifold_ints=ints, manifold_floats=floats)
+        s.manifold_count[0] = self._made_count
         if st.sleep:
             self._settle(nc)
         self.n_contacts = nc

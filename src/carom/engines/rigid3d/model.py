@@ -17,16 +17,19 @@ takes the slices as they are.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
+from carom.geometry.manifold3d import MAX_POINTS
 from carom.geometry.polyhedron import polyhedron_features, triangle_features
 from carom.laws.kinds import KIND_DYNAMIC
 from carom.shapes3d import ConvexPiece3D
 
 __all__ = [
+    "MANIFOLD_FLOATS",
+    "MANIFOLD_INTS",
     "PIECE_PLANE",
     "PIECE_POLYTOPE",
     "PIECE_ROUND",
@@ -34,6 +37,7 @@ __all__ = [
     "Piece3D",
     "State3D",
     "build_model",
+    "empty_manifolds",
     "new_state",
     "plane_piece",
     "triangle_piece",
@@ -194,6 +198,21 @@ class Model3D(NamedTuple):
     gravity: FloatArray
 
 
+# float columns of a kept manifold (one row per candidate pair, :mod:`.contacts`); "frame":
+# the body of the piece that reaches further (a plane's, a mesh's), "other": the other's body
+M_T = 0  # the other body's centre in the frame body's frame (3) [m]
+M_R = 3  # the other body's rotation in the frame body's frame, row-major (9)
+M_GAP = 12  # no points: a lower bound of the gap [m] (-inf: none known)
+M_N = 13  # the normal, from A to B, in the frame body's frame (3)
+M_SEP = 16  # each point's separation when made (4) [m]
+M_POINT = 20  # point j: on A in A's frame (3), on B in B's frame (3), from M_POINT + 6 j [m]
+MANIFOLD_FLOATS = M_POINT + 6 * MAX_POINTS
+# int columns of a kept manifold
+M_COUNT = 0  # points, 0 to 4
+M_ID0 = 1  # feature ids: M_ID0 + j
+MANIFOLD_INTS = M_ID0 + MAX_POINTS
+
+
 class State3D(NamedTuple):
     """What changes: pose and motion, sleep, placed pieces and the warm-start cache.
 
@@ -219,6 +238,11 @@ class State3D(NamedTuple):
         Contacts of the last step (``a * P + b``), sorted; ``cache_ids`` (K, 4) int64 their
         points' feature ids, ``cache_impulses`` (K, 4, 4) each point's normal impulse and its
         tangent impulse as a world vector [N s]; ``cache_count`` (1,) int64 rows used.
+    manifold_keys : (M,) int64
+        The candidate pairs of the last step (``a * P + b``), sorted, with their manifolds as
+        made (:mod:`.contacts`: ``manifold_ints`` (M, MANIFOLD_INTS) int64 the point count and
+        feature ids, ``manifold_floats`` (M, MANIFOLD_FLOATS) the pose they were made at and
+        the points on each body [m]); ``manifold_count`` (1,) int64 rows used.
     """
 
     x: FloatArray
@@ -234,6 +258,10 @@ class State3D(NamedTuple):
     cache_ids: IntArray
     cache_impulses: FloatArray
     cache_count: IntArray
+    manifold_keys: IntArray
+    manifold_ints: IntArray
+    manifold_floats: FloatArray
+    manifold_count: IntArray
 
 
 def build_model(
@@ -365,4 +393,16 @@ def new_state(
         cache_ids=np.zeros((0, 4), np.int64),
         cache_impulses=np.zeros((0, 4, 4)),
         cache_count=np.zeros(1, np.int64),
+        **empty_manifolds(0),
     )
+
+
+def empty_manifolds(rows: int) -> dict[str, NDArray[Any]]:
+    """Room for ``rows`` kept manifolds, none used (the ``manifold_*`` fields of
+    :class:`State3D`)."""
+    return {
+        "manifold_keys": np.zeros(rows, np.int64),
+        "manifold_ints": np.zeros((rows, MANIFOLD_INTS), np.int64),
+        "manifold_floats": np.zeros((rows, MANIFOLD_FLOATS)),
+        "manifold_count": np.zeros(1, np.int64),
+    }
