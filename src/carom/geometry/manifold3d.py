@@ -329,6 +329,22 @@ def _dot(u: np.ndarray, v: np.ndarray) -> float:
     return total
 
 
+@njit(cache=True, inline="always")
+def _flat(points: np.ndarray, j: int, n: np.ndarray) -> tuple[float, float, float]:
+    """Point ``j`` of ``points`` projected onto the plane through the origin across ``n``."""
+    p = points[j]
+    d = p[0] * n[0] + p[1] * n[1] + p[2] * n[2]
+    return p[0] - d * n[0], p[1] - d * n[1], p[2] - d * n[2]
+
+
+@njit(cache=True, inline="always")
+def _cross(
+    ax: float, ay: float, az: float, bx: float, by: float, bz: float
+) -> tuple[float, float, float]:
+    """a x b."""
+    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+
+
 @njit(cache=True)
 def reduce_points(
     points: np.ndarray, sep: np.ndarray, count: int, normal: np.ndarray, keep: np.ndarray
@@ -336,52 +352,59 @@ def reduce_points(
     """At most four of ``count`` contact candidates ``points`` (k, 3) [m] with separations
     ``sep`` into ``keep`` (their rows): all of them if four or fewer, else the deepest, the
     farthest from it across ``normal``, the farthest from the line of those two, and the one
-    adding the most area outside that triangle (ties to the lower row). Returns how many."""
+    adding the most area outside that triangle (ties to the lower row). Returns how many.
+    In scalars: no arrays are made."""
     if count <= MAX_POINTS:
         for j in range(count):
             keep[j] = j
         return count
-    # positions projected onto the plane
-    flat = np.empty((count, 3))
-    for j in range(count):
-        p = points[j]
-        flat[j] = p - _dot(p, normal) * normal
     first = 0
     for j in range(1, count):
         if sep[j] < sep[first]:
             first = j
+    fx, fy, fz = _flat(points, first, normal)
     second = first
     best = -1.0
     for j in range(count):
-        d = flat[j] - flat[first]
-        reach = _dot(d, d)
+        x, y, z = _flat(points, j, normal)
+        dx, dy, dz = x - fx, y - fy, z - fz
+        reach = dx * dx + dy * dy + dz * dz
         if reach > best:
             best = reach
             second = j
-    axis = flat[second] - flat[first]
+    sx, sy, sz = _flat(points, second, normal)
+    ax, ay, az = sx - fx, sy - fy, sz - fz
     third = first
     best = -1.0
     for j in range(count):
-        c = np.cross(axis, flat[j] - flat[first])
-        spread = _dot(c, c)
+        x, y, z = _flat(points, j, normal)
+        cx, cy, cz = _cross(ax, ay, az, x - fx, y - fy, z - fz)
+        spread = cx * cx + cy * cy + cz * cz
         if spread > best:
             best = spread
             third = j
     keep[0], keep[1], keep[2] = first, second, third
     # the fourth: most area outside the triangle's edges, on the far side of an edge from the
     # triangle's remaining corner
-    up = np.cross(flat[second] - flat[first], flat[third] - flat[first])
+    tx, ty, tz = _flat(points, third, normal)
+    ux, uy, uz = _cross(ax, ay, az, tx - fx, ty - fy, tz - fz)
     fourth = -1
     best = 0.0
-    corners = (first, second, third)
     for j in range(count):
-        if j in corners:
+        if j in (first, second, third):
             continue
+        x, y, z = _flat(points, j, normal)
         for e in range(3):
-            p = flat[corners[e]]
-            q = flat[corners[(e + 1) % 3]]
+            # the triangle's edge e, from corner p to corner q
+            if e == 0:
+                px, py, pz, qx, qy, qz = fx, fy, fz, sx, sy, sz
+            elif e == 1:
+                px, py, pz, qx, qy, qz = sx, sy, sz, tx, ty, tz
+            else:
+                px, py, pz, qx, qy, qz = tx, ty, tz, fx, fy, fz
             # signed area of (p, q, x) against the triangle's turn: negative is outside
-            area = -_dot(np.cross(q - p, flat[j] - p), up)
+            cx, cy, cz = _cross(qx - px, qy - py, qz - pz, x - px, y - py, z - pz)
+            area = -(cx * ux + cy * uy + cz * uz)
             if area > best:
                 best = area
                 fourth = j
@@ -591,6 +614,22 @@ def _gauss_edge_separation(
     cx /= va.shape[0]
     cy /= va.shape[0]
     cz /= va.shape[0]
+    # B's arcs in rows (one allocation): the face normals c and d at each edge, the pole
+    # d x c, whether the arc is a half circle; then, for each edge of A, whether it crosses
+    n_b = eb.shape[0]
+    arcs = np.empty((11, n_b))
+    for j in range(n_b):
+        fb0 = eb[j, 2]
+        fb1 = eb[j, 3]
+        c0, c1, c2 = nb[fb0, 0], nb[fb0, 1], nb[fb0, 2]
+        d0, d1, d2 = nb[fb1, 0], nb[fb1, 1], nb[fb1, 2]
+        arcs[0, j], arcs[1, j], arcs[2, j] = c0, c1, c2
+        arcs[3, j], arcs[4, j], arcs[5, j] = d0, d1, d2
+        arcs[6, j] = d1 * c2 - d2 * c1
+        arcs[7, j] = d2 * c0 - d0 * c2
+        arcs[8, j] = d0 * c1 - d1 * c0
+        arcs[9, j] = 1.0 if 1.0 + (c0 * d0 + c1 * d1 + c2 * d2) <= 0.5 * _PARALLEL else 0.0
+    cross = arcs[10]
     for i in range(ea.shape[0]):
         fa0 = ea[i, 2]
         fa1 = ea[i, 3]
@@ -604,27 +643,21 @@ def _gauss_edge_separation(
         flat_a = 1.0 + (a0 * b0 + a1 * b1 + a2 * b2) <= 0.5 * _PARALLEL
         ux, uy, uz = _edge(va, ea, i)
         uu = ux * ux + uy * uy + uz * uz
-        for j in range(eb.shape[0]):
-            fb0 = eb[j, 2]
-            fb1 = eb[j, 3]
-            c0, c1, c2 = nb[fb0, 0], nb[fb0, 1], nb[fb0, 2]
-            d0, d1, d2 = nb[fb1, 0], nb[fb1, 1], nb[fb1, 2]
-            flat_b = 1.0 + (c0 * d0 + c1 * d1 + c2 * d2) <= 0.5 * _PARALLEL
-            if not (flat_a or flat_b):
-                # do -c and -d lie on either side of the plane of arc a-b (most pairs fail
-                # here), and a and b on either side of the arc from -c to -d, whose pole is
-                # (-d) x (-c) = d x c, on the same side as each other's arcs?
-                cba = -(c0 * px + c1 * py + c2 * pz)
-                dba = -(d0 * px + d1 * py + d2 * pz)
-                if cba * dba >= 0.0:
-                    continue
-                qx = d1 * c2 - d2 * c1
-                qy = d2 * c0 - d0 * c2
-                qz = d0 * c1 - d1 * c0
-                adc = a0 * qx + a1 * qy + a2 * qz
-                bdc = b0 * qx + b1 * qy + b2 * qz
-                if not (adc * bdc < 0.0 and cba * bdc > 0.0):
-                    continue
+        # do -c and -d lie on either side of the plane of arc a-b, and a and b on either side
+        # of the arc from -c to -d, whose pole is (-d) x (-c) = d x c, on the same side as
+        # each other's arcs? Every edge of B at once, without branches (the compiler makes
+        # vectors of it); a half circle is always tried
+        for j in range(n_b):
+            cba = -(arcs[0, j] * px + arcs[1, j] * py + arcs[2, j] * pz)
+            dba = -(arcs[3, j] * px + arcs[4, j] * py + arcs[5, j] * pz)
+            adc = a0 * arcs[6, j] + a1 * arcs[7, j] + a2 * arcs[8, j]
+            bdc = b0 * arcs[6, j] + b1 * arcs[7, j] + b2 * arcs[8, j]
+            crosses = (cba * dba < 0.0) & (adc * bdc < 0.0) & (cba * bdc > 0.0)
+            cross[j] = 1.0 if crosses | flat_a | (arcs[9, j] != 0.0) else 0.0
+        for j in range(n_b):
+            if cross[j] == 0.0:
+                continue
+            flat_b = arcs[9, j] != 0.0
             wx, wy, wz = _edge(vb, eb, j)
             x, y, z = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
             length2 = x * x + y * y + z * z
@@ -813,11 +846,11 @@ def contact_hull_hull(
         b0 = vb[eb[edge_b, 0]]
         b1 = vb[eb[edge_b, 1]]
         s, t = closest_segment_segment(a0, a1, b0, b1)
-        p = a0 + s * (a1 - a0)
-        q = b0 + t * (b1 - b0)
-        m = 0.5 * (p + q)
+        mx = 0.5 * ((a0[0] + s * (a1[0] - a0[0])) + (b0[0] + t * (b1[0] - b0[0])))
+        my = 0.5 * ((a0[1] + s * (a1[1] - a0[1])) + (b0[1] + t * (b1[1] - b0[1])))
+        mz = 0.5 * ((a0[2] + s * (a1[2] - a0[2])) + (b0[2] + t * (b1[2] - b0[2])))
         out[0], out[1], out[2] = ax, ay, az
-        _point(out, ids, 0, m[0], m[1], m[2], sep_e, (1 << 50) | (edge_a << 20) | edge_b)
+        _point(out, ids, 0, mx, my, mz, sep_e, (1 << 50) | (edge_a << 20) | edge_b)
         return 1
     if sep_a + tie >= sep_b:
         count = _clip_faces(
@@ -961,15 +994,17 @@ def contact_hull_sphere(
         _point(out, ids, 0, m[0], m[1], m[2], highest - rb, top)
         return 1
     best, cx, cy, cz, feature = _closest_on_hull(va, na, sa, ca, cora, ea, b[0], b[1], b[2])
-    closest = np.array([cx, cy, cz])
     sep = best - rb
     if sep > margin:
+        out[6] = sep  # the exact gap
         return 0
-    # on the surface itself: out along the face it lies on
-    n = (b - closest) / best if best > 0.0 else na[top].copy()
-    m = closest + 0.5 * (best - rb) * n
-    out[0], out[1], out[2] = n[0], n[1], n[2]
-    _point(out, ids, 0, m[0], m[1], m[2], sep, feature)
+    if best > 0.0:
+        nx, ny, nz = (b[0] - cx) / best, (b[1] - cy) / best, (b[2] - cz) / best
+    else:  # on the surface itself: out along the face it lies on
+        nx, ny, nz = na[top, 0], na[top, 1], na[top, 2]
+    h = 0.5 * (best - rb)
+    out[0], out[1], out[2] = nx, ny, nz
+    _point(out, ids, 0, cx + h * nx, cy + h * ny, cz + h * nz, sep, feature)
     return 1
 
 
