@@ -31,9 +31,10 @@ graph colouring and wide solver): the contacts are coloured so that no two of a 
 body that impulses move (:func:`carom.engines.rigid.solver.color_groups`), each colour cut into
 groups of ``LANES = 16`` contacts; a group's rows (its normal and tangents, softness, both
 bodies' inverse masses and world inverse tensors, and each of its four points' anchors,
-masses and impulses) are copied into one small buffer with its bodies' velocities, moves and
-turns since the step began, and every stage runs over the sixteen lanes at once, which the
-compiler turns into vector instructions. A contact of fewer than four points fills the rest
+masses and impulses) are followed by rows for its bodies' velocities, moves and turns since
+the step began, loaded from the bodies before each pass over the group and stored back after
+(the pass works on the group in place: only the bodies are copied), and every stage runs over
+the sixteen lanes at once, which the compiler turns into vector instructions. A contact of fewer than four points fills the rest
 with points that never touch. The lanes of a group are independent, so this is Gauss-Seidel
 in colour order: per contact, the same arithmetic as one contact after another. Each body's
 velocity, angular velocity, move and turn share one row of the solver's state; padding lanes
@@ -128,7 +129,7 @@ Q_JT2 = 14
 Q_TOTAL = 15
 POINT_ROWS = 16
 GROUP_ROWS = R_POINT + MAX_POINTS * POINT_ROWS
-# ... then, in the working buffer only, its two bodies' velocities, moves and turns
+# ... then its two bodies' velocities, moves and turns, loaded for each pass
 B_VA = GROUP_ROWS  # velocity of A (3) [m/s]
 B_WA = GROUP_ROWS + 3  # angular velocity of A (3) [rad/s]
 B_VB = GROUP_ROWS + 6
@@ -289,7 +290,7 @@ def _pack(
     soft_fixed: tuple[float, float, float], group: np.ndarray, pair: np.ndarray,
     kinematic: np.ndarray,
 ) -> None:  # fmt: skip
-    """Copy the contacts of ``lanes`` into ``group`` (G, GROUP_ROWS * LANES), with each
+    """Copy the contacts of ``lanes`` into ``group`` (G, BUFFER_ROWS * LANES), with each
     point's effective masses along the normal and the tangents, and the rolling masses; their
     bodies into ``pair`` (G, 2 * LANES); ``kinematic[g]``: a lane of group g touches a moving
     body of infinite mass. Padding lanes join the dummy body (the state's last row)."""
@@ -396,12 +397,9 @@ def _unpack(group: np.ndarray, lanes: np.ndarray, ci: np.ndarray, cf: np.ndarray
 
 
 @njit(cache=True, inline="always")
-def _gather(
-    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray
-) -> None:
-    """Group g and its bodies' velocities into the working buffer (BUFFER_ROWS * LANES)."""
-    for k in range(GROUP_ROWS * LANES):  # one flat run: the compiler moves it in vectors
-        buf[k] = group[g, k]
+def _gather(buf: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray) -> None:
+    """Group g's bodies' velocities into its rows ``buf`` (``group[g]``): the passes work on
+    the group in place, so only the bodies are copied in and out."""
     for lane in range(LANES):
         a = pair[g, lane]
         b = pair[g, LANES + lane]
@@ -413,12 +411,9 @@ def _gather(
 
 
 @njit(cache=True, inline="always")
-def _gather_all(
-    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray
-) -> None:
-    """Group g and its bodies' velocities, moves and turns since the step began into the
-    working buffer."""
-    _gather(buf, group, pair, g, state)
+def _gather_all(buf: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray) -> None:
+    """Group g's bodies' velocities, moves and turns since the step began into its rows."""
+    _gather(buf, pair, g, state)
     for lane in range(LANES):
         a = pair[g, lane]
         b = pair[g, LANES + lane]
@@ -430,19 +425,9 @@ def _gather_all(
 
 
 @njit(cache=True, inline="always")
-def _scatter(
-    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray
-) -> None:
-    """The impulses back to group g, the velocities back to its bodies. Lanes sharing a body
-    of infinite mass write back the value they all read."""
-    for p in range(MAX_POINTS):
-        q = R_POINT + p * POINT_ROWS
-        for r in (Q_JN, Q_JT1, Q_JT2, Q_TOTAL):
-            for lane in range(LANES):
-                group[g, (q + r) * LANES + lane] = buf[(q + r) * LANES + lane]
-    for lane in range(LANES):
-        group[g, R_JR1 * LANES + lane] = buf[R_JR1 * LANES + lane]
-        group[g, R_JR2 * LANES + lane] = buf[R_JR2 * LANES + lane]
+def _scatter(buf: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray) -> None:
+    """The velocities back to group g's bodies. Lanes sharing a body of infinite mass write
+    back the value they all read."""
     for lane in range(LANES):
         a = pair[g, lane]
         b = pair[g, LANES + lane]
@@ -451,6 +436,17 @@ def _scatter(
             state[a, S_W + k] = buf[(B_WA + k) * LANES + lane]
             state[b, S_V + k] = buf[(B_VB + k) * LANES + lane]
             state[b, S_W + k] = buf[(B_WB + k) * LANES + lane]
+
+
+@njit(cache=True, inline="always")
+def _impulses(buf: np.ndarray, before: np.ndarray) -> None:
+    """Group rows ``buf``'s point impulses (normal, two tangents) into ``before``
+    (MAX_POINTS * 3 * LANES), to tell what a pass added."""
+    for p in range(MAX_POINTS):
+        q = R_POINT + p * POINT_ROWS
+        for c in range(3):
+            for lane in range(LANES):
+                before[(3 * p + c) * LANES + lane] = buf[(q + Q_JN + c) * LANES + lane]
 
 
 @njit(cache=True, inline="always")
@@ -543,11 +539,11 @@ def _impulse(
 
 
 @njit(cache=True)
-def _group_work(buf: np.ndarray, group: np.ndarray, g: int, warm: bool) -> float:
-    """Work [J] done on group g's lanes by their bodies of infinite mass, for the impulses
-    the buffer holds beyond what ``group`` held (all of them, if ``warm``): the impulse on
-    the other body times the fixed body's velocity at the point (:func:`_fixed_work`); such a
-    body's velocity is the same before and after."""
+def _group_work(buf: np.ndarray, before: np.ndarray, warm: bool) -> float:
+    """Work [J] done on the group in rows ``buf`` by its bodies of infinite mass, for the
+    impulses it holds beyond those in ``before`` (:func:`_impulses`; all of them, if
+    ``warm``): the impulse on the other body times the fixed body's velocity at the point
+    (:func:`_fixed_work`); such a body's velocity is the same before and after."""
     total = 0.0
     for lane in range(LANES):
         for p in range(MAX_POINTS):
@@ -556,9 +552,9 @@ def _group_work(buf: np.ndarray, group: np.ndarray, g: int, warm: bool) -> float
             d1 = buf[(q + Q_JT1) * LANES + lane]
             d2 = buf[(q + Q_JT2) * LANES + lane]
             if not warm:
-                dn -= group[g, (q + Q_JN) * LANES + lane]
-                d1 -= group[g, (q + Q_JT1) * LANES + lane]
-                d2 -= group[g, (q + Q_JT2) * LANES + lane]
+                dn -= before[3 * p * LANES + lane]
+                d1 -= before[(3 * p + 1) * LANES + lane]
+                d2 -= before[(3 * p + 2) * LANES + lane]
             px, py, pz = _impulse(buf, lane, dn, d1, d2)
             if buf[R_IMA * LANES + lane] == 0.0:
                 ux, uy, uz = _point_velocity(buf, lane, B_VA, B_WA, q + Q_RA)
@@ -576,9 +572,10 @@ def _warm_start(
 ) -> None:  # fmt: skip
     """Apply every point's impulse, and each contact's rolling impulse, from the last
     substep (or step) again."""
-    buf = np.empty(BUFFER_ROWS * LANES)
+    before = np.empty(0)
     for g in range(group.shape[0]):
-        _gather(buf, group, pair, g, state)
+        buf = group[g]
+        _gather(buf, pair, g, state)
         for p in range(MAX_POINTS):
             q = R_POINT + p * POINT_ROWS
             for lane in range(LANES):
@@ -591,8 +588,8 @@ def _warm_start(
         for lane in range(LANES):
             _roll(buf, lane, buf[R_JR1 * LANES + lane], buf[R_JR2 * LANES + lane])
         if kinematic[g]:
-            work[0] += _group_work(buf, group, g, True)
-        _scatter(buf, group, pair, g, state)
+            work[0] += _group_work(buf, before, True)
+        _scatter(buf, pair, g, state)
 
 
 @njit(cache=True, inline="always")
@@ -620,10 +617,13 @@ def _solve(
     lane by lane. ``state`` (N+1, STATE_COLS: velocity, angular velocity, move and turn since
     the step began) has a row for each body and one for the padding lanes' dummy;
     ``work[0]`` gathers what kinematic bodies do."""
-    buf = np.empty(BUFFER_ROWS * LANES)
     load = np.empty(LANES)
+    before = np.empty(MAX_POINTS * 3 * LANES)
     for g in range(group.shape[0]):
-        _gather_all(buf, group, pair, g, state)
+        buf = group[g]
+        _gather_all(buf, pair, g, state)
+        if kinematic[g]:
+            _impulses(buf, before)
         for lane in range(LANES):
             load[lane] = 0.0
         for p in range(MAX_POINTS):
@@ -722,8 +722,8 @@ def _solve(
             buf[R_JR2 * LANES + lane] = n2
             _roll(buf, lane, n1 - j1, n2 - j2)
         if kinematic[g]:
-            work[0] += _group_work(buf, group, g, False)
-        _scatter(buf, group, pair, g, state)
+            work[0] += _group_work(buf, before, False)
+        _scatter(buf, pair, g, state)
 
 
 @njit(cache=True)
@@ -781,7 +781,7 @@ def solve_step(
         start[i] = r
     lanes = color_groups(ci, nc, inv_mass, I_FLAGS)
     groups = lanes.shape[0]
-    group = np.empty((groups, GROUP_ROWS * LANES))
+    group = np.empty((groups, BUFFER_ROWS * LANES))
     pair = np.empty((groups, 2 * LANES), np.int64)
     kinematic = np.empty(groups, np.bool_)
     _pack(cf, ci, lanes, inv_mass, iw, state, soft_moving, soft_fixed, group, pair, kinematic)
