@@ -34,10 +34,11 @@ bodies' inverse masses and world inverse tensors, and each of its four points' a
 masses and impulses) are followed by rows for its bodies' velocities, moves and turns since
 the step began, loaded from the bodies before each pass over the group and stored back after
 (the pass works on the group in place: only the bodies are copied), and every stage runs over
-the sixteen lanes at once, which the compiler turns into vector instructions. A contact of fewer than four points fills the rest
-with points that never touch. The lanes of a group are independent, so this is Gauss-Seidel
-in colour order: per contact, the same arithmetic as one contact after another. Each body's
-velocity, angular velocity, move and turn share one row of the solver's state; padding lanes
+the sixteen lanes at once, which the compiler turns into vector instructions. A contact of
+fewer than four points fills the rest with points that never touch. The lanes of a group are
+independent, so this is Gauss-Seidel in colour order: per contact, the same arithmetic as one
+contact after another. Each body's velocity, angular velocity, move and turn share one row of
+the solver's state; padding lanes
 join a dummy body that nothing moves.
 
 Vectors are multiplied in scalars, never with ``@`` (Numba's ``@`` calls BLAS through SciPy).
