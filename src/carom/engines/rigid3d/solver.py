@@ -38,8 +38,7 @@ the sixteen lanes at once, which the compiler turns into vector instructions. A 
 fewer than four points fills the rest with points that never touch. The lanes of a group are
 independent, so this is Gauss-Seidel in colour order: per contact, the same arithmetic as one
 contact after another. Each body's velocity, angular velocity, move and turn share one row of
-the solver's state; padding lanes
-join a dummy body that nothing moves.
+the solver's state; padding lanes join a dummy body that nothing moves.
 
 Vectors are multiplied in scalars, never with ``@`` (Numba's ``@`` calls BLAS through SciPy).
 """
