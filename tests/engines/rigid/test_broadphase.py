@@ -1,31 +1,37 @@
 """The broad phase (:func:`carom.engines.rigid.broadphase.find_pairs`): every pair of pieces
 whose boxes overlap, of two bodies, one active and one dynamic, reported once and sorted by
 ``(a, b)``; checked against the brute-force O(P^2) answer. Kept fat boxes
-(:func:`refit`, :func:`select_pairs`) give the same pairs while rebuilding only when a piece
-leaves its fat box."""
+(:func:`refit`, :func:`select_pairs`, :class:`KeptPairs`, which both engines use) give the
+same pairs while rebuilding only when a piece leaves its fat box, in 2D and 3D."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from carom.engines.rigid.broadphase import FAT, MAX_CELLS, find_pairs, refit, select_pairs
+from carom.engines.rigid.broadphase import (
+    FAT,
+    MAX_CELLS,
+    KeptPairs,
+    find_pairs,
+    refit,
+    select_pairs,
+)
+from carom.engines.rigid3d.broadphase import find_pairs as find_pairs_3d
 
 
 def _brute(
     boxes: np.ndarray, body: np.ndarray, active: np.ndarray, dynamic: np.ndarray
 ) -> list[tuple[int, int]]:
+    d = boxes.shape[1] // 2  # 2D or 3D boxes: lower corner, then upper
     found = []
     for a in range(boxes.shape[0]):
         for b in range(a + 1, boxes.shape[0]):
             ba, bb = body[a], body[b]
             if ba == bb or not (active[ba] or active[bb]) or not (dynamic[ba] or dynamic[bb]):
                 continue
-            if (
-                boxes[a, 0] <= boxes[b, 2]
-                and boxes[b, 0] <= boxes[a, 2]
-                and boxes[a, 1] <= boxes[b, 3]
-                and boxes[b, 1] <= boxes[a, 3]
-            ):
+            if all(boxes[a, k] <= boxes[b, d + k] and boxes[b, k] <= boxes[a, d + k]
+                   for k in range(d)):  # fmt: skip
                 found.append((a, b))
     return found
 
@@ -76,7 +82,12 @@ def test_a_pair_sharing_many_cells_is_reported_once_and_big_pieces_meet_each_oth
     assert _pairs(boxes, body, yes, yes, 4.0) == [(0, 1), (0, 2), (1, 2)]  # no big piece
 
 
-def test_fat_boxes_give_the_same_pairs_and_rebuild_only_when_a_piece_leaves_its_own() -> None:
+@pytest.mark.parametrize("dims", [2, 3])
+def test_fat_boxes_give_the_same_pairs_and_rebuild_only_when_a_piece_leaves_its_own(
+    dims: int,
+) -> None:
+    # Both engines keep their pairs through fat boxes (KeptPairs, refit, select_pairs).
+    find = find_pairs if dims == 2 else find_pairs_3d
     rng = np.random.default_rng(5)
     pieces = 60
     body = np.arange(pieces)
@@ -84,30 +95,36 @@ def test_fat_boxes_give_the_same_pairs_and_rebuild_only_when_a_piece_leaves_its_
     dynamic[:5] = False  # static pieces: never paired with each other
     everyone = np.ones(pieces, np.bool_)
     reach = rng.uniform(0.1, 0.5, pieces)
-    centre = rng.uniform(0.0, 6.0, (pieces, 2))
-    fat = np.zeros((pieces, 4))
-    fat[:, :2] = np.inf  # empty: every piece gets a fat box at the first step
-    fat[:, 2:] = -np.inf
+    centre = rng.uniform(0.0, 6.0, (pieces, dims))
+    fat = np.zeros((pieces, 2 * dims))
+    fat[:, :dims] = np.inf  # empty: every piece gets a fat box at the first step
+    fat[:, dims:] = -np.inf
     candidates = np.zeros((pieces * pieces, 2), np.int64)
     n_candidates = 0
     rebuilds = 0
+    kept = KeptPairs(pieces, dims, pieces, lambda boxes, active, out: find(
+        boxes, body, active, dynamic, 0.5, out))  # fmt: skip
     for step in range(200):
         # pieces drift at random, some steps not at all; some sleep now and then
         if step % 3:
-            centre[5:] += rng.normal(0.0, 0.02, (pieces - 5, 2))
+            centre[5:] += rng.normal(0.0, 0.02, (pieces - 5, dims))
         active = dynamic & (rng.random(pieces) < 0.9)
         boxes = np.hstack([centre - reach[:, None], centre + reach[:, None]])
         before = fat.copy()
         moved = refit(boxes, fat, reach)
-        left = np.any((boxes[:, :2] < before[:, :2]) | (boxes[:, 2:] > before[:, 2:]), axis=1)
+        left = np.any((boxes[:, :dims] < before[:, :dims]) | (boxes[:, dims:] > before[:, dims:]),
+                      axis=1)  # fmt: skip
         assert moved == np.count_nonzero(left)
         np.testing.assert_array_equal(fat[~left], before[~left])  # the others keep theirs
-        np.testing.assert_allclose(fat[left, :2], boxes[left, :2] - FAT * reach[left, None])
+        np.testing.assert_allclose(fat[left, :dims], boxes[left, :dims] - FAT * reach[left, None])
         if moved:
             rebuilds += 1
-            n_candidates = find_pairs(fat, body, everyone, dynamic, 0.5, candidates)
+            n_candidates = find(fat, body, everyone, dynamic, 0.5, candidates)
         pairs = np.zeros((max(n_candidates, 1), 2), np.int64)
         count = select_pairs(candidates, n_candidates, boxes, body, active, dynamic, pairs)
         found = [(int(a), int(b)) for a, b in pairs[:count]]
         assert found == _brute(boxes, body, active, dynamic), step
+        # the engines' keeper gives the same, whether it pairs the fat boxes or the swept ones
+        count = kept.update(boxes, reach, body, active, dynamic)
+        assert [(int(a), int(b)) for a, b in kept.pairs[:count]] == found, step
     assert rebuilds <= 200 - 66  # the 66 steps moving nothing (step % 3 == 0, after the first)

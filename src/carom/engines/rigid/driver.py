@@ -186,18 +186,17 @@ class RigidEngine(SteppedEngine):
         #: the caller's bodies: the first ``n_bodies``
         self.n_bodies = int(np.count_nonzero(partners.kind == KIND_PAIR))
         self.cell = grid_cell(model)
-        self._pairs = np.zeros((max(64, 4 * n), 2), np.int64)
         self._cf = np.zeros((max(64, 2 * n), contacts.CONTACT_FLOATS))
         self._ci = np.zeros((max(64, 2 * n), contacts.CONTACT_INTS), np.int64)
         self._boxes = np.zeros((model.piece_start.shape[0], 4))
-        # fat boxes (empty: refitted at the first step) and the pairs of those that overlap
-        self._fat = np.zeros((model.piece_start.shape[0], 4))
-        self._fat[:, :2] = np.inf
-        self._fat[:, 2:] = -np.inf
-        self._fat_pairs = np.zeros((max(64, 4 * n), 2), np.int64)
-        self._n_fat = -1  # how many fat pairs; -1: they are not those of the fat boxes now
-        self._busy = True  # a piece left its fat box at the last step
-        self._everyone = np.ones(n, np.bool_)
+        self._kept = broadphase.KeptPairs(
+            model.piece_start.shape[0],
+            2,
+            n,
+            lambda boxes, active, out: broadphase.find_pairs(
+                boxes, self.model.piece_body, active, self._dynamic, self.cell, out
+            ),
+        )
         self._parent = np.zeros(n, np.int64)
         self._role = np.zeros(n, np.int64)
         self._dynamic = model.kind == islands.KIND_DYNAMIC
@@ -298,10 +297,11 @@ class RigidEngine(SteppedEngine):
             speculative,
             self._boxes,
         )
-        n_pairs = self._pairs_now(moving)
+        # stage 2: the pairs of swept boxes that overlap (kept through fat boxes)
+        n_pairs = self._kept.update(self._boxes, m.piece_reach, m.piece_body, moving, self._dynamic)
         while True:
             nc = contacts.narrow_phase(
-                self._pairs,
+                self._kept.pairs,
                 n_pairs,
                 s.vertices,
                 s.normals,
@@ -334,49 +334,6 @@ class RigidEngine(SteppedEngine):
             self._cf = np.zeros((size, contacts.CONTACT_FLOATS))
             self._ci = np.zeros((size, contacts.CONTACT_INTS), np.int64)
         return nc
-
-    def _pairs_now(self, moving: NDArray[np.bool_]) -> int:
-        """Stage 2: the pairs of swept boxes that overlap, into ``self._pairs``; return how
-        many. The pairs of overlapping fat boxes are rebuilt only when a piece left its fat
-        box (:mod:`.broadphase`); while pieces leave theirs step after step (a tumbler), the
-        swept boxes are paired directly, which costs less than pairing the fat boxes and
-        choosing among them. Both give the same pairs in the same order."""
-        m = self.model
-        moved = broadphase.refit(self._boxes, self._fat, m.piece_reach)
-        busy, self._busy = self._busy, moved > 0
-        if moved:
-            self._n_fat = -1
-            if busy:
-                count, self._pairs = self._find_pairs(self._boxes, moving, self._pairs)
-                return count
-        if self._n_fat < 0:
-            self._n_fat, self._fat_pairs = self._find_pairs(
-                self._fat, self._everyone, self._fat_pairs
-            )
-        if self._pairs.shape[0] < self._n_fat:
-            self._pairs = np.zeros_like(self._fat_pairs)
-        return broadphase.select_pairs(
-            self._fat_pairs,
-            self._n_fat,
-            self._boxes,
-            m.piece_body,
-            moving,
-            self._dynamic,
-            self._pairs,
-        )
-
-    def _find_pairs(
-        self, boxes: FloatArray, active: NDArray[np.bool_], out: NDArray[np.int64]
-    ) -> tuple[int, NDArray[np.int64]]:
-        """:func:`.broadphase.find_pairs` into ``out``, grown until they fit; return the
-        count and the array that holds them."""
-        while True:
-            count = broadphase.find_pairs(
-                boxes, self.model.piece_body, active, self._dynamic, self.cell, out
-            )
-            if count >= 0:
-                return count, out
-            out = np.zeros((2 * -count, 2), np.int64)
 
     def step(self, sink: Sink | None = None) -> None:
         """Advance one step of ``dt`` [s]."""

@@ -12,6 +12,9 @@ apart and tested against every box.
 
 A plane's box is unbounded, except along the axis its normal lies on, if it lies on one (a
 floor's box ends at the floor). Pairs are sorted by key ``a * P + b`` (``a < b``).
+
+The driver keeps the pairs from step to step through fat boxes, as the 2D engine does
+(:class:`carom.engines.rigid.broadphase.KeptPairs`): a resting stack is paired once.
 """
 
 from __future__ import annotations

@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, Sink
 from carom.engines.rigid import islands
 from carom.engines.rigid.assemble import Partners
+from carom.engines.rigid.broadphase import KeptPairs
 from carom.engines.rigid.driver import SteppedEngine
 from carom.engines.rigid.settings import RigidSettings
 from carom.engines.rigid3d import broadphase, contacts, impacts, motion, solver
@@ -101,13 +102,20 @@ class RigidEngine3D(SteppedEngine):
         self.partners = partners
         self.n_bodies = int(np.count_nonzero(partners.kind == KIND_PAIR))
         self.cell = grid_cell(model)
-        self._pairs = np.zeros((max(64, 4 * n), 2), np.int64)
         self._cf = np.zeros((max(64, 2 * n), contacts.CONTACT_FLOATS))
         self._ci = np.zeros((max(64, 2 * n), contacts.CONTACT_INTS), np.int64)
         made = empty_manifolds(self._ci.shape[0])
         self._made = (made["manifold_keys"], made["manifold_ints"], made["manifold_floats"])
         self._made_count = 0
         self._boxes = np.zeros((model.piece_body.shape[0], 6))
+        self._kept = KeptPairs(
+            model.piece_body.shape[0],
+            3,
+            n,
+            lambda boxes, active, out: broadphase.find_pairs(
+                boxes, self.model.piece_body, active, self._dynamic, self.cell, out
+            ),
+        )
         self._dynamic = model.kind == KIND_DYNAMIC
         self._kinematic = model.kind == KIND_KINEMATIC
         self._movers = np.flatnonzero(self._kinematic)
@@ -198,18 +206,13 @@ class RigidEngine3D(SteppedEngine):
         moving = (self._dynamic & s.awake) | self._kinematic
         self._place(moving)
         self._box(moving, s.v, s.w, self.dt)
-        while True:
-            n_pairs = broadphase.find_pairs(
-                self._boxes, m.piece_body, moving, self._dynamic, self.cell, self._pairs
-            )
-            if n_pairs >= 0:
-                break
-            self._pairs = np.zeros((2 * -n_pairs, 2), np.int64)
+        # the pairs of swept boxes that overlap (kept through fat boxes, as in 2D)
+        n_pairs = self._kept.update(self._boxes, m.piece_reach, m.piece_body, moving, self._dynamic)
         speculative = 4.0 * st.linear_slop
         kept = (s.manifold_keys, s.manifold_ints, s.manifold_floats, int(s.manifold_count[0]))
         while True:
             nc = contacts.narrow_phase(
-                self._pairs, n_pairs, self._ints, m.piece_radius, m.piece_reach,
+                self._kept.pairs, n_pairs, self._ints, m.piece_radius, m.piece_reach,
                 s.vertices, s.normals, m.face_first, m.face_size, m.corners, m.edges,
                 m.material, m.e_table, m.mu_table, m.rolling_table, s.x, s.q, s.v, s.w,
                 self._dynamic, self._g, self.dt, speculative, st.linear_slop,
