@@ -288,15 +288,17 @@ def _pack(
     cf: np.ndarray, ci: np.ndarray, lanes: np.ndarray, inv_mass: np.ndarray, iw: np.ndarray,
     state: np.ndarray, soft_moving: tuple[float, float, float],
     soft_fixed: tuple[float, float, float], group: np.ndarray, pair: np.ndarray,
-    kinematic: np.ndarray,
+    kinematic: np.ndarray, rolling: np.ndarray,
 ) -> None:  # fmt: skip
     """Copy the contacts of ``lanes`` into ``group`` (G, BUFFER_ROWS * LANES), with each
     point's effective masses along the normal and the tangents, and the rolling masses; their
     bodies into ``pair`` (G, 2 * LANES); ``kinematic[g]``: a lane of group g touches a moving
-    body of infinite mass. Padding lanes join the dummy body (the state's last row)."""
+    body of infinite mass; ``rolling[g]``: a lane of group g has rolling resistance. Padding
+    lanes join the dummy body (the state's last row)."""
     dummy = state.shape[0] - 1
     for g in range(lanes.shape[0]):
         kinematic[g] = False
+        rolling[g] = False
         for lane in range(LANES):
             m = lanes[g, lane]
             if m < 0:
@@ -328,6 +330,7 @@ def _pack(
                 group[g, (R_IWA + k) * LANES + lane] = iw[a, k]
                 group[g, (R_IWB + k) * LANES + lane] = iw[b, k]
             group[g, R_ROLL * LANES + lane] = cf[m, F_ROLL]
+            rolling[g] = rolling[g] or cf[m, F_ROLL] > 0.0
             group[g, R_JR1 * LANES + lane] = cf[m, F_JR1]
             group[g, R_JR2 * LANES + lane] = cf[m, F_JR2]
             group[g, R_RM1 * LANES + lane] = _angular_mass(
@@ -567,8 +570,8 @@ def _group_work(buf: np.ndarray, before: np.ndarray, warm: bool) -> float:
 
 @njit(cache=True, fastmath=LANE_MATH)
 def _warm_start(
-    group: np.ndarray, pair: np.ndarray, kinematic: np.ndarray, state: np.ndarray,
-    work: np.ndarray,
+    group: np.ndarray, pair: np.ndarray, kinematic: np.ndarray, rolling: np.ndarray,
+    state: np.ndarray, work: np.ndarray,
 ) -> None:  # fmt: skip
     """Apply every point's impulse, and each contact's rolling impulse, from the last
     substep (or step) again."""
@@ -585,8 +588,9 @@ def _warm_start(
                 px, py, pz = _impulse(buf, lane, jn, j1, j2)
                 buf[(q + Q_TOTAL) * LANES + lane] += jn
                 _push(buf, lane, q, px, py, pz)
-        for lane in range(LANES):
-            _roll(buf, lane, buf[R_JR1 * LANES + lane], buf[R_JR2 * LANES + lane])
+        if rolling[g]:  # (a group without rolling resistance holds no rolling impulse)
+            for lane in range(LANES):
+                _roll(buf, lane, buf[R_JR1 * LANES + lane], buf[R_JR2 * LANES + lane])
         if kinematic[g]:
             work[0] += _group_work(buf, before, True)
         _scatter(buf, pair, g, state)
@@ -610,8 +614,8 @@ def _roll(buf: np.ndarray, lane: int, d1: float, d2: float) -> None:
 
 @njit(cache=True, fastmath=LANE_MATH)
 def _solve(
-    group: np.ndarray, pair: np.ndarray, kinematic: np.ndarray, state: np.ndarray,
-    inv_h: float, use_bias: bool, push_speed: float, work: np.ndarray,
+    group: np.ndarray, pair: np.ndarray, kinematic: np.ndarray, rolling: np.ndarray,
+    state: np.ndarray, inv_h: float, use_bias: bool, push_speed: float, work: np.ndarray,
 ) -> None:  # fmt: skip
     """One Gauss-Seidel pass over the groups: normal impulses, friction, rolling resistance,
     lane by lane. ``state`` (N+1, STATE_COLS: velocity, angular velocity, move and turn since
@@ -697,30 +701,31 @@ def _solve(
                 buf[(q + Q_JT1) * LANES + lane] = n1
                 buf[(q + Q_JT2) * LANES + lane] = n2
                 _push(buf, lane, q, d1 * t1x + d2 * t2x, d1 * t1y + d2 * t2y, d1 * t1z + d2 * t2z)
-        for lane in range(LANES):
-            # rolling resistance, in every lane (no branch: a lane without it has a zero limit
-            # and keeps a zero impulse)
-            wx = buf[B_WA * LANES + lane] - buf[B_WB * LANES + lane]
-            wy = buf[(B_WA + 1) * LANES + lane] - buf[(B_WB + 1) * LANES + lane]
-            wz = buf[(B_WA + 2) * LANES + lane] - buf[(B_WB + 2) * LANES + lane]
-            t1x = buf[R_T1 * LANES + lane]
-            t1y = buf[(R_T1 + 1) * LANES + lane]
-            t1z = buf[(R_T1 + 2) * LANES + lane]
-            t2x = buf[R_T2 * LANES + lane]
-            t2y = buf[(R_T2 + 1) * LANES + lane]
-            t2z = buf[(R_T2 + 2) * LANES + lane]
-            j1 = buf[R_JR1 * LANES + lane]
-            j2 = buf[R_JR2 * LANES + lane]
-            n1 = j1 - buf[R_RM1 * LANES + lane] * (wx * t1x + wy * t1y + wz * t1z)
-            n2 = j2 - buf[R_RM2 * LANES + lane] * (wx * t2x + wy * t2y + wz * t2z)
-            limit = buf[R_ROLL * LANES + lane] * load[lane]
-            size = math.sqrt(n1 * n1 + n2 * n2)
-            scale = limit / max(size, limit, 1e-300)
-            n1 *= scale
-            n2 *= scale
-            buf[R_JR1 * LANES + lane] = n1
-            buf[R_JR2 * LANES + lane] = n2
-            _roll(buf, lane, n1 - j1, n2 - j2)
+        if rolling[g]:  # (a group without rolling resistance keeps zero rolling impulses)
+            for lane in range(LANES):
+                # rolling resistance, in every lane (no branch: a lane without it has a zero limit
+                # and keeps a zero impulse)
+                wx = buf[B_WA * LANES + lane] - buf[B_WB * LANES + lane]
+                wy = buf[(B_WA + 1) * LANES + lane] - buf[(B_WB + 1) * LANES + lane]
+                wz = buf[(B_WA + 2) * LANES + lane] - buf[(B_WB + 2) * LANES + lane]
+                t1x = buf[R_T1 * LANES + lane]
+                t1y = buf[(R_T1 + 1) * LANES + lane]
+                t1z = buf[(R_T1 + 2) * LANES + lane]
+                t2x = buf[R_T2 * LANES + lane]
+                t2y = buf[(R_T2 + 1) * LANES + lane]
+                t2z = buf[(R_T2 + 2) * LANES + lane]
+                j1 = buf[R_JR1 * LANES + lane]
+                j2 = buf[R_JR2 * LANES + lane]
+                n1 = j1 - buf[R_RM1 * LANES + lane] * (wx * t1x + wy * t1y + wz * t1z)
+                n2 = j2 - buf[R_RM2 * LANES + lane] * (wx * t2x + wy * t2y + wz * t2z)
+                limit = buf[R_ROLL * LANES + lane] * load[lane]
+                size = math.sqrt(n1 * n1 + n2 * n2)
+                scale = limit / max(size, limit, 1e-300)
+                n1 *= scale
+                n2 *= scale
+                buf[R_JR1 * LANES + lane] = n1
+                buf[R_JR2 * LANES + lane] = n2
+                _roll(buf, lane, n1 - j1, n2 - j2)
         if kinematic[g]:
             work[0] += _group_work(buf, before, False)
         _scatter(buf, pair, g, state)
@@ -784,7 +789,11 @@ def solve_step(
     group = np.empty((groups, BUFFER_ROWS * LANES))
     pair = np.empty((groups, 2 * LANES), np.int64)
     kinematic = np.empty(groups, np.bool_)
-    _pack(cf, ci, lanes, inv_mass, iw, state, soft_moving, soft_fixed, group, pair, kinematic)
+    rolling = np.empty(groups, np.bool_)
+    _pack(
+        cf, ci, lanes, inv_mass, iw, state, soft_moving, soft_fixed, group, pair, kinematic,
+        rolling,
+    )  # fmt: skip
     turned = np.empty(9)
     elapsed = 0.0
     for _ in range(substeps):
@@ -792,8 +801,8 @@ def solve_step(
             if gravity_on[i]:
                 for k in range(3):
                     state[i, S_V + k] += h * g[k]
-        _warm_start(group, pair, kinematic, state, work)
-        _solve(group, pair, kinematic, state, 1.0 / h, True, push_speed, work)
+        _warm_start(group, pair, kinematic, rolling, state, work)
+        _solve(group, pair, kinematic, rolling, state, 1.0 / h, True, push_speed, work)
         for i in bodies:
             for k in range(3):
                 v[i, k] = state[i, S_V + k]
@@ -819,7 +828,7 @@ def solve_step(
             _axis_angle(w[i, 0] * elapsed, w[i, 1] * elapsed, w[i, 2] * elapsed, turned)
             for k in range(9):
                 state[i, S_T + k] = turned[k]
-        _solve(group, pair, kinematic, state, 1.0 / h, False, push_speed, work)
+        _solve(group, pair, kinematic, rolling, state, 1.0 / h, False, push_speed, work)
     for i in bodies:
         for k in range(3):
             v[i, k] = state[i, S_V + k]
