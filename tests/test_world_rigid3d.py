@@ -3,16 +3,18 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import carom
+from carom.engines.rigid.settings import RigidSettings
 from carom.errors import CaromError
 from carom.meshes import Mesh
 from carom.shapes import Box as Box2D
-from carom.shapes3d import Box, Capsule, Plane, Sphere, rotation_matrix
+from carom.shapes3d import Box, Capsule, Hull, Plane, Sphere, rotation_matrix
 
 
 def _floor_world() -> carom.World:
@@ -117,20 +119,48 @@ def test_walls_keep_3d_bodies_in_the_box() -> None:
     assert np.all(world.positions < 1.0)
 
 
-def test_save_and_load_continue_bit_for_bit(tmp_path: Path) -> None:
-    def build() -> carom.World:
-        world = _floor_world()
-        world.add_body(Box([0.2, 0.3, 0.4]), [0, 0, 0.5], angular_velocity=[1, 2, 3])
-        world.add_body(Sphere(0.1), [0.5, 0, 0.5], material=carom.Material(0.5, rolling=1e-3))
-        return world
+def _tumbling() -> carom.World:
+    world = _floor_world()
+    world.add_body(Box([0.2, 0.3, 0.4]), [0, 0, 0.5], angular_velocity=[1, 2, 3])
+    world.add_body(Sphere(0.1), [0.5, 0, 0.5], material=carom.Material(0.5, rolling=1e-3))
+    return world
 
+
+def _pile() -> carom.World:
+    """Boxes, balls and hulls dropped onto a stack of slabs, sleep off: settled by 2 s, when
+    most of its manifolds are kept from step to step (carom.engines.rigid3d.contacts)."""
+    rng = np.random.default_rng(7)
+    world = carom.World(3, box=[4, 4, 4], boundary="open", gravity=[0, 0, -9.81],
+                        rigid=RigidSettings(sleep=False))  # fmt: skip
+    world.add_plane([0, 0, 0], [0, 0, 1], material=carom.Material(0.2, friction=0.6))
+    rock = Hull(rng.normal(size=(10, 3)) * 0.1)
+    for k in range(4):
+        turn = 0.025 * k  # half the yaw, as a quaternion (w, 0, 0, z)
+        world.add_body(Box([0.6, 0.6, 0.3]), [0.02 * k, 0, 0.15 + 0.3 * k],
+                       orientation=[math.cos(turn), 0.0, 0.0, math.sin(turn)])  # fmt: skip
+    for k in range(6):
+        q = rng.normal(size=4)
+        world.add_body([Box([0.2, 0.2, 0.2]), Sphere(0.1), rock][k % 3],
+                       [0.15 * (k % 2) - 0.07, 0.15 * (k // 2 % 2) - 0.07, 1.6 + 0.4 * k],
+                       orientation=q / np.linalg.norm(q))  # fmt: skip
+    return world
+
+
+@pytest.mark.parametrize(
+    ("build", "half", "until"), [(_tumbling, 0.5, 1.0), (_pile, 2.0, 2.5)], ids=["tumbling", "pile"]
+)
+def test_save_and_load_continue_bit_for_bit(
+    tmp_path: Path, build: Callable[[], carom.World], half: float, until: float
+) -> None:
+    # The checkpoint holds everything a step reads: poses, warm-start impulses, and the
+    # manifolds kept from step to step (the pile fails without them).
     straight = build()
-    straight.run(until=1.0)
+    straight.run(until=until)
     saved = build()
-    saved.run(until=0.5)
+    saved.run(until=half)
     saved.save(tmp_path / "w.npz")
     loaded = carom.World.load(tmp_path / "w.npz")
-    loaded.run(until=1.0)
+    loaded.run(until=until)
     for name in ("positions", "velocities", "orientations", "angular_velocities"):
         assert np.array_equal(getattr(loaded, name), getattr(straight, name)), name
 

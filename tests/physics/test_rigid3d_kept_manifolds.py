@@ -1,6 +1,7 @@
 """Manifolds kept from step to step in 3D (carom.engines.rigid3d.contacts): a kept manifold
-measures what a new one would, a pair found apart is tested again before it can touch, and a
-checkpoint carries the kept manifolds so a resumed run continues bit for bit."""
+measures what a new one would, and a pair found apart is tested again before it can touch. A
+checkpoint carries the kept manifolds, so a resumed run continues bit for bit
+(tests/test_world_rigid3d.py, a settled pile)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import pytest
 import carom
 from carom import CaromError
 from carom.engines.rigid.settings import RigidSettings
-from carom.shapes3d import Box, Hull, Sphere, rotation_matrix
+from carom.shapes3d import Box, rotation_matrix
 
 G = 9.81
 #: the soft contact's angular frequency against a static body: twice 30 Hz [rad/s]
@@ -100,37 +101,6 @@ def test_a_pair_found_apart_is_tested_again_before_it_can_touch() -> None:
     assert world.counters().wall_collisions + world.counters().collisions >= 1
     assert world.positions[1, 2] > 0.4  # thrown back up
     assert world.stats.kinetic_energy == pytest.approx(before, rel=1e-12)
-
-
-def test_resumed_run_continues_bit_for_bit(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    # A checkpoint holds the kept manifolds with the warm-start impulses: loaded and run on,
-    # the world ends where the run that never stopped ends, to the bit.
-    def pile() -> carom.World:
-        # boxes, balls and hulls dropped onto a stack of cubes, sleep off
-        rng = np.random.default_rng(7)
-        world = carom.World(3, box=[4, 4, 4], boundary="open", gravity=[0, 0, -G],
-                            rigid=RigidSettings(sleep=False))  # fmt: skip
-        world.add_plane([0, 0, 0], [0, 0, 1], material=carom.Material(0.2, friction=0.6))
-        rock = Hull(rng.normal(size=(10, 3)) * 0.1)
-        for k in range(4):
-            world.add_body(Box([0.6, 0.6, 0.3]), [0.02 * k, 0, 0.15 + 0.3 * k],
-                           orientation=_yaw(0.05 * k))  # fmt: skip
-        for k in range(6):
-            q = rng.normal(size=4)
-            world.add_body([Box([0.2, 0.2, 0.2]), Sphere(0.1), rock][k % 3],
-                           [0.15 * (k % 2) - 0.07, 0.15 * (k // 2 % 2) - 0.07, 1.6 + 0.4 * k],
-                           orientation=q / np.linalg.norm(q))  # fmt: skip
-        return world
-
-    whole = pile()
-    whole.run(until=2.5)
-    half = pile()
-    half.run(until=2.0)  # settled: most manifolds are kept
-    half.save(tmp_path / "half.npz")
-    resumed = carom.World.load(tmp_path / "half.npz")
-    resumed.run(until=2.5)
-    for field in ("positions", "velocities", "orientations", "angular_velocities"):
-        assert np.array_equal(getattr(resumed, field), getattr(whole, field)), field
 
 
 def test_manifold_reuse_must_be_a_number_at_least_zero() -> None:
