@@ -67,7 +67,7 @@ from carom.engines.rigid.contacts import (
 )
 from carom.engines.rigid.motion import apply_impulse, fixed_work, relative_velocity
 
-__all__ = ["LANES", "color_groups", "softness", "solve_step"]
+__all__ = ["LANES", "color_groups", "soft_bias", "softness", "solve_step"]
 
 FLAG_EXACT = 1  # the contact was solved exactly this step (an isolated impact)
 
@@ -159,6 +159,29 @@ def softness(hertz: float, zeta: float, h: float) -> tuple[float, float, float]:
     a2 = h * omega * a1
     a3 = 1.0 / (1.0 + a2)
     return omega / a1, a2 * a3, a3
+
+
+@njit(cache=True, inline="always")
+def soft_bias(
+    s: float, use_bias: bool, inv_h: float, push_speed: float, rate: float, mass_scale: float,
+    impulse_scale: float,
+) -> tuple[float, float, float]:  # fmt: skip
+    """The mass scale, impulse scale [-] and bias [m/s] of a contact point at separation ``s``
+    [m] in a pass (both engines' lanes): a point apart is speculative and may close the gap
+    in the substep, no more (rigid, bias ``s / h``); one that overlaps is the soft spring
+    (``rate``, ``mass_scale``, ``impulse_scale`` from :func:`softness`) pushing out at
+    ``push_speed`` [m/s] at most in a pass ``use_bias``, and rigid in a relax pass."""
+    spec = s > 0.0  # speculative: close the gap, no more
+    soft = use_bias and not spec
+    scale_m = mass_scale if soft else 1.0
+    scale_i = impulse_scale if soft else 0.0
+    if spec:
+        bias = s * inv_h
+    elif use_bias:
+        bias = max(scale_m * rate * s, -push_speed)
+    else:
+        bias = 0.0
+    return scale_m, scale_i, bias
 
 
 @njit(cache=True)
@@ -522,16 +545,10 @@ def _solve(
                 sx = buf[B_DX * LANES + lane] + (ca * rax - sa * ray) - (cb * rbx - sb * rby)
                 sy = buf[B_DY * LANES + lane] + (sa * rax + ca * ray) - (sb * rbx + cb * rby)
                 s = buf[(q + Q_BASE) * LANES + lane] + sx * nx + sy * ny
-                spec = s > 0.0  # speculative: close the gap, no more
-                soft = use_bias and not spec
-                mass_scale = buf[R_MSCALE * LANES + lane] if soft else 1.0
-                impulse_scale = buf[R_ISCALE * LANES + lane] if soft else 0.0
-                if spec:
-                    bias = s * inv_h
-                elif use_bias:
-                    bias = max(mass_scale * buf[R_RATE * LANES + lane] * s, -push_speed)
-                else:
-                    bias = 0.0
+                mass_scale, impulse_scale, bias = soft_bias(
+                    s, use_bias, inv_h, push_speed, buf[R_RATE * LANES + lane],
+                    buf[R_MSCALE * LANES + lane], buf[R_ISCALE * LANES + lane],
+                )  # fmt: skip
                 ux, uy = _slip(buf, lane, q)
                 un = ux * nx + uy * ny
                 jn = buf[(q + Q_JN) * LANES + lane]

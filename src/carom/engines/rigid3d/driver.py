@@ -104,8 +104,7 @@ class RigidEngine3D(SteppedEngine):
         self.cell = grid_cell(model)
         self._cf = np.zeros((max(64, 2 * n), contacts.CONTACT_FLOATS))
         self._ci = np.zeros((max(64, 2 * n), contacts.CONTACT_INTS), np.int64)
-        made = empty_manifolds(self._ci.shape[0])
-        self._made = (made["manifold_keys"], made["manifold_ints"], made["manifold_floats"])
+        self._made = _room(self._ci.shape[0])  # this step's manifolds, kept once it is taken
         self._made_count = 0
         self._boxes = np.zeros((model.piece_body.shape[0], 6))
         self._kept = KeptPairs(
@@ -225,8 +224,7 @@ class RigidEngine3D(SteppedEngine):
             size = 2 * -nc
             self._cf = np.zeros((size, contacts.CONTACT_FLOATS))
             self._ci = np.zeros((size, contacts.CONTACT_INTS), np.int64)
-            made = empty_manifolds(size)
-            self._made = (made["manifold_keys"], made["manifold_ints"], made["manifold_floats"])
+            self._made = _room(size)
 
     def step(self, sink: Sink | None = None) -> None:
         """Advance one step of ``dt`` [s]."""
@@ -360,6 +358,13 @@ class RigidEngine3D(SteppedEngine):
                 rows, self._dynamic, m.mass, m.inertia, s.x, s.v, s.q, s.w, g[0], g[1], g[2]
             )
         )
+
+
+def _room(rows: int) -> tuple[NDArray[np.int64], NDArray[np.int64], FloatArray]:
+    """Room for ``rows`` manifolds as the narrow phase makes them: keys, ints and floats
+    (:func:`.model.empty_manifolds`)."""
+    made = empty_manifolds(rows)
+    return made["manifold_keys"], made["manifold_ints"], made["manifold_floats"]
 
 
 _WARM = False

@@ -50,7 +50,7 @@ import math
 import numpy as np
 from numba import njit
 
-from carom.engines.rigid.solver import LANE_MATH, LANES, color_groups, softness
+from carom.engines.rigid.solver import LANE_MATH, LANES, color_groups, soft_bias, softness
 from carom.engines.rigid3d.contacts import (
     F_E,
     F_JR1,
@@ -208,19 +208,6 @@ def _fixed_work(
         uz = v[b, 2] + w[b, 0] * r_b[1] - w[b, 1] * r_b[0]
         total += px * ux + py * uy + pz * uz
     return total
-
-
-@njit(cache=True, inline="always")
-def _turn_angular(
-    a: int, b: int, jx: float, jy: float, jz: float, iw: np.ndarray, w: np.ndarray
-) -> None:
-    """Angular impulse ``J`` [N m s] on A and ``-J`` on B."""
-    w[a, 0] += iw[a, 0] * jx + iw[a, 1] * jy + iw[a, 2] * jz
-    w[a, 1] += iw[a, 3] * jx + iw[a, 4] * jy + iw[a, 5] * jz
-    w[a, 2] += iw[a, 6] * jx + iw[a, 7] * jy + iw[a, 8] * jz
-    w[b, 0] -= iw[b, 0] * jx + iw[b, 1] * jy + iw[b, 2] * jz
-    w[b, 1] -= iw[b, 3] * jx + iw[b, 4] * jy + iw[b, 5] * jz
-    w[b, 2] -= iw[b, 6] * jx + iw[b, 7] * jy + iw[b, 8] * jz
 
 
 @njit(cache=True)
@@ -652,16 +639,10 @@ def _solve(
                 sy = buf[(B_D + 1) * LANES + lane] + tay - tby
                 sz = buf[(B_D + 2) * LANES + lane] + taz - tbz
                 s = buf[(q + Q_BASE) * LANES + lane] + sx * nx + sy * ny + sz * nz
-                spec = s > 0.0  # speculative: close the gap, no more
-                soft = use_bias and not spec
-                mass_scale = buf[R_MSCALE * LANES + lane] if soft else 1.0
-                impulse_scale = buf[R_ISCALE * LANES + lane] if soft else 0.0
-                if spec:
-                    bias = s * inv_h
-                elif use_bias:
-                    bias = max(mass_scale * buf[R_RATE * LANES + lane] * s, -push_speed)
-                else:
-                    bias = 0.0
+                mass_scale, impulse_scale, bias = soft_bias(
+                    s, use_bias, inv_h, push_speed, buf[R_RATE * LANES + lane],
+                    buf[R_MSCALE * LANES + lane], buf[R_ISCALE * LANES + lane],
+                )  # fmt: skip
                 ux, uy, uz = _slip(buf, lane, q)
                 un = ux * nx + uy * ny + uz * nz
                 jn = buf[(q + Q_JN) * LANES + lane]
