@@ -21,7 +21,7 @@ LAYERS = [
     {"world", "observables", "checkpoint"},
     {"scene", "reference", "studies"},
     {"io", "viz"},
-    {"run", "compare"},
+    {"run", "compare", "sweeps"},
     {"cli", "__init__", "__main__"},
 ]
 RANK = {name: rank for rank, names in enumerate(LAYERS) for name in names}

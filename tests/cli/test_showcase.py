@@ -17,7 +17,9 @@ pytest.importorskip("imageio_ffmpeg", reason="the viz extra is not installed")
 def test_the_page_shows_the_study_and_links_every_file(tmp_path: Path) -> None:
     out = tmp_path / "out"
     lines: list[str] = []
-    page = build_showcase(out, scenes=("case-4", "newtons-cradle", "rod-drop"), say=lines.append)
+    page = build_showcase(
+        out, scenes=("case-4", "newtons-cradle", "rod-drop"), sweeps=("rebound",), say=lines.append
+    )
     assert page == out / "index.html"
     text = page.read_text()
     # one row per impact of the study (19), each model's error shown
@@ -29,6 +31,12 @@ def test_the_page_shows_the_study_and_links_every_file(tmp_path: Path) -> None:
     assert "cases/case-7.png" in links
     assert "scenes/rod-drop/animation.mp4" in links  # a rigid body, drawn turned
     assert "energy given by the solver" in text  # the rigid engine's ledger
+    # the sweep: its plot and table, and the closed form beside each point
+    assert "sweeps/rebound/plot-rebound_height.png" in links
+    assert "sweeps/rebound/results.csv" in links
+    # (e^2 h0 to round-off: every one of the ten rows agrees to 0.00%)
+    assert text.count("<tr class='sweep'>") == 10
+    assert text.count("<td>+0.00%</td>") + text.count("<td>-0.00%</td>") == 10
     missing = [link for link in links if not (out / link).is_file()]
     assert not missing
     # and nothing written that the page does not show or link
@@ -36,7 +44,7 @@ def test_the_page_shows_the_study_and_links_every_file(tmp_path: Path) -> None:
     assert files - links == {"index.html"}
     # the study, then each scene (and a line on compiling when the kernels were not cached)
     done = [line for line in lines if " -> " in line]
-    assert len(done) == 4
+    assert len(done) == 5
     assert done[0].startswith("the seven two-sphere cases")
 
 
@@ -57,7 +65,7 @@ def test_the_showcase_says_when_it_compiles_first(
 
     monkeypatch.setattr(showcase, "kernels_cached", lambda: False)
     lines: list[str] = []
-    build_showcase(tmp_path / "out", scenes=("case-1",), say=lines.append)
+    build_showcase(tmp_path / "out", scenes=("case-1",), sweeps=(), say=lines.append)
     compiling = [k for k, line in enumerate(lines) if "compiling the engine's kernels" in line]
     case = [k for k, line in enumerate(lines) if "1 collision and 0 at walls in" in line]
     assert compiling

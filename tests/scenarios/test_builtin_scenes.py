@@ -22,6 +22,7 @@ EXPECTED = CASE_SCENES | {
     "gas-3d",
     "galton-board",
     "granular-cooling",
+    "hard-disk-gas",
     "hard-sphere-gas",
     "newtons-cradle",
     "rain-3d",

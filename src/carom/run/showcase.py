@@ -6,6 +6,7 @@
     index.html          every figure, film and table below, linked and shown
     cases/              the seven-case study: cases.csv, cases.json, case-1.png ... case-7.png
     scenes/NAME/        each scene's carom run: animation, plots, summary, events, trajectory
+    sweeps/NAME/        each sweep's carom sweep on a local Dask cluster: table and plots
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from carom import __version__
 from carom.io.outdir import check_output, staged_output
 from carom.jit import kernels_cached
@@ -23,8 +26,10 @@ from carom.run.runner import run_scene
 from carom.run.study import write_case_study
 from carom.scene import find_scene, load_scene
 from carom.studies.two_spheres import CASES, MODELS, run_study
+from carom.sweeps import SweepSpec, load_sweep, sweep
+from carom.sweeps.plots import series
 
-__all__ = ["SHOWCASE_SCENES", "build_showcase"]
+__all__ = ["SHOWCASE_SCENES", "SHOWCASE_SWEEPS", "build_showcase"]
 
 #: the scenes shown, in page order: the event-driven engine's, then the rigid engine's
 SHOWCASE_SCENES = (
@@ -37,6 +42,8 @@ SHOWCASE_SCENES = (
     "pyramid",
     "tumbler",
 )
+#: the parameter sweeps shown (carom sweep, on a local Dask cluster: the sweep extra)
+SHOWCASE_SWEEPS = ("eos-2d",)
 
 
 def build_showcase(
@@ -44,6 +51,7 @@ def build_showcase(
     *,
     force: bool = False,
     scenes: tuple[str, ...] = SHOWCASE_SCENES,
+    sweeps: tuple[str, ...] = SHOWCASE_SWEEPS,
     say: Callable[[str], object] = print,
 ) -> Path:
     """Run the study and ``scenes``; write them and ``index.html`` to ``out``.
@@ -56,6 +64,8 @@ def build_showcase(
         Replace a non-empty ``out``.
     scenes : tuple of str
         Built-in scene names or scene files to run.
+    sweeps : tuple of str
+        Built-in sweep names or sweep files to run (skipped, with a note, without Dask).
     say : callable
         Receives one line per step done.
 
@@ -67,6 +77,10 @@ def build_showcase(
     check_output(out, force=force)
     for scene in scenes:
         find_scene(scene)  # a bad name fails before anything runs
+    specs = [load_sweep(name) for name in sweeps]
+    if specs and not _have_dask():
+        say("(the sweeps are skipped: they run on Dask: pip install 'carom[sweep]')")
+        specs = []
     with staged_output(out, force=force) as staging:
         cases = staging / "cases"
         cases.mkdir()
@@ -86,7 +100,16 @@ def build_showcase(
                 )
             say(f"{report.title}: {report.work()} -> {out / 'scenes' / folder.name}/")
             shown.append((scene, folder, report.written))
-        page = _page(staging, json.loads((cases / "cases.json").read_text()), shown)
+        swept: list[tuple[SweepSpec, Path, list[str]]] = []
+        for spec in specs:
+            folder = staging / "sweeps" / spec.name
+            done = sweep(spec, folder, progress=False)
+            say(
+                f"{spec.title}: {done.runs} runs on {done.workers} Dask workers in "
+                f"{done.wall_seconds:.1f} s -> {out / 'sweeps' / folder.name}/"
+            )
+            swept.append((spec, folder, done.written))
+        page = _page(staging, json.loads((cases / "cases.json").read_text()), shown, swept)
         (staging / "index.html").write_text(page, encoding="utf-8")
     return out / "index.html"
 
@@ -106,7 +129,20 @@ video { max-width: 100%; border: 1px solid #ddd; } nav a { margin-right: 1em; }
 """
 
 
-def _page(root: Path, study: dict[str, Any], shown: list[tuple[str, Path, list[str]]]) -> str:
+def _have_dask() -> bool:
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _page(
+    root: Path,
+    study: dict[str, Any],
+    shown: list[tuple[str, Path, list[str]]],
+    swept: list[tuple[SweepSpec, Path, list[str]]],
+) -> str:
     parts = [
         "<!doctype html>",
         '<html lang="en"><head><meta charset="utf-8">',
@@ -116,7 +152,9 @@ def _page(root: Path, study: dict[str, Any], shown: list[tuple[str, Path, list[s
         f"<p>carom {html.escape(__version__)}: exact, impulse-based collision response. "
         "Everything on this page was computed by <code>make demo</code> "
         "(<code>carom showcase</code>); each figure links to its file.</p>",
-        '<nav><a href="#cases">two-sphere study</a><a href="#scenes">scenes</a></nav>',
+        '<nav><a href="#cases">two-sphere study</a><a href="#scenes">scenes</a>'
+        + ('<a href="#sweeps">sweeps</a>' if swept else "")
+        + "</nav>",
         *_study_section(study),
         '<h2 id="scenes">Scenes</h2>',
         "<p>Each scene was run by <code>carom run</code>: the film of its frames, its energy "
@@ -126,6 +164,16 @@ def _page(root: Path, study: dict[str, Any], shown: list[tuple[str, Path, list[s
     ]
     for scene, folder, written in shown:
         parts += _scene_section(root, scene, folder, written)
+    if swept:
+        parts += [
+            '<h2 id="sweeps">Parameter sweeps</h2>',
+            "<p>Each sweep was run by <code>carom sweep</code>: every point and seed a task on "
+            "a local Dask cluster, the observables against the parameter (the mean over the "
+            "seeds with its standard error) beside the closed form, and below it the relative "
+            "difference. The table has one row per run (docs/sweeps.md).</p>",
+        ]
+        for spec, folder, written in swept:
+            parts += _sweep_section(root, spec, folder, written)
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"
 
@@ -185,12 +233,7 @@ def _scene_section(root: Path, scene: str, folder: Path, written: list[str]) -> 
         )
     elif "animation.gif" in written:
         parts.append(f'<img src="{rel}/animation.gif" alt="animation">')
-    images = [name for name in written if name.endswith(".png")]
-    parts.append(
-        '<div class="row">'
-        + "".join(f'<a href="{rel}/{n}"><img src="{rel}/{n}" alt="{n}"></a>' for n in images)
-        + "</div>"
-    )
+    parts.append(_figures(rel, written))
     summary = json.loads((folder / "summary.json").read_text())
     energy = summary["energy"]
     # the rigid engine's solver, or the event-driven engine's parting floor
@@ -211,6 +254,53 @@ def _scene_section(root: Path, scene: str, folder: Path, written: list[str]) -> 
         + "".join(f"<tr><th class='text'>{k}</th><td>{v}</td></tr>" for k, v in facts)
         + "</table>"
     )
-    links = "".join(f'<a href="{rel}/{n}">{n}</a>' for n in written)
-    parts.append(f'<p class="files">{links}</p></div>')
+    parts.append(_files(rel, written))
     return parts
+
+
+def _sweep_section(root: Path, spec: SweepSpec, folder: Path, written: list[str]) -> list[str]:
+    from carom.sweeps.observe import OBSERVABLES, has_theory
+    from carom.sweeps.spec import parameter_label
+
+    rel = folder.relative_to(root).as_posix()
+    parts = [f'<div class="scene" id="sweep-{html.escape(spec.name)}">']
+    parts.append(f"<h3>{html.escape(spec.title)}</h3>")
+    if spec.description:
+        parts.append(f"<p>{html.escape(spec.description)}</p>")
+    parts.append(_figures(rel, written))
+    x_name = parameter_label(next(iter(spec.parameters))) if spec.parameters else "point"
+    for name in spec.observables:
+        if not has_theory(name):
+            continue
+        observable = OBSERVABLES[name]
+        for label, (x, mean, error, _, theory) in series(folder, spec, name).items():
+            dim = int(spec.base.get("world", {}).get("dimension", 3))
+            assert observable.theory_name is not None
+            head = (
+                f"<tr><th>{html.escape(x_name)}</th><th>{html.escape(name)} (carom)</th>"
+                f"<th>standard error</th><th>{html.escape(observable.theory_name(dim))}</th>"
+                "<th>relative difference</th></tr>"
+            )
+            spread = ["-" if np.isnan(e) else f"{e:.2g}" for e in error]  # (one seed: none)
+            rows = "".join(
+                f"<tr class='sweep'><td>{a:g}</td><td>{m:.5g}</td><td>{e}</td><td>{t:.5g}</td>"
+                f"<td>{m / t - 1:+.2%}</td></tr>"
+                for a, m, e, t in zip(x, mean, spread, theory, strict=True)
+            )
+            caption = f"<caption>{html.escape(label)}</caption>" if label else ""
+            parts.append(f"<table>{caption}{head}{rows}</table>")
+    parts.append(_files(rel, written))
+    return parts
+
+
+def _figures(rel: str, written: list[str]) -> str:
+    """A row of the PNG figures among ``written`` (in folder ``rel``), each linking to itself."""
+    images = [name for name in written if name.endswith(".png")]
+    links = "".join(f'<a href="{rel}/{n}"><img src="{rel}/{n}" alt="{n}"></a>' for n in images)
+    return f'<div class="row">{links}</div>'
+
+
+def _files(rel: str, written: list[str]) -> str:
+    """A line of links to every file written, closing the section."""
+    links = "".join(f'<a href="{rel}/{n}">{n}</a>' for n in written)
+    return f'<p class="files">{links}</p></div>'
