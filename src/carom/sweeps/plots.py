@@ -31,9 +31,10 @@ def _number(text: str) -> float | None:
 def series(
     folder: Path, spec: SweepSpec, name: str
 ) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
-    """An observable's curves from ``results.csv``: for each setting of the parameters after
-    the first (a label), ``(x, mean, standard error, seeds, theory)`` over the first
-    parameter's values (the point's number when it has none, or its values are not numbers).
+    """An observable's curves from ``results.csv`` (its finite values): for each setting of
+    the parameters after the first (a label), ``(x, mean, standard error, seeds, theory)``
+    over the first parameter's values (the point's number when it has none, or its values
+    are not numbers).
     The standard error is ``std / sqrt(n)`` over the seeds (NaN for one seed); theory is the
     mean closed form of the point (NaN where there is none)."""
     with (folder / RESULTS).open(newline="", encoding="utf-8") as handle:
@@ -43,8 +44,8 @@ def series(
     numeric = first is not None and all(_number(r[first]) is not None for r in rows)
     groups: dict[str, dict[float, tuple[list[float], list[float]]]] = defaultdict(dict)
     for row in rows:
-        if row["status"] != "ok" or row[name] == "":
-            continue
+        if row["status"] != "ok" or row[name] == "" or not math.isfinite(float(row[name])):
+            continue  # (NaN: the observable does not apply, e.g. a pressure under gravity)
         x = _number(row[first]) if numeric and first is not None else float(row["point"])
         assert x is not None
         # crossed: a curve per setting of the other parameters; zipped, they move together
