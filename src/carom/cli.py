@@ -2,7 +2,7 @@
 
 Exit codes: 0 success, 1 a sweep finished with failed points (their messages are in its
 table), 2 bad input or usage (one message, no traceback; ``--debug`` shows it), 130
-interrupted.
+interrupted (Ctrl-C), 143 stopped by SIGTERM (carom run and carom sweep).
 """
 
 from __future__ import annotations
@@ -311,7 +311,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             ),
             file=sys.stderr,
         )
-        return 130
+        return 128 + stopped.signal
     points = len(spec.grid())
     seeds = len(spec.seeds) if spec.seeds else 1
     done = "" if report.ran == report.runs else f" ({report.runs - report.ran} done before)"

@@ -17,12 +17,15 @@ import json
 import logging
 import os
 import shutil
+import signal
 import sys
+import threading
 import time
 import uuid
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import FrameType
 from typing import Any
 
 from carom.errors import CaromError
@@ -42,7 +45,35 @@ PARQUET_EVERY = 10.0
 
 
 class SweepInterrupted(Exception):  # noqa: N818 (the user asked to stop: not an error)
-    """Ctrl-C: the rows done are in ``results.csv``; ``resume=True`` continues."""
+    """Ctrl-C or SIGTERM: the rows done are in ``results.csv``; ``resume=True`` continues.
+
+    ``signal`` is the number of the signal that asked (``signal.SIGINT`` or ``SIGTERM``).
+    """
+
+    def __init__(self, message: str, signal: int) -> None:
+        super().__init__(message)
+        self.signal = signal
+
+
+@contextlib.contextmanager
+def _stop_on_sigterm() -> Iterator[list[int]]:
+    """SIGTERM (what timeout, docker stop and batch schedulers send) stops a sweep as Ctrl-C
+    does, so that its cluster is closed and its table kept; yields the signals received.
+    Only the main thread can own signal handlers; elsewhere SIGTERM keeps its meaning."""
+    received: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield received
+        return
+
+    def handler(signum: int, frame: FrameType | None) -> None:
+        received.append(signum)
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield received
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 @dataclass
@@ -129,33 +160,36 @@ def sweep(
     todo = [p for p in points if p.key not in done]
     failed, nworkers = 0, 0
     table: ResultsTable | None = None
-    try:
-        with contextlib.ExitStack() as stack:
-            # the cluster first: a scheduler that cannot be reached leaves nothing behind
-            warm = (todo[0].scene, str(spec.scene_path)) if todo else None
-            client = stack.enter_context(_cluster(workers, scheduler, warm)) if todo else None
-            if not resume:
-                _make_folder(folder, spec)
-            table = ResultsTable(folder, spec, keep=resume)
-            _write_manifest(folder, spec, points, state="running")
-            if client is not None:
-                nworkers = len(client.scheduler_info()["workers"])
-                failed = _run(client, spec, todo, table, folder, progress)
-    except KeyboardInterrupt:
-        if table is None:
-            raise SweepInterrupted(
-                "interrupted before any point ran; nothing was written"
-            ) from None
-        table.close()
-        _write_manifest(folder, spec, points, state="interrupted")
-        raise SweepInterrupted(
-            f"interrupted: {len(table.done())} of {len(points)} runs are in {folder / RESULTS}"
-        ) from None
-    except BaseException:
-        if table is not None:
+    with _stop_on_sigterm() as received:
+        try:
+            with contextlib.ExitStack() as stack:
+                # the cluster first: a scheduler that cannot be reached leaves nothing behind
+                warm = (todo[0].scene, str(spec.scene_path)) if todo else None
+                client = stack.enter_context(_cluster(workers, scheduler, warm)) if todo else None
+                if not resume:
+                    _make_folder(folder, spec)
+                table = ResultsTable(folder, spec, keep=resume)
+                _write_manifest(folder, spec, points, state="running")
+                if client is not None:
+                    nworkers = len(client.scheduler_info()["workers"])
+                    failed = _run(client, spec, todo, table, folder, progress)
+        except KeyboardInterrupt:
+            number = received[0] if received else int(signal.SIGINT)
+            if table is None:
+                raise SweepInterrupted(
+                    "interrupted before any point ran; nothing was written", number
+                ) from None
             table.close()
             _write_manifest(folder, spec, points, state="interrupted")
-        raise
+            raise SweepInterrupted(
+                f"interrupted: {len(table.done())} of {len(points)} runs are in {folder / RESULTS}",
+                number,
+            ) from None
+        except BaseException:
+            if table is not None:
+                table.close()
+                _write_manifest(folder, spec, points, state="interrupted")
+            raise
     table.finish()
     written = [RESULTS, TIMINGS, MANIFEST]
     if spec.text:
