@@ -39,6 +39,7 @@ __all__ = [
     "Outputs",
     "RunInterrupted",
     "RunReport",
+    "check_steps",
     "run_scene",
     "stop_on_signals",
     "work_directory",
@@ -206,7 +207,7 @@ def run_scene(
         run.world.prepare()
     else:
         world = scene.build()  # refuses a bad scene before anything is written
-        _check_steps(world, until, scene.run["frame_interval"])
+        check_steps(world, until=until, frame_interval=scene.run["frame_interval"])
         world.prepare()  # compiled (or loaded) apart from the run's own time
         _make_directory(work)
         try:
@@ -256,13 +257,14 @@ def run_scene(
     )
 
 
-def _check_steps(world: World, until: float, interval: float | None) -> None:
-    """A time-stepped engine stops on its steps: refuse a run length or frame interval that
-    is not a whole number of them, naming the nearest that is."""
+def check_steps(world: World, **times: float | None) -> None:
+    """A time-stepped engine stops on its steps: refuse a time (``until``, ``frame_interval``,
+    ``warmup``: given by name, in seconds) that is not a whole number of them, naming the
+    nearest that is."""
     if world.engine_name != "rigid":
         return
     dt = world.rigid_settings.dt
-    for name, value in (("until", until), ("frame_interval", interval)):
+    for name, value in times.items():
         if value is None:
             continue
         steps = value / dt

@@ -448,10 +448,15 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
 
 def _measure(task: dict[str, Any], out: dict[str, Any]) -> None:
     from carom.observables import kinetic_energy, momentum, potential_energy
+    from carom.run.runner import check_steps
     from carom.scene import Scene
 
     scene = Scene.from_dict(task["scene"], task["source"])
     world = scene.build()
+    if task["warmup"] > 0:
+        check_steps(world, warmup=task["warmup"], until=task["until"])
+    else:
+        check_steps(world, until=task["until"])
     mark = time.perf_counter()
     world.prepare()
     out["prepare_s"] = time.perf_counter() - mark
