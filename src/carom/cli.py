@@ -227,12 +227,14 @@ def _build_parser() -> argparse.ArgumentParser:
 
     showcase = commands.add_parser(
         "showcase",
-        help="the two-sphere study and a few scenes, with DIR/index.html showing them all",
+        help="the two-sphere study, a few scenes and a sweep, with DIR/index.html showing them",
         description=(
-            "Run the seven-case two-sphere study and the scenes case-1 ... case-7, "
-            "newtons-cradle, billiards-break and hard-sphere-gas; write their results under "
-            "DIR (cases/, scenes/NAME/) and DIR/index.html, one page linking and showing "
-            "every figure, film and table. This is what 'make demo' runs."
+            "Run the seven-case two-sphere study; the scenes case-1 ... case-7, "
+            "newtons-cradle, billiards-break, hard-sphere-gas, rod-drop, card-house, pyramid "
+            "and tumbler; and the eos-2d sweep on a local Dask cluster (with the sweep extra); "
+            "write their results under DIR (cases/, scenes/NAME/, sweeps/NAME/) and "
+            "DIR/index.html, one page linking and showing every figure, film and table. This "
+            "is what 'make demo' runs."
         ),
     )
     showcase.add_argument("--out", type=Path, default=Path("out"), metavar="DIR")
