@@ -243,3 +243,9 @@ def test_a_stop_keeps_what_finished_and_resume_completes_it(
     assert report.ran == 6 - kept
     assert results.read_bytes() == (tmp_path / "expected" / "results.csv").read_bytes()
     assert expected.failed == 0
+
+
+def test_no_more_local_workers_than_runs(tmp_path: Path) -> None:
+    path = write_sweep(tmp_path / "in", '"gas.count" = [15]', head="seeds = [4]")
+    report = sweep(path, tmp_path / "out", workers=2, plots=False)
+    assert (report.runs, report.workers) == (1, 1)

@@ -113,7 +113,7 @@ def sweep(
         ``force`` (replace it) or ``resume``.
     workers : int, optional
         Worker processes of the local cluster (one thread each); the number of cores by
-        default. Not with ``scheduler``.
+        default, and never more than the runs to do. Not with ``scheduler``.
     scheduler : str, optional
         The address of a running Dask scheduler (``tcp://host:8786``) whose workers run the
         points; they need carom installed and the scene's files at the same paths.
@@ -165,7 +165,9 @@ def sweep(
             with contextlib.ExitStack() as stack:
                 # the cluster first: a scheduler that cannot be reached leaves nothing behind
                 warm = (todo[0].scene, str(spec.scene_path)) if todo else None
-                client = stack.enter_context(_cluster(workers, scheduler, warm)) if todo else None
+                # (no more local workers than runs: each is a process of its own)
+                size = min(workers or os.cpu_count() or 1, len(todo))
+                client = stack.enter_context(_cluster(size, scheduler, warm)) if todo else None
                 if not resume:
                     _make_folder(folder, spec)
                 table = ResultsTable(folder, spec, keep=resume)
@@ -308,7 +310,7 @@ def _warm(scene: dict[str, Any], source: str) -> float:
 
 @contextlib.contextmanager
 def _cluster(
-    workers: int | None, scheduler: str | None, warm: tuple[dict[str, Any], str] | None
+    workers: int, scheduler: str | None, warm: tuple[dict[str, Any], str] | None
 ) -> Iterator[Any]:
     """A Dask client: to the scheduler at ``scheduler``, or to a new local cluster of
     ``workers`` processes, its kernels made ready."""
@@ -328,7 +330,7 @@ def _cluster(
             # compile once here, into the on-disk cache the local workers then load from
             _warm(*warm)
         cluster = LocalCluster(
-            n_workers=workers or os.cpu_count() or 1,
+            n_workers=workers,
             threads_per_worker=1,
             processes=True,
             dashboard_address=None,
