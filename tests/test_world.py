@@ -61,6 +61,20 @@ def test_overlapping_spheres_at_the_start_are_refused() -> None:
         world.run(until=1.0)
 
 
+def test_overlap_across_a_periodic_boundary_is_refused() -> None:
+    # 125 spheres 4 m apart in a 20 m periodic box; sphere 0 moved to x = 0.15 and sphere 124
+    # to x = 19.85 on the same line: 0.3 m apart through the x = 0 face, so they overlap by
+    # 1 - 0.3 = 0.7 m (and nothing else comes within 1.85 m)
+    side = 20.0
+    x = (np.indices((5, 5, 5)).reshape(3, -1).T * 4.0 + 2.0).astype(float)
+    x[0] = [0.15, 2.0, 2.0]
+    x[124] = [19.85, 2.0, 2.0]
+    world = carom.World(3, [side] * 3, "periodic")
+    world.add_spheres(x, np.random.default_rng(3).normal(size=(125, 3)), radius=0.5)
+    with pytest.raises(CaromError, match=r"spheres 0 and 124 overlap by 0.7 m"):
+        world.run(until=1.0)
+
+
 def test_touching_spheres_are_accepted() -> None:
     # exactly touching (Newton's cradle) is legal; round-off overlaps of 1e-17 m are not errors
     world = carom.World(3, [1.0, 1.0, 1.0])

@@ -24,7 +24,7 @@ from carom.engines.base import (
     Counters,
     Sink,
 )
-from carom.engines.edmd import codes, loop
+from carom.engines.edmd import codes, loop, neighbours
 from carom.engines.edmd.model import Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
 from carom.engines.edmd.ordering import spatial_order
@@ -147,7 +147,7 @@ class EdmdEngine:
         model = self._build_model(order)
         acc = np.where(model.mobile[:, None], model.gravity[None, :], 0.0)
         cells = np.clip(np.floor(x / model.cell_size).astype(np.int64), 0, model.ncell - 1)
-        occupancy = np.unique(cells, axis=0, return_counts=True)[1].max()
+        occupancy = np.bincount(np.ravel_multi_index(cells.T, model.ncell)).max()
         self.cell_capacity = max(self.cell_capacity, 8, 2 * int(occupancy))
         while True:
             state = allocate_state(
@@ -219,39 +219,26 @@ class EdmdEngine:
         )
 
     def _check_overlaps(self) -> None:
-        """Refuse overlapping spheres: every overlapping pair shares a neighbour list.
-
-        Vectorised over the lists, a block of bodies at a time (bounded memory at 1e6 bodies).
-        """
+        """Refuse overlapping spheres: every overlapping pair shares a neighbour list."""
         model, state = self.model, self.state
-        x = state.kin[:, : self.env.dim]  # engine order, at the start time
-        n, capacity = state.nbr.shape
-        slots = np.arange(capacity)
-        block = max(1, 2_000_000 // max(capacity, 1))
-        for start in range(0, n, block):
-            stop = min(n, start + block)
-            used = (slots[None, :] < state.nbr_count[start:stop, None]) & model.mobile[
-                start:stop, None
-            ]
-            rows, cols = np.nonzero(used)
-            i = rows + start
-            j = state.nbr[i, cols].astype(np.int64)
-            d = x[i] - x[j]
-            if model.periodic:
-                d -= model.box * np.floor(d / model.box + 0.5)
-            dist = np.sqrt(np.sum(d * d, axis=1))
-            reach = model.radius[i] + model.radius[j]
-            overlap = reach - dist
-            bad = overlap > OVERLAP_TOLERANCE * reach
-            if bad.any():
-                k = int(np.argmax(bad))
-                a, b = sorted((int(self.order[i[k]]), int(self.order[j[k]])))
-                pos, rad = self.bodies.position, self.bodies.radius
-                raise CaromError(
-                    f"spheres {a} and {b} overlap by {overlap[k]:.3g} m at the start (centres "
-                    f"{pos[a].tolist()} and {pos[b].tolist()}, radii {rad[a]:g} and "
-                    f"{rad[b]:g}); place them at least the sum of their radii apart"
-                )
+        i, j, overlap = neighbours.first_overlap(
+            state.kin,
+            state.nbr,
+            state.nbr_count,
+            model.mobile,
+            model.radius,
+            model.box,
+            model.periodic,
+            OVERLAP_TOLERANCE,
+        )
+        if i >= 0:
+            a, b = sorted((int(self.order[i]), int(self.order[j])))
+            pos, rad = self.bodies.position, self.bodies.radius
+            raise CaromError(
+                f"spheres {a} and {b} overlap by {overlap:.3g} m at the start (centres "
+                f"{pos[a].tolist()} and {pos[b].tolist()}, radii {rad[a]:g} and "
+                f"{rad[b]:g}); place them at least the sum of their radii apart"
+            )
 
     # -- running ----------------------------------------------------------------------------
 

@@ -338,3 +338,37 @@ def rebuild_shell(
         if mark[j] == stamp and mobile[j]:
             _list_remove(nbr, count, j, i)
     return FITS
+
+
+@njit(cache=True, error_model="numpy")
+def first_overlap(
+    kin: np.ndarray,
+    nbr: np.ndarray,
+    nbr_count: np.ndarray,
+    mobile: np.ndarray,
+    radius: np.ndarray,
+    box: np.ndarray,
+    periodic: bool,
+    tolerance: float,
+) -> tuple[int, int, float]:
+    """The first pair of bodies that overlap by more than ``tolerance`` of the sum of their
+    radii, scanning each moving body's list in order: ``(i, j, overlap [m])``, or
+    ``(-1, -1, 0.0)`` when none does. Every overlapping pair shares a list (their shells
+    overlap), so this finds any overlap there is."""
+    dim = box.shape[0]
+    for i in range(nbr.shape[0]):
+        if not mobile[i]:
+            continue
+        for s in range(nbr_count[i]):
+            j = nbr[i, s]
+            d2 = 0.0
+            for k in range(dim):
+                d = kin[i, k] - kin[j, k]
+                if periodic:
+                    d -= box[k] * math.floor(d / box[k] + 0.5)
+                d2 += d * d
+            reach = radius[i] + radius[j]
+            overlap = reach - math.sqrt(d2)
+            if overlap > tolerance * reach:
+                return i, int(j), overlap
+    return -1, -1, 0.0
