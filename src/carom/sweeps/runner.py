@@ -374,7 +374,7 @@ def _run(
         total=len(todo),
         disable=(None if progress is None else not progress),
         file=sys.stderr,
-        unit="point",
+        unit="run",
         desc="sweeping",
         dynamic_ncols=True,
     )
