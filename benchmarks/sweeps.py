@@ -25,6 +25,7 @@ import statistics
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -54,12 +55,12 @@ def many_points(count: int) -> SweepSpec:
     """The rebound sweep over ``count`` restitutions: tasks of a few milliseconds."""
     spec = load_sweep("rebound")
     values = [round(0.05 + 0.95 * k / (count - 1), 12) for k in range(count)]
-    return SweepSpec(**{**spec.__dict__, "parameters": {"world.walls.2": values}, "text": ""})
+    return replace(spec, parameters={"world.walls.2": values}, text="")
 
 
 def one_point() -> SweepSpec:
     spec = load_sweep("rebound")
-    return SweepSpec(**{**spec.__dict__, "parameters": {"world.walls.2": [0.5]}, "text": ""})
+    return replace(spec, parameters={"world.walls.2": [0.5]}, text="")
 
 
 def main() -> None:

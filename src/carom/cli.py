@@ -304,17 +304,12 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             plots=plots,
         )
     except SweepInterrupted as stopped:
-        kept = [a for a in args.argv if a not in ("--force", "--resume")]
-        import shlex
-
         print(
-            printable(
-                f"carom: {stopped}; continue with: {shlex.join(['carom', *kept, '--resume'])}"
-            ),
+            printable(f"carom: {stopped}; continue with: {_resume_command(args.argv)}"),
             file=sys.stderr,
         )
         return 128 + stopped.signal
-    points = len(spec.grid())
+    points = spec.count()
     seeds = len(spec.seeds) if spec.seeds else 1
     done = "" if report.ran == report.runs else f" ({report.runs - report.ran} done before)"
     print(

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from carom.errors import CaromError
 
-__all__ = ["check_output", "existing_folder", "publish", "staged_output"]
+__all__ = ["check_output", "existing_folder", "publish", "staged_output", "write_whole"]
 
 
 def check_output(path: str | os.PathLike[str], *, force: bool = False) -> Path:
@@ -114,3 +114,14 @@ def publish(staging: Path, target: Path) -> None:
             f"cannot move the finished results from {staging} to {target}: {exc.strerror}; "
             f"they are complete in {staging}: move them by hand"
         ) from None
+
+
+def write_whole(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file beside it, forced to disk, and a
+    rename: ``path`` holds the old text or the new, never half of one."""
+    temporary = path.with_name(f".{path.name}.tmp")
+    with temporary.open("w", newline="", encoding="utf-8") as handle:
+        handle.write(text)
+        handle.flush()
+        os.fsync(handle.fileno())
+    temporary.replace(path)

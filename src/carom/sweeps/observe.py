@@ -66,8 +66,8 @@ class Window:
     time: float  # [s]
     temperature: float  # [J]
     kinetic: float  # [J]
-    start: dict[str, Any]  # summary.json's start values
     positions: NDArray[np.float64]  # (N, d) [m]
+    fluid: _Fluid | None  # the world as a hard-sphere fluid, for the closed forms
     first_bounce: tuple[float, float] | None  # body 0's first (u_before, u_after) at the floor
     initial_height: float | None  # body 0's drop height above the floor at t = 0 [m]
     floor_restitution: float | None
@@ -174,7 +174,7 @@ def _compressibility(world: World, window: Window) -> float:
 
 
 def _compressibility_theory(world: World, window: Window) -> float | None:
-    fluid = _fluid(world)
+    fluid = window.fluid
     if fluid is None or fluid.restitution != 1.0:
         return None
     return kolafa(fluid.fraction) if fluid.dim == 3 else henderson(fluid.fraction)
@@ -186,7 +186,7 @@ def _temperature_ratio(world: World, window: Window) -> float:
 
 def _haff(world: World, window: Window) -> float | None:
     """Haff's law: T / T0 = 1 / (1 + t / tau0)^2, 1/tau0 = (1 - e^2) omega(T0) / (2 d)."""
-    fluid = _fluid(world)
+    fluid = window.fluid
     if fluid is None:
         return None
     inv_tau0 = (1 - fluid.restitution**2) * fluid.enskog_rate(window.temperature) / (2 * fluid.dim)
@@ -200,7 +200,7 @@ def _collision_rate(world: World, window: Window) -> float:
 
 
 def _enskog_rate(world: World, window: Window) -> float | None:
-    fluid = _fluid(world)
+    fluid = window.fluid
     if fluid is None or fluid.restitution != 1.0:
         return None  # a cooling gas's rate falls with its temperature
     return fluid.enskog_rate(window.temperature)
@@ -453,10 +453,7 @@ def _measure(task: dict[str, Any], out: dict[str, Any]) -> None:
 
     scene = Scene.from_dict(task["scene"], task["source"])
     world = scene.build()
-    if task["warmup"] > 0:
-        check_steps(world, warmup=task["warmup"], until=task["until"])
-    else:
-        check_steps(world, until=task["until"])
+    check_steps(world, warmup=task["warmup"] or None, until=task["until"])
     mark = time.perf_counter()
     world.prepare()
     out["prepare_s"] = time.perf_counter() - mark
@@ -482,8 +479,8 @@ def _measure(task: dict[str, Any], out: dict[str, Any]) -> None:
         time=t0,
         temperature=temp0,
         kinetic=kinetic,
-        start=start,
         positions=frame.positions.copy(),
+        fluid=_fluid(world),
         first_bounce=None if watcher is None else watcher.found,
         initial_height=None if floor is None else floor[2],
         floor_restitution=None if floor is None else floor[1],

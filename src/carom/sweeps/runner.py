@@ -29,6 +29,7 @@ from types import FrameType
 from typing import Any
 
 from carom.errors import CaromError
+from carom.io.outdir import write_whole
 from carom.sweeps.observe import run_point
 from carom.sweeps.spec import Point, SweepSpec, load_sweep
 from carom.sweeps.table import RESULTS, ResultsTable, completed, write_parquet
@@ -283,7 +284,7 @@ def _write_manifest(folder: Path, spec: SweepSpec, points: list[Point], *, state
         "digest": spec.digest(),
         "state": state,
         "runs": len(points),
-        "points": len(spec.grid()),
+        "points": spec.count(),
         "seeds": spec.seeds,
         "parameters": list(spec.parameters),
         "observables": spec.observables,
@@ -291,21 +292,17 @@ def _write_manifest(folder: Path, spec: SweepSpec, points: list[Point], *, state
         "warmup_s": spec.warmup,
         "carom": __version__,
     }
-    temporary = folder / f".{MANIFEST}.tmp"
-    temporary.write_text(json.dumps(data, indent=2) + "\n")
-    temporary.replace(folder / MANIFEST)
+    write_whole(folder / MANIFEST, json.dumps(data, indent=2) + "\n")
 
 
-def _warm(scene: dict[str, Any], source: str) -> float:
-    """Compile (or load from the cache) the kernels a point's scene uses, in this process;
-    return the seconds it took. Run on every worker before the points, so that no task
-    compiles (a failure here is the first point's to report)."""
-    began = time.perf_counter()
+def _warm(scene: dict[str, Any], source: str) -> None:
+    """Compile (or load from the cache) the kernels a point's scene uses, in this process.
+    Run on every worker before the points, so that no task compiles (a failure here is the
+    first point's to report)."""
     with contextlib.suppress(Exception):
         from carom.scene import Scene
 
         Scene.from_dict(scene, source).build().prepare()
-    return time.perf_counter() - began
 
 
 @contextlib.contextmanager

@@ -97,6 +97,8 @@ class SweepSpec:
         More words, for the plots' captions and the table's reader.
     scene_path : Path
         The base scene file.
+    base : dict
+        The base scene as read (nested dicts and lists), before any parameter is set.
     until : float
         Simulated time of each run [s].
     warmup : float
@@ -115,7 +117,7 @@ class SweepSpec:
     source : str
         Where the sweep came from (a path, or ``"<dict>"``), for messages.
     text : str
-        The sweep file's text (what ``--resume`` checks against).
+        The sweep file's text (written beside the results as ``sweep.toml``).
     """
 
     title: str
@@ -136,6 +138,13 @@ class SweepSpec:
     def name(self) -> str:
         """A short name: the sweep file's stem, or its title."""
         return Path(self.source).stem if self.source != "<dict>" else self.title
+
+    def count(self) -> int:
+        """How many points the grid has (without making it)."""
+        lengths = [len(v) for v in self.parameters.values()]
+        if self.combine == "zip":
+            return lengths[0] if lengths else 1
+        return math.prod(lengths)
 
     def grid(self) -> list[dict[str, Any]]:
         """The parameter values of every point, in order."""
@@ -187,8 +196,8 @@ class SweepSpec:
         return points
 
     def digest(self) -> str:
-        """A fingerprint of everything that decides the results (not the observables' order):
-        the base scene, the grid, the seeds and the run; ``--resume`` refuses another."""
+        """A fingerprint of everything that decides the table: the base scene, the grid, the
+        seeds, the run and the observables; ``--resume`` refuses another."""
         data = {
             "base": self.base,
             "until": self.until,
@@ -307,7 +316,7 @@ class SweepSpec:
             source=source,
             text=text,
         )
-        runs = len(spec.grid()) * (len(seeds) if seeds else 1)
+        runs = spec.count() * (len(seeds) if seeds else 1)
         if runs > MAX_POINTS:
             raise SweepError(
                 f"{where}: {runs:,} runs (points times seeds), more than the {MAX_POINTS:,} a "

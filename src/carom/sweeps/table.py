@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from carom.errors import CaromError
+from carom.io.outdir import write_whole
 from carom.sweeps.observe import has_theory
 from carom.sweeps.spec import Point, SweepSpec, show_value
 
@@ -83,8 +84,8 @@ class ResultsTable:
         """The (point, seed) of every row that succeeded."""
         return set(self.rows)
 
-    def add(self, point: Point, result: dict[str, Any]) -> list[str]:
-        """Append the row of a finished point and force it to disk; return the row."""
+    def add(self, point: Point, result: dict[str, Any]) -> None:
+        """Append the row of a finished point and force it to disk."""
         row = [str(point.index), "" if point.seed is None else str(point.seed)]
         row += [show_value(point.values[p]) for p in self.spec.parameters]
         row.append(result["status"])
@@ -97,7 +98,6 @@ class ResultsTable:
         self.file.flush()
         os.fsync(self.file.fileno())
         self.rows[point.key] = row
-        return row
 
     def close(self) -> None:
         self.file.close()
@@ -114,7 +114,7 @@ class ResultsTable:
         writer.writerow(self.header)
         for key in sorted(self.rows, key=lambda k: (k[0], -1 if k[1] is None else k[1])):
             writer.writerow(self.rows[key])
-        _replace(self.path, buffer.getvalue())
+        write_whole(self.path, buffer.getvalue())
 
 
 def _read(path: Path, header: list[str]) -> list[list[str]]:
@@ -135,16 +135,6 @@ def _read(path: Path, header: list[str]) -> list[list[str]]:
 
 def _key(row: list[str]) -> tuple[int, int | None]:
     return (int(row[0]), None if row[1] == "" else int(row[1]))
-
-
-def _replace(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename (never half-written)."""
-    temporary = path.with_name(f".{path.name}.tmp")
-    with temporary.open("w", newline="", encoding="utf-8") as handle:
-        handle.write(text)
-        handle.flush()
-        os.fsync(handle.fileno())
-    temporary.replace(path)
 
 
 def write_parquet(folder: Path, spec: SweepSpec) -> bool:
