@@ -10,6 +10,7 @@ Each check names the argument, the offending value (and its index in a batch) an
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -37,6 +38,14 @@ def _where(name: str, arr: NDArray[Any], bad: NDArray[np.bool_], item_ndim: int)
     return f"{name}[{row}] = {shown}"
 
 
+def _check_finite(name: str, arr: FloatArray, item_ndim: int, unit: str) -> None:
+    """Refuse non-finite or overflowing items of a vector or spin argument, by name."""
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        raise CaromError(f"{name} must be finite [{unit}]; got {_where(name, arr, bad, item_ndim)}")
+    check_magnitude(name, arr, unit)
+
+
 def as_float_array(name: str, value: ArrayLike) -> FloatArray:
     """Convert to a float64 array, refusing anything that is not numeric."""
     try:
@@ -51,13 +60,29 @@ class PairInputs:
     """Collects the arguments of one call, checks them and broadcasts them to a batch.
 
     Use :meth:`vector`, :meth:`scalar` to register arguments, then :meth:`broadcast`.
+    Shapes are checked as each argument is registered. Values are checked then too, unless
+    ``defer_values`` is set: a caller that checks values in its own pass (a Numba kernel) runs
+    :meth:`check_values` only when that pass finds a bad pair, to name it.
     """
 
     dim: int | None = None
     single: bool = True
+    defer_values: bool = False
     _vectors: dict[str, FloatArray] = field(default_factory=dict)
     _scalars: dict[str, FloatArray] = field(default_factory=dict)
     _spins: dict[str, FloatArray] = field(default_factory=dict)
+    _value_checks: list[Callable[[], None]] = field(default_factory=list)
+
+    def _values(self, check: Callable[[], None]) -> None:
+        if self.defer_values:
+            self._value_checks.append(check)
+        else:
+            check()
+
+    def check_values(self) -> None:
+        """Run the value checks deferred so far, in the order the arguments were registered."""
+        for check in self._value_checks:
+            check()
 
     def vector(self, name: str, value: ArrayLike, *, unit: str) -> None:
         """Register a position or velocity: shape (d,) or (n, d), d in {2, 3}, finite."""
@@ -81,10 +106,7 @@ class PairInputs:
                 f"{name} is {d}-dimensional but {first} is {self.dim}-dimensional; "
                 f"give every vector the same number of components"
             )
-        bad = ~np.isfinite(arr)
-        if bad.any():
-            raise CaromError(f"{name} must be finite [{unit}]; got {_where(name, arr, bad, 1)}")
-        check_magnitude(name, arr, unit)
+        self._values(lambda: _check_finite(name, arr, 1, unit))
         if arr.ndim == 2:
             self.single = False
         self._vectors[name] = arr
@@ -103,11 +125,7 @@ class PairInputs:
                 f"{name} is the spin [rad/s] and in {self.dim}D must be {want}; "
                 f"got shape {arr.shape}"
             )
-        bad = ~np.isfinite(arr)
-        if bad.any():
-            shown = _where(name, arr, bad, per_body_ndim)
-            raise CaromError(f"{name} must be finite [rad/s]; got {shown}")
-        check_magnitude(name, arr, "rad/s")
+        self._values(lambda: _check_finite(name, arr, per_body_ndim, "rad/s"))
         if arr.ndim == per_body_ndim + 1:
             self.single = False
         self._spins[name] = arr
@@ -130,33 +148,33 @@ class PairInputs:
             raise CaromError(
                 f"{name} must be a scalar or have shape (n,) for a batch; got shape {arr.shape}"
             )
-        ok = (arr > low) if low_open else (arr >= low)
-        ok &= arr <= high
-        if not allow_inf:
-            ok &= np.isfinite(arr)
-        bad = ~ok  # NaN fails every comparison, so it lands here too
-        if bad.any():
-            bracket = "(" if low_open else "["
-            top = "inf" if math.isinf(high) else f"{high:g}"
-            rng = f"{bracket}{low:g}, {top}]"
-            extra = f" ({hint})" if hint else ""
-            raise CaromError(
-                f"{name} must lie in {rng} [{unit}]{extra}; got {_where(name, arr, bad, 0)}"
-            )
-        finite = np.where(np.isfinite(arr), arr, 1.0)  # inf, where allowed, is not overflow
-        check_magnitude(name, finite, unit)
-        if low_open and low == 0.0:  # a positive size: not so small that it underflows
-            check_size(name, finite, unit)
+
+        def check() -> None:
+            ok = (arr > low) if low_open else (arr >= low)
+            ok &= arr <= high
+            if not allow_inf:
+                ok &= np.isfinite(arr)
+            bad = ~ok  # NaN fails every comparison, so it lands here too
+            if bad.any():
+                bracket = "(" if low_open else "["
+                top = "inf" if math.isinf(high) else f"{high:g}"
+                rng = f"{bracket}{low:g}, {top}]"
+                extra = f" ({hint})" if hint else ""
+                raise CaromError(
+                    f"{name} must lie in {rng} [{unit}]{extra}; got {_where(name, arr, bad, 0)}"
+                )
+            finite = np.where(np.isfinite(arr), arr, 1.0)  # inf, where allowed, is not overflow
+            check_magnitude(name, finite, unit)
+            if low_open and low == 0.0:  # a positive size: not so small that it underflows
+                check_size(name, finite, unit)
+
+        self._values(check)
         if arr.ndim == 1:
             self.single = False
         self._scalars[name] = arr
 
-    def broadcast(self) -> tuple[int, dict[str, FloatArray]]:
-        """Broadcast everything to one batch length ``n``; return ``n`` and the arrays.
-
-        Vectors come back as (n, d), spins as (n,) in 2D or (n, 3) in 3D, scalars as (n,).
-        Every array is a fresh contiguous copy, so callers may modify it.
-        """
+    def length(self) -> int:
+        """The common batch length ``n`` (1 for a single pair); refuse lengths that differ."""
         assert self.dim is not None
         lengths: dict[str, int] = {}
         for name, arr in self._vectors.items():
@@ -175,7 +193,27 @@ class PairInputs:
                 f"the batch arguments do not broadcast: their lengths differ ({listed}); "
                 f"give every batched argument the same length n, or a single value"
             )
-        n = sizes.pop() if sizes else 1
+        return sizes.pop() if sizes else 1
+
+    def rows(self, name: str) -> FloatArray:
+        """A registered argument as C-contiguous rows, without broadcasting: vectors and
+        spins ``(k, c)`` (a 2D spin has ``c = 1``), scalars ``(k,)``, with ``k`` 1 or ``n``."""
+        if name in self._vectors:
+            arr = self._vectors[name]
+            return np.ascontiguousarray(arr.reshape(-1, arr.shape[-1]))
+        if name in self._spins:
+            arr = self._spins[name]
+            return np.ascontiguousarray(arr.reshape(-1, 1 if self.dim == 2 else 3))
+        return np.ascontiguousarray(self._scalars[name].reshape(-1))
+
+    def broadcast(self) -> tuple[int, dict[str, FloatArray]]:
+        """Broadcast everything to one batch length ``n``; return ``n`` and the arrays.
+
+        Vectors come back as (n, d), spins as (n,) in 2D or (n, 3) in 3D, scalars as (n,).
+        Every array is a fresh contiguous copy, so callers may modify it.
+        """
+        assert self.dim is not None
+        n = self.length()
         out: dict[str, FloatArray] = {}
         for name, arr in self._vectors.items():
             out[name] = np.array(np.broadcast_to(arr, (n, self.dim)))
@@ -212,11 +250,6 @@ def cross_vector_vector(a: FloatArray, b: FloatArray) -> FloatArray:
     if a.shape[1] == 2:
         return a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
     return np.cross(a, b)
-
-
-def scale_rows(s: FloatArray, w: FloatArray) -> FloatArray:
-    """``s_i * w_i`` for per-row scalars ``s`` (n,) and rows ``w`` (n,) or (n, k)."""
-    return s * w if w.ndim == 1 else s[:, None] * w
 
 
 def inverse_mass(m: FloatArray) -> FloatArray:

@@ -96,3 +96,92 @@ def test_single_pair_returns_unbatched_shapes() -> None:
     assert r.w1.shape == (3,)
     assert np.ndim(r.ke_lost) == 0
     assert isinstance(r.applied, bool)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("law", list(LAWS))
+def test_out_is_written_over_with_the_bits_of_a_fresh_call(dim: int, law: str) -> None:
+    b = _batch(dim)
+    fresh = carom.collide(**b, **LAWS[law]())
+    other = _batch(dim, n=64)
+    other["v1"] = other["v1"][::-1].copy()  # a different batch of the same shape
+    out = carom.collide(**other, **LAWS[law]())
+    again = carom.collide(**b, **LAWS[law](), out=out)
+    assert again is out
+    for name, value in _fields(fresh).items():
+        if value is None:
+            assert getattr(out, name) is None
+        else:
+            np.testing.assert_array_equal(getattr(out, name), value, err_msg=name)
+
+
+def test_an_out_that_does_not_fit_is_refused_by_name() -> None:
+    b = _batch(3)
+    smooth = carom.collide(**{k: b[k] for k in ("x1", "v1", "m1", "x2", "v2", "m2", "e")})
+    with pytest.raises(carom.CaromError, match=r"out\.w1 does not fit .* shape \(64, 3\)"):
+        carom.collide(**b, beta=0.3, out=smooth)  # a rough call needs the spins' arrays
+    short = carom.collide(**{k: v[:10] for k, v in b.items()})
+    with pytest.raises(
+        carom.CaromError, match=r"out\.v1 does not fit .* shape \(64, 3\), got shape \(10, 3\)"
+    ):
+        carom.collide(**b, out=short)
+    with pytest.raises(carom.CaromError, match="out must be the CollisionResult"):
+        carom.collide(**b, out=np.zeros((64, 3)))  # type: ignore[arg-type]
+    with pytest.raises(carom.CaromError, match="a single pair returns scalars"):
+        carom.collide(**{k: v[0] for k, v in b.items()}, out=smooth)
+    result = carom.collide(**b)
+    with pytest.raises(carom.CaromError, match=r"out\.v1 shares memory with v1"):
+        carom.collide(**{**b, "v1": result.v1}, out=result)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_the_first_bad_pair_of_a_large_batch_is_named(dim: int) -> None:
+    # 20,000 pairs run in several blocks of the compiled pass (carom.laws.batch.BLOCK = 4096);
+    # the bad pairs lie in different blocks, and the first in index order is named
+    rng = np.random.default_rng(RNG_SEED)
+    n = 20_000
+    x2 = rng.normal(size=(n, dim))
+    args = {
+        "x1": x2 + 1.0,
+        "v1": rng.normal(size=(n, dim)),
+        "m1": np.ones(n),
+        "x2": x2,
+        "v2": rng.normal(size=(n, dim)),
+        "m2": np.ones(n),
+    }
+    args["m1"][[15_001, 9_002]] = -1.0, -2.0
+    with pytest.raises(carom.CaromError, match=r"m1\[9002\] = -2\.0"):
+        carom.collide(**args)
+    args["m1"][:] = 1.0
+    args["x2"][[19_999, 4_100]] = args["x1"][[19_999, 4_100]]
+    with pytest.raises(carom.CaromError, match=r"x1 and x2 coincide at index 4100"):
+        carom.collide(**args)
+    args["v2"][12_000, -1] = math.inf
+    with pytest.raises(carom.CaromError, match=r"v2 must be finite \[m/s\]; got v2\[12000\]"):
+        carom.collide(**args)  # argument checks come before the pair checks, as ever
+
+
+@pytest.mark.needs_jit
+def test_the_bits_do_not_depend_on_the_number_of_threads() -> None:
+    import numba
+
+    b = _batch(3, n=50_000)  # 13 blocks of the compiled pass
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = carom.collide(**b, friction=0.3, beta0=0.1)
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+        many = carom.collide(**b, friction=0.3, beta0=0.1)
+    finally:
+        numba.set_num_threads(before)
+    for name, value in _fields(one).items():
+        np.testing.assert_array_equal(getattr(many, name), value, err_msg=name)
+
+
+def test_the_compiled_pass_refuses_what_the_limits_refuse() -> None:
+    from carom import limits
+    from carom.laws import batch
+
+    # the kernel keeps its own copies of carom.limits' bounds (kernel constants live in the
+    # kernel packages, whose hash names the cache); they must be the same numbers
+    assert (batch.LARGEST, batch.SMALLEST) == (limits.LARGEST, limits.SMALLEST)

@@ -5,4 +5,4 @@ impulse between rigid bodies with inertia (:mod:`carom.laws.point_impulse`)."""
 from carom.jit import kernel_cache
 
 with kernel_cache():
-    from carom.laws import kernels, rigid_impact  # noqa: F401
+    from carom.laws import batch, kernels, rigid_impact  # noqa: F401

@@ -24,13 +24,11 @@ from carom._inputs import (
     FloatArray,
     PairInputs,
     check_not_both_static,
-    cross_scalar_vector,
-    cross_vector_vector,
     dot,
-    inverse_mass,
-    scale_rows,
 )
 from carom.errors import CaromError
+from carom.laws.batch import collide_rows
+from carom.laws.kernels import LAW_ROUGH, LAW_SMOOTH, LAW_WALTON
 
 __all__ = [
     "CollisionResult",
@@ -152,6 +150,7 @@ def collide(
     beta: ArrayLike | None = None,
     friction: ArrayLike | None = None,
     beta0: ArrayLike | None = None,
+    out: CollisionResult | None = None,
 ) -> CollisionResult:
     r"""Velocities (and spins) of two spheres or disks just after they collide.
 
@@ -200,6 +199,11 @@ def collide(
     beta0 : float or (n,) array_like, optional
         Walton's sticking tangential restitution in [-1, 1] [-], default 0 (plain Coulomb
         friction: a sticking contact stops slipping; glass beads have about 0.4).
+    out : CollisionResult, optional
+        The result of an earlier batch call with the same batch length, dimension and law,
+        to be written over instead of allocating new arrays (for calls in a loop). It is
+        returned. Its arrays must not share memory with the inputs. If the call raises, they
+        may have been partly written.
 
     Returns
     -------
@@ -249,6 +253,7 @@ def collide(
         radius2=radius2,
         with_spins=spins,
         radii_for="the rough laws" if rough else "spins",
+        defer_values=True,
     )
     assert inp.dim is not None
     dim = inp.dim
@@ -259,18 +264,144 @@ def collide(
         inp.scalar("friction", friction, low=0.0, high=math.inf, unit="-")
         inp.scalar("beta0", 0.0 if beta0 is None else beta0, low=-1.0, high=1.0, unit="-")
 
-    _, a = inp.broadcast()
-    check_not_both_static(a["m1"], a["m2"])
-    batch = _collide_batch(
-        a,
-        dim=dim,
-        rough=rough,
-        spins=spins,
-        walton=friction is not None,
-        q1=q1,
-        q2=q2,
-    )
+    walton = friction is not None
+    if out is not None and inp.single:
+        raise CaromError("out= takes the result of a batch call; a single pair returns scalars")
+    batch = _collide_rows(inp, rough=rough, spins=spins, walton=walton, q1=q1, q2=q2, out=out)
+    if batch is None:  # a pair was refused: name it, with the checks that know every argument
+        inp.check_values()
+        _, a = inp.broadcast()
+        check_not_both_static(a["m1"], a["m2"])
+        _check_centres_apart(a["x1"], a["x2"])
+        raise AssertionError("carom.laws.batch refused a pair that the argument checks accept")
     return batch.unbatched() if inp.single else batch
+
+
+def _collide_rows(
+    inp: PairInputs,
+    *,
+    rough: bool,
+    spins: bool,
+    walton: bool,
+    q1: float,
+    q2: float,
+    out: CollisionResult | None,
+) -> CollisionResult | None:
+    """:func:`collide` in one compiled pass (:func:`carom.laws.batch.collide_rows`); ``None``
+    when the pass refuses a pair, for the caller to name what is wrong."""
+    assert inp.dim is not None
+    n, dim = inp.length(), inp.dim
+    law = LAW_WALTON if walton else LAW_ROUGH if rough else LAW_SMOOTH
+    names = ["x1", "v1", "m1", "x2", "v2", "m2", "e"]
+    if spins:
+        names += ["w1", "w2", "radius1", "radius2"]
+    inputs = {name: inp.rows(name) for name in names}
+    if rough:
+        inputs["beta"] = inp.rows("beta0" if walton else "beta")
+    if walton:
+        inputs["friction"] = inp.rows("friction")
+    res = _result_arrays(n, dim, spins=spins, rough=rough, out=out, inputs=inputs)
+    unused = np.zeros(1)
+    no_spin = np.zeros((1, 1 if dim == 2 else 3))
+    # a refused pair may divide by zero; compiled, that is IEEE arithmetic without a word, and
+    # the same under NUMBA_DISABLE_JIT
+    with np.errstate(all="ignore"):
+        refused = collide_rows(
+            inputs["x1"],
+            inputs["v1"],
+            inputs["m1"],
+            inputs["x2"],
+            inputs["v2"],
+            inputs["m2"],
+            inputs["e"],
+            inputs.get("w1", no_spin),
+            inputs.get("w2", no_spin),
+            inputs.get("radius1", unused),
+            inputs.get("radius2", unused),
+            inputs.get("beta", unused),
+            inputs.get("friction", unused),
+            law,
+            spins,
+            q1,
+            q2,
+            res.v1,
+            res.v2,
+            no_spin if res.w1 is None else res.w1.reshape(n, -1),
+            no_spin if res.w2 is None else res.w2.reshape(n, -1),
+            res.impulse,
+            res.normal,
+            res.approach_speed,
+            res.separation_speed,
+            res.relative_speed_after,
+            res.ke_before,
+            res.ke_after,
+            res.ke_lost,
+            unused if res.beta is None else res.beta,
+            res.applied,
+        )
+    return None if refused >= 0 else res
+
+
+def _result_arrays(
+    n: int,
+    dim: int,
+    *,
+    spins: bool,
+    rough: bool,
+    out: CollisionResult | None,
+    inputs: dict[str, FloatArray],
+) -> CollisionResult:
+    """Fresh arrays for a batch's result, or ``out``'s once they are checked to fit."""
+    spin_shape = (n,) if dim == 2 else (n, 3)
+    shapes: dict[str, tuple[int, ...] | None] = {f.name: (n,) for f in fields(CollisionResult)}
+    shapes.update(v1=(n, dim), v2=(n, dim), impulse=(n, dim), normal=(n, dim))
+    shapes.update(w1=spin_shape if spins else None, w2=spin_shape if spins else None)
+    shapes.update(beta=(n,) if rough else None)
+    if out is None:
+        made: dict[str, Any] = {
+            name: None if shape is None else np.empty(shape, dtype=_dtype(name))
+            for name, shape in shapes.items()
+        }
+        return CollisionResult(**made)
+    if not isinstance(out, CollisionResult):
+        raise CaromError(
+            f"out must be the CollisionResult of an earlier batch call; got {type(out).__name__}"
+        )
+    taken: dict[str, FloatArray] = {}
+    for name, shape in shapes.items():
+        value = getattr(out, name)
+        if shape is None and value is None:
+            continue
+        fits = (
+            shape is not None
+            and isinstance(value, np.ndarray)
+            and value.shape == shape
+            and value.dtype == _dtype(name)
+            and value.flags.c_contiguous
+            and value.flags.writeable
+        )
+        if not fits:
+            need = (
+                "no array"
+                if shape is None
+                else f"a writeable C-contiguous {np.dtype(_dtype(name))} array of shape {shape}"
+            )
+            got = f"shape {value.shape}" if isinstance(value, np.ndarray) else repr(value)
+            raise CaromError(
+                f"out.{name} does not fit this call: it needs {need}, got {got}; pass the "
+                f"result of a batch call with the same length, dimension and law"
+            )
+        for other, arr in (*taken.items(), *inputs.items()):
+            if np.may_share_memory(value, arr):
+                where = f"out.{other}" if other in taken else other
+                raise CaromError(f"out.{name} shares memory with {where}; give it its own array")
+        taken[name] = value
+    return out
+
+
+def _dtype(name: str) -> type:
+    """The dtype of a result field: bool for ``applied``, float64 otherwise."""
+    return np.bool_ if name == "applied" else np.float64
 
 
 def read_pair(
@@ -288,13 +419,15 @@ def read_pair(
     radius2: ArrayLike | None,
     with_spins: bool,
     radii_for: str,
+    defer_values: bool = False,
 ) -> PairInputs:
     """Check the arguments every two-body law shares and register them for broadcasting.
 
     With ``with_spins`` the spins default to zero and both radii are required
-    (``radii_for`` says why, in the error).
+    (``radii_for`` says why, in the error). ``defer_values`` leaves the value checks to
+    :meth:`PairInputs.check_values`.
     """
-    inp = PairInputs()
+    inp = PairInputs(defer_values=defer_values)
     inp.vector("x1", x1, unit="m")
     inp.vector("v1", v1, unit="m/s")
     inp.vector("x2", x2, unit="m")
@@ -345,104 +478,13 @@ def inertia_factors(q: float | tuple[float, float] | None, dim: int) -> tuple[fl
     return out[0], out[1]
 
 
-def _collide_batch(
-    a: dict[str, FloatArray],
-    *,
-    dim: int,
-    rough: bool,
-    spins: bool,
-    walton: bool,
-    q1: float,
-    q2: float,
-) -> CollisionResult:
-    """The laws on broadcast (n, ...) arrays; see :func:`collide`."""
-    x1, v1, m1, x2, v2, m2, e = (a[k] for k in ("x1", "v1", "m1", "x2", "v2", "m2", "e"))
+def _check_centres_apart(x1: FloatArray, x2: FloatArray) -> None:
+    """Refuse a pair whose centres coincide: its line of centres is undefined."""
     r = x1 - x2
-    dist2 = dot(r, r)
-    coincident = dist2 == 0.0
+    coincident = dot(r, r) == 0.0
     if coincident.any():
         i = int(np.argmax(coincident))
         raise CaromError(
             f"x1 and x2 coincide at index {i} (both at {x1[i].tolist()}): the line of centres, "
             f"and so the contact normal, is undefined; give the centres at the instant of contact"
         )
-    n = r / np.sqrt(dist2)[:, None]
-    inv_m1 = inverse_mass(m1)
-    inv_m2 = inverse_mass(m2)
-    mu = 1.0 / (inv_m1 + inv_m2)
-
-    v_rel = v1 - v2
-    u = dot(v_rel, n)  # normal relative velocity; spin adds nothing along n
-    applied = u < 0.0
-    u_in = np.where(applied, u, 0.0)
-    J = (-(1.0 + e) * mu * u_in)[:, None] * n
-    ke_lost = 0.5 * mu * (1.0 - e * e) * u_in * u_in
-
-    w1 = a.get("w1")
-    w2 = a.get("w2")
-    radius1 = a.get("radius1")
-    radius2 = a.get("radius2")
-    beta_used: FloatArray | None = None
-    if rough:
-        assert w1 is not None and w2 is not None and radius1 is not None and radius2 is not None
-        g = (
-            v_rel
-            - cross_scalar_vector(scale_rows(radius1, w1), n)
-            - cross_scalar_vector(scale_rows(radius2, w2), n)
-        )
-        g_t = g - dot(g, n)[:, None] * n
-        g_t_norm = np.sqrt(dot(g_t, g_t))
-        inv_mu_t = inv_m1 * (1.0 + 1.0 / q1) + inv_m2 * (1.0 + 1.0 / q2)
-        mu_t = 1.0 / inv_mu_t
-        # Work with 1 + beta and 1 - beta, never beta itself: in a sliding contact with
-        # |g_t| >> |g_n| the Coulomb cap puts beta within a hair of -1, and forming -1 + x
-        # then 1 + beta would cancel most of x's digits (seen: 2.6e-12 relative excess over
-        # mu_f |J_n|); near beta = +1, 1 + beta rounds to 2 and 1 - beta^2 would vanish.
-        if walton:
-            beta0 = a["beta0"]
-            # Coulomb: |J_t| = (1 + beta) mu_t |g_t| <= mu_f |J_n| = mu_f (1 + e) mu |g_n|
-            with np.errstate(divide="ignore", invalid="ignore"):
-                cap = a["friction"] * (1.0 + e) * (mu / mu_t) * (-u_in) / g_t_norm
-            capped = (g_t_norm > 0.0) & (cap < 1.0 + beta0)
-            one_plus_beta = np.where(capped, cap, 1.0 + beta0)
-            one_minus_beta = np.where(capped, 2.0 - cap, 1.0 - beta0)
-            beta_used = np.where(capped, cap - 1.0, beta0)
-        else:
-            beta_used = a["beta"]
-            one_plus_beta = 1.0 + beta_used
-            one_minus_beta = 1.0 - beta_used
-        one_plus_beta = np.where(applied, one_plus_beta, 0.0)
-        J = J - (one_plus_beta * mu_t)[:, None] * g_t
-        ke_lost = ke_lost + 0.5 * mu_t * one_plus_beta * one_minus_beta * dot(g_t, g_t)
-
-    v1_after = v1 + J * inv_m1[:, None]
-    v2_after = v2 - J * inv_m2[:, None]
-    w1_after: FloatArray | None = None
-    w2_after: FloatArray | None = None
-    if spins:
-        assert w1 is not None and w2 is not None and radius1 is not None and radius2 is not None
-        torque_dir = cross_vector_vector(n, J)  # n x J: (n,) in 2D, (n, 3) in 3D
-        # w_i' = w_i - a_i (n x J) / (q_i m_i a_i^2) = w_i - (n x J) / (q_i m_i a_i)
-        s1 = inv_m1 / (q1 * radius1)
-        s2 = inv_m2 / (q2 * radius2)
-        w1_after = w1 - scale_rows(s1, torque_dir)
-        w2_after = w2 - scale_rows(s2, torque_dir)
-
-    rel_after = v1_after - v2_after
-    return CollisionResult(
-        v1=v1_after,
-        v2=v2_after,
-        w1=w1_after,
-        w2=w2_after,
-        impulse=J,
-        normal=n,
-        approach_speed=-u,
-        separation_speed=dot(rel_after, n),
-        relative_speed_after=np.sqrt(dot(rel_after, rel_after)),
-        ke_before=kinetic_energy(m1, v1, w1, radius1, q1) + kinetic_energy(m2, v2, w2, radius2, q2),
-        ke_after=kinetic_energy(m1, v1_after, w1_after, radius1, q1)
-        + kinetic_energy(m2, v2_after, w2_after, radius2, q2),
-        ke_lost=ke_lost,
-        beta=beta_used,
-        applied=applied,
-    )
