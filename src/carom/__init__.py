@@ -13,7 +13,7 @@ from carom.laws.spheres import CollisionResult, collide
 from carom.scene import Scene, SceneError, load_scene
 from carom.studies import hecker
 from carom.sweeps import sweep
-from carom.world import Frame, Material, World
+from carom.world import Frame, Material, Recording, World
 
 __all__ = [
     "CaromError",
@@ -21,6 +21,7 @@ __all__ = [
     "CollisionResult",
     "Frame",
     "Material",
+    "Recording",
     "Scene",
     "SceneError",
     "World",

@@ -25,14 +25,14 @@ import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, NoReturn
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from carom._inputs import as_float_array
 from carom.bodies import BODY_KINDS, KIND_DYNAMIC, Bodies
-from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, KIND_WALL, Counters
+from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, KIND_WALL, Counters, FrameArrays
 from carom.engines.edmd.driver import OVERLAP_TOLERANCE, EdmdEngine, Environment
 from carom.engines.edmd.settings import EdmdSettings
 from carom.engines.rigid.assemble import Partners, assemble
@@ -45,6 +45,7 @@ from carom.engines.rigid3d.model import Model3D, State3D
 from carom.errors import CaromError, CaromWarning
 from carom.limits import (
     MAX_BODIES,
+    MAX_FRAMES,
     RESOLUTION,
     check_body_count,
     check_magnitude,
@@ -63,7 +64,7 @@ from carom.shapes3d import (
     rotation_matrix,
 )
 
-__all__ = ["LOG_LIMIT", "Frame", "Material", "World"]
+__all__ = ["LOG_LIMIT", "RECORD_BYTES", "Frame", "Material", "Recording", "World"]
 
 FloatArray = NDArray[np.float64]
 #: the engines a World can run: "auto" picks "edmd" for spheres alone, "rigid" otherwise
@@ -94,6 +95,46 @@ class Frame:
     velocities: FloatArray
     orientations: FloatArray
     angular_velocities: FloatArray
+
+
+#: the most memory [bytes] one :meth:`World.record` call may fill with frames
+RECORD_BYTES = 2_000_000_000
+
+
+@dataclass(frozen=True)
+class Recording:
+    """Every body's state at each of ``F`` frame times (:meth:`World.record`).
+
+    Attributes
+    ----------
+    times : (F,) float64
+        [s].
+    positions, velocities : (F, N, d) float64
+        [m], [m/s]; periodic boxes wrap positions into the box.
+    orientations : (F, N) float64 in 2D, (F, N, 4) float64 in 3D
+        Angle about z [rad]; unit quaternion ``w, x, y, z`` (body to world).
+    angular_velocities : (F, N, 3) float64
+        [rad/s], world frame (2D: about z, column 2).
+    """
+
+    times: FloatArray
+    positions: FloatArray
+    velocities: FloatArray
+    orientations: FloatArray
+    angular_velocities: FloatArray
+
+    def __len__(self) -> int:
+        return len(self.times)
+
+    def frame(self, f: int) -> Frame:
+        """Frame ``f`` as a :class:`Frame` (views of the recording's arrays)."""
+        return Frame(
+            float(self.times[f]),
+            self.positions[f],
+            self.velocities[f],
+            self.orientations[f],
+            self.angular_velocities[f],
+        )
 
 
 class World:
@@ -813,6 +854,7 @@ class World:
 
             warm_up_3d()  # the kernels a step calls only on its first impact or sleep, too
         self.frame()
+        self.record(np.empty(0))  # the path of record() and frames(), frame-less
 
     @property
     def engine(self) -> EdmdEngine | RigidEngine | RigidEngine3D | None:
@@ -923,6 +965,154 @@ class World:
         ``log``, ``on_collisions`` and ``stop`` as for :meth:`run` (a stopped run yields no
         more frames).
         """
+        until = self._check_until(until)
+        if frame_interval is not None and not (
+            frame_interval > 0.0 and math.isfinite(frame_interval)
+        ):
+            raise CaromError(f"frame_interval must be a positive time [s]; got {frame_interval!r}")
+        engine = self.build()
+        sink = self._sink(log, on_collisions)
+        start = self._time
+        times = np.empty(1)
+        k = 1
+        while True:
+            target = until if frame_interval is None else min(until, start + k * frame_interval)
+            times[0] = target
+            if frame_interval is None:
+                try:
+                    reached = engine.advance(target, np.iinfo(np.int64).max, sink, stop)
+                finally:
+                    self._time = engine.time  # the target, or the last event before a stop
+            else:
+                out = FrameArrays.empty(1, self.n_bodies, self.dim)
+                try:  # one compiled call advances and samples (event-driven engine)
+                    reached = engine.advance_frames(times, sink, stop, out) == 1
+                finally:
+                    self._time = engine.time
+            self.reached = reached
+            if not reached:
+                return
+            if frame_interval is not None:
+                yield self._frame_of(out, 0)
+            if target >= until:
+                return
+            k += 1
+
+    def record(
+        self,
+        times: ArrayLike,
+        *,
+        log: bool | ArrayLike = False,
+        on_collisions: Callable[[NDArray[Any]], object] | None = None,
+        stop: Callable[[], bool] | None = None,
+    ) -> Recording:
+        """Advance through each of ``times`` in turn and return every body's state at each.
+
+        The frames of :meth:`frames`, all at once: the event-driven engine runs the whole
+        stretch in one compiled call, where :meth:`frames` makes a call per frame. The world
+        ends at the last time.
+
+        Parameters
+        ----------
+        times : (F,) array_like
+            Frame times [s], finite, non-decreasing, none before :attr:`time`.
+        log, on_collisions, stop
+            As for :meth:`run`. A stopped run returns the frames done before the stop.
+
+        Returns
+        -------
+        Recording
+            ``times`` (F,) and the states (F, N, ...) at them.
+
+        Raises
+        ------
+        CaromError
+            Times not finite, decreasing or before now, or frames that would take more than
+            :data:`RECORD_BYTES` of memory (use :meth:`frames` to stream them instead).
+        """
+        grid = np.ascontiguousarray(as_float_array("times", times))
+        if grid.ndim != 1:
+            raise CaromError(f"times must be a 1-D array of frame times [s]; got {grid.shape}")
+        # one pass when all is well (ascending between finite ends is finite throughout)
+        if grid.size and not (
+            math.isfinite(grid[0])
+            and math.isfinite(grid[-1])
+            and grid[0] >= self._time
+            and bool((grid[1:] >= grid[:-1]).all())
+        ):
+            self._refuse_times(grid)
+        per_frame = 8 * self.n_bodies * (2 * self.dim + (1 if self.dim == 2 else 4) + 3)
+        if grid.size * per_frame > RECORD_BYTES:
+            raise CaromError(
+                f"{grid.size:,} frames of {self.n_bodies:,} bodies take "
+                f"{grid.size * per_frame / 1e9:.1f} GB, more than the {RECORD_BYTES / 1e9:g} GB "
+                f"a recording may; record fewer times at once, or stream them with frames()"
+            )
+        engine = self.build()
+        sink = self._sink(log, on_collisions)
+        out = FrameArrays.empty(grid.size, self.n_bodies, self.dim)
+        try:
+            done = engine.advance_frames(grid, sink, stop, out)
+        finally:
+            self._time = engine.time
+        if grid.size:  # no frame asked, nothing said (prepare() warms this path so)
+            self.reached = done == grid.size
+        orientations = out.orientations[:done]
+        return Recording(
+            times=out.times[:done],
+            positions=out.positions[:done],
+            velocities=out.velocities[:done],
+            orientations=orientations[..., 0] if self.dim == 2 else orientations,
+            angular_velocities=out.angular_velocities[:done],
+        )
+
+    def _refuse_times(self, grid: FloatArray) -> NoReturn:
+        """Name the first frame time :meth:`record` cannot take."""
+        bad = ~np.isfinite(grid)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise CaromError(f"times must be finite [s]; got times[{i}] = {float(grid[i])!r}")
+        if grid[0] < self._time:
+            raise CaromError(
+                f"times must not start before the current time {self._time} s; "
+                f"got times[0] = {float(grid[0])!r}"
+            )
+        i = int(np.argmax(np.diff(grid) < 0.0))
+        raise CaromError(
+            f"times must not decrease; got times[{i}] = {float(grid[i])!r} then "
+            f"times[{i + 1}] = {float(grid[i + 1])!r}"
+        )
+
+    def frame_times(self, until: float, frame_interval: float) -> FloatArray:
+        """The times [s] at which :meth:`frames` yields, (F,): ``time + k frame_interval``
+        for k = 1, 2, ... while before ``until``, then ``until`` (for :meth:`record`)."""
+        until = self._check_until(until)
+        if not (frame_interval > 0.0 and math.isfinite(frame_interval)):
+            raise CaromError(f"frame_interval must be a positive time [s]; got {frame_interval!r}")
+        start = self._time
+        count = int(min((until - start) / frame_interval + 2.0, MAX_FRAMES + 2.0))
+        grid = start + np.arange(1, count + 1, dtype=np.float64) * frame_interval
+        grid = grid[grid < until]
+        if grid.size >= MAX_FRAMES:
+            raise CaromError(
+                f"{grid.size:,} frames or more: more than the {MAX_FRAMES:,} carom writes; "
+                f"take a longer frame_interval"
+            )
+        return np.append(grid, until)
+
+    def _frame_of(self, out: FrameArrays, f: int) -> Frame:
+        """Frame ``f`` of ``out`` as a :class:`Frame`."""
+        orient = out.orientations[f]
+        return Frame(
+            float(out.times[f]),
+            out.positions[f],
+            out.velocities[f],
+            orient[:, 0] if self.dim == 2 else orient,
+            out.angular_velocities[f],
+        )
+
+    def _check_until(self, until: float) -> float:
+        """``until`` as a float at or after the current time, or a CaromError naming it."""
         wrong = CaromError(
             f"until must be a finite time >= the current time {self._time} s; got {until!r}"
         )
@@ -934,28 +1124,7 @@ class World:
             raise wrong from None
         if not math.isfinite(until) or until < self._time:
             raise wrong
-        if frame_interval is not None and not (
-            frame_interval > 0.0 and math.isfinite(frame_interval)
-        ):
-            raise CaromError(f"frame_interval must be a positive time [s]; got {frame_interval!r}")
-        engine = self.build()
-        sink = self._sink(log, on_collisions)
-        start = self._time
-        k = 1
-        while True:
-            target = until if frame_interval is None else min(until, start + k * frame_interval)
-            try:
-                reached = engine.advance(target, np.iinfo(np.int64).max, sink, stop)
-            finally:
-                self._time = engine.time  # the target, or the last event before a stop
-            self.reached = reached
-            if not reached:
-                return
-            if frame_interval is not None:
-                yield self.frame()
-            if target >= until:
-                return
-            k += 1
+        return until
 
     def _sink(
         self, log: bool | ArrayLike, stream: Callable[[NDArray[Any]], object] | None

@@ -23,7 +23,9 @@ __all__ = [
     "STOP_CHECK_EVENTS",
     "Counters",
     "Engine",
+    "FrameArrays",
     "Sink",
+    "advance_frames_stepwise",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -107,6 +109,40 @@ class Counters(NamedTuple):
         return Counters(*(a - b for a, b in zip(self, other, strict=True)))  # type: ignore[arg-type]
 
 
+class FrameArrays(NamedTuple):
+    """Room for ``F`` frames of ``N`` bodies in ``d`` dimensions, written by
+    :meth:`Engine.advance_frames`; frame ``f`` is row ``f`` of each array.
+
+    Attributes
+    ----------
+    times : (F,) float64
+        The engine's clock at each frame [s].
+    positions, velocities : (F, N, d) float64
+        [m], [m/s].
+    orientations : (F, N, 1) float64 in 2D, (F, N, 4) float64 in 3D
+        The angle about z [rad]; the unit quaternion ``w, x, y, z``.
+    angular_velocities : (F, N, 3) float64
+        [rad/s], world frame (2D: about z, column 2).
+    """
+
+    times: FloatArray
+    positions: FloatArray
+    velocities: FloatArray
+    orientations: FloatArray
+    angular_velocities: FloatArray
+
+    @classmethod
+    def empty(cls, frames: int, n: int, dim: int) -> FrameArrays:
+        """Uninitialised room for ``frames`` frames of ``n`` bodies in ``dim`` dimensions."""
+        return cls(
+            np.empty(frames),
+            np.empty((frames, n, dim)),
+            np.empty((frames, n, dim)),
+            np.empty((frames, n, 1 if dim == 2 else 4)),
+            np.empty((frames, n, 3)),
+        )
+
+
 class Engine(Protocol):
     """An engine that advances bodies in time."""
 
@@ -127,6 +163,19 @@ class Engine(Protocol):
         where it is, consistent, and returns False. Returns True when it got there."""
         ...
 
+    def advance_frames(
+        self,
+        times: FloatArray,
+        sink: Sink | None,
+        stop: Callable[[], bool] | None,
+        out: FrameArrays,
+    ) -> int:
+        """Advance to each of ``times`` [s] in turn (non-decreasing, from the engine's clock
+        on) and write the state there into frame ``f`` of ``out``; ``sink`` and ``stop`` as
+        for :meth:`advance`. Returns the number of frames written: all, unless ``stop`` said
+        True (the engine then stands where it stopped)."""
+        ...
+
     def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Positions (N, d) [m], velocities (N, d) [m/s], orientations ((N,) angles [rad] in
         2D, (N, 4) unit quaternions ``w, x, y, z`` in 3D) and angular velocities (N, 3)
@@ -144,3 +193,39 @@ class Engine(Protocol):
     def arrays(self) -> dict[str, NDArray[Any]]:
         """Everything needed to continue bit for bit, as named arrays (for checkpoints)."""
         ...
+
+
+class _Sampled(Protocol):
+    @property
+    def time(self) -> float: ...
+
+    def advance(
+        self,
+        until: float,
+        max_events: int,
+        sink: Sink | None,
+        stop: Callable[[], bool] | None = None,
+    ) -> bool: ...
+
+    def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]: ...
+
+
+def advance_frames_stepwise(
+    engine: _Sampled,
+    times: FloatArray,
+    sink: Sink | None,
+    stop: Callable[[], bool] | None,
+    out: FrameArrays,
+) -> int:
+    """:meth:`Engine.advance_frames` as :meth:`Engine.advance` then :meth:`Engine.sample` for
+    each frame: for the engines whose step already costs far more than a call from Python."""
+    for f in range(len(times)):
+        if not engine.advance(float(times[f]), np.iinfo(np.int64).max, sink, stop):
+            return f
+        x, v, orient, w = engine.sample()
+        out.times[f] = engine.time
+        out.positions[f] = x
+        out.velocities[f] = v
+        out.orientations[f] = orient.reshape(len(orient), -1)
+        out.angular_velocities[f] = w
+    return len(times)

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import carom
+from carom.scene import find_scene, load_scene
 from tests.worlds import gas
 
 EPS = float(np.finfo(np.float64).eps)
@@ -114,3 +115,110 @@ def test_periodic_contact_points_lie_in_the_box() -> None:
     points = world.collisions["point"][:, :2]
     assert len(points) > 1000
     assert np.all((points >= 0.0) & (points < world.box))
+
+
+def _frames_as_arrays(frames: list[carom.Frame]) -> dict[str, np.ndarray]:
+    return {
+        "times": np.array([f.time for f in frames]),
+        "positions": np.stack([f.positions for f in frames]),
+        "velocities": np.stack([f.velocities for f in frames]),
+        "orientations": np.stack([f.orientations for f in frames]),
+        "angular_velocities": np.stack([f.angular_velocities for f in frames]),
+    }
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: gas(3, 6, 0.3, seed=5, e=0.9),  # periodic, dissipative
+        lambda: gas(2, 8, 0.4, seed=2, boundary="walls", e=0.95),
+        lambda: load_scene(find_scene("bouncing-ball")).build(),  # gravity; it comes to rest
+        lambda: load_scene(find_scene("dominoes")).build(),  # the 2D rigid engine, step by step
+    ],
+)
+def test_a_recording_is_the_frames_bit_for_bit(make) -> None:  # type: ignore[no-untyped-def]
+    # World.record runs many frames in one compiled call; World.frames makes one call a frame:
+    # the same events, the same samples
+    streamed = make()
+    until = streamed.time + 3.0
+    frames = _frames_as_arrays(list(streamed.frames(until, 0.05)))
+    recorded = make()
+    times = recorded.frame_times(until, 0.05)
+    rec = recorded.record(times, log=True)
+    assert len(rec) == len(times) == len(frames["times"])
+    for name, value in frames.items():
+        np.testing.assert_array_equal(getattr(rec, name), value, err_msg=name)
+    assert recorded.time == streamed.time == until
+    np.testing.assert_array_equal(recorded.positions, streamed.positions)
+    assert recorded.reached
+
+
+def test_a_recording_goes_on_through_growing_lists() -> None:
+    # the lists overflow mid-recording: they grow, the engine's compiled handle is made again
+    # on the new arrays, and the frames are those of a world that never ran short
+    roomy = gas(3, 7, 0.45, seed=8, e=0.9)
+    times = roomy.frame_times(5.0, 0.1)
+    expected = roomy.record(times)
+    cramped = gas(3, 7, 0.45, seed=8, e=0.9)
+    engine = cramped.build()
+    tight = int(engine.neighbour_counts().max())
+    engine.resize_grid(tight, engine.cell_capacity)
+    got = cramped.record(times)
+    assert engine.capacity > tight
+    np.testing.assert_array_equal(got.positions, expected.positions)
+    np.testing.assert_array_equal(got.velocities, expected.velocities)
+
+
+def test_a_stopped_recording_returns_the_frames_before_the_stop() -> None:
+    world = gas(2, 20, 0.3, seed=3)
+    asked = [0]
+
+    def stop() -> bool:
+        asked[0] += 1
+        return True  # at the first chance: after the first block of 65,536 events
+
+    times = world.frame_times(200.0, 0.01)
+    rec = world.record(times, stop=stop)
+    assert asked[0] == 1
+    assert not world.reached
+    assert 0 < len(rec) < len(times)
+    assert rec.times[-1] <= world.time < times[len(rec)]
+    again = gas(2, 20, 0.3, seed=3)
+    whole = again.record(times[: len(rec)])
+    np.testing.assert_array_equal(rec.positions, whole.positions)
+
+
+def test_frame_times_are_the_times_frames_yields() -> None:
+    world = gas(2, 5, 0.2, seed=0)
+    assert world.frame_times(1.0, 0.25).tolist() == [0.25, 0.5, 0.75, 1.0]
+    assert world.frame_times(1.0, 0.3).tolist() == [0.3, 0.6, 0.8999999999999999, 1.0]
+    assert [f.time for f in world.frames(1.0, 0.3)] == [0.3, 0.6, 0.8999999999999999, 1.0]
+
+
+@pytest.mark.parametrize(
+    ("times", "pattern"),
+    [
+        ([0.1, 0.3, 0.2], r"times must not decrease; got times\[1\] = 0\.3 then times\[2\] = 0\.2"),
+        ([-1.0, 0.5], r"times must not start before the current time 0\.0 s; got times\[0\]"),
+        ([0.1, float("nan")], r"times must be finite \[s\]; got times\[1\] = nan"),
+        ([[0.1, 0.2]], r"times must be a 1-D array"),
+        (["soon"], r"times must be numeric"),
+    ],
+)
+def test_bad_recording_times_are_refused_by_name(times: object, pattern: str) -> None:
+    world = gas(2, 5, 0.2, seed=0)
+    with pytest.raises(carom.CaromError, match=pattern):
+        world.record(times)  # type: ignore[arg-type]
+    assert world.time == 0.0
+
+
+def test_a_recording_too_large_for_memory_is_refused_first(monkeypatch: pytest.MonkeyPatch) -> None:
+    import carom.world
+
+    monkeypatch.setattr(carom.world, "RECORD_BYTES", 9_000)
+    # 25 disks, 8 float64 each a frame (position 2, velocity 2, angle, spin 3): 1600 bytes
+    world = gas(2, 5, 0.2, seed=0)
+    with pytest.raises(carom.CaromError, match=r"6 frames of 25 bodies take .* stream them"):
+        world.record(np.linspace(0.1, 0.6, 6))
+    assert world.time == 0.0
+    assert len(world.record(np.linspace(0.1, 0.5, 5))) == 5

@@ -10,24 +10,37 @@ import numpy as np
 from carom.compare.rigid import RigidScene
 from carom.compare.rigid3d import RigidScene3D
 from carom.compare.spec import PeerScene
-from carom.world import Frame
+from carom.world import Frame, Recording
 
 __all__ = ["start"]
+
+
+#: the most memory [bytes] one stretch of recorded frames may take
+CHUNK_BYTES = 8 << 20
 
 
 class CaromSimulation:
     """carom advancing frame by frame; it has no time step, so ``dt`` is the frame interval.
 
     Between frames it jumps from collision to collision; the frames only tell the monitor
-    where the bodies are.
+    where the bodies are. The frames are recorded a stretch at a time (``World.record``: one
+    compiled call runs the events of many frames and samples each), and each step moves on to
+    the next one; the stretch's call is timed in the step that makes it.
     """
 
     def __init__(self, scene: PeerScene) -> None:
         world = scene.world()  # the scene's own world: its combine rule, t_c and all
         self.dt = scene.frame_interval
         world.prepare()  # the set-up (neighbour grid, first predictions, kernels) is not timed
-        self._frame: Frame = world.frame()
-        self._frames = world.frames(scene.duration(self.dt), self.dt)
+        self._world = world
+        first = world.frame()
+        self._first = first.positions, first.velocities
+        self._times = world.frame_times(scene.duration(self.dt), self.dt)
+        per_frame = first.positions.nbytes * 13 // world.dim  # every array of a frame
+        self._stretch = max(1, CHUNK_BYTES // max(per_frame, 1))
+        self._recording: Recording | None = None  # None: at the start, before any step
+        self._next = 0  # the first frame time not yet recorded
+        self._row, self._rows = -1, 0  # the row handed over, of the recording's rows
         self.settings: dict[str, Any] = {
             "method": "event-driven: exact times of impact, one impulse per collision",
             "frame_interval_s": self.dt,
@@ -40,10 +53,17 @@ class CaromSimulation:
         ]
 
     def step(self) -> None:
-        self._frame = next(self._frames)
+        self._row += 1
+        if self._row == self._rows:  # the stretch is used up: record the next one
+            stretch = self._times[self._next : self._next + self._stretch]
+            self._recording = self._world.record(stretch)
+            self._next += len(stretch)
+            self._row, self._rows = 0, len(stretch)
 
     def state(self) -> tuple[np.ndarray, np.ndarray]:
-        return self._frame.positions, self._frame.velocities
+        if self._recording is None:
+            return self._first
+        return self._recording.positions[self._row], self._recording.velocities[self._row]
 
     def close(self) -> None:
         pass

@@ -9,4 +9,4 @@ grid), ``prefetch``, and ``driver`` (the :class:`carom.engines.base.Engine` that
 from carom.jit import kernel_cache
 
 with kernel_cache():
-    from carom.engines.edmd import calendar, collide, loop, neighbours, predict  # noqa: F401
+    from carom.engines.edmd import calendar, collide, handle, loop, neighbours, predict  # noqa: F401

@@ -10,7 +10,7 @@ EV_PAIR = 1
 EV_WALL = 2  # other = face: 2k lower, 2k + 1 upper wall of axis k; 2 dim + p plane p
 EV_SHELL = 3
 
-# why the loop (carom.engines.edmd.loop.run) returned
+# why the loop (carom.engines.edmd.loop.run_frames) returned
 DONE = 0
 LOG_FULL = 1
 MAX_EVENTS = 2

@@ -22,9 +22,11 @@ from carom.engines.base import (
     KIND_WALL,
     STOP_CHECK_EVENTS,
     Counters,
+    FrameArrays,
     Sink,
 )
 from carom.engines.edmd import codes, loop, neighbours
+from carom.engines.edmd.handle import advance_frames, new_handle, sample_now
 from carom.engines.edmd.model import Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
 from carom.engines.edmd.ordering import spatial_order
@@ -40,6 +42,9 @@ LOG_CAPACITY = 1 << 16
 #: Overlaps and box excursions smaller than this fraction of the radii are round-off, not errors
 OVERLAP_TOLERANCE = 1e-12
 
+
+#: what a call that samples nothing passes for the frames it does not write
+_NO_FRAMES = FrameArrays.empty(1, 1, 3)
 
 #: The cell grid holds at most this many cells per body (and at least MIN_CELLS in all)
 CELLS_PER_BODY = 16
@@ -115,6 +120,30 @@ class EdmdEngine:
     """
 
     name = "edmd"
+    _handle: Any = None
+
+    @property
+    def state(self) -> State:
+        """The changing arrays (:mod:`carom.engines.edmd.state`), in engine order."""
+        return self._state
+
+    @state.setter
+    def state(self, value: State) -> None:
+        self._state = value
+        self._handle = None  # it held the arrays replaced
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Copies and pickles leave the handle behind; it is made again on first use."""
+        attributes = self.__dict__.copy()
+        attributes["_handle"] = None
+        return attributes
+
+    def _compiled(self) -> Any:
+        """The engine handle on the model, state and order (:mod:`carom.engines.edmd.handle`),
+        made again after the state's arrays were replaced."""
+        if self._handle is None:
+            self._handle = new_handle(self.model, self._state, self.order)
+        return self._handle
 
     def __init__(
         self,
@@ -257,25 +286,55 @@ class EdmdEngine:
         """Process events in time order until ``until`` [s] (the clock then reads ``until``)
         or ``max_events`` events; collisions go to ``sink`` if given (the log buffer is
         emptied into it whenever it fills), and the lists grow whenever one overflows.
+        Returns False if ``stop`` said True (see :meth:`_drive`)."""
+        reached, _ = self._drive(np.array([until], dtype=np.float64), max_events, sink, stop)
+        return reached
 
-        The loop runs in blocks of :data:`STOP_CHECK_EVENTS` events, so Python's signal
+    def advance_frames(
+        self,
+        times: FloatArray,
+        sink: Sink | None,
+        stop: Callable[[], bool] | None,
+        out: FrameArrays,
+    ) -> int:
+        """Process events up to each of ``times`` in turn and write every body's state there
+        into frame ``f`` of ``out``, in one compiled call for the lot
+        (:func:`carom.engines.edmd.handle.advance_frames`); returns the frames written."""
+        _, done = self._drive(times, np.iinfo(np.int64).max, sink, stop, out)
+        return done
+
+    def _drive(
+        self,
+        times: FloatArray,
+        max_events: int,
+        sink: Sink | None,
+        stop: Callable[[], bool] | None,
+        out: FrameArrays | None = None,
+    ) -> tuple[bool, int]:
+        """Run the kernel through ``times`` (sampling into ``out`` if given): whether it got
+        through them (or through ``max_events`` events), and how many frames it finished.
+
+        The kernel runs in blocks of :data:`STOP_CHECK_EVENTS` events, so Python's signal
         handlers run between them (Ctrl-C is seen within a fraction of a second) and ``stop``
-        is asked; if it says True, the clock stays at the last event and False is returned.
-        Blocks change no bit: the loop ends and resumes between two events.
+        is asked; if it says True, the clock stays at the last event. Blocks change no bit:
+        the loop ends and resumes between two events.
         """
+        frames = out if out is not None else _NO_FRAMES
+        done = np.zeros(1, dtype=np.int64)
         remaining = max_events
         while True:
-            before = int(self.state.counts[codes.C_EVENTS])
+            counts = self.state.counts
+            before = int(counts[codes.C_EVENTS])
             block = min(remaining, STOP_CHECK_EVENTS)
-            status = loop.run(self.model, self.state, until, block, sink is not None)
+            status = advance_frames(
+                self._compiled(), times, block, sink is not None, out is not None, done, *frames
+            )
             self._drain(sink)
-            remaining -= int(self.state.counts[codes.C_EVENTS]) - before
+            remaining -= int(counts[codes.C_EVENTS]) - before
             if status == codes.DONE or (status == codes.MAX_EVENTS and remaining <= 0):
-                return True
+                return True, int(done[0])
             if stop is not None and stop():
-                return False
-            if status == codes.MAX_EVENTS:
-                continue
+                return False, int(done[0])
             if status in (codes.LISTS_FULL, codes.CELLS_FULL):
                 self._grow(status)
                 self.resize_grid(self.capacity, self.cell_capacity)
@@ -367,17 +426,9 @@ class EdmdEngine:
     def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Positions (N, d), velocities (N, d), orientations ((N, 1) or (N, 4)) and angular
         velocities (N, 3) at the engine's clock, in the caller's numbering."""
-        dim, n = self.env.dim, self.bodies.n
-        x, v = np.empty((n, dim)), np.empty((n, dim))
-        loop.positions_at(self.model, self.state, self.time, x, v)
-        orient = np.empty((n, 1 if dim == 2 else 4))
-        loop.orientations_at(self.model, self.state, self.time, orient)
-        return (
-            self._to_user(x),
-            self._to_user(v),
-            self._to_user(orient),
-            self._to_user(self.state.w),
-        )
+        out = FrameArrays.empty(1, self.bodies.n, self.env.dim)
+        sample_now(self._compiled(), *out)
+        return out.positions[0], out.velocities[0], out.orientations[0], out.angular_velocities[0]
 
     def counters(self) -> Counters:
         c, s = self.state.counts, self.state.sums

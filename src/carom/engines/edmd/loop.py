@@ -68,7 +68,7 @@ from carom.geometry.toi import INF
 # compile without reference counting (see the module docstring); an internal Numba flag
 NO_REFCOUNTING: dict[str, Any] = {"_nrt": False}
 _F = TypeVar("_F", bound=Callable[..., Any])
-_njit_without_refcounting = cast(
+njit_without_refcounting = cast(
     Callable[[_F], _F], njit(cache=True, error_model="numpy", **NO_REFCOUNTING)
 )
 
@@ -136,14 +136,45 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
     return DONE
 
 
-@_njit_without_refcounting
+@njit(cache=True, error_model="numpy")
 def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ignore[no-untyped-def]
-    """Process events in time order up to ``t_stop``; return why it stopped.
+    """Process events in time order up to ``t_stop``; return why it stopped (as
+    :func:`run_frames`, for one time and no frame)."""
+    times = np.full(1, t_stop)
+    done = np.zeros(1, dtype=np.int64)
+    order = np.zeros(1, dtype=np.int64)
+    no_frame = np.zeros((1, 1, 3))
+    return run_frames(
+        m, s, order, times, max_events, log_on, False, done, times, no_frame, no_frame,
+        no_frame, no_frame,
+    )  # fmt: skip
 
-    ``DONE``: the next event is after ``t_stop`` (the clock is set to ``t_stop``);
-    ``LOG_FULL``: the event log needs emptying; ``MAX_EVENTS``: ``max_events`` processed;
+
+@njit_without_refcounting
+def run_frames(  # type: ignore[no-untyped-def]
+    m,
+    s,
+    order,
+    times,
+    max_events: int,
+    log_on: bool,
+    sample: bool,
+    done,
+    t_out,
+    x_out,
+    v_out,
+    orient_out,
+    w_out,
+) -> int:
+    """Process events in time order up to each of ``times`` in turn, from frame ``done[0]``
+    on; with ``sample``, write every body's state at each into that frame of the outputs
+    (:func:`write_frame`); count each frame done in ``done[0]``. Return why it stopped.
+
+    ``DONE``: every frame is done (the clock reads the last time); ``LOG_FULL``: the event
+    log needs emptying; ``MAX_EVENTS``: ``max_events`` processed in this call;
     ``LISTS_FULL`` / ``CELLS_FULL``: a neighbour list or a cell row is full (grow them and
     rebuild them all; the schedule stays valid, and the event that overflowed runs again).
+    Called again with the same ``done``, it goes on where it stopped.
     """
     # unpack once: the hot functions take plain arrays (see the module docstring)
     kin = s.kin
@@ -173,13 +204,26 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
     dim = x.shape[1]
     processed = 0
     log_cap = log_time.shape[0]
+    if done[0] >= times.shape[0]:
+        return DONE
+    t_stop = times[done[0]]
     while True:
         i = calendar_top(ev_time, cal)
         T = ev_time[i] if i >= 0 else INF
         if t_stop < T or math.isinf(T):
             if t_stop < INF:
                 s.clock[0] = t_stop
-            return DONE
+            f = done[0]
+            if sample:
+                write_frame(
+                    kin, acc, s.orient, s.orient_t, w, box, periodic, order, t_stop, f,
+                    t_out, x_out, v_out, orient_out, w_out,
+                )  # fmt: skip
+            done[0] = f + 1
+            if f + 1 >= times.shape[0]:
+                return DONE
+            t_stop = times[f + 1]
+            continue
         if processed >= max_events:
             return MAX_EVENTS
         if log_on and log_n[0] + 1 > log_cap:
@@ -293,27 +337,30 @@ def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ign
             calendar_update(ev_time, body, cal)
 
 
-@njit(cache=True, error_model="numpy")
-def positions_at(m, s, T: float, x_out: np.ndarray, v_out: np.ndarray) -> None:  # type: ignore[no-untyped-def]
-    """Every body's position and velocity at time ``T`` (periodic: wrapped into the box)."""
-    dim = m.box.shape[0]
-    x, v, t = kinematic_views(s.kin, dim)
+@njit_without_refcounting
+def write_frame(  # type: ignore[no-untyped-def]
+    kin, acc, orient, orient_t, w, box, periodic, order, t_f, f, t_out, x_out, v_out,
+    orient_out, w_out,
+) -> None:  # fmt: skip
+    """Write each body's position, velocity, orientation (a 2D angle in column 0, a 3D
+    quaternion) and spin at ``t_f`` [s] into ``[f, order[i]]`` of the outputs (periodic
+    positions wrapped into the box), and ``t_f`` into ``t_out[f]``. ``t_f`` is at or after
+    every body's own clock."""
+    t_out[f] = t_f
+    dim = box.shape[0]
+    x, v, t = kinematic_views(kin, dim)
+    frame = orient_out[f]
     for i in range(x.shape[0]):
-        dt = T - t[i]
+        r = order[i]
+        dt = t_f - t[i]
         for k in range(dim):
-            a = s.acc[i, k]
-            x_out[i, k] = x[i, k] + (v[i, k] + 0.5 * a * dt) * dt
-            v_out[i, k] = v[i, k] + a * dt
-            if m.periodic:
-                x_out[i, k] -= m.box[k] * np.floor(x_out[i, k] / m.box[k])
-
-
-@njit(cache=True, error_model="numpy")
-def orientations_at(m, s, T: float, out: np.ndarray) -> None:  # type: ignore[no-untyped-def]
-    """Every body's orientation at time ``T`` (rows of ``out``: 2D angle in column 0, 3D
-    quaternion): spins are constant since each body's orientation clock."""
-    dim = m.box.shape[0]
-    for i in range(out.shape[0]):
-        for k in range(out.shape[1]):
-            out[i, k] = s.orient[i, k]
-        turn(out, i, s.w[i, 0], s.w[i, 1], s.w[i, 2], T - s.orient_t[i], dim)
+            a = acc[i, k]
+            x_out[f, r, k] = x[i, k] + (v[i, k] + 0.5 * a * dt) * dt
+            v_out[f, r, k] = v[i, k] + a * dt
+            if periodic:
+                x_out[f, r, k] -= box[k] * np.floor(x_out[f, r, k] / box[k])
+        for k in range(frame.shape[1]):
+            frame[r, k] = orient[i, k]
+        turn(frame, r, w[i, 0], w[i, 1], w[i, 2], t_f - orient_t[i], dim)
+        for k in range(3):
+            w_out[f, r, k] = w[i, k]

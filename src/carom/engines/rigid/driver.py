@@ -25,7 +25,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, Counters, Sink
+from carom.engines.base import (
+    COLLISION_DTYPE,
+    KIND_PAIR,
+    Counters,
+    FrameArrays,
+    Sink,
+    advance_frames_stepwise,
+)
 from carom.engines.rigid import broadphase, contacts, impacts, islands, motion, solver
 from carom.engines.rigid.assemble import Partners
 from carom.engines.rigid.model import RigidModel, RigidState, grid_cell
@@ -85,6 +92,19 @@ class SteppedEngine:
             if stop is not None and (k + 1) % STOP_CHECK_STEPS == 0 and stop():
                 return False
         return True
+
+    def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        raise NotImplementedError
+
+    def advance_frames(
+        self,
+        times: FloatArray,
+        sink: Sink | None,
+        stop: Callable[[], bool] | None,
+        out: FrameArrays,
+    ) -> int:
+        """Step to each of ``times`` and sample there (:func:`advance_frames_stepwise`)."""
+        return advance_frames_stepwise(self, times, sink, stop, out)
 
     def counters(self) -> Counters:
         return Counters(
