@@ -33,7 +33,8 @@ LAWS = ("smooth", "rough", "walton")
 SNIPPET = """
 import json, statistics, sys, time
 import numpy as np
-dim, law, n, repeats, mode = int(sys.argv[1]), sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
+dim, law, mode = int(sys.argv[1]), sys.argv[2], sys.argv[5]
+n, repeats = int(sys.argv[3]), int(sys.argv[4])
 if mode == "1 thread":
     import numba
     numba.set_num_threads(1)
