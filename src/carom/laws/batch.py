@@ -82,6 +82,12 @@ def _out(x: float, low: float, high: float) -> bool:
     return not ((x >= low) & (x <= high))
 
 
+@njit(cache=True, error_model="numpy")
+def _huge(x0: float, x1: float, x2: float) -> bool:
+    """True if a component is not a number or beyond ``LARGEST`` in size."""
+    return _out(x0, -LARGEST, LARGEST) | _out(x1, -LARGEST, LARGEST) | _out(x2, -LARGEST, LARGEST)
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
 def collide_rows(
     x1: np.ndarray,
@@ -152,18 +158,10 @@ def collide_rows(
             mass2 = m2[im2]
             ei = e[ie]
             refused = (
-                _out(a0, -LARGEST, LARGEST)
-                | _out(a1, -LARGEST, LARGEST)
-                | _out(a2, -LARGEST, LARGEST)
-                | _out(b0, -LARGEST, LARGEST)
-                | _out(b1, -LARGEST, LARGEST)
-                | _out(b2, -LARGEST, LARGEST)
-                | _out(p0, -LARGEST, LARGEST)
-                | _out(p1, -LARGEST, LARGEST)
-                | _out(p2, -LARGEST, LARGEST)
-                | _out(s0, -LARGEST, LARGEST)
-                | _out(s1, -LARGEST, LARGEST)
-                | _out(s2, -LARGEST, LARGEST)
+                _huge(a0, a1, a2)
+                | _huge(b0, b1, b2)
+                | _huge(p0, p1, p2)
+                | _huge(s0, s1, s2)
                 | ((mass1 != math.inf) & _out(mass1, SMALLEST, LARGEST))
                 | ((mass2 != math.inf) & _out(mass2, SMALLEST, LARGEST))
                 | ((mass1 == math.inf) & (mass2 == math.inf))
@@ -197,12 +195,8 @@ def collide_rows(
                 rad2 = radius2[ir2]
                 refused = (
                     refused
-                    | _out(w10, -LARGEST, LARGEST)
-                    | _out(w11, -LARGEST, LARGEST)
-                    | _out(w12, -LARGEST, LARGEST)
-                    | _out(w20, -LARGEST, LARGEST)
-                    | _out(w21, -LARGEST, LARGEST)
-                    | _out(w22, -LARGEST, LARGEST)
+                    | _huge(w10, w11, w12)
+                    | _huge(w20, w21, w22)
                     | _out(rad1, SMALLEST, LARGEST)
                     | _out(rad2, SMALLEST, LARGEST)
                 )
