@@ -1,11 +1,12 @@
 """Where the event loop spends its time, in CPU cycles, phase by phase.
 
 Wall-clock timings on shared machines vary by about 15% run to run, and perf cannot see into
-Numba's JIT code. This tool builds a copy of ``carom.engines.edmd.loop.run`` with the CPU's cycle
-counter (LLVM ``readcyclecounter``) read around each phase, runs it on a melted hard-sphere
-gas, and prints nanoseconds per collision for: processing a pair event (advance both bodies,
-apply the impulse), a shell event (advance, rebuild the neighbour list), predictions, calendar
-updates, and the rest. It is a development tool; its figures are not recorded in RESULTS.md.
+Numba's JIT code. This tool builds a copy of ``carom.engines.edmd.loop.run_frames`` with the
+CPU's cycle counter (LLVM ``readcyclecounter``) read around each phase, runs it on a melted
+hard-sphere gas, and prints nanoseconds per collision for: processing a pair event (advance
+both bodies, apply the impulse), a shell event (advance, rebuild the neighbour list),
+predictions, calendar updates, and the rest. It is a development tool; its figures are not
+recorded in RESULTS.md.
 
 Run:  python benchmarks/profile_edmd.py [--sizes 1000 10000 100000] [--dim 3] [--packing 0.3]
 """
@@ -42,7 +43,7 @@ def cycles() -> int:
     return _cycles()  # type: ignore[no-any-return]
 
 
-# Text anchors in edmd.run where counters go; if run changes, these say so loudly.
+# Text anchors in loop.run_frames where counters go; if it changes, these say so loudly.
 ANCHORS = {
     "        kind = ev_kind[i]\n        j = -1": (
         "        c0 = _cycles()\n        kind = ev_kind[i]\n        j = -1"
@@ -70,24 +71,52 @@ ANCHORS = {
 
 
 def instrumented_run() -> Any:
-    """``edmd.run`` with cycle counters added at the anchors, compiled fresh."""
-    source = inspect.getsource(loop.run.py_func)
+    """``loop.run_frames`` with cycle counters added at the anchors, compiled fresh; it takes
+    ``(m, s, t_stop, max_events, log_on, cyc)`` and samples no frame."""
+    source = inspect.getsource(loop.run_frames.py_func)
     source = source.split("\n", 1)[1]  # drop the decorator
-    source = source.replace(
-        "def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:",
-        "def run_prof(m, s, t_stop, max_events, log_on, cyc):",
+    head, body = source.split(") -> int:\n", 1)
+    if not head.startswith("def run_frames("):
+        raise SystemExit("loop.run_frames changed: its signature; update instrumented_run")
+    source = (
+        "def run_prof(m, s, order, times, max_events, log_on, sample, done, t_out, x_out,"
+        " v_out, orient_out, w_out, cyc):\n" + body
     )
     for anchor, replacement in ANCHORS.items():
         if anchor not in source:
-            raise SystemExit(f"edmd.run changed: anchor not found: {anchor!r}; update ANCHORS")
+            raise SystemExit(f"run_frames changed: anchor not found: {anchor!r}; update ANCHORS")
         source = source.replace(anchor, replacement)
     namespace: dict[str, Any] = {
         **vars(loop),
         "_cycles": _cycles,
+        "EV_SHELL": codes.EV_SHELL,
         "rebuild_shell": neighbours.rebuild_shell,
     }
-    exec(compile(source, "<instrumented edmd.run>", "exec"), namespace)
-    return njit(error_model="numpy", **loop.NO_REFCOUNTING)(namespace["run_prof"])
+    exec(compile(source, "<instrumented run_frames>", "exec"), namespace)
+    loop_prof = njit(error_model="numpy", **loop.NO_REFCOUNTING)(namespace["run_prof"])
+    order, done = np.zeros(1, np.int64), np.zeros(1, np.int64)
+    times, none = np.zeros(1), np.zeros((1, 1, 3))
+
+    def run_prof(m: Any, s: Any, t_stop: float, max_events: int, log_on: bool, cyc: Any) -> Any:
+        times[0], done[0] = t_stop, 0
+        return loop_prof(
+            m,
+            s,
+            order,
+            times,
+            max_events,
+            log_on,
+            False,
+            done,
+            times,
+            none,
+            none,
+            none,
+            none,
+            cyc,
+        )
+
+    return run_prof
 
 
 def main() -> None:

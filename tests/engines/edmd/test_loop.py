@@ -1,23 +1,33 @@
-"""The event loop (carom.engines.edmd.loop.run) and its driver, tested directly: why it
-returns, the clock, the log buffer emptied whenever it fills, and events in time order."""
+"""The event loop (carom.engines.edmd.loop.run_frames, through the engine's handle) and its
+driver, tested directly: why it returns, the clock, the log buffer emptied whenever it fills,
+and events in time order."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from carom.engines.edmd import codes, driver, loop
+from carom.engines.base import FrameArrays
+from carom.engines.edmd import codes, driver
+from carom.engines.edmd.handle import advance_frames
 from carom.scene.layouts import lattice_gas
+
+
+def run(engine: driver.EdmdEngine, t_stop: float, max_events: int, log_on: bool) -> int:
+    """One call of the loop, up to ``t_stop``, sampling nothing; its status."""
+    none = FrameArrays.empty(1, 1, 3)
+    done = np.zeros(1, dtype=np.int64)
+    times = np.array([t_stop])
+    return int(advance_frames(engine.handle, times, max_events, log_on, False, done, *none))
 
 
 def test_it_stops_after_max_events_and_at_t_stop() -> None:
     world = lattice_gas(3, 5, 0.3, seed=1)
     engine = world.build()
-    state = engine.state
-    assert loop.run(engine.model, state, np.inf, 7, False) == codes.MAX_EVENTS
+    assert run(engine, np.inf, 7, False) == codes.MAX_EVENTS
     assert engine.counters().events == 7
     t = engine.time
-    assert loop.run(engine.model, state, t + 0.25, 10**9, False) == codes.DONE
+    assert run(engine, t + 0.25, 10**9, False) == codes.DONE
     assert engine.time == t + 0.25  # the clock reads t_stop exactly, whatever the last event
 
 
@@ -49,7 +59,7 @@ def test_a_full_buffer_is_reported_by_the_loop() -> None:
         log_un=np.zeros((2, 2)),
         log_point=np.zeros((2, 3)),
     )
-    assert loop.run(engine.model, engine.state, 10.0, 10**9, True) == codes.LOG_FULL
+    assert run(engine, 10.0, 10**9, True) == codes.LOG_FULL
     assert int(engine.state.log_n[0]) == 2
 
 

@@ -138,9 +138,11 @@ class EdmdEngine:
         attributes["_handle"] = None
         return attributes
 
-    def _compiled(self) -> Any:
-        """The engine handle on the model, state and order (:mod:`carom.engines.edmd.handle`),
-        made again after the state's arrays were replaced."""
+    @property
+    def handle(self) -> Any:
+        """The compiled handle on the model, state and order that the kernels of
+        :mod:`carom.engines.edmd.handle` take, made again after the state's arrays were
+        replaced."""
         if self._handle is None:
             self._handle = new_handle(self.model, self._state, self.order)
         return self._handle
@@ -327,7 +329,7 @@ class EdmdEngine:
             before = int(counts[codes.C_EVENTS])
             block = min(remaining, STOP_CHECK_EVENTS)
             status = advance_frames(
-                self._compiled(), times, block, sink is not None, out is not None, done, *frames
+                self.handle, times, block, sink is not None, out is not None, done, *frames
             )
             self._drain(sink)
             remaining -= int(counts[codes.C_EVENTS]) - before
@@ -427,7 +429,7 @@ class EdmdEngine:
         """Positions (N, d), velocities (N, d), orientations ((N, 1) or (N, 4)) and angular
         velocities (N, 3) at the engine's clock, in the caller's numbering."""
         out = FrameArrays.empty(1, self.bodies.n, self.env.dim)
-        sample_now(self._compiled(), *out)
+        sample_now(self.handle, *out)
         return out.positions[0], out.velocities[0], out.orientations[0], out.angular_velocities[0]
 
     def counters(self) -> Counters:

@@ -20,14 +20,15 @@ Dissipation and round-off:
   one never does (Bannerman et al. 2014). Overlaps therefore cannot grow.
 
 The model ``m`` and state ``s`` are the named tuples of :mod:`carom.engines.edmd.model` and
-:mod:`carom.engines.edmd.state`. :func:`run` unpacks them once: the functions of the hot loop
-take the arrays they need one by one, because Numba passes a named tuple of arrays into a call by
-reference-counting every array in it (measured: 95 ns a call, against under 1 ns for a few
-plain arrays, which LLVM inlines). Nothing is allocated per event, so :func:`run` is compiled
-without Numba's reference counting (``_nrt=False``, the remedy Numba's developers give in
-numba#2345): every inlined call would otherwise increment and decrement an atomic counter per
-array argument, and each such locked instruction stalls the loads around it (measured: the
-event loop 1.4x faster without them). A kernel that allocated would fail to compile, loudly.
+:mod:`carom.engines.edmd.state`. :func:`run_frames` unpacks them once: the functions of the hot
+loop take the arrays they need one by one, because Numba passes a named tuple of arrays into a
+call by reference-counting every array in it (measured: 95 ns a call, against under 1 ns for a
+few plain arrays, which LLVM inlines), and copies the whole tuple into a call it does not
+inline. Nothing is allocated per event, so :func:`run_frames` is compiled without Numba's
+reference counting (``_nrt=False``, the remedy Numba's developers give in numba#2345): every
+inlined call would otherwise increment and decrement an atomic counter per array argument, and
+each such locked instruction stalls the loads around it (measured: the event loop 1.4x faster
+without them). A kernel that allocated would fail to compile, loudly.
 """
 
 from __future__ import annotations
@@ -134,20 +135,6 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
         )
     calendar_build(s.ev_time, calendar_of(s))
     return DONE
-
-
-@njit(cache=True, error_model="numpy")
-def run(m, s, t_stop: float, max_events: int, log_on: bool) -> int:  # type: ignore[no-untyped-def]
-    """Process events in time order up to ``t_stop``; return why it stopped (as
-    :func:`run_frames`, for one time and no frame)."""
-    times = np.full(1, t_stop)
-    done = np.zeros(1, dtype=np.int64)
-    order = np.zeros(1, dtype=np.int64)
-    no_frame = np.zeros((1, 1, 3))
-    return run_frames(
-        m, s, order, times, max_events, log_on, False, done, times, no_frame, no_frame,
-        no_frame, no_frame,
-    )  # fmt: skip
 
 
 @njit_without_refcounting
