@@ -171,11 +171,14 @@ def collide_rows(
             r0, r1, r2 = a0 - b0, a1 - b1, a2 - b2
             dist2 = _dot(r0, r1, r2, r0, r1, r2, d3)
             refused = refused | (dist2 == 0.0)
-            root = math.sqrt(dist2)
+            # a refused pair (centres together, both masses infinite) must not divide by zero:
+            # in plain Python (NUMBA_DISABLE_JIT) that raises; an accepted pair is untouched
+            root = math.sqrt(dist2) if dist2 > 0.0 else 1.0
             n0, n1, n2 = r0 / root, r1 / root, r2 / root
             inv_m1 = 0.0 if math.isinf(mass1) else 1.0 / mass1
             inv_m2 = 0.0 if math.isinf(mass2) else 1.0 / mass2
-            mu = 1.0 / (inv_m1 + inv_m2)
+            inv_sum = inv_m1 + inv_m2
+            mu = 1.0 / inv_sum if inv_sum > 0.0 else 0.0
             g0, g1, g2 = p0 - s0, p1 - s1, p2 - s2  # v1 - v2
             u = _dot(g0, g1, g2, n0, n1, n2, d3)
             applied = u < 0.0
@@ -211,7 +214,8 @@ def collide_rows(
                 t0, t1, t2 = h0 - gn * n0, h1 - gn * n1, h2 - gn * n2
                 g_t2 = _dot(t0, t1, t2, t0, t1, t2, d3)
                 g_t = math.sqrt(g_t2)
-                mu_t = 1.0 / (inv_m1 * (1.0 + 1.0 / q1) + inv_m2 * (1.0 + 1.0 / q2))
+                inv_mu_t = inv_m1 * (1.0 + 1.0 / q1) + inv_m2 * (1.0 + 1.0 / q2)
+                mu_t = 1.0 / inv_mu_t if inv_mu_t > 0.0 else 1.0
                 one_plus_beta, one_minus_beta, beta_used = 1.0 + bi, 1.0 - bi, bi
                 if law == LAW_WALTON:
                     fi = friction[i_f]
