@@ -137,6 +137,24 @@ class Recording:
         )
 
 
+def _recording(out: FrameArrays, done: int, dim: int) -> Recording:
+    """The first ``done`` frames an engine wrote into ``out``, as a :class:`Recording`."""
+    orientations = out.orientations[:done]
+    return Recording(
+        times=out.times[:done],
+        positions=out.positions[:done],
+        velocities=out.velocities[:done],
+        orientations=orientations[..., 0] if dim == 2 else orientations,
+        angular_velocities=out.angular_velocities[:done],
+    )
+
+
+def _check_interval(frame_interval: float) -> None:
+    """Refuse a frame interval that is not a positive, finite time."""
+    if not (frame_interval > 0.0 and math.isfinite(frame_interval)):
+        raise CaromError(f"frame_interval must be a positive time [s]; got {frame_interval!r}")
+
+
 class World:
     """Bodies in a box: spheres (3D) or disks (2D) simulated exactly, event by event, or 2D
     rigid bodies of any shape, step by step.
@@ -966,34 +984,34 @@ class World:
         more frames).
         """
         until = self._check_until(until)
-        if frame_interval is not None and not (
-            frame_interval > 0.0 and math.isfinite(frame_interval)
-        ):
-            raise CaromError(f"frame_interval must be a positive time [s]; got {frame_interval!r}")
+        if frame_interval is not None:
+            _check_interval(frame_interval)
         engine = self.build()
         sink = self._sink(log, on_collisions)
         start = self._time
-        times = np.empty(1)
         k = 1
         while True:
             target = until if frame_interval is None else min(until, start + k * frame_interval)
-            times[0] = target
-            if frame_interval is None:
-                try:
+            out = None if frame_interval is None else FrameArrays.empty(1, self.n_bodies, self.dim)
+            try:
+                if out is None:
                     reached = engine.advance(target, np.iinfo(np.int64).max, sink, stop)
-                finally:
-                    self._time = engine.time  # the target, or the last event before a stop
-            else:
-                out = FrameArrays.empty(1, self.n_bodies, self.dim)
-                try:  # one compiled call advances and samples (event-driven engine)
-                    reached = engine.advance_frames(times, sink, stop, out) == 1
-                finally:
-                    self._time = engine.time
+                else:  # one compiled call advances and samples (event-driven engine)
+                    reached = engine.advance_frames(np.array([target]), sink, stop, out) == 1
+            finally:
+                self._time = engine.time  # the target, or the last event before a stop
             self.reached = reached
             if not reached:
                 return
-            if frame_interval is not None:
-                yield self._frame_of(out, 0)
+            if out is not None:
+                orient = out.orientations[0]
+                yield Frame(
+                    float(out.times[0]),
+                    out.positions[0],
+                    out.velocities[0],
+                    orient[:, 0] if self.dim == 2 else orient,
+                    out.angular_velocities[0],
+                )
             if target >= until:
                 return
             k += 1
@@ -1041,7 +1059,7 @@ class World:
             and bool((grid[1:] >= grid[:-1]).all())
         ):
             self._refuse_times(grid)
-        per_frame = 8 * self.n_bodies * (2 * self.dim + (1 if self.dim == 2 else 4) + 3)
+        per_frame = FrameArrays.frame_bytes(self.n_bodies, self.dim)
         if grid.size * per_frame > RECORD_BYTES:
             raise CaromError(
                 f"{grid.size:,} frames of {self.n_bodies:,} bodies take "
@@ -1057,14 +1075,7 @@ class World:
             self._time = engine.time
         if grid.size:  # no frame asked, nothing said (prepare() warms this path so)
             self.reached = done == grid.size
-        orientations = out.orientations[:done]
-        return Recording(
-            times=out.times[:done],
-            positions=out.positions[:done],
-            velocities=out.velocities[:done],
-            orientations=orientations[..., 0] if self.dim == 2 else orientations,
-            angular_velocities=out.angular_velocities[:done],
-        )
+        return _recording(out, done, self.dim)
 
     def _refuse_times(self, grid: FloatArray) -> NoReturn:
         """Name the first frame time :meth:`record` cannot take."""
@@ -1087,8 +1098,7 @@ class World:
         """The times [s] at which :meth:`frames` yields, (F,): ``time + k frame_interval``
         for k = 1, 2, ... while before ``until``, then ``until`` (for :meth:`record`)."""
         until = self._check_until(until)
-        if not (frame_interval > 0.0 and math.isfinite(frame_interval)):
-            raise CaromError(f"frame_interval must be a positive time [s]; got {frame_interval!r}")
+        _check_interval(frame_interval)
         start = self._time
         count = int(min((until - start) / frame_interval + 2.0, MAX_FRAMES + 2.0))
         grid = start + np.arange(1, count + 1, dtype=np.float64) * frame_interval
@@ -1099,17 +1109,6 @@ class World:
                 f"take a longer frame_interval"
             )
         return np.append(grid, until)
-
-    def _frame_of(self, out: FrameArrays, f: int) -> Frame:
-        """Frame ``f`` of ``out`` as a :class:`Frame`."""
-        orient = out.orientations[f]
-        return Frame(
-            float(out.times[f]),
-            out.positions[f],
-            out.velocities[f],
-            orient[:, 0] if self.dim == 2 else orient,
-            out.angular_velocities[f],
-        )
 
     def _check_until(self, until: float) -> float:
         """``until`` as a float at or after the current time, or a CaromError naming it."""

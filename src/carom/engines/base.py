@@ -25,7 +25,6 @@ __all__ = [
     "Engine",
     "FrameArrays",
     "Sink",
-    "advance_frames_stepwise",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -131,6 +130,11 @@ class FrameArrays(NamedTuple):
     orientations: FloatArray
     angular_velocities: FloatArray
 
+    @staticmethod
+    def frame_bytes(n: int, dim: int) -> int:
+        """The memory [bytes] one frame of ``n`` bodies in ``dim`` dimensions takes."""
+        return 8 * (1 + n * (2 * dim + (1 if dim == 2 else 4) + 3))
+
     @classmethod
     def empty(cls, frames: int, n: int, dim: int) -> FrameArrays:
         """Uninitialised room for ``frames`` frames of ``n`` bodies in ``dim`` dimensions."""
@@ -193,39 +197,3 @@ class Engine(Protocol):
     def arrays(self) -> dict[str, NDArray[Any]]:
         """Everything needed to continue bit for bit, as named arrays (for checkpoints)."""
         ...
-
-
-class _Sampled(Protocol):
-    @property
-    def time(self) -> float: ...
-
-    def advance(
-        self,
-        until: float,
-        max_events: int,
-        sink: Sink | None,
-        stop: Callable[[], bool] | None = None,
-    ) -> bool: ...
-
-    def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]: ...
-
-
-def advance_frames_stepwise(
-    engine: _Sampled,
-    times: FloatArray,
-    sink: Sink | None,
-    stop: Callable[[], bool] | None,
-    out: FrameArrays,
-) -> int:
-    """:meth:`Engine.advance_frames` as :meth:`Engine.advance` then :meth:`Engine.sample` for
-    each frame: for the engines whose step already costs far more than a call from Python."""
-    for f in range(len(times)):
-        if not engine.advance(float(times[f]), np.iinfo(np.int64).max, sink, stop):
-            return f
-        x, v, orient, w = engine.sample()
-        out.times[f] = engine.time
-        out.positions[f] = x
-        out.velocities[f] = v
-        out.orientations[f] = orient.reshape(len(orient), -1)
-        out.angular_velocities[f] = w
-    return len(times)

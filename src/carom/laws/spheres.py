@@ -1,6 +1,7 @@
 """Closed-form impulse laws for the collision of two spheres (3D) or disks (2D).
 
-The laws of PHYSICS.md sections 1 and 3, vectorised over batches of pairs:
+The laws of PHYSICS.md sections 1 and 3, for one pair or a batch (computed in one compiled
+pass, :mod:`carom.laws.batch`; this module checks the arguments and shapes the result):
 
 * **smooth** spheres: an impulse along the line of centres with Newton's restitution ``e``;
 * **rough** spheres with a constant tangential restitution ``beta``;

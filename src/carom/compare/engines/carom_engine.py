@@ -10,6 +10,7 @@ import numpy as np
 from carom.compare.rigid import RigidScene
 from carom.compare.rigid3d import RigidScene3D
 from carom.compare.spec import PeerScene
+from carom.engines.base import FrameArrays
 from carom.world import Frame, Recording
 
 __all__ = ["start"]
@@ -36,8 +37,7 @@ class CaromSimulation:
         first = world.frame()
         self._first = first.positions, first.velocities
         self._times = world.frame_times(scene.duration(self.dt), self.dt)
-        per_frame = first.positions.nbytes * 13 // world.dim  # every array of a frame
-        self._stretch = max(1, CHUNK_BYTES // max(per_frame, 1))
+        self._stretch = max(1, CHUNK_BYTES // FrameArrays.frame_bytes(world.n_bodies, world.dim))
         self._recording: Recording | None = None  # None: at the start, before any step
         self._next = 0  # the first frame time not yet recorded
         self._row, self._rows = -1, 0  # the row handed over, of the recording's rows
