@@ -72,15 +72,15 @@ ANCHORS = {
 
 def instrumented_run() -> Any:
     """``loop.run_frames`` with cycle counters added at the anchors, compiled fresh; it takes
-    ``(m, s, t_stop, max_events, log_on, cyc)`` and samples no frame."""
+    ``(handle, t_stop, max_events, log_on, cyc)`` and samples no frame."""
     source = inspect.getsource(loop.run_frames.py_func)
     source = source.split("\n", 1)[1]  # drop the decorator
     head, body = source.split(") -> int:\n", 1)
     if not head.startswith("def run_frames("):
         raise SystemExit("loop.run_frames changed: its signature; update instrumented_run")
     source = (
-        "def run_prof(m, s, order, times, max_events, log_on, sample, done, t_out, x_out,"
-        " v_out, orient_out, w_out, cyc):\n" + body
+        "def run_prof(h, times, max_events, log_on, sample, done, t_out, x_out, v_out,"
+        " orient_out, w_out, cyc):\n" + body
     )
     for anchor, replacement in ANCHORS.items():
         if anchor not in source:
@@ -93,16 +93,14 @@ def instrumented_run() -> Any:
         "rebuild_shell": neighbours.rebuild_shell,
     }
     exec(compile(source, "<instrumented run_frames>", "exec"), namespace)
-    loop_prof = njit(error_model="numpy", **loop.NO_REFCOUNTING)(namespace["run_prof"])
-    order, done = np.zeros(1, np.int64), np.zeros(1, np.int64)
+    loop_prof = njit(error_model="numpy")(namespace["run_prof"])
+    done = np.zeros(1, np.int64)
     times, none = np.zeros(1), np.zeros((1, 1, 3))
 
-    def run_prof(m: Any, s: Any, t_stop: float, max_events: int, log_on: bool, cyc: Any) -> Any:
+    def run_prof(h: Any, t_stop: float, max_events: int, log_on: bool, cyc: Any) -> Any:
         times[0], done[0] = t_stop, 0
         return loop_prof(
-            m,
-            s,
-            order,
+            h,
             times,
             max_events,
             log_on,
@@ -138,14 +136,14 @@ def main() -> None:
         world = layouts.lattice_gas(args.dim, round(n ** (1 / args.dim)), args.packing, seed=1)
         world.run(until=0.3, log=False)
         engine = world.build()
-        model, state = engine.model, engine.state
+        state = engine.state
         counters = np.zeros(8, np.int64)
-        run_prof(model, state, state.clock[0] + 0.01, 10**12, False, counters)  # compile
+        run_prof(engine.handle, state.clock[0] + 0.01, 10**12, False, counters)  # compile
         counters[:] = 0
         before = state.counts.copy()
         start_wall, start = time.perf_counter(), cycles()
         run_prof(
-            model, state, state.clock[0] + (1.0 if n < 50_000 else 0.3), 10**12, False, counters
+            engine.handle, state.clock[0] + (1.0 if n < 50_000 else 0.3), 10**12, False, counters
         )
         total, wall = cycles() - start, time.perf_counter() - start_wall
         collisions = int(state.counts[codes.C_PAIR] - before[codes.C_PAIR])

@@ -157,6 +157,23 @@ def _root_bound(c4: float, c3: float, c2: float, c1: float, c0: float) -> float:
 
 
 @njit(cache=True, error_model="numpy")
+def _fall_on(c4: float, c3: float, c2: float, c1: float, c0: float, lo: float, hi: float) -> float:
+    """First time in (lo, hi] where the quartic, positive at ``lo``, falls to zero, on a piece
+    where its derivative changes sign at most once (INF if it does not): split at that
+    critical point, and bisect the first part whose end is at or below zero."""
+    d_lo = _horner(0.0, 4.0 * c4, 3.0 * c3, 2.0 * c2, c1, lo)
+    d_hi = _horner(0.0, 4.0 * c4, 3.0 * c3, 2.0 * c2, c1, hi)
+    if (d_lo > 0.0) != (d_hi > 0.0):
+        p = _bisect(0.0, 4.0 * c4, 3.0 * c3, 2.0 * c2, c1, lo, hi)
+        if p > lo and _horner(c4, c3, c2, c1, c0, p) <= 0.0:
+            return _bisect(c4, c3, c2, c1, c0, lo, p)
+        lo = p
+    if hi > lo and _horner(c4, c3, c2, c1, c0, hi) <= 0.0:
+        return _bisect(c4, c3, c2, c1, c0, lo, hi)
+    return INF
+
+
+@njit(cache=True, error_model="numpy")
 def _first_fall(c4: float, c3: float, c2: float, c1: float, c0: float, t_max: float) -> float:
     """First time in (0, t_max] where the quartic, positive at 0 (``c0 > 0``), falls to zero.
 
@@ -171,28 +188,21 @@ def _first_fall(c4: float, c3: float, c2: float, c1: float, c0: float, t_max: fl
         t_max = _root_bound(c4, c3, c2, c1, c0)
         if t_max == INF:
             return INF  # constant: positive for ever
-    # critical points of f': roots of f'' = 12 c4 t^2 + 6 c3 t + 2 c2
+    # critical points of f': roots of f'' = 12 c4 t^2 + 6 c3 t + 2 c2; they cut (0, t_max)
+    # into at most three pieces, on each of which f' changes sign at most once
     s1, s2 = _quadratic_roots(12.0 * c4, 6.0 * c3, 2.0 * c2)
-    cuts = [0.0, t_max]
-    for s in (s1, s2):
-        if s > 0.0 and s < t_max:
-            cuts.append(s)
-    cuts.sort()
-    # critical points of f: roots of f' = 4 c4 t^3 + 3 c3 t^2 + 2 c2 t + c1 on each piece
-    points = [0.0]
-    for k in range(len(cuts) - 1):
-        lo, hi = cuts[k], cuts[k + 1]
-        d_lo = _horner(0.0, 4.0 * c4, 3.0 * c3, 2.0 * c2, c1, lo)
-        d_hi = _horner(0.0, 4.0 * c4, 3.0 * c3, 2.0 * c2, c1, hi)
-        if (d_lo > 0.0) != (d_hi > 0.0):
-            points.append(_bisect(0.0, 4.0 * c4, 3.0 * c3, 2.0 * c2, c1, lo, hi))
-        points.append(hi)
-    for k in range(len(points) - 1):
-        lo, hi = points[k], points[k + 1]
-        if hi <= lo:
+    a = s1 if s1 > 0.0 and s1 < t_max else INF
+    b = s2 if s2 > 0.0 and s2 < t_max else INF
+    if b < a:
+        a, b = b, a
+    lo = 0.0
+    for hi in (a, b, t_max):
+        if hi == INF:
             continue
-        if _horner(c4, c3, c2, c1, c0, hi) <= 0.0:
-            return _bisect(c4, c3, c2, c1, c0, lo, hi)
+        t = _fall_on(c4, c3, c2, c1, c0, lo, hi)
+        if t != INF:
+            return t
+        lo = hi
     return INF
 
 

@@ -9,7 +9,7 @@ import pytest
 
 from carom.engines.base import FrameArrays
 from carom.engines.edmd import codes, driver
-from carom.engines.edmd.handle import advance_frames
+from carom.engines.edmd.loop import run_frames
 from carom.scene.layouts import lattice_gas
 
 
@@ -18,7 +18,7 @@ def run(engine: driver.EdmdEngine, t_stop: float, max_events: int, log_on: bool)
     none = FrameArrays.empty(1, 1, 3)
     done = np.zeros(1, dtype=np.int64)
     times = np.array([t_stop])
-    return int(advance_frames(engine.handle, times, max_events, log_on, False, done, *none))
+    return int(run_frames(engine.handle, times, max_events, log_on, False, done, *none))
 
 
 def test_it_stops_after_max_events_and_at_t_stop() -> None:

@@ -29,6 +29,8 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.engines.edmd.jitflags import njit_inlined
+
 IN_HEAP = -1
 NOWHERE = -2
 
@@ -49,12 +51,12 @@ Calendar = tuple[
 ]  # fmt: skip
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def _before(key_a: float, body_a: int, key_b: float, body_b: int) -> bool:
     return key_a < key_b or (key_a == key_b and body_a < body_b)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def _place(
     heap: np.ndarray, key: np.ndarray, where: np.ndarray, k: int, body: int, t: float
 ) -> None:
@@ -63,7 +65,7 @@ def _place(
     where[body] = k
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def _sift_up(
     heap: np.ndarray, key: np.ndarray, where: np.ndarray, k: int, body: int, t: float
 ) -> None:
@@ -76,7 +78,7 @@ def _sift_up(
     _place(heap, key, where, k, body, t)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def _sift_down(
     heap: np.ndarray, key: np.ndarray, where: np.ndarray, n: int, k: int, body: int, t: float
 ) -> None:
@@ -94,7 +96,7 @@ def _sift_down(
     _place(heap, key, where, k, body, t)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def _bucket(t: float, cal_f: np.ndarray, cur: int, n_buckets: int) -> int:
     """Where an event at ``t`` goes: ``IN_HEAP`` (current bucket or earlier), a bucket, the
     overflow (``n_buckets``), or ``NOWHERE`` (t infinite)."""
@@ -107,7 +109,7 @@ def _bucket(t: float, cal_f: np.ndarray, cur: int, n_buckets: int) -> int:
     return IN_HEAP if k <= cur else k
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def _insert(body: int, t: float, cal: Calendar) -> None:
     cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key, cur_where, cal_f, cal_i = cal
     n_buckets = cal_head.shape[0] - 1
@@ -129,7 +131,7 @@ def _insert(body: int, t: float, cal: Calendar) -> None:
     cal_head[loc] = body
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def _remove(body: int, cal: Calendar) -> None:
     cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key, cur_where, _cal_f, cal_i = cal
     loc = cal_loc[body]
@@ -160,7 +162,7 @@ def _remove(body: int, cal: Calendar) -> None:
         cal_prev[nxt] = prv
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def calendar_update(keys: np.ndarray, body: int, cal: Calendar) -> None:
     """Re-file ``body`` after its event time ``keys[body]`` changed."""
     _remove(body, cal)
@@ -195,7 +197,7 @@ def _new_year(keys: np.ndarray, cal: Calendar) -> None:
         body = following
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def calendar_top(keys: np.ndarray, cal: Calendar) -> int:
     """The body with the earliest event (ties: lowest index), or -1 if no event is left."""
     cal_head, cal_next, _cal_prev, cal_loc, cur_heap, cur_key, cur_where, _cal_f, cal_i = cal
@@ -221,23 +223,40 @@ def calendar_top(keys: np.ndarray, cal: Calendar) -> int:
     return int(cur_heap[0])
 
 
-@njit(cache=True, error_model="numpy")
 def calendar_build(keys: np.ndarray, cal: Calendar) -> None:
-    """File every body's event; the first year starts at the earliest event, with buckets as
-    wide as ``EVENTS_PER_BUCKET`` times the mean spacing of the earliest half of the events."""
-    cal_head, _cal_next, _cal_prev, cal_loc, _cur_heap, _cur_key, _cur_where, cal_f, cal_i = cal
+    """File every body's event (``keys`` (N,) [s], infinite for none); the first year starts
+    at the earliest event, with buckets as wide as ``EVENTS_PER_BUCKET`` times the mean spacing
+    of the earliest half of the events.
+
+    Plain NumPy picks the width (``np.partition`` finds the two order statistics in linear
+    time, where compiling Numba's sort cost a cold start more than a second) and a kernel
+    files the events. The width only sets how the events share the buckets: the order they
+    come out in is that of a sort on (time, body) whatever it is.
+    """
+    cal_f = cal[7]
     finite = keys[np.isfinite(keys)]
-    cal_head[:] = -1
-    cal_i[:] = 0
-    cal_loc[:] = NOWHERE
     if finite.shape[0] == 0:
         cal_f[F_BASE] = 0.0
         cal_f[F_WIDTH] = 1.0
+        _file_all(keys, cal, False)
         return
-    ordered = np.sort(finite)
-    half = max(1, ordered.shape[0] // 2)
+    half = max(1, finite.shape[0] // 2)
+    ordered = np.partition(finite, (0, half - 1))  # the earliest and the half-th earliest
     spread = ordered[half - 1] - ordered[0]
     cal_f[F_BASE] = ordered[0]
     cal_f[F_WIDTH] = EVENTS_PER_BUCKET * spread / half if spread > 0.0 else 1.0
+    _file_all(keys, cal, True)
+
+
+@njit(cache=True, error_model="numpy")
+def _file_all(keys: np.ndarray, cal: Calendar, any_finite: bool) -> None:
+    """Empty the calendar, then file every body's event (with ``any_finite``) in a year
+    starting at ``cal_f``'s base and width."""
+    cal_head, _cal_next, _cal_prev, cal_loc, _cur_heap, _cur_key, _cur_where, _cal_f, cal_i = cal
+    cal_head[:] = -1
+    cal_i[:] = 0
+    cal_loc[:] = NOWHERE
+    if not any_finite:
+        return
     for body in range(keys.shape[0]):
         _insert(body, keys[body], cal)

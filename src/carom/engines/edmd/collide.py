@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from carom.engines.edmd.codes import (
     C_FLOOR,
@@ -23,6 +22,7 @@ from carom.engines.edmd.codes import (
     S_VIRIAL,
 )
 from carom.engines.edmd.hints import unlikely
+from carom.engines.edmd.jitflags import njit_inlined
 from carom.engines.edmd.predict import face_normal, set_support
 from carom.geometry.rotation import turn
 from carom.laws.kernels import LAW_SMOOTH, impulse_spheres
@@ -34,7 +34,7 @@ LogBuffer = tuple[
 ]
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def log_event(
     logbuf: LogBuffer,
     T: float,
@@ -68,7 +68,7 @@ def log_event(
     log_n[0] = n + 1
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def contact_velocity(
     dv0: float,
     dv1: float,
@@ -93,7 +93,7 @@ def contact_velocity(
     return dv0 - (s1 * n2 - s2 * n1), dv1 - (s2 * n0 - s0 * n2), dv2 - (s0 * n1 - s1 * n0)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def collide_pair(
     i: int,
     j: int,
@@ -297,7 +297,7 @@ def collide_pair(
         )
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def parting_floor(
     u: float, jn: float, inv_sum: float, u_pull: float, gg: float
 ) -> tuple[float, float]:
@@ -316,7 +316,7 @@ def parting_floor(
     return 0.0, 0.0
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def held_cosine(
     b: int,
     push: float,
@@ -351,7 +351,7 @@ def held_cosine(
     return 0.0
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def hold_on_support(b: int, v: np.ndarray, support: np.ndarray, plane_normal: np.ndarray) -> None:
     """Body ``b`` stays on its support: its velocity along the support's normal is zero."""
     dim = v.shape[1]
@@ -363,7 +363,7 @@ def hold_on_support(b: int, v: np.ndarray, support: np.ndarray, plane_normal: np
         v[b, k] -= un * face_normal(plane_normal, dim, face, k)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def support_reaction(
     b: int,
     v: np.ndarray,
@@ -400,10 +400,10 @@ def support_reaction(
         sums[S_KE_LOST] += 0.5 * mass[b] * un * un
         return
     if un != 0.0:
-        set_support(gravity, plane_normal, support, acc, b, -1)
+        set_support(gravity, plane_normal, support, acc, b, np.int64(-1))  # not a literal
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def collide_face(
     i: int,
     face: int,

@@ -26,7 +26,8 @@ from carom.engines.base import (
     Sink,
 )
 from carom.engines.edmd import codes, loop, neighbours
-from carom.engines.edmd.handle import advance_frames, new_handle, sample_now
+from carom.engines.edmd.calendar import Calendar, calendar_build
+from carom.engines.edmd.handle import new_handle, sample_now
 from carom.engines.edmd.model import Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
 from carom.engines.edmd.ordering import spatial_order
@@ -198,6 +199,7 @@ class EdmdEngine:
             if status == codes.DONE:
                 break
             self._grow(status)
+        calendar_build(state.ev_time, _calendar(state))
         self.order = order
         self.model, self.state = model, state
         self._check_overlaps()
@@ -301,7 +303,7 @@ class EdmdEngine:
     ) -> int:
         """Process events up to each of ``times`` in turn and write every body's state there
         into frame ``f`` of ``out``, in one compiled call for the lot
-        (:func:`carom.engines.edmd.handle.advance_frames`); returns the frames written."""
+        (:func:`carom.engines.edmd.loop.run_frames`); returns the frames written."""
         _, done = self._drive(times, np.iinfo(np.int64).max, sink, stop, out)
         return done
 
@@ -328,7 +330,7 @@ class EdmdEngine:
             counts = self.state.counts
             before = int(counts[codes.C_EVENTS])
             block = min(remaining, STOP_CHECK_EVENTS)
-            status = advance_frames(
+            status = loop.run_frames(
                 self.handle, times, block, sink is not None, out is not None, done, *frames
             )
             self._drain(sink)
@@ -492,3 +494,12 @@ class EdmdEngine:
         )
         bodies.set_state(*engine.sample())  # the table as of the checkpoint's clock
         return engine
+
+
+def _calendar(s: State) -> Calendar:
+    """The event calendar's arrays of state ``s``, as ``predict.calendar_of`` gives them to
+    the kernels."""
+    return (
+        s.cal_head, s.cal_next, s.cal_prev, s.cal_loc, s.cur_heap, s.cur_key, s.cur_where,
+        s.cal_f, s.cal_i,
+    )  # fmt: skip

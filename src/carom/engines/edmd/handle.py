@@ -7,10 +7,10 @@ and the body order; passing it costs one pointer (under 1 us a call). It is made
 again whenever the state's arrays are replaced (the lists grow, a checkpoint is restored). It
 refers to the same arrays, so what a kernel writes through it is what the driver reads.
 
-:func:`advance_frames` is the one call that runs a stretch of frames: the events up to each
-frame's time in turn, and every body's state at that time written into the caller's arrays,
-in the caller's numbering. A frame a call (``World.frames``) and many frames a call
-(``World.record``) are the same kernel.
+:func:`carom.engines.edmd.loop.run_frames` takes the handle: it is the one call that runs a
+stretch of frames, the events up to each frame's time in turn, and every body's state at that
+time written into the caller's arrays, in the caller's numbering. A frame a call
+(``World.frames``) and many frames a call (``World.record``) are the same kernel.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from numba import njit, types
 from numba.experimental import structref
 from numba.extending import overload
 
-from carom.engines.edmd.loop import run_frames, write_frame
+from carom.engines.edmd.loop import write_frame
 
 
 @structref.register
@@ -80,36 +80,8 @@ def new_handle(model, state, order):  # type: ignore[no-untyped-def]
 def sample_now(h, t_out, x_out, v_out, orient_out, w_out) -> None:  # type: ignore[no-untyped-def]
     """Frame 0 of the outputs: every body at the engine's clock, events pending or not."""
     m, s = h.model, h.state
+    frame = np.int64(0)  # typed, not a literal: the loop's compiled write_frame serves
     write_frame(
-        s.kin, s.acc, s.orient, s.orient_t, s.w, m.box, m.periodic, h.order, s.clock[0], 0,
-        t_out, x_out, v_out, orient_out, w_out,
-    )  # fmt: skip
-
-
-@njit(cache=True, error_model="numpy")
-def advance_frames(  # type: ignore[no-untyped-def]
-    h,
-    times: np.ndarray,
-    max_events: int,
-    log_on: bool,
-    sample: bool,
-    done: np.ndarray,
-    t_out: np.ndarray,
-    x_out: np.ndarray,
-    v_out: np.ndarray,
-    orient_out: np.ndarray,
-    w_out: np.ndarray,
-) -> int:
-    """Run the events up to each of ``times`` in turn, from frame ``done[0]`` on.
-
-    :func:`carom.engines.edmd.loop.run_frames` through the handle: with ``sample``, every
-    body's state at ``times[f]`` goes into frame ``f`` of the outputs. Returns ``DONE`` when
-    every frame is done, or the status that stopped it (``max_events`` counts over the whole
-    call); called again with the same ``done``, it goes on from there.
-    """
-    # reading the handle needs Numba's reference counting; the loop runs without it (see
-    # carom.engines.edmd.loop), so it takes the model and state once, as arguments
-    return run_frames(
-        h.model, h.state, h.order, times, max_events, log_on, sample, done,
+        s.kin, s.acc, s.orient, s.orient_t, s.w, m.box, m.periodic, h.order, s.clock[0], frame,
         t_out, x_out, v_out, orient_out, w_out,
     )  # fmt: skip

@@ -20,27 +20,26 @@ Dissipation and round-off:
   one never does (Bannerman et al. 2014). Overlaps therefore cannot grow.
 
 The model ``m`` and state ``s`` are the named tuples of :mod:`carom.engines.edmd.model` and
-:mod:`carom.engines.edmd.state`. :func:`run_frames` unpacks them once: the functions of the hot
-loop take the arrays they need one by one, because Numba passes a named tuple of arrays into a
-call by reference-counting every array in it (measured: 95 ns a call, against under 1 ns for a
-few plain arrays, which LLVM inlines), and copies the whole tuple into a call it does not
-inline. Nothing is allocated per event, so :func:`run_frames` is compiled without Numba's
-reference counting (``_nrt=False``, the remedy Numba's developers give in numba#2345): every
-inlined call would otherwise increment and decrement an atomic counter per array argument, and
-each such locked instruction stalls the loads around it (measured: the event loop 1.4x faster
-without them). A kernel that allocated would fail to compile, loudly.
+:mod:`carom.engines.edmd.state`, reached through the engine's handle
+(:mod:`carom.engines.edmd.handle`). :func:`run_frames` unpacks them once: the functions of the
+hot loop take the arrays they need one by one, because Numba passes a named tuple of arrays
+into a call by reference-counting every array in it (measured: 95 ns a call, against under 1 ns
+for a few plain arrays, which LLVM inlines), and copies the whole tuple into a call it does not
+inline. The helpers are compiled without reference counting and inlined by LLVM
+(:mod:`carom.engines.edmd.jitflags` says why); the loop itself counts references only where it
+reads the handle, once a call (measured: no slower than the loop compiled without counting,
+in an interleaved A/B). Being the call from Python, it is compiled once: a wrapper that read
+the handle and called it re-optimised its whole machine code, 2 s of every cold start.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from typing import Any, TypeVar, cast
 
 import numpy as np
 from numba import njit
 
-from carom.engines.edmd.calendar import calendar_build, calendar_top, calendar_update
+from carom.engines.edmd.calendar import calendar_top, calendar_update
 from carom.engines.edmd.codes import (
     C_EVENTS,
     C_SHELL,
@@ -54,6 +53,7 @@ from carom.engines.edmd.codes import (
     MAX_EVENTS,
 )
 from carom.engines.edmd.collide import collide_face, collide_pair
+from carom.engines.edmd.jitflags import njit_without_refcounting
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all, rebuild_shell
 from carom.engines.edmd.predict import (
     calendar_of,
@@ -66,17 +66,11 @@ from carom.engines.edmd.prefetch import prefetch_row
 from carom.geometry.rotation import turn
 from carom.geometry.toi import INF
 
-# compile without reference counting (see the module docstring); an internal Numba flag
-NO_REFCOUNTING: dict[str, Any] = {"_nrt": False}
-_F = TypeVar("_F", bound=Callable[..., Any])
-njit_without_refcounting = cast(
-    Callable[[_F], _F], njit(cache=True, error_model="numpy", **NO_REFCOUNTING)
-)
-
 
 @njit(cache=True, error_model="numpy")
 def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
-    """Build every shell and neighbour list and schedule every body.
+    """Build every shell and neighbour list and predict every body's event (the caller then
+    files the events: :func:`carom.engines.edmd.calendar.calendar_build`).
 
     Returns ``DONE``, or ``LISTS_FULL`` / ``CELLS_FULL`` when the arrays need to grow.
     """
@@ -133,15 +127,12 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
             ev_other,
             ev_stamp,
         )
-    calendar_build(s.ev_time, calendar_of(s))
     return DONE
 
 
-@njit_without_refcounting
+@njit(cache=True, error_model="numpy")
 def run_frames(  # type: ignore[no-untyped-def]
-    m,
-    s,
-    order,
+    h,
     times,
     max_events: int,
     log_on: bool,
@@ -153,9 +144,11 @@ def run_frames(  # type: ignore[no-untyped-def]
     orient_out,
     w_out,
 ) -> int:
-    """Process events in time order up to each of ``times`` in turn, from frame ``done[0]``
-    on; with ``sample``, write every body's state at each into that frame of the outputs
-    (:func:`write_frame`); count each frame done in ``done[0]``. Return why it stopped.
+    """Process the events of the engine behind handle ``h``
+    (:mod:`carom.engines.edmd.handle`) in time order up to each of ``times`` in turn, from
+    frame ``done[0]`` on; with ``sample``, write every body's state at each into that frame
+    of the outputs (:func:`write_frame`); count each frame done in ``done[0]``. Return why it
+    stopped.
 
     ``DONE``: every frame is done (the clock reads the last time); ``LOG_FULL``: the event
     log needs emptying; ``MAX_EVENTS``: ``max_events`` processed in this call;
@@ -163,7 +156,9 @@ def run_frames(  # type: ignore[no-untyped-def]
     rebuild them all; the schedule stays valid, and the event that overflowed runs again).
     Called again with the same ``done``, it goes on where it stopped.
     """
-    # unpack once: the hot functions take plain arrays (see the module docstring)
+    # unpack once: the hot functions take plain arrays (see the module docstring); reading the
+    # handle is the only reference counting the loop does
+    m, s, order = h.model, h.state, h.order
     kin = s.kin
     x, v, t = kinematic_views(kin, m.box.shape[0])
     acc, w = s.acc, s.w

@@ -25,6 +25,7 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.engines.edmd.jitflags import njit_inlined
 from carom.engines.edmd.prefetch import prefetch_row
 
 FITS = 0
@@ -32,7 +33,7 @@ LIST_FULL = 1
 CELL_FULL = 2
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def cell_of(shell: np.ndarray, i: int, cell_size: np.ndarray, ncell: np.ndarray) -> int:
     """Linear index of the cell holding shell ``i``'s centre (clamped to the grid)."""
     index = 0
@@ -46,7 +47,7 @@ def cell_of(shell: np.ndarray, i: int, cell_size: np.ndarray, ncell: np.ndarray)
     return index
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def cell_insert(
     i: int,
     c: int,
@@ -66,7 +67,7 @@ def cell_insert(
     return True
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def cell_remove(
     i: int, cell_count: np.ndarray, cell_body: np.ndarray, slot: np.ndarray, cell: np.ndarray
 ) -> None:
@@ -79,7 +80,7 @@ def cell_remove(
     cell_count[c] = last
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def _list_remove(nbr: np.ndarray, count: np.ndarray, owner: int, body: int) -> None:
     n = count[owner]
     for s in range(n):
@@ -89,7 +90,7 @@ def _list_remove(nbr: np.ndarray, count: np.ndarray, owner: int, body: int) -> N
             return
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def _axis_cells(c: int, n: int, periodic: bool) -> tuple[int, int, int, int]:
     """The cell coordinates next to ``c`` (itself included) on an axis of ``n`` cells.
 
@@ -107,7 +108,7 @@ def _axis_cells(c: int, n: int, periodic: bool) -> tuple[int, int, int, int]:
     return (3 if hi < n else 2), lo, c, hi
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def _axis_images(c: int, n: int, length: float, periodic: bool) -> tuple[float, float, float]:
     """The periodic image shift [m] to add to ``c_i - c_j`` for a body ``j`` in each cell of
     :func:`_axis_cells` (the same order): ``+length`` for the cell reached by wrapping below
@@ -122,7 +123,7 @@ def _axis_images(c: int, n: int, length: float, periodic: bool) -> tuple[float, 
     return (length if c == 0 else 0.0), 0.0, (-length if c == n - 1 else 0.0)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def _link_overlapping(
     i: int,
     shell: np.ndarray,
@@ -264,14 +265,14 @@ def build_all(
             delta,
             ncell,
             mark,
-            -1,  # no body is marked -1
+            np.int64(-1),  # no body is marked -1 (typed, not a literal: one compiled version)
         )
         if status != FITS:
             return status
     return FITS
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def rebuild_shell(
     i: int,
     shell: np.ndarray,

@@ -13,6 +13,7 @@ import numpy as np
 from numba import njit
 
 from carom.engines.edmd.codes import EV_NONE, EV_PAIR, EV_SHELL, EV_WALL, SHELL_MARGIN
+from carom.engines.edmd.jitflags import njit_inlined
 from carom.engines.edmd.prefetch import prefetch_row
 from carom.engines.edmd.state import (
     KIN_R,
@@ -32,7 +33,7 @@ from carom.geometry.toi import (
 )
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def face_normal(plane_normal: np.ndarray, dim: int, face: int, k: int) -> float:
     """Component ``k`` of the inward unit normal of wall face or plane ``face``."""
     if face < 2 * dim:
@@ -42,7 +43,7 @@ def face_normal(plane_normal: np.ndarray, dim: int, face: int, k: int) -> float:
     return float(plane_normal[face - 2 * dim, k])
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def set_support(
     gravity: np.ndarray,
     plane_normal: np.ndarray,
@@ -99,7 +100,7 @@ def calendar_of(s):  # type: ignore[no-untyped-def]
     )
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def free_flight(
     x: np.ndarray, v: np.ndarray, acc: np.ndarray, t: np.ndarray, i: int, T: float
 ) -> None:
@@ -113,7 +114,7 @@ def free_flight(
     t[i] = T
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def _first_pair_straight(
     i: int,
     T: float,
@@ -172,7 +173,7 @@ def _first_pair_straight(
     return best, other
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit_inlined
 def predict(
     i: int,
     T: float,
