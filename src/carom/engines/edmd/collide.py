@@ -400,7 +400,8 @@ def support_reaction(
         sums[S_KE_LOST] += 0.5 * mass[b] * un * un
         return
     if un != 0.0:
-        set_support(gravity, plane_normal, support, acc, b, np.int64(-1))  # not a literal
+        # -1 typed, not a literal (a literal argument compiles a second copy of the helper)
+        set_support(gravity, plane_normal, support, acc, b, np.int64(-1))  # type: ignore[arg-type]
 
 
 @njit_inlined

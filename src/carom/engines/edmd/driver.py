@@ -25,7 +25,7 @@ from carom.engines.base import (
     FrameArrays,
     Sink,
 )
-from carom.engines.edmd import codes, loop, neighbours
+from carom.engines.edmd import aside, codes, loop, neighbours
 from carom.engines.edmd.calendar import Calendar, calendar_build
 from carom.engines.edmd.handle import new_handle, sample_now
 from carom.engines.edmd.model import Model
@@ -171,6 +171,7 @@ class EdmdEngine:
             self.model = self._build_model(order)
             self.state = state
             return
+        helper = aside.start()  # a cold cache: the build kernels compile on a second core
         x = bodies.position.copy()
         if env.periodic:
             x -= env.box * np.floor(x / env.box)
@@ -195,6 +196,10 @@ class EdmdEngine:
                 self.capacity,
                 LOG_CAPACITY,
             )
+            if helper is not None:
+                aside.compile_loop(model, state, order)  # meanwhile, the loop here
+                aside.finish(helper)
+                helper = None
             status = loop.initialise(model, state)
             if status == codes.DONE:
                 break

@@ -53,14 +53,17 @@ def _make(model, state, order):  # type: ignore[no-untyped-def]
     return _PlainHandle(model, state, order)
 
 
+def handle_type(model: Any, state: Any, order: Any) -> EngineHandleType:
+    """The Numba type of a handle on a model, state and order of these Numba types."""
+    return EngineHandleType([("model", model), ("state", state), ("order", order)])  # type: ignore[no-untyped-call]
+
+
 @overload(_make)
 def _make_typed(model, state, order):  # type: ignore[no-untyped-def]
-    handle_type = EngineHandleType(  # type: ignore[no-untyped-call]
-        [("model", model), ("state", state), ("order", order)]
-    )
+    typ = handle_type(model, state, order)
 
     def make(model, state, order):  # type: ignore[no-untyped-def]
-        h = structref.new(handle_type)  # type: ignore[call-arg, var-annotated]
+        h = structref.new(typ)  # type: ignore[call-arg, var-annotated]
         h.model = model  # type: ignore[unreachable]
         h.state = state
         h.order = order

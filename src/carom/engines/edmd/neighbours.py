@@ -265,7 +265,7 @@ def build_all(
             delta,
             ncell,
             mark,
-            np.int64(-1),  # no body is marked -1 (typed, not a literal: one compiled version)
+            np.int64(-1),  # type: ignore[arg-type]  # none is marked -1; typed, not a literal
         )
         if status != FITS:
             return status

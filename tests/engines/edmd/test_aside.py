@@ -1,0 +1,114 @@
+"""A cold start compiles on two cores (carom.engines.edmd.aside): the helper's two-sphere engine
+has the kernel argument types of every kind of scene, so what it compiles is what a scene
+loads; the loop compiled ahead has the signature the engine calls it with; and from a cold
+cache the helper's kernels are loaded, not compiled again, with the same bits."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numba import typeof
+
+import carom
+from carom.engines.edmd import aside, loop
+from carom.engines.edmd.driver import EdmdEngine
+from carom.engines.edmd.settings import EdmdSettings
+from carom.scene import find_scene, load_scene
+from tests.worlds import gas
+
+
+def _kinds() -> dict[str, carom.World]:
+    """One world of each kind the event-driven engine runs."""
+    planes = load_scene(find_scene("galton-board"))  # gravity, static spheres, planes
+    rough = carom.World(dim=3, box=(1.0, 1.0, 1.0))
+    steel = rough.add_material(carom.Material(restitution=0.8, beta=0.5))
+    rough.add_spheres([[0.3, 0.5, 0.5], [0.7, 0.5, 0.5]], radius=0.1, material=steel)
+    return {
+        "3D periodic gas": gas(3, 4, 0.3, seed=1),
+        "2D walled gas": gas(2, 6, 0.4, seed=1, boundary="walls"),
+        "gravity and planes": planes.build(),
+        "rough spheres": rough,
+    }
+
+
+def _types(engine: EdmdEngine) -> tuple[object, ...]:
+    return (typeof(engine.model), typeof(engine.state), *aside.loop_signature(
+        engine.model, engine.state, engine.order
+    ))  # fmt: skip
+
+
+@pytest.mark.needs_jit
+def test_every_kind_of_scene_has_the_helpers_kernel_types() -> None:
+    bodies, env = aside.two_spheres()
+    helper = _types(EdmdEngine(bodies, env, EdmdSettings(), 0.0))
+    for name, world in _kinds().items():
+        engine = world.build()
+        assert isinstance(engine, EdmdEngine), name
+        assert _types(engine) == helper, name
+
+
+@pytest.mark.needs_jit
+def test_the_loop_compiled_ahead_is_the_one_the_engine_calls() -> None:
+    world = gas(3, 4, 0.3, seed=1)
+    world.run(until=world.time + 0.1)
+    engine = world.build()
+    assert isinstance(engine, EdmdEngine)
+    signature = aside.loop_signature(engine.model, engine.state, engine.order)
+    assert signature in loop.run_frames.overloads
+
+
+def test_no_helper_when_the_loop_is_cached_or_from_a_helper(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    monkeypatch.setattr(aside, "kernels_cached", lambda: True)
+    assert aside.start() is None
+    monkeypatch.setattr(aside, "kernels_cached", lambda: False)
+    monkeypatch.setenv(aside.HELPER_FLAG, "1")
+    assert aside.start() is None
+
+
+COLD_RUN = """
+import json, sys
+import numpy as np
+from carom.engines.edmd import loop
+from tests.worlds import gas
+world = gas(3, 4, 0.3, seed=1, e=0.9)
+world.run(until=2.0)
+print(json.dumps({
+    "positions": world.positions.tolist(),
+    "velocities": world.velocities.tolist(),
+    "initialise_loaded": sum(loop.initialise.stats.cache_hits.values()),
+    "initialise_compiled": sum(loop.initialise.stats.cache_misses.values()),
+    "loop_compiled": sum(loop.run_frames.stats.cache_misses.values()),
+}))
+"""
+
+
+@pytest.mark.needs_jit
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="the helper needs a second CPU")
+def test_a_cold_start_loads_what_the_helper_compiled_with_the_same_bits(tmp_path: Path) -> None:
+    root = Path(__file__).resolve().parents[3]
+    done = subprocess.run(
+        [sys.executable, "-c", COLD_RUN],
+        capture_output=True,
+        text=True,
+        cwd=root,
+        env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), "PYTHONPATH": str(root / "src")},
+        stdin=subprocess.DEVNULL,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    cold = json.loads(done.stdout)
+    # the helper compiled the build kernels into the (empty) cache; this process loaded them
+    # and compiled the loop
+    assert cold["initialise_loaded"] == 1
+    assert cold["initialise_compiled"] == 0
+    assert cold["loop_compiled"] == 1
+    warm = gas(3, 4, 0.3, seed=1, e=0.9)
+    warm.run(until=2.0)
+    np.testing.assert_array_equal(np.array(cold["positions"]), warm.positions)
+    np.testing.assert_array_equal(np.array(cold["velocities"]), warm.velocities)
