@@ -361,7 +361,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     )
     if not kernels_cached():
         print(
-            "carom: compiling the engine's kernels (once per install; about 20 s)...",
+            "carom: compiling the engine's kernels (once per install; 10 to 20 s)...",
             file=sys.stderr,
             flush=True,
         )

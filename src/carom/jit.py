@@ -82,5 +82,5 @@ def kernel_cache() -> Iterator[None]:
 
 def kernels_cached() -> bool:
     """Whether the event loop's machine code is in the cache (else the first run compiles it,
-    which takes about 20 s once per install)."""
+    which takes 10 to 20 s once per install)."""
     return any(Path(kernel_cache_dir()).glob("*/loop.run_frames-*.nbi"))

@@ -89,7 +89,7 @@ def build_showcase(
         say(f"the seven two-sphere cases: {len(records)} impacts -> {out / 'cases'}/")
         shown: list[tuple[str, Path, list[str]]] = []
         if not kernels_cached():
-            say("compiling the engine's kernels (once per install; about 20 s) ...")
+            say("compiling the engine's kernels (once per install; 10 to 20 s) ...")
         for scene in scenes:
             folder = staging / "scenes" / Path(scene).stem
             report = run_scene(scene, folder, progress=False)
