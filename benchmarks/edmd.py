@@ -3,9 +3,10 @@
 Hard spheres at packing fraction 0.3 (3D) and hard disks at 0.5 (2D), periodic, unit
 diameter and mass, T = 1, started on a lattice and melted before timing. For each size:
 collisions/s and events/s on one core (the engine is single-threaded), the time per collision
-relative to the smallest size (log N growth would be 1 + log(N/N0)/log(N0) at most), and the
+relative to the smallest size (log N growth would be 1 + log(N/N0)/log(N0) at most), the
 engine's memory per particle (every array of the model and state, the fixed-size event log
-excluded). The first-call compile time is measured apart, in fresh processes: with an empty
+excluded), and the process's peak resident memory so far (the sizes run in order, in one
+process). The first-call compile time is measured apart, in fresh processes: with an empty
 kernel cache, and loading from the cache.
 
 Run:  python benchmarks/edmd.py                   (all sizes, appends to benchmarks/RESULTS.md)
@@ -19,6 +20,7 @@ import datetime as dt
 import math
 import os
 import platform
+import resource
 import subprocess
 import sys
 import tempfile
@@ -80,6 +82,7 @@ def measure(dim: int, n: int, packing: float, repeats: int) -> dict[str, float]:
             best = result
     best["n"] = float(count)
     best["bytes_per_particle"] = memory_per_particle(world)
+    best["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     best["events_per_collision"] = best["events_per_s"] / best["collisions_per_s"]
     return best
 
@@ -170,21 +173,22 @@ def main() -> None:
             print(
                 f"{dim}D phi={packing} N={int(r['n']):>8,}: {r['collisions_per_s']:.3g} coll/s, "
                 f"{r['events_per_s']:.3g} events/s, {r['events_per_collision']:.2f} events/coll,"
-                f" {r['bytes_per_particle']:.0f} B/particle, time/coll x{growth:.2f} "
+                f" {r['bytes_per_particle']:.0f} B/particle, peak {r['peak_mb']:.0f} MB, "
+                f"time/coll x{growth:.2f} "
                 f"(log N bound x{log_bound:.2f})",
                 flush=True,
             )
 
     header = (
         "| dim | packing | N | collisions/s | events/s | events/collision | "
-        "time per collision vs smallest N | log N bound | bytes/particle |"
+        "time per collision vs smallest N | log N bound | bytes/particle | peak RSS so far [MB] |"
     )
-    lines = [header, "|---|---|---|---|---|---|---|---|---|"]
+    lines = [header, "|---|---|---|---|---|---|---|---|---|---|"]
     for dim, packing, r, growth, bound in rows:
         lines.append(
             f"| {dim} | {packing} | {int(r['n']):,} | {r['collisions_per_s']:.3g} | "
             f"{r['events_per_s']:.3g} | {r['events_per_collision']:.2f} | x{growth:.2f} | "
-            f"x{bound:.2f} | {r['bytes_per_particle']:.0f} |"
+            f"x{bound:.2f} | {r['bytes_per_particle']:.0f} | {r['peak_mb']:.0f} |"
         )
     three_d = [r for d, _, r, _, _ in rows if d == 3 and 5_000 <= r["n"] <= 20_000]
     verdict = ""
