@@ -71,6 +71,22 @@ def test_no_helper_when_the_loop_is_cached_or_from_a_helper(monkeypatch) -> None
     assert aside.start() is None
 
 
+def test_cpus_are_counted_where_the_system_has_no_affinity(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # macOS and Windows have no os.sched_getaffinity: every CPU counts there
+    monkeypatch.delattr(os, "sched_getaffinity", raising=False)
+    monkeypatch.setattr(os, "cpu_count", lambda: 3)
+    assert aside.usable_cpus() == 3
+    monkeypatch.setattr(os, "cpu_count", lambda: None)
+    assert aside.usable_cpus() == 1
+
+
+def test_no_helper_on_one_cpu(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    monkeypatch.setattr(aside, "kernels_cached", lambda: False)
+    monkeypatch.delenv(aside.HELPER_FLAG, raising=False)
+    monkeypatch.setattr(aside, "usable_cpus", lambda: 1)
+    assert aside.start() is None
+
+
 COLD_RUN = """
 import json, sys
 import numpy as np
@@ -89,7 +105,7 @@ print(json.dumps({
 
 
 @pytest.mark.needs_jit
-@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="the helper needs a second CPU")
+@pytest.mark.skipif(aside.usable_cpus() < 2, reason="the helper needs a second CPU")
 def test_a_cold_start_loads_what_the_helper_compiled_with_the_same_bits(tmp_path: Path) -> None:
     root = Path(__file__).resolve().parents[3]
     done = subprocess.run(

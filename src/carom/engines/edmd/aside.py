@@ -50,7 +50,7 @@ def start() -> subprocess.Popen[bytes] | None:
     """Start the helper process if the kernel cache is cold and a second CPU can run it."""
     if config.DISABLE_JIT or os.environ.get(HELPER_FLAG) or kernels_cached():  # type: ignore[attr-defined]
         return None
-    if len(os.sched_getaffinity(0)) < 2:
+    if usable_cpus() < 2:
         return None
     try:
         return subprocess.Popen(
@@ -62,6 +62,15 @@ def start() -> subprocess.Popen[bytes] | None:
         )
     except OSError:
         return None
+
+
+def usable_cpus() -> int:
+    """How many CPUs this process may run on (its affinity where the system has one, as on
+    Linux; else every CPU)."""
+    affinity = getattr(os, "sched_getaffinity", None)
+    if affinity is not None:
+        return len(affinity(0))
+    return os.cpu_count() or 1
 
 
 def finish(helper: subprocess.Popen[bytes]) -> None:
