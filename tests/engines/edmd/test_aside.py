@@ -87,6 +87,19 @@ def test_no_helper_on_one_cpu(monkeypatch) -> None:  # type: ignore[no-untyped-d
     assert aside.start() is None
 
 
+def test_a_failed_compile_stops_the_helper(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # an error (or Ctrl-C) while the loop compiles leaves no helper process behind
+    helper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+
+    def broken(*args: object) -> None:
+        raise RuntimeError("compiling failed")
+
+    monkeypatch.setattr(aside, "loop_signature", broken)
+    with pytest.raises(RuntimeError, match="compiling failed"):
+        aside.compile_beside(helper, None, None, None)  # type: ignore[arg-type]
+    assert helper.poll() is not None  # stopped and waited for
+
+
 COLD_RUN = """
 import json, sys
 import numpy as np

@@ -7,7 +7,7 @@ the neighbour lists, the calendar, the handle, sampling) and the event loop
 (:func:`carom.engines.edmd.loop.run_frames`). When the kernel cache is cold, a fresh engine
 starts :func:`start`: a second Python process (``python -m carom.engines.edmd.aside``) builds a
 two-sphere engine and samples it, which compiles the first half into the shared cache, while
-this process compiles the loop for its own model and state (:func:`compile_loop`). It then
+this process compiles the loop for its own model and state (:func:`compile_beside`). It then
 waits for the helper and loads the first half from the cache. Machine code is the same
 whichever process compiled it: the cache only moves it.
 
@@ -99,9 +99,22 @@ def loop_signature(model: Model, state: State, order: np.ndarray) -> tuple[Any, 
     )
 
 
-def compile_loop(model: Model, state: State, order: np.ndarray) -> None:
-    """Compile (or load) the event loop for this model and state now."""
-    loop.run_frames.compile(loop_signature(model, state, order))
+def compile_beside(
+    helper: subprocess.Popen[bytes] | None, model: Model, state: State, order: np.ndarray
+) -> None:
+    """With a ``helper`` running (:func:`start`), compile (or load) the event loop for this
+    model and state here, then wait for the helper (:func:`finish`); if compiling fails or is
+    interrupted, stop the helper before passing the error on. Without one, nothing."""
+    if helper is None:
+        return
+    try:
+        signature = loop_signature(model, state, order)
+        loop.run_frames.compile(signature)
+    except BaseException:
+        helper.kill()
+        helper.wait()
+        raise
+    finish(helper)
 
 
 def two_spheres() -> tuple[Bodies, Any]:

@@ -171,7 +171,6 @@ class EdmdEngine:
             self.model = self._build_model(order)
             self.state = state
             return
-        helper = aside.start()  # a cold cache: the build kernels compile on a second core
         x = bodies.position.copy()
         if env.periodic:
             x -= env.box * np.floor(x / env.box)
@@ -182,8 +181,9 @@ class EdmdEngine:
         cells = np.clip(np.floor(x / model.cell_size).astype(np.int64), 0, model.ncell - 1)
         occupancy = np.bincount(np.ravel_multi_index(cells.T, model.ncell)).max()
         self.cell_capacity = max(self.cell_capacity, 8, 2 * int(occupancy))
-        while True:
-            state = allocate_state(
+
+        def new_state() -> State:
+            return allocate_state(
                 x[order],
                 bodies.velocity[order],
                 acc,
@@ -196,14 +196,17 @@ class EdmdEngine:
                 self.capacity,
                 LOG_CAPACITY,
             )
-            if helper is not None:
-                aside.compile_loop(model, state, order)  # meanwhile, the loop here
-                aside.finish(helper)
-                helper = None
+
+        state = new_state()
+        # a cold cache: the build kernels compile in a helper process while the loop compiles
+        # here (engines/edmd/aside.py)
+        aside.compile_beside(aside.start(), model, state, order)
+        while True:
             status = loop.initialise(model, state)
             if status == codes.DONE:
                 break
             self._grow(status)
+            state = new_state()
         calendar_build(state.ev_time, _calendar(state))
         self.order = order
         self.model, self.state = model, state
