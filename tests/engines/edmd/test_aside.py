@@ -63,12 +63,20 @@ def test_the_loop_compiled_ahead_is_the_one_the_engine_calls() -> None:
     assert signature in loop.run_frames.overloads
 
 
-def test_no_helper_when_the_loop_is_cached_or_from_a_helper(monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    monkeypatch.setattr(aside, "kernels_cached", lambda: True)
+def test_no_helper_when_the_loop_is_compiled_or_from_a_helper(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    monkeypatch.setattr(aside, "loop_ready", lambda: True)
     assert aside.start() is None
-    monkeypatch.setattr(aside, "kernels_cached", lambda: False)
+    monkeypatch.setattr(aside, "loop_ready", lambda: False)
     monkeypatch.setenv(aside.HELPER_FLAG, "1")
     assert aside.start() is None
+
+
+@pytest.mark.needs_jit
+def test_a_loop_loaded_in_this_process_is_ready_whatever_the_disk_says(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # (an unwritable cache would otherwise start a helper at every engine build)
+    gas(2, 4, 0.4, seed=1).run(until=0.1)
+    monkeypatch.setattr(aside, "kernels_cached", lambda: False)
+    assert aside.loop_ready()
 
 
 def test_cpus_are_counted_where_the_system_has_no_affinity(monkeypatch) -> None:  # type: ignore[no-untyped-def]
@@ -81,7 +89,7 @@ def test_cpus_are_counted_where_the_system_has_no_affinity(monkeypatch) -> None:
 
 
 def test_no_helper_on_one_cpu(monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    monkeypatch.setattr(aside, "kernels_cached", lambda: False)
+    monkeypatch.setattr(aside, "loop_ready", lambda: False)
     monkeypatch.delenv(aside.HELPER_FLAG, raising=False)
     monkeypatch.setattr(aside, "usable_cpus", lambda: 1)
     assert aside.start() is None

@@ -13,7 +13,7 @@ whichever process compiled it: the cache only moves it.
 
 Nothing depends on the helper: if it cannot start, fails or outlives :data:`WAIT_SECONDS`, this
 process compiles what is missing itself. It is not started on one CPU, without the JIT, when
-the loop is cached already, or from a helper.
+the loop is compiled already (in this process or the cache), or from a helper.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import os
 import subprocess
 import sys
 from collections.abc import Callable
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numba import config, types
@@ -38,6 +38,9 @@ from carom.engines.edmd.state import State
 from carom.jit import kernels_cached
 from carom.materials import pair_table
 
+if TYPE_CHECKING:
+    from carom.engines.edmd.driver import Environment
+
 typeof = cast(Callable[[Any], Any], _typeof)
 
 #: set in the helper's environment, so that its own engine starts no helper
@@ -48,7 +51,7 @@ WAIT_SECONDS = 600.0
 
 def start() -> subprocess.Popen[bytes] | None:
     """Start the helper process if the kernel cache is cold and a second CPU can run it."""
-    if config.DISABLE_JIT or os.environ.get(HELPER_FLAG) or kernels_cached():  # type: ignore[attr-defined]
+    if config.DISABLE_JIT or os.environ.get(HELPER_FLAG) or loop_ready():  # type: ignore[attr-defined]
         return None
     if usable_cpus() < 2:
         return None
@@ -62,6 +65,12 @@ def start() -> subprocess.Popen[bytes] | None:
         )
     except OSError:
         return None
+
+
+def loop_ready() -> bool:
+    """Whether the event loop is compiled already: in this process (then the disk is not
+    asked again), or in the kernel cache."""
+    return bool(getattr(loop.run_frames, "overloads", None)) or kernels_cached()
 
 
 def usable_cpus() -> int:
@@ -117,10 +126,10 @@ def compile_beside(
     finish(helper)
 
 
-def two_spheres() -> tuple[Bodies, Any]:
+def two_spheres() -> tuple[Bodies, Environment]:
     """The helper's engine inputs: two spheres in a walled 3D box (every scene the event-driven
     engine runs has the same kernel argument types; the tests hold this)."""
-    from carom.engines.edmd.driver import Environment
+    from carom.engines.edmd.driver import Environment  # (the driver imports this module)
 
     bodies = Bodies(3)
     bodies.append_spheres(

@@ -238,25 +238,22 @@ def calendar_build(keys: np.ndarray, cal: Calendar) -> None:
     if finite.shape[0] == 0:
         cal_f[F_BASE] = 0.0
         cal_f[F_WIDTH] = 1.0
-        _file_all(keys, cal, False)
-        return
-    half = max(1, finite.shape[0] // 2)
-    ordered = np.partition(finite, (0, half - 1))  # the earliest and the half-th earliest
-    spread = ordered[half - 1] - ordered[0]
-    cal_f[F_BASE] = ordered[0]
-    cal_f[F_WIDTH] = EVENTS_PER_BUCKET * spread / half if spread > 0.0 else 1.0
-    _file_all(keys, cal, True)
+    else:
+        half = max(1, finite.shape[0] // 2)
+        ordered = np.partition(finite, (0, half - 1))  # the earliest and the half-th earliest
+        spread = ordered[half - 1] - ordered[0]
+        cal_f[F_BASE] = ordered[0]
+        cal_f[F_WIDTH] = EVENTS_PER_BUCKET * spread / half if spread > 0.0 else 1.0
+    _file_all(keys, cal)
 
 
 @njit(cache=True, error_model="numpy")
-def _file_all(keys: np.ndarray, cal: Calendar, any_finite: bool) -> None:
-    """Empty the calendar, then file every body's event (with ``any_finite``) in a year
-    starting at ``cal_f``'s base and width."""
+def _file_all(keys: np.ndarray, cal: Calendar) -> None:
+    """Empty the calendar, then file every body's event in a year starting at ``cal_f``'s
+    base and width (an infinite time is filed nowhere)."""
     cal_head, _cal_next, _cal_prev, cal_loc, _cur_heap, _cur_key, _cur_where, _cal_f, cal_i = cal
     cal_head[:] = -1
     cal_i[:] = 0
     cal_loc[:] = NOWHERE
-    if not any_finite:
-        return
     for body in range(keys.shape[0]):
         _insert(body, keys[body], cal)

@@ -1,10 +1,11 @@
 """How the event loop's kernels are compiled: without reference counting, and inlined by LLVM.
 
-**Without reference counting.** Nothing is allocated per event, so the loop and every function
-it calls are compiled without Numba's reference counting (``_nrt=False``, an internal Numba
-flag; the remedy Numba's developers give in numba#2345): each call would otherwise increment
-and decrement an atomic counter per array argument, and each such locked instruction stalls
-the loads around it (measured: the event loop 1.4x faster without them). A kernel that
+**Without reference counting.** Nothing is allocated per event, so the functions the loop
+calls are compiled without Numba's reference counting (``_nrt=False``, an internal Numba flag;
+the remedy Numba's developers give in numba#2345): each call would otherwise increment and
+decrement an atomic counter per array argument, and each such locked instruction stalls the
+loads around it (measured: the event loop 1.4x faster without them). The loop itself counts
+only where it reads the engine's handle, once a call (:mod:`carom.engines.edmd.loop`). A kernel that
 allocated would fail to compile, loudly. A function compiled so must not return an array
 either (its caller, if counted, would release a reference it never took): the few helpers
 that return views stay in Numba's own inliner (``inline="always"``).
