@@ -113,6 +113,7 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
             s.support,
             s.nbr,
             s.nbr_count,
+            s.near,
             counter,
             m.radius,
             m.mobile,
@@ -164,7 +165,7 @@ def run_frames(  # type: ignore[no-untyped-def]
     acc, w = s.acc, s.w
     rot = (w, s.orient, s.orient_t)
     shell, support, last_coll = s.shell, s.support, s.last_coll
-    nbr, nbr_count, nbr_mark, nbr_old = s.nbr, s.nbr_count, s.nbr_mark, s.nbr_old
+    nbr, nbr_count, nbr_mark, nbr_old, near = s.nbr, s.nbr_count, s.nbr_mark, s.nbr_old, s.near
     ev_time = s.ev_time
     sched = s.sched
     ev_kind, ev_other, ev_stamp, counter = schedule_views(sched)
@@ -312,8 +313,8 @@ def run_frames(  # type: ignore[no-untyped-def]
             if body < 0:
                 continue
             predict(
-                body, T, kin, x, v, acc, accelerated, t, shell, support, nbr, nbr_count, counter,
-                radius, mobile, box, inv_box, periodic, delta, plane_point, plane_normal,
+                body, T, kin, x, v, acc, accelerated, t, shell, support, nbr, nbr_count, near,
+                counter, radius, mobile, box, inv_box, periodic, delta, plane_point, plane_normal,
                 ev_time, ev_kind, ev_other, ev_stamp,
             )  # fmt: skip
             calendar_update(ev_time, body, cal)

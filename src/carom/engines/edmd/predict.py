@@ -19,6 +19,7 @@ from carom.engines.edmd.state import (
     KIN_R,
     KIN_T,
     KIN_V,
+    KIN_WIDTH,
     SCHED_COUNTER,
     SCHED_KIND,
     SCHED_OTHER,
@@ -122,16 +123,22 @@ def _first_pair_straight(
     kin: np.ndarray,
     nbr: np.ndarray,
     nbr_count: np.ndarray,
+    near: np.ndarray,
     box: np.ndarray,
     periodic: bool,
 ) -> tuple[float, int]:
     """Body ``i``'s first collision with a neighbour before ``best`` when nothing accelerates.
 
-    Returns ``(time from T, neighbour)``, or ``(best, -1)``. The same arithmetic as
-    :func:`carom.geometry.toi.toi_sphere_sphere`, written out per component and without branches
-    on the neighbour (the hot loop of the engine: a mispredicted branch costs more than the
-    square root and division it would skip). Each neighbour's data is one record of ``kin``
-    (z is zero in 2D, so three components serve both).
+    Returns ``(time from T, neighbour)``, or ``(best, -1)``; of equal times, the first in
+    ``i``'s list. The same arithmetic as :func:`carom.geometry.toi.toi_sphere_sphere`, written
+    out per component. The hot loop of the engine, in three passes so that the middle one runs
+    four neighbours per instruction (AVX2; measured 2x faster than one neighbour at a time in
+    3D): copy each neighbour's record of ``kin`` (one cache line; z is zero in 2D, so three
+    components serve both) into column ``slot`` of the scratch ``near`` (``KIN_WIDTH + 1``,
+    K) float64; compute every time of impact into its last row, without branches (a select
+    per neighbour, where a mispredicted branch would cost more than the square root and
+    division it skips); then take the first smallest. Vector square roots and divisions are
+    IEEE-exact like scalar ones and nothing is reordered, so the times are the same bits.
     """
     xi0, xi1, xi2 = kin[i, 0], kin[i, 1], kin[i, 2]
     vi0, vi1, vi2 = kin[i, KIN_V], kin[i, KIN_V + 1], kin[i, KIN_V + 2]
@@ -139,16 +146,19 @@ def _first_pair_straight(
     L2 = box[2] if box.shape[0] == 3 else 1.0
     inv0, inv1, inv2 = 1.0 / L0, 1.0 / L1, 1.0 / L2
     rad = kin[i, KIN_R]
-    other = -1
-    for slot in range(nbr_count[i]):
+    count = nbr_count[i]
+    for slot in range(count):
         prefetch_row(kin, nbr[i, slot])
-    for slot in range(nbr_count[i]):
+    for slot in range(count):
         j = nbr[i, slot]
-        dtj = T - kin[j, KIN_T]
-        vj0, vj1, vj2 = kin[j, KIN_V], kin[j, KIN_V + 1], kin[j, KIN_V + 2]
-        r0 = xi0 - (kin[j, 0] + vj0 * dtj)
-        r1 = xi1 - (kin[j, 1] + vj1 * dtj)
-        r2 = xi2 - (kin[j, 2] + vj2 * dtj)
+        for k in range(KIN_WIDTH):
+            near[k, slot] = kin[j, k]
+    for slot in range(count):
+        dtj = T - near[KIN_T, slot]
+        vj0, vj1, vj2 = near[KIN_V, slot], near[KIN_V + 1, slot], near[KIN_V + 2, slot]
+        r0 = xi0 - (near[0, slot] + vj0 * dtj)
+        r1 = xi1 - (near[1, slot] + vj1 * dtj)
+        r2 = xi2 - (near[2, slot] + vj2 * dtj)
         if periodic:
             r0 -= L0 * np.floor(r0 * inv0 + 0.5)
             r1 -= L1 * np.floor(r1 * inv1 + 0.5)
@@ -159,17 +169,20 @@ def _first_pair_straight(
         rr = r0 * r0 + r1 * r1 + r2 * r2
         rv = r0 * dv0 + r1 * dv1 + r2 * dv2
         vv = dv0 * dv0 + dv1 * dv1 + dv2 * dv2
-        reach = rad + kin[j, KIN_R]
+        reach = rad + near[KIN_R, slot]
         c = rr - reach * reach
         disc = rv * rv - vv * c
         # the smaller root of vv t^2 + 2 rv t + c, cancellation-free (rv < 0); 0 when already
-        # touching and approaching; none when separating or passing by
-        # (a select, not a branch; the denominator is never zero, even where discarded)
+        # touching and approaching; none when separating or passing by (the denominator is
+        # never zero, even where discarded)
         tp = max(c / (math.sqrt(max(disc, 0.0)) - rv if rv < 0.0 else 1.0), 0.0)
-        tp = tp if (rv < 0.0 and disc >= 0.0) else INF
+        near[KIN_WIDTH, slot] = tp if (rv < 0.0 and disc >= 0.0) else INF
+    other = -1
+    for slot in range(count):
+        tp = near[KIN_WIDTH, slot]
         if tp < best:
             best = tp
-            other = j
+            other = nbr[i, slot]
     return best, other
 
 
@@ -187,6 +200,7 @@ def predict(
     support: np.ndarray,
     nbr: np.ndarray,
     nbr_count: np.ndarray,
+    near: np.ndarray,
     counter: np.ndarray,
     radius: np.ndarray,
     mobile: np.ndarray,
@@ -258,7 +272,7 @@ def predict(
 
     # neighbours: relative motion r + v t + da t^2 / 2, j extrapolated to T on the fly
     if not accelerated:
-        tp, j = _first_pair_straight(i, T, best, kin, nbr, nbr_count, box, periodic)
+        tp, j = _first_pair_straight(i, T, best, kin, nbr, nbr_count, near, box, periodic)
         if j >= 0:
             best = tp
             kind = EV_PAIR

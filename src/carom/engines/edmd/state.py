@@ -73,6 +73,9 @@ class State(NamedTuple):
         Neighbour lists.
     nbr_mark : (N,) int64; nbr_old : (K,) int32
         Scratch for rebuilding one list (:func:`carom.engines.edmd.neighbours.rebuild_shell`).
+    near : (KIN_WIDTH + 1, K) float64
+        Scratch for one prediction: the records of a body's neighbours, column by column, and
+        their times of impact (:mod:`carom.engines.edmd.predict`).
     cell, slot : (N,) int64; cell_count : (C,) int64; cell_body : (C, B) int32
         The cell grid of shell centres: cell ``c`` holds bodies ``cell_body[c, :cell_count[c]]``;
         body ``i`` is in cell ``cell[i]`` at place ``slot[i]``.
@@ -105,6 +108,7 @@ class State(NamedTuple):
     nbr_count: NDArray[np.int64]
     nbr_mark: NDArray[np.int64]
     nbr_old: NDArray[np.int32]
+    near: NDArray[np.float64]
     cell: NDArray[np.int64]
     slot: NDArray[np.int64]
     cell_count: NDArray[np.int64]
@@ -182,6 +186,7 @@ def allocate_state(
         nbr_count=np.zeros(n, np.int64),
         nbr_mark=np.zeros(n, np.int64),
         nbr_old=np.zeros(capacity, np.int32),
+        near=np.zeros((KIN_WIDTH + 1, capacity)),
         cell=np.zeros(n, np.int64),
         slot=np.zeros(n, np.int64),
         cell_count=np.zeros(n_cells, np.int64),
