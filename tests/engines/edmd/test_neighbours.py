@@ -8,7 +8,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from carom.engines.edmd.neighbours import CELL_FULL, FITS, LIST_FULL, build_all
+from carom.engines.edmd.neighbours import (
+    CELL_FULL,
+    FITS,
+    LIST_FULL,
+    SCAN_ROWS,
+    build_all,
+    scan_size,
+)
 
 
 def _grid(
@@ -38,6 +45,8 @@ def _grid(
         "cell_size": box / ncell,
         "ncell": ncell,
         "mark": np.zeros(n, np.int64),
+        "scan": np.zeros((SCAN_ROWS, scan_size(dim, cell_capacity))),
+        "scan_body": np.zeros(scan_size(dim, cell_capacity), np.int32),
     }
 
 

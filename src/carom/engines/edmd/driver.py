@@ -366,11 +366,14 @@ class EdmdEngine:
         """
         model, state = self.model, self.state
         while True:
+            scan_size = neighbours.scan_size(model.box.shape[0], cell_capacity)
             state = state._replace(
                 nbr=np.zeros((state.kin.shape[0], capacity), np.int32),
                 nbr_old=np.zeros(capacity, np.int32),
                 near=np.zeros((KIN_WIDTH + 1, capacity)),
                 cell_body=np.zeros((state.cell_count.shape[0], cell_capacity), np.int32),
+                scan=np.zeros((neighbours.SCAN_ROWS, scan_size)),
+                scan_body=np.zeros(scan_size, np.int32),
             )
             status = build_all(
                 state.shell,
@@ -387,6 +390,8 @@ class EdmdEngine:
                 model.cell_size,
                 model.ncell,
                 state.nbr_mark,
+                state.scan,
+                state.scan_body,
             )
             if status == FITS:
                 break

@@ -94,6 +94,8 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
         m.cell_size,
         m.ncell,
         s.nbr_mark,
+        s.scan,
+        s.scan_body,
     )
     if status != FITS:
         return LISTS_FULL if status == LIST_FULL else CELLS_FULL
@@ -166,6 +168,7 @@ def run_frames(  # type: ignore[no-untyped-def]
     rot = (w, s.orient, s.orient_t)
     shell, support, last_coll = s.shell, s.support, s.last_coll
     nbr, nbr_count, nbr_mark, nbr_old, near = s.nbr, s.nbr_count, s.nbr_mark, s.nbr_old, s.near
+    scan, scan_body = s.scan, s.scan_body
     ev_time = s.ev_time
     sched = s.sched
     ev_kind, ev_other, ev_stamp, counter = schedule_views(sched)
@@ -305,6 +308,8 @@ def run_frames(  # type: ignore[no-untyped-def]
                 nbr_mark,
                 nbr_old,
                 counts[C_SHELL],  # a stamp no earlier rebuild used
+                scan,
+                scan_body,
             )
             if status != FITS:
                 return LISTS_FULL if status == LIST_FULL else CELLS_FULL

@@ -12,6 +12,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from carom.engines.edmd.neighbours import SCAN_ROWS, scan_size
+
 __all__ = [
     "KIN_R",
     "KIN_T",
@@ -76,6 +78,9 @@ class State(NamedTuple):
     near : (KIN_WIDTH + 1, K) float64
         Scratch for one prediction: the records of a body's neighbours, column by column, and
         their times of impact (:mod:`carom.engines.edmd.predict`).
+    scan : (5, M) float64; scan_body : (M,) int32
+        Scratch for one scan of the cell grid, M = 3^d B: the candidates' shell records,
+        column by column, and the candidates (:mod:`carom.engines.edmd.neighbours`).
     cell, slot : (N,) int64; cell_count : (C,) int64; cell_body : (C, B) int32
         The cell grid of shell centres: cell ``c`` holds bodies ``cell_body[c, :cell_count[c]]``;
         body ``i`` is in cell ``cell[i]`` at place ``slot[i]``.
@@ -109,6 +114,8 @@ class State(NamedTuple):
     nbr_mark: NDArray[np.int64]
     nbr_old: NDArray[np.int32]
     near: NDArray[np.float64]
+    scan: NDArray[np.float64]
+    scan_body: NDArray[np.int32]
     cell: NDArray[np.int64]
     slot: NDArray[np.int64]
     cell_count: NDArray[np.int64]
@@ -187,6 +194,8 @@ def allocate_state(
         nbr_mark=np.zeros(n, np.int64),
         nbr_old=np.zeros(capacity, np.int32),
         near=np.zeros((KIN_WIDTH + 1, capacity)),
+        scan=np.zeros((SCAN_ROWS, scan_size(dim, cell_capacity))),
+        scan_body=np.zeros(scan_size(dim, cell_capacity), np.int32),
         cell=np.zeros(n, np.int64),
         slot=np.zeros(n, np.int64),
         cell_count=np.zeros(n_cells, np.int64),
