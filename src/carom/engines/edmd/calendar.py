@@ -223,6 +223,20 @@ def calendar_top(keys: np.ndarray, cal: Calendar) -> int:
     return int(cur_heap[0])
 
 
+@njit_inlined
+def calendar_next(cal: Calendar, k: int) -> int:
+    """A body whose event is likely among the next few after the top's, or -1: the heap's
+    node ``k`` (1 or 2, the top's children), else the first body filed in the next bucket.
+    Only a hint, for prefetching: nothing is changed."""
+    cal_head, _cal_next, _cal_prev, _cal_loc, cur_heap, _cur_key, _cur_where, _cal_f, cal_i = cal
+    if k < cal_i[I_SIZE]:
+        return int(cur_heap[k])
+    following = cal_i[I_CUR] + k
+    if following < cal_head.shape[0] - 1:
+        return int(cal_head[following])
+    return -1
+
+
 def calendar_build(keys: np.ndarray, cal: Calendar) -> None:
     """File every body's event (``keys`` (N,) [s], infinite for none); the first year starts
     at the earliest event, with buckets as wide as ``EVENTS_PER_BUCKET`` times the mean spacing

@@ -39,7 +39,7 @@ import math
 import numpy as np
 from numba import njit
 
-from carom.engines.edmd.calendar import calendar_top, calendar_update
+from carom.engines.edmd.calendar import calendar_next, calendar_top, calendar_update
 from carom.engines.edmd.codes import (
     C_EVENTS,
     C_SHELL,
@@ -65,6 +65,11 @@ from carom.engines.edmd.predict import (
 from carom.engines.edmd.prefetch import prefetch_row
 from carom.geometry.rotation import turn
 from carom.geometry.toi import INF
+
+
+# bodies above which the loop prefetches the next events' data (the state, ~500 bytes a body,
+# no longer fits a core's 2 MB cache)
+LOOKAHEAD_BODIES = 4096
 
 
 @njit(cache=True, error_model="numpy")
@@ -101,7 +106,7 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
         return LISTS_FULL if status == LIST_FULL else CELLS_FULL
     T = s.clock[0]
     for i in range(x.shape[0]):
-        free_flight(x, v, s.acc, t, i, T)
+        free_flight(x, v, s.acc, m.accelerated, t, i, T)
         predict(
             i,
             T,
@@ -188,6 +193,9 @@ def run_frames(  # type: ignore[no-untyped-def]
     cell_size, ncell = m.cell_size, m.ncell
 
     dim = x.shape[1]
+    # prefetch the next events' data only where it misses the core's own caches (measured:
+    # 1.06 to 1.13x from 1e5 bodies on, 4% slower at 1e3, where everything is in cache)
+    lookahead = x.shape[0] > LOOKAHEAD_BODIES
     processed = 0
     log_cap = log_time.shape[0]
     if done[0] >= times.shape[0]:
@@ -219,11 +227,31 @@ def run_frames(  # type: ignore[no-untyped-def]
         prefetch_row(sched, i)
         prefetch_row(kin, i)
         prefetch_row(nbr, i)
+        if lookahead:
+            # and what the next events will read: at large N each is a miss; asked for now,
+            # they arrive while this event is processed
+            for k in range(1, 3):
+                b = calendar_next(cal, k)
+                if b >= 0:
+                    prefetch_row(sched, b)
+                    prefetch_row(kin, b)
+                    prefetch_row(nbr, b)
+                    prefetch_row(nbr_count, b)
+                    prefetch_row(shell, b)
+                    prefetch_row(ev_time, b)
+                    prefetch_row(last_coll, b)
+                    prefetch_row(material, b)
+                    prefetch_row(inv_mass, b)
+                    prefetch_row(radius, b)
+            # i's neighbours' records, which its prediction reads (its list is in cache: it
+            # was asked for an event ago), now rather than after the collision
+            for ahead in range(nbr_count[i]):
+                prefetch_row(kin, nbr[i, ahead])
         s.clock[0] = T
         counts[C_EVENTS] += 1
         kind = ev_kind[i]
         j = -1
-        free_flight(x, v, acc, t, i, T)  # every event moves its own body to now
+        free_flight(x, v, acc, accelerated, t, i, T)  # every event moves its own body to now
         if kind == EV_PAIR:
             j = ev_other[i]
             prefetch_row(kin, j)
@@ -232,7 +260,7 @@ def run_frames(  # type: ignore[no-untyped-def]
                 counts[C_STALE] += 1
                 j = -1  # stale: the partner collided since; just re-predict
             else:
-                free_flight(x, v, acc, t, j, T)
+                free_flight(x, v, acc, accelerated, t, j, T)
                 collide_pair(
                     i,
                     j,

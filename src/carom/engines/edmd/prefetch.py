@@ -1,4 +1,5 @@
-"""Software prefetch of one row of a 2-D array (LLVM ``llvm.prefetch``).
+"""Software prefetch of one row of a 2-D array, or one element of a 1-D array (LLVM
+``llvm.prefetch``).
 
 The event loop reads, for each neighbour of a body, one record in an order no hardware
 prefetcher can guess; at large N each is a trip to main memory. Asking for all of them
@@ -18,7 +19,7 @@ from numba.extending import intrinsic
 
 @intrinsic
 def _prefetch_row(typingctx: Any, array: Any, row: Any) -> Any:
-    if not isinstance(array, types.Array) or array.ndim != 2:
+    if not isinstance(array, types.Array) or array.ndim not in (1, 2):
         return None
 
     def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
@@ -26,8 +27,9 @@ def _prefetch_row(typingctx: Any, array: Any, row: Any) -> Any:
         ary = context.make_array(array_type)(context, builder, args[0])
         index = context.cast(builder, args[1], row_type, types.intp)
         zero = context.get_constant(types.intp, 0)
+        indices = [index, zero] if array_type.ndim == 2 else [index]
         ptr = cgutils.get_item_pointer(  # type: ignore[no-untyped-call]
-            context, builder, array_type, ary, [index, zero], wraparound=False
+            context, builder, array_type, ary, indices, wraparound=False
         )
         i8p = llvm_ir.IntType(8).as_pointer()
         i32 = llvm_ir.IntType(32)
