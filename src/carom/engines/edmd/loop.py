@@ -66,7 +66,6 @@ from carom.engines.edmd.prefetch import prefetch_row
 from carom.geometry.rotation import turn
 from carom.geometry.toi import INF
 
-
 # bodies above which the loop prefetches the next events' data (the state, ~500 bytes a body,
 # no longer fits a core's 2 MB cache)
 LOOKAHEAD_BODIES = 4096
