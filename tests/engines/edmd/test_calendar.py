@@ -7,7 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from carom.engines.edmd.calendar import Calendar, calendar_build, calendar_top, calendar_update
+from carom.engines.edmd.calendar import (
+    I_SIZE,
+    Calendar,
+    calendar_build,
+    calendar_next,
+    calendar_top,
+    calendar_update,
+)
 
 
 def _calendar(n: int) -> Calendar:
@@ -71,3 +78,27 @@ def test_calendar_pops_in_time_then_body_order(seed: int) -> None:
         if math.isfinite(keys[other]) and rng.random() < 0.5:
             keys[other] = now + rng.exponential(scale)
             calendar_update(keys, other, cal)
+
+
+def test_the_next_event_is_hinted_whenever_the_heap_holds_it() -> None:
+    # calendar_next only guides prefetching (the loop reads the data of the bodies it names
+    # early), so it must name real bodies or -1, and, when the current bucket's heap holds two
+    # events or more, the event after the top is one of the top's two children.
+    rng = np.random.default_rng(5)
+    n = 200
+    keys = rng.exponential(1.0, n)
+    cal = _calendar(n)
+    calendar_build(keys, cal)
+    hinted = 0
+    for _ in range(4000):
+        top = calendar_top(keys, cal)
+        hints = [calendar_next(cal, 1), calendar_next(cal, 2)]
+        for b in hints:
+            assert b == -1 or (0 <= b < n and b != top and np.isfinite(keys[b]))
+        if cal[8][I_SIZE] >= 2:
+            order = np.lexsort((np.arange(n), keys))
+            assert int(order[1]) in hints
+            hinted += 1
+        keys[top] += rng.exponential(1.0)
+        calendar_update(keys, top, cal)
+    assert hinted > 1000  # the heap often holds two or more (8 events a bucket)

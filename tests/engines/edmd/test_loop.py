@@ -4,11 +4,17 @@ and events in time order."""
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from carom.engines.base import FrameArrays
-from carom.engines.edmd import codes, driver
+from carom.engines.edmd import aside, codes, driver, loop
 from carom.engines.edmd.loop import run_frames
 from carom.scene.layouts import lattice_gas
 
@@ -72,3 +78,46 @@ def test_stale_predictions_are_counted_not_processed() -> None:
     assert counts[codes.C_STALE] > 0
     processed = counts[codes.C_PAIR] + counts[codes.C_WALL] + counts[codes.C_SHELL]
     assert counts[codes.C_EVENTS] == processed + counts[codes.C_STALE]
+
+
+LOOKAHEAD_RUN = """
+import json
+from carom.engines.edmd import loop
+loop.LOOKAHEAD_BODIES = 0  # prefetch the next events' data at every size (read at compile time)
+from carom.scene.layouts import lattice_gas
+world = lattice_gas(3, 6, 0.3, seed=4)
+world.run(until=3.0, log=False)
+print(json.dumps({"positions": world.positions.tolist(), "velocities": world.velocities.tolist(),
+                  "compiled": sum(loop.run_frames.stats.cache_misses.values())}))
+"""
+
+
+@pytest.mark.needs_jit
+def test_prefetching_the_next_events_changes_no_bit(tmp_path: Path) -> None:
+    # Above LOOKAHEAD_BODIES the loop asks for the likely next events' data one event ahead.
+    # A prefetch reads nothing into the computation, so a loop compiled to do it at every size
+    # (in a fresh process with an empty kernel cache) must give this process's bits, where
+    # 216 bodies are below the threshold.
+    assert lattice_gas(3, 6, 0.3, seed=4).n_bodies < loop.LOOKAHEAD_BODIES
+    root = Path(__file__).resolve().parents[3]
+    env = {
+        **os.environ,
+        "NUMBA_CACHE_DIR": str(tmp_path),
+        "PYTHONPATH": str(root / "src"),
+        aside.HELPER_FLAG: "1",  # compile everything in that process, with its setting
+    }
+    done = subprocess.run(
+        [sys.executable, "-c", LOOKAHEAD_RUN],
+        capture_output=True,
+        text=True,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    ahead = json.loads(done.stdout)
+    assert ahead["compiled"] == 1  # its own loop, not this one's from a cache
+    world = lattice_gas(3, 6, 0.3, seed=4)
+    world.run(until=3.0, log=False)
+    np.testing.assert_array_equal(np.array(ahead["positions"]), world.positions)
+    np.testing.assert_array_equal(np.array(ahead["velocities"]), world.velocities)

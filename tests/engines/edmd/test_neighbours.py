@@ -19,12 +19,17 @@ from carom.engines.edmd.neighbours import (
 
 
 def _grid(
-    dim: int, n: int, periodic: bool, seed: int, capacity: int = 64, cell_capacity: int = 64
+    dim: int,
+    n: int,
+    periodic: bool,
+    seed: int,
+    capacity: int = 64,
+    cell_capacity: int = 64,
+    delta: float = 0.3,
 ) -> dict[str, np.ndarray]:
     rng = np.random.default_rng(seed)
     box = np.full(dim, 10.0)
     radius = rng.uniform(0.1, 0.4, n)
-    delta = 0.3
     shell = np.zeros((n, 4))
     shell[:, :dim] = rng.uniform(0.0, 10.0, (n, dim))
     shell[:, 3] = radius
@@ -55,9 +60,19 @@ def _build(g: dict[str, np.ndarray]) -> int:
 
 
 @pytest.mark.parametrize("dim", [2, 3])
-@pytest.mark.parametrize("periodic", [False, True])
-def test_lists_are_exactly_the_overlapping_shells(dim: int, periodic: bool) -> None:
-    g = _grid(dim, 300, periodic, seed=dim)
+@pytest.mark.parametrize(
+    ("periodic", "n", "delta"),
+    [
+        (False, 300, 0.3),
+        (True, 300, 0.3),  # 7 cells a side: each pair's image is its cell's
+        (True, 60, 1.8),  # 2 cells a side: both neighbouring cells are one, met once
+    ],
+)
+def test_lists_are_exactly_the_overlapping_shells(
+    dim: int, periodic: bool, n: int, delta: float
+) -> None:
+    g = _grid(dim, n, periodic, seed=dim, delta=delta)
+    assert int(g["ncell"][0]) == (2 if delta > 1.0 else 7)
     assert _build(g) == FITS
     c, a = g["shell"][:, :dim], g["shell"][:, 3]
     d = c[:, None, :] - c[None, :, :]
