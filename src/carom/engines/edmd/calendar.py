@@ -229,8 +229,9 @@ def calendar_top(keys: np.ndarray, cal: Calendar) -> int:
 @njit_inlined
 def calendar_next(cal: Calendar, k: int) -> int:
     """A body whose event is likely among the next few after the top's, or -1: the heap's
-    node ``k`` (1 or 2, the top's children), else the first body filed in the next bucket.
-    Only a hint, for prefetching: nothing is changed."""
+    node ``k`` (1 or 2, the top's children) if the heap has one, else the first body filed in
+    the ``k``-th bucket after the current one. Only a hint, for prefetching: nothing is
+    changed."""
     cal_head, _cal_next, _cal_prev, _cal_loc, cur_heap, _cur_key, _cur_where, _cal_f, cal_i = cal
     if k < cal_i[I_SIZE]:
         return int(cur_heap[k])

@@ -32,7 +32,7 @@ from carom.engines.edmd.model import Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
 from carom.engines.edmd.ordering import spatial_order
 from carom.engines.edmd.settings import SHELL_DEFAULT, EdmdSettings
-from carom.engines.edmd.state import KIN_WIDTH, State, aligned_records, allocate_state
+from carom.engines.edmd.state import State, aligned_records, allocate_state, scratch
 from carom.errors import CaromError
 from carom.materials import PairTable
 
@@ -366,14 +366,10 @@ class EdmdEngine:
         """
         model, state = self.model, self.state
         while True:
-            scan_size = neighbours.scan_size(model.box.shape[0], cell_capacity)
             state = state._replace(
                 nbr=np.zeros((state.kin.shape[0], capacity), np.int32),
-                nbr_old=np.zeros(capacity, np.int32),
-                near=np.zeros((KIN_WIDTH + 1, capacity)),
                 cell_body=np.zeros((state.cell_count.shape[0], cell_capacity), np.int32),
-                scan=np.zeros((neighbours.SCAN_ROWS, scan_size)),
-                scan_body=np.zeros(scan_size, np.int32),
+                **scratch(model.box.shape[0], capacity, cell_capacity),
             )
             status = build_all(
                 state.shell,

@@ -7,7 +7,7 @@ arrays resumes a run bit for bit.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -26,6 +26,7 @@ __all__ = [
     "State",
     "aligned_records",
     "allocate_state",
+    "scratch",
 ]
 
 N_COUNTS = 8
@@ -192,10 +193,7 @@ def allocate_state(
         nbr=np.zeros((n, capacity), np.int32),
         nbr_count=np.zeros(n, np.int64),
         nbr_mark=np.zeros(n, np.int64),
-        nbr_old=np.zeros(capacity, np.int32),
-        near=np.zeros((KIN_WIDTH + 1, capacity)),
-        scan=np.zeros((SCAN_ROWS, scan_size(dim, cell_capacity))),
-        scan_body=np.zeros(scan_size(dim, cell_capacity), np.int32),
+        **scratch(dim, capacity, cell_capacity),
         cell=np.zeros(n, np.int64),
         slot=np.zeros(n, np.int64),
         cell_count=np.zeros(n_cells, np.int64),
@@ -222,6 +220,19 @@ def allocate_state(
         log_point=np.zeros((log_capacity, 3)),
         log_n=np.zeros(1, np.int64),
     )
+
+
+def scratch(dim: int, capacity: int, cell_capacity: int) -> dict[str, NDArray[Any]]:
+    """The state's scratch arrays for lists of ``capacity`` and cell rows of
+    ``cell_capacity``, by field name: ``nbr_old``, ``near``, ``scan`` and ``scan_body``
+    (sized again whenever either capacity grows)."""
+    size = scan_size(dim, cell_capacity)
+    return {
+        "nbr_old": np.zeros(capacity, np.int32),
+        "near": np.zeros((KIN_WIDTH + 1, capacity)),
+        "scan": np.zeros((SCAN_ROWS, size)),
+        "scan_body": np.zeros(size, np.int32),
+    }
 
 
 def _orient_records(orientation: NDArray[np.float64]) -> NDArray[np.float64]:
