@@ -871,7 +871,10 @@ class World:
             from carom.engines.rigid3d.driver import warm_up as warm_up_3d
 
             warm_up_3d()  # the kernels a step calls only on its first impact or sleep, too
-        self.frame()
+        if isinstance(engine, EdmdEngine):
+            engine.load_sampler()  # the kernel of frame(), without a frame of every body
+        else:
+            self.frame()
         self.record(np.empty(0))  # the path of record() and frames(), frame-less
 
     @property

@@ -4,10 +4,17 @@ grow without changing a bit of the physics."""
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import carom
+from carom.engines.edmd import aside
 from carom.scene import find_scene, load_scene
 from tests.worlds import gas
 
@@ -222,3 +229,42 @@ def test_a_recording_too_large_for_memory_is_refused_first(monkeypatch: pytest.M
         world.record(np.linspace(0.1, 0.6, 6))
     assert world.time == 0.0
     assert len(world.record(np.linspace(0.1, 0.5, 5))) == 5
+
+
+SAMPLER_RUN = """
+import json
+from carom.engines.edmd.driver import EdmdEngine
+from carom.engines.edmd.handle import sample_now
+from carom.scene.layouts import lattice_gas
+world = lattice_gas(3, 5, 0.3, seed=2)
+before = len(sample_now.signatures)
+sample = EdmdEngine.sample
+def refuse(engine):
+    raise AssertionError("prepare sampled every body")
+EdmdEngine.sample = refuse
+world.prepare()
+EdmdEngine.sample = sample
+prepared = len(sample_now.signatures)
+world.positions
+print(json.dumps([before, prepared, len(sample_now.signatures)]))
+"""
+
+
+@pytest.mark.needs_jit
+def test_prepare_loads_the_sampler_without_sampling() -> None:
+    # World.prepare loads every kernel a run and its frames call; the sampler is loaded by
+    # signature, without sampling (a frame of 10^6 spheres would be 100 MB of arrays made and
+    # dropped). In a fresh process: no sampler before prepare, one after it, loaded with the
+    # engine's sample() refusing to run, and reading positions needs no other.
+    root = Path(__file__).resolve().parents[3]
+    env = {**os.environ, "PYTHONPATH": str(root / "src"), aside.HELPER_FLAG: "1"}
+    done = subprocess.run(
+        [sys.executable, "-c", SAMPLER_RUN],
+        capture_output=True,
+        text=True,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout) == [0, 1, 1]

@@ -174,24 +174,24 @@ class EdmdEngine:
         x = bodies.position.copy()
         if env.periodic:
             x -= env.box * np.floor(x / env.box)
-        grid = self._build_model(np.arange(bodies.n))
-        order = spatial_order(x, grid.cell_size, grid.ncell)
+        # the grid only orders the bodies; the model below sets the shells (the same sizes)
+        _, ncell = self._shell_grid(bodies.radius, np.isfinite(bodies.mass))
+        order = spatial_order(x, env.box / ncell, ncell)
         model = self._build_model(order)
-        acc = np.where(model.mobile[:, None], model.gravity[None, :], 0.0)
         cells = np.clip(np.floor(x / model.cell_size).astype(np.int64), 0, model.ncell - 1)
         occupancy = np.bincount(np.ravel_multi_index(cells.T, model.ncell)).max()
         self.cell_capacity = max(self.cell_capacity, 8, 2 * int(occupancy))
+        del x, cells  # the state is filled from the bodies, block by block
 
         def new_state() -> State:
             return allocate_state(
-                x[order],
-                bodies.velocity[order],
-                acc,
-                bodies.angular_velocity[order],
-                bodies.orientation[order],
-                model.radius,
+                bodies.position,
+                bodies.velocity,
+                bodies.angular_velocity,
+                bodies.orientation,
+                order,
+                model,
                 time,
-                int(np.prod(model.ncell)),
                 self.cell_capacity,
                 self.capacity,
                 LOG_CAPACITY,
@@ -214,24 +214,34 @@ class EdmdEngine:
 
     # -- building ---------------------------------------------------------------------------
 
-    def _build_model(self, order: NDArray[np.int64]) -> Model:
-        """The Model with bodies in engine order ``order``."""
-        b, env = self.bodies, self.env
-        mass = b.mass[order]
-        mobile = np.isfinite(mass)
-        radius = b.radius[order]
+    def _shell_grid(
+        self, radius: FloatArray, mobile: NDArray[np.bool_]
+    ) -> tuple[float, NDArray[np.int64]]:
+        """The shell thickness ``delta`` [m] and the cells along each axis for spheres of
+        ``radius`` (N,) [m], of which ``mobile`` (N,) move (their mean diameter sets the
+        default thickness)."""
+        n = radius.shape[0]
         mean_diameter = 2.0 * float(np.mean(radius[mobile])) if mobile.any() else 1.0
         thickness = self.settings.shell_thickness
         delta = thickness if thickness is not None else SHELL_DEFAULT * mean_diameter
-        largest = float(radius.max()) if b.n else 0.0
+        largest = float(radius.max()) if n else 0.0
         shell_diameter = 2.0 * (largest + delta)
+        env = self.env
         if env.periodic and np.any(env.box < 2.0 * shell_diameter):
             raise CaromError(
                 f"the box is too small for periodic boundaries with spheres of radius "
                 f"{largest:g} m: each side must exceed 4 (radius + shell) = "
                 f"{2.0 * shell_diameter:g} m"
             )
-        ncell = grid_cells(env.box, shell_diameter, b.n)
+        return delta, grid_cells(env.box, shell_diameter, n)
+
+    def _build_model(self, order: NDArray[np.int64]) -> Model:
+        """The Model with bodies in engine order ``order``."""
+        b, env = self.bodies, self.env
+        mass = b.mass[order]
+        mobile = np.isfinite(mass)
+        radius = b.radius[order]
+        delta, ncell = self._shell_grid(radius, mobile)
         with np.errstate(divide="ignore"):
             inv_mass = np.where(mobile, 1.0 / mass, 0.0)
         return Model(
@@ -443,6 +453,14 @@ class EdmdEngine:
         out = FrameArrays.empty(1, self.bodies.n, self.env.dim)
         sample_now(self.handle, *out)
         return out.positions[0], out.velocities[0], out.orientations[0], out.angular_velocities[0]
+
+    def load_sampler(self) -> None:
+        """Load the kernel of :meth:`sample` from the cache (or compile it) without sampling:
+        a sample of 10^6 spheres is 100 MB of new arrays that ``World.prepare`` would drop."""
+        compile_for = getattr(sample_now, "compile", None)  # none without the JIT
+        if compile_for is not None:
+            tiny = FrameArrays.empty(1, 1, self.env.dim)
+            compile_for(tuple(aside.typeof(a) for a in (self.handle, *tiny)))
 
     def counters(self) -> Counters:
         c, s = self.state.counts, self.state.sums

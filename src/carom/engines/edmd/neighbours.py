@@ -371,13 +371,16 @@ def first_overlap(
     """The first pair of bodies that overlap by more than ``tolerance`` of the sum of their
     radii, scanning each moving body's list in order: ``(i, j, overlap [m])``, or
     ``(-1, -1, 0.0)`` when none does. Every overlapping pair shares a list (their shells
-    overlap), so this finds any overlap there is."""
+    overlap), so this finds any overlap there is. A pair of moving bodies is in both their
+    lists and is measured once, from the first body's."""
     dim = box.shape[0]
     for i in range(nbr.shape[0]):
         if not mobile[i]:
             continue
         for s in range(nbr_count[i]):
             j = nbr[i, s]
+            if j < i and mobile[j]:
+                continue  # measured from j's list
             d2 = 0.0
             for k in range(dim):
                 d = kin[i, k] - kin[j, k]

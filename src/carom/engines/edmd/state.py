@@ -12,6 +12,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from carom.engines.edmd.model import Model
 from carom.engines.edmd.neighbours import SCAN_ROWS, scan_size
 
 __all__ = [
@@ -156,36 +157,74 @@ def aligned_records(n: int, values: NDArray[np.float64] | None = None) -> NDArra
     return kin
 
 
+#: Rows filled at a time when a state is built from the bodies: each block's records are
+#: written while in cache, and no array of all the bodies is made on the way
+FILL_ROWS = 8192
+
+
 def allocate_state(
-    x: NDArray[np.float64],
-    v: NDArray[np.float64],
-    acc: NDArray[np.float64],
-    w: NDArray[np.float64],
+    position: NDArray[np.float64],
+    velocity: NDArray[np.float64],
+    angular_velocity: NDArray[np.float64],
     orientation: NDArray[np.float64],
-    radius: NDArray[np.float64],
+    order: NDArray[np.int64],
+    model: Model,
     time: float,
-    n_cells: int,
     cell_capacity: int,
     capacity: int,
     log_capacity: int,
 ) -> State:
-    """A fresh state at time ``time`` (schedule still empty: call ``edmd.initialise``)."""
-    n, dim = x.shape
+    """A fresh state at time ``time`` (schedule still empty: call ``edmd.initialise``).
+
+    Parameters
+    ----------
+    position, velocity : (N, d) float64
+        Centres [m] and velocities [m/s] in the caller's numbering (positions are wrapped
+        into a periodic box here).
+    angular_velocity : (N, 3) float64
+        Spins [rad/s] (2D: about z, column 2).
+    orientation : (N, 1) or (N, 4) float64
+        Angles [rad] (2D) or unit quaternions (3D).
+    order : (N,) int64
+        Engine row ``e`` holds the caller's body ``order[e]``.
+    model : Model
+        The model in engine order (radii, which bodies move, gravity, box, grid).
+    time : float
+        The clock of every body [s].
+    cell_capacity, capacity, log_capacity : int
+        Bodies per cell row, neighbours per list, collisions the log buffer holds.
+    """
+    n, dim = position.shape
+    box = model.box
     kin = aligned_records(n)
-    kin[:, :dim] = x
-    kin[:, KIN_T] = time
-    kin[:, KIN_V : KIN_V + dim] = v
-    kin[:, KIN_R] = radius
+    shell = np.zeros((n, 4))
+    acc = np.empty((n, dim))
+    w = np.empty((n, 3))
+    orient = np.zeros((n, 4))
+    for a in range(0, n, FILL_ROWS):
+        rows = order[a : a + FILL_ROWS]
+        b = a + rows.shape[0]
+        x = position[rows]
+        if model.periodic:
+            x -= box * np.floor(x / box)
+        radius = model.radius[a:b]
+        kin[a:b, :dim] = x
+        kin[a:b, KIN_T] = time
+        kin[a:b, KIN_V : KIN_V + dim] = velocity[rows]
+        kin[a:b, KIN_R] = radius
+        shell[a:b, :dim] = x
+        shell[a:b, 3] = radius
+        acc[a:b] = np.where(model.mobile[a:b, None], model.gravity[None, :], 0.0)
+        w[a:b] = angular_velocity[rows]
+        orient[a:b, : orientation.shape[1]] = orientation[rows]
     sched = np.zeros((n, 4), np.int64)
     sched[:, SCHED_OTHER] = -1
-    shell = np.zeros((n, 4))
-    shell[:, :dim] = x
-    shell[:, 3] = radius
+    n_cells = int(np.prod(model.ncell))
     return State(
         kin=kin,
-        acc=np.array(acc, dtype=np.float64),
-        w=np.array(w, dtype=np.float64),
-        orient=_orient_records(orientation),
+        acc=acc,
+        w=w,
+        orient=orient,
         orient_t=np.full(n, time),
         last_coll=np.full(n, -np.inf),
         support=np.full(n, -1, np.int64),
@@ -233,10 +272,3 @@ def scratch(dim: int, capacity: int, cell_capacity: int) -> dict[str, NDArray[An
         "scan": np.zeros((SCAN_ROWS, size)),
         "scan_body": np.zeros(size, np.int32),
     }
-
-
-def _orient_records(orientation: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(N, 4) records from (N, 1) angles (2D, column 0) or (N, 4) quaternions (3D)."""
-    out = np.zeros((orientation.shape[0], 4))
-    out[:, : orientation.shape[1]] = orientation
-    return out
