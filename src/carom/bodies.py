@@ -105,6 +105,20 @@ def identity_orientations(n: int, dim: int) -> FloatArray:
     return q
 
 
+def _sphere_tensors(
+    dim: int, mass: FloatArray, radius: FloatArray, inertia_factor: FloatArray
+) -> FloatArray:
+    """Spheres' inertia tensors, (n, 3, 3) [kg m^2]: ``q m a^2`` on the diagonal in 3D
+    (inf for a static sphere, zeros off the diagonal), zero in 2D; from their masses [kg],
+    radii [m] and factors ``q`` [-], (n,) each."""
+    tensor = np.zeros((mass.shape[0], 3, 3))
+    if dim == 3:
+        with np.errstate(invalid="ignore"):  # static spheres: inf times 0 off the diagonal
+            moment = np.where(np.isfinite(mass), inertia_factor * mass * radius**2, np.inf)
+        tensor[:, [0, 1, 2], [0, 1, 2]] = moment[:, None]
+    return tensor
+
+
 class Bodies:
     """N bodies in ``dim`` dimensions.
 
@@ -130,7 +144,9 @@ class Bodies:
         bodies: a third of the trace of their inertia tensor over ``m a^2``).
     inertia_tensor : (N, 3, 3) float64
         3D: the inertia tensor about the centre of mass in the body's frame [kg m^2] (inf for
-        static and kinematic bodies); 2D: unused, zero.
+        static and kinematic bodies); 2D: unused, zero. While every body is a sphere it is
+        not stored but made on each read from ``inertia_factor``, ``mass`` and ``radius``
+        (72 bytes a sphere saved: 720 MB for 10^7 spheres).
     material : (N,) int64
         Index of the body's material in the World's list.
     kind : (N,) int8
@@ -150,7 +166,7 @@ class Bodies:
         self.radius = np.zeros(0)
         self.mass = np.zeros(0)
         self.inertia_factor = np.zeros(0)
-        self.inertia_tensor = np.zeros((0, 3, 3))
+        self._tensor: FloatArray | None = None  # None: every body a sphere (inertia_tensor)
         self.material = np.zeros(0, np.int64)
         self.kind = np.zeros(0, np.int8)
         self.pieces: list[Pieces] = []
@@ -172,6 +188,17 @@ class Bodies:
             moment = self.inertia_factor * self.mass * self.radius**2
         result: FloatArray = np.where(self.mobile, moment, np.inf)
         return result
+
+    @property
+    def inertia_tensor(self) -> FloatArray:
+        """The body-frame inertia tensors, (N, 3, 3) [kg m^2] (see the class docstring)."""
+        if self._tensor is not None:
+            return self._tensor
+        return _sphere_tensors(self.dim, self.mass, self.radius, self.inertia_factor)
+
+    @inertia_tensor.setter
+    def inertia_tensor(self, value: FloatArray) -> None:
+        self._tensor = np.asarray(value, np.float64)
 
     @property
     def spheres_only(self) -> bool:
@@ -197,13 +224,12 @@ class Bodies:
         self.shape = np.concatenate([self.shape, np.full(n, SHAPE_CODES["sphere"], np.int8)])
         self.radius = np.concatenate([self.radius, radius])
         self.mass = np.concatenate([self.mass, mass])
-        self.inertia_factor = np.concatenate([self.inertia_factor, np.full(n, inertia_factor)])
-        tensor = np.zeros((n, 3, 3))
-        if self.dim == 3:
-            with np.errstate(invalid="ignore"):  # static spheres: inf times 0 off the diagonal
-                moment = np.where(np.isfinite(mass), inertia_factor * mass * radius**2, np.inf)
-            tensor[:, [0, 1, 2], [0, 1, 2]] = moment[:, None]
-        self.inertia_tensor = np.concatenate([self.inertia_tensor, tensor])
+        q = np.full(n, inertia_factor)
+        self.inertia_factor = np.concatenate([self.inertia_factor, q])
+        if self._tensor is not None:  # other shapes too: every tensor is stored
+            self._tensor = np.concatenate(
+                [self._tensor, _sphere_tensors(self.dim, mass, radius, q)]
+            )
         self.material = np.concatenate([self.material, np.full(n, material, np.int64)])
         kind = np.where(np.isfinite(mass), KIND_DYNAMIC, KIND_STATIC).astype(np.int8)
         self.kind = np.concatenate([self.kind, kind])
@@ -231,6 +257,7 @@ class Bodies:
         dynamic. Return their indices."""
         n = position.shape[0]
         start = self.n
+        stored = self.inertia_tensor  # every tensor is stored from now on, the spheres' too
         reach = max(piece.reach for piece in pieces) if pieces else 0.0
         tensor = np.zeros((n, 3, 3))
         if self.dim == 2:
@@ -253,7 +280,7 @@ class Bodies:
         self.mass = np.concatenate([self.mass, np.full(n, mass)])
         q = moment / (mass * reach**2) if math.isfinite(mass) and reach > 0.0 else 0.0
         self.inertia_factor = np.concatenate([self.inertia_factor, np.full(n, q)])
-        self.inertia_tensor = np.concatenate([self.inertia_tensor, tensor])
+        self._tensor = np.concatenate([stored, tensor])
         self.material = np.concatenate([self.material, np.full(n, material, np.int64)])
         self.kind = np.concatenate([self.kind, np.full(n, kind, np.int8)])
         self.pieces.extend(pieces for _ in range(n))
