@@ -233,7 +233,7 @@ class Bodies:
         self.material = np.concatenate([self.material, np.full(n, material, np.int64)])
         kind = np.where(np.isfinite(mass), KIND_DYNAMIC, KIND_STATIC).astype(np.int8)
         self.kind = np.concatenate([self.kind, kind])
-        self.pieces.extend(() for _ in range(n))
+        self.pieces.extend([()] * n)  # one shared empty tuple: a list of n in one step
         return np.arange(start, self.n)
 
     def append_bodies(
@@ -283,7 +283,7 @@ class Bodies:
         self._tensor = np.concatenate([stored, tensor])
         self.material = np.concatenate([self.material, np.full(n, material, np.int64)])
         self.kind = np.concatenate([self.kind, np.full(n, kind, np.int8)])
-        self.pieces.extend(pieces for _ in range(n))
+        self.pieces.extend([pieces] * n)
         return np.arange(start, self.n)
 
     def set_state(
