@@ -4,18 +4,12 @@ grow without changing a bit of the physics."""
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 import carom
-from carom.engines.edmd import aside
 from carom.scene import find_scene, load_scene
+from tests.processes import fresh_python
 from tests.worlds import gas
 
 EPS = float(np.finfo(np.float64).eps)
@@ -256,15 +250,4 @@ def test_prepare_loads_the_sampler_without_sampling() -> None:
     # signature, without sampling (a frame of 10^6 spheres would be 100 MB of arrays made and
     # dropped). In a fresh process: no sampler before prepare, one after it, loaded with the
     # engine's sample() refusing to run, and reading positions needs no other.
-    root = Path(__file__).resolve().parents[3]
-    env = {**os.environ, "PYTHONPATH": str(root / "src"), aside.HELPER_FLAG: "1"}
-    done = subprocess.run(
-        [sys.executable, "-c", SAMPLER_RUN],
-        capture_output=True,
-        text=True,
-        env=env,
-        stdin=subprocess.DEVNULL,
-        check=False,
-    )
-    assert done.returncode == 0, done.stderr
-    assert json.loads(done.stdout) == [0, 1, 1]
+    assert fresh_python(SAMPLER_RUN) == [0, 1, 1]

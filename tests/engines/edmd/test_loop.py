@@ -4,19 +4,16 @@ and events in time order."""
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from carom.engines.base import FrameArrays
-from carom.engines.edmd import aside, codes, driver, loop
+from carom.engines.edmd import codes, driver, loop
 from carom.engines.edmd.loop import run_frames
 from carom.scene.layouts import lattice_gas
+from tests.processes import fresh_python
 
 
 def run(engine: driver.EdmdEngine, t_stop: float, max_events: int, log_on: bool) -> int:
@@ -99,23 +96,8 @@ def test_prefetching_the_next_events_changes_no_bit(tmp_path: Path) -> None:
     # (in a fresh process with an empty kernel cache) must give this process's bits, where
     # 216 bodies are below the threshold.
     assert lattice_gas(3, 6, 0.3, seed=4).n_bodies < loop.LOOKAHEAD_BODIES
-    root = Path(__file__).resolve().parents[3]
-    env = {
-        **os.environ,
-        "NUMBA_CACHE_DIR": str(tmp_path),
-        "PYTHONPATH": str(root / "src"),
-        aside.HELPER_FLAG: "1",  # compile everything in that process, with its setting
-    }
-    done = subprocess.run(
-        [sys.executable, "-c", LOOKAHEAD_RUN],
-        capture_output=True,
-        text=True,
-        env=env,
-        stdin=subprocess.DEVNULL,
-        check=False,
-    )
-    assert done.returncode == 0, done.stderr
-    ahead = json.loads(done.stdout)
+    # its own cache: it compiles everything itself, with its setting
+    ahead = fresh_python(LOOKAHEAD_RUN, NUMBA_CACHE_DIR=str(tmp_path))
     assert ahead["compiled"] == 1  # its own loop, not this one's from a cache
     world = lattice_gas(3, 6, 0.3, seed=4)
     world.run(until=3.0, log=False)

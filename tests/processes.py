@@ -1,0 +1,31 @@
+"""Running a snippet of Python in a fresh process, for what only a new interpreter shows
+(kernels compiled or loaded from the cache, counters that start at zero)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+from carom.engines.edmd import aside
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def fresh_python(code: str, **env: str) -> Any:
+    """Run ``code`` in a new interpreter on this checkout's sources, with ``env`` added to
+    the environment and no compile helper started (it compiles what it needs itself); fail
+    with its standard error unless it exits 0; return the JSON its standard output holds."""
+    done = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(ROOT / "src"), aside.HELPER_FLAG: "1", **env},
+        stdin=subprocess.DEVNULL,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
