@@ -4,11 +4,15 @@ grow without changing a bit of the physics."""
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 import pytest
 
 import carom
+from carom.engines.edmd import state
 from carom.scene import find_scene, load_scene
+from carom.scene.layouts import lattice_gas
 from tests.processes import fresh_python
 from tests.worlds import gas
 
@@ -251,3 +255,29 @@ def test_prepare_loads_the_sampler_without_sampling() -> None:
     # dropped). In a fresh process: no sampler before prepare, one after it, loaded with the
     # engine's sample() refusing to run, and reading positions needs no other.
     assert fresh_python(SAMPLER_RUN) == [0, 1, 1]
+
+
+@pytest.mark.needs_jit
+def test_a_state_filled_by_two_threads_is_the_one_filled_by_one(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # From FILL_THREAD_BODIES bodies on, a second thread writes the state's constant arrays
+    # while the first copies the bodies in (first writes to new memory overlap); below, one
+    # thread does both. 65536 disks built both ways: every state array the same.
+    submitted: list[str] = []
+
+    class Spy(ThreadPoolExecutor):
+        def submit(self, fn, /, *args, **kwargs):  # type: ignore[no-untyped-def]
+            submitted.append(fn.__name__)
+            return super().submit(fn, *args, **kwargs)
+
+    monkeypatch.setattr(state, "ThreadPoolExecutor", Spy)
+    threaded = lattice_gas(2, 256, 0.5, seed=3)
+    assert threaded.n_bodies >= state.FILL_THREAD_BODIES
+    two = threaded.build().state
+    assert submitted == ["fill_constant"]
+    monkeypatch.setattr(state, "FILL_THREAD_BODIES", threaded.n_bodies + 1)
+    one = lattice_gas(2, 256, 0.5, seed=3).build().state
+    assert submitted == ["fill_constant"]  # no thread the second time
+    for name in state.State._fields:
+        np.testing.assert_array_equal(getattr(two, name), getattr(one, name), err_msg=name)

@@ -7,6 +7,8 @@ arrays resumes a run bit for bit.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import nullcontext
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -160,6 +162,8 @@ def aligned_records(n: int, values: NDArray[np.float64] | None = None) -> NDArra
 #: Rows filled at a time when a state is built from the bodies: each block's records are
 #: written while in cache, and no array of all the bodies is made on the way
 FILL_ROWS = 8192
+#: Bodies from which a second thread writes the state's constant-filled arrays
+FILL_THREAD_BODIES = 1 << 16
 
 
 def allocate_state(
@@ -196,56 +200,75 @@ def allocate_state(
     """
     n, dim = position.shape
     box = model.box
+    n_cells = int(np.prod(model.ncell))
     kin = aligned_records(n)
     shell = np.zeros((n, 4))
     acc = np.empty((n, dim))
     w = np.empty((n, 3))
     orient = np.zeros((n, 4))
-    for a in range(0, n, FILL_ROWS):
-        rows = order[a : a + FILL_ROWS]
-        b = a + rows.shape[0]
-        x = position[rows]
-        if model.periodic:
-            x -= box * np.floor(x / box)
-        radius = model.radius[a:b]
-        kin[a:b, :dim] = x
-        kin[a:b, KIN_T] = time
-        kin[a:b, KIN_V : KIN_V + dim] = velocity[rows]
-        kin[a:b, KIN_R] = radius
-        shell[a:b, :dim] = x
-        shell[a:b, 3] = radius
-        acc[a:b] = np.where(model.mobile[a:b, None], model.gravity[None, :], 0.0)
-        w[a:b] = angular_velocity[rows]
-        orient[a:b, : orientation.shape[1]] = orientation[rows]
-    sched = np.zeros((n, 4), np.int64)
-    sched[:, SCHED_OTHER] = -1
-    n_cells = int(np.prod(model.ncell))
+    # the arrays that start at one value each and are written through at the build, filled
+    # beside the records (below); nbr_mark, cur_heap and cur_where stay untouched zeros until
+    # used (a rebuild's marks; the heap holds a bucket's few events)
+    constant: dict[str, tuple[NDArray[Any], float]] = {
+        "orient_t": (np.empty(n), time),
+        "last_coll": (np.empty(n), -np.inf),
+        "support": (np.empty(n, np.int64), -1),
+        "nbr": (np.empty((n, capacity), np.int32), 0),
+        "nbr_count": (np.empty(n, np.int64), 0),
+        "cell": (np.empty(n, np.int64), 0),
+        "slot": (np.empty(n, np.int64), 0),
+        "cell_count": (np.empty(n_cells, np.int64), 0),
+        "cell_body": (np.empty((n_cells, cell_capacity), np.int32), 0),
+        "ev_time": (np.empty(n), np.inf),
+        "sched": (np.empty((n, 4), np.int64), 0),
+        "cal_head": (np.empty(n + 1, np.int32), -1),
+        "cal_next": (np.empty(n, np.int32), -1),
+        "cal_prev": (np.empty(n, np.int32), -1),
+        "cal_loc": (np.empty(n, np.int32), -2),
+        "cur_key": (np.empty(n), np.inf),
+    }
+
+    def fill_constant() -> None:
+        for array, value in constant.values():
+            array.fill(value)
+        constant["sched"][0][:, SCHED_OTHER] = -1
+
+    # Above FILL_THREAD_BODIES a second thread fills those while this one copies the bodies
+    # in: a build's first writes to new memory are much of its time (on a virtual machine
+    # each new page can cost microseconds), and NumPy's fills run without the GIL.
+    with ThreadPoolExecutor(1) if n >= FILL_THREAD_BODIES else nullcontext() as pool:
+        filling = pool.submit(fill_constant) if pool is not None else None
+        for a in range(0, n, FILL_ROWS):
+            rows = order[a : a + FILL_ROWS]
+            b = a + rows.shape[0]
+            x = position[rows]
+            if model.periodic:
+                x -= box * np.floor(x / box)
+            radius = model.radius[a:b]
+            kin[a:b, :dim] = x
+            kin[a:b, KIN_T] = time
+            kin[a:b, KIN_V : KIN_V + dim] = velocity[rows]
+            kin[a:b, KIN_R] = radius
+            shell[a:b, :dim] = x
+            shell[a:b, 3] = radius
+            acc[a:b] = np.where(model.mobile[a:b, None], model.gravity[None, :], 0.0)
+            w[a:b] = angular_velocity[rows]
+            orient[a:b, : orientation.shape[1]] = orientation[rows]
+        if filling is not None:
+            filling.result()  # (its error, if any, raised here)
+        else:
+            fill_constant()
     return State(
         kin=kin,
         acc=acc,
         w=w,
         orient=orient,
-        orient_t=np.full(n, time),
-        last_coll=np.full(n, -np.inf),
-        support=np.full(n, -1, np.int64),
         shell=shell,
-        nbr=np.zeros((n, capacity), np.int32),
-        nbr_count=np.zeros(n, np.int64),
+        **{name: array for name, (array, _) in constant.items()},
         nbr_mark=np.zeros(n, np.int64),
-        **scratch(dim, capacity, cell_capacity),
-        cell=np.zeros(n, np.int64),
-        slot=np.zeros(n, np.int64),
-        cell_count=np.zeros(n_cells, np.int64),
-        cell_body=np.zeros((n_cells, cell_capacity), np.int32),
-        ev_time=np.full(n, np.inf),
-        sched=sched,
-        cal_head=np.full(n + 1, -1, np.int32),
-        cal_next=np.full(n, -1, np.int32),
-        cal_prev=np.full(n, -1, np.int32),
-        cal_loc=np.full(n, -2, np.int32),
         cur_heap=np.zeros(n, np.int32),
-        cur_key=np.full(n, np.inf),
         cur_where=np.zeros(n, np.int32),
+        **scratch(dim, capacity, cell_capacity),
         cal_f=np.array([0.0, 1.0]),
         cal_i=np.zeros(4, np.int64),
         clock=np.array([time]),
