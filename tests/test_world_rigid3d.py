@@ -189,22 +189,23 @@ def test_observables_use_the_turned_inertia_tensor() -> None:
 
 
 def test_spheres_inertia_tensors_are_made_until_another_shape_comes() -> None:
-    # A world of spheres stores no inertia tensor (72 bytes a sphere); it reads
-    # diag(q m a^2), inf for a static sphere. Once a box comes, every tensor is stored, the
-    # spheres' with the same values, the box's its own: m (b^2 + c^2) / 12 on the diagonal.
+    # A world of spheres stores no inertia tensor (72 bytes a sphere); it makes, on each read,
+    # diag(q m a^2) (PHYSICS.md: I = q m a^2, q = 2/5 for a solid sphere), inf for a static
+    # sphere. Once a box comes, every tensor is stored, the spheres' with the same values, the
+    # box's its own: a solid cuboid's m (b^2 + c^2) / 12 on the diagonal (any mechanics text).
     world = carom.World(3, box=[5, 5, 5])
     world.add_spheres([[1, 1, 1], [3, 3, 3]], radius=0.4, mass=[1.0, 2.0])
     world.add_static_spheres([[2, 2, 4]], radius=0.3)
-    assert world.bodies._tensor is None
     tensor = world.bodies.inertia_tensor
+    assert world.bodies.inertia_tensor is not tensor  # made again on each read
     for i, (m, a) in enumerate([(1.0, 0.4), (2.0, 0.4)]):
         np.testing.assert_array_equal(tensor[i], np.diag([0.4 * m * a**2] * 3))  # q = 2/5
     np.testing.assert_array_equal(np.diag(tensor[2]), [np.inf] * 3)
     np.testing.assert_array_equal(tensor[2][~np.eye(3, dtype=bool)], np.zeros(6))
     world.add_body(Box([0.2, 0.4, 0.6]), [2.5, 1, 1], mass=3.0)
     world.add_spheres([[4, 4, 1]], radius=0.2)
-    stored = world.bodies._tensor
-    assert stored is not None
+    stored = world.bodies.inertia_tensor
+    assert world.bodies.inertia_tensor is stored  # kept from now on
     assert stored.shape == (5, 3, 3)
     np.testing.assert_array_equal(stored[:3], tensor)
     box = np.diag([0.4**2 + 0.6**2, 0.2**2 + 0.6**2, 0.2**2 + 0.4**2]) * 3.0 / 12.0

@@ -175,7 +175,7 @@ class EdmdEngine:
         if env.periodic:
             x -= env.box * np.floor(x / env.box)
         # the grid only orders the bodies; the model below sets the shells (the same sizes)
-        _, ncell = self._shell_grid(bodies.radius, np.isfinite(bodies.mass))
+        _, ncell = self._shell_grid(bodies.radius, bodies.mobile)
         order = spatial_order(x, env.box / ncell, ncell)
         model = self._build_model(order)
         cells = np.clip(np.floor(x / model.cell_size).astype(np.int64), 0, model.ncell - 1)
