@@ -15,10 +15,12 @@ import math
 
 from numba import njit
 
+from carom.jit import kernel_only
+
 INF = math.inf
 
 
-@njit(cache=True, error_model="numpy")
+@kernel_only(error_model="numpy")
 def toi_sphere_sphere(c: float, b: float, a: float) -> float:
     """First contact of two spheres in linear relative motion.
 
@@ -39,7 +41,7 @@ def toi_sphere_sphere(c: float, b: float, a: float) -> float:
     return c / (-b + math.sqrt(disc))
 
 
-@njit(cache=True, error_model="numpy")
+@kernel_only(error_model="numpy")
 def _quadratic_roots(a: float, b: float, c: float) -> tuple[float, float]:
     """Real roots of a t^2 + b t + c (NaN when absent), smaller first."""
     nan = math.nan
@@ -88,12 +90,12 @@ def toi_gap(d0: float, u: float, acc: float) -> float:
     return INF
 
 
-@njit(cache=True, error_model="numpy")
+@kernel_only(error_model="numpy")
 def _horner(c4: float, c3: float, c2: float, c1: float, c0: float, t: float) -> float:
     return (((c4 * t + c3) * t + c2) * t + c1) * t + c0
 
 
-@njit(cache=True, error_model="numpy")
+@kernel_only(error_model="numpy")
 def _bisect(c4: float, c3: float, c2: float, c1: float, c0: float, lo: float, hi: float) -> float:
     """A root of the polynomial in [lo, hi] given a sign change, to the last bit."""
     f_lo = _horner(c4, c3, c2, c1, c0, lo)
@@ -138,7 +140,7 @@ def first_root_quartic(
     return _first_fall(c4, c3, c2, c1, c0, t_max)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel_only(error_model="numpy")
 def _root_bound(c4: float, c3: float, c2: float, c1: float, c0: float) -> float:
     """Twice Cauchy's bound ``1 + max |c_k / c_lead|`` on the roots' magnitudes: beyond it the
     polynomial is at least half its leading term in size, so no round-off flips its sign
@@ -156,7 +158,7 @@ def _root_bound(c4: float, c3: float, c2: float, c1: float, c0: float) -> float:
     return 2.0 * (1.0 + largest)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel_only(error_model="numpy")
 def _fall_on(c4: float, c3: float, c2: float, c1: float, c0: float, lo: float, hi: float) -> float:
     """First time in (lo, hi] where the quartic, positive at ``lo``, falls to zero, on a piece
     where its derivative changes sign at most once (INF if it does not): split at that
@@ -173,7 +175,7 @@ def _fall_on(c4: float, c3: float, c2: float, c1: float, c0: float, lo: float, h
     return INF
 
 
-@njit(cache=True, error_model="numpy")
+@kernel_only(error_model="numpy")
 def _first_fall(c4: float, c3: float, c2: float, c1: float, c0: float, t_max: float) -> float:
     """First time in (0, t_max] where the quartic, positive at 0 (``c0 > 0``), falls to zero.
 
@@ -206,7 +208,7 @@ def _first_fall(c4: float, c3: float, c2: float, c1: float, c0: float, t_max: fl
     return INF
 
 
-@njit(cache=True, error_model="numpy")
+@kernel_only(error_model="numpy")
 def shell_exit_time(off2: float, off_v: float, speed2: float, acc: float, delta: float) -> float:
     """When a body may first be ``delta`` from its shell centre [s] (a lower bound).
 

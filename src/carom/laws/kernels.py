@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from carom.jit import kernel_only
 
 LAW_SMOOTH = 0
 LAW_ROUGH = 1  # constant tangential restitution beta
 LAW_WALTON = 2  # Coulomb friction mu_f with sticking restitution beta0
 
 
-@njit(cache=True, error_model="numpy")
+@kernel_only(error_model="numpy")
 def impulse_spheres(
     n0: float,
     n1: float,

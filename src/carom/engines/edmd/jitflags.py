@@ -17,28 +17,25 @@ IR, copying the callee's IR block by block with its whole scope, and types it ag
 site: it was 35 s of a 55 s cold start. ``forceinline=True`` compiles each helper once and
 asks LLVM to inline it (``alwaysinline``): the same machine code, the same bits, compiled in a
 fraction of the time (issue 16, item 4).
+
+**No entry points from Python.** A helper that only runs inlined into the loop needs no
+wrapper for calls from Python or C: the helpers are compiled without them
+(:func:`carom.jit.kernel_only`), and a call from Python is refused with a ``TypeError``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any, TypeVar, cast
+from typing import Any
 
-from numba import njit
+from carom.jit import kernel_only
 
 #: compile without reference counting (see the module docstring); an internal Numba flag
 NO_REFCOUNTING: dict[str, Any] = {"_nrt": False}
 
-_F = TypeVar("_F", bound=Callable[..., Any])
+#: a function the event loop calls, not inlined: compiled once, cached, without reference
+#: counting, with no entry point from Python (:func:`carom.jit.kernel_only`)
+njit_without_refcounting = kernel_only(error_model="numpy", **NO_REFCOUNTING)
 
-#: a kernel of the event loop: compiled once, cached, without reference counting
-njit_without_refcounting = cast(
-    Callable[[_F], _F], njit(cache=True, error_model="numpy", **NO_REFCOUNTING)
-)
-
-#: a helper of the event loop: as :data:`njit_without_refcounting`, and inlined by LLVM into
-#: every caller
-njit_inlined = cast(
-    Callable[[_F], _F],
-    njit(cache=True, error_model="numpy", forceinline=True, **NO_REFCOUNTING),
-)
+#: a helper of the event loop: as :data:`njit_without_refcounting`, inlined by LLVM into every
+#: caller, and with no entry point from Python (:func:`carom.jit.kernel_only`)
+njit_inlined = kernel_only(error_model="numpy", forceinline=True, **NO_REFCOUNTING)

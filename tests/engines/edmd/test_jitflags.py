@@ -1,0 +1,78 @@
+"""The event loop's helpers are compiled without entry points from Python
+(carom.jit.kernel_only): they run in compiled code, and a call from Python is refused with a
+TypeError rather than jumping to a wrapper that was never made."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numba import njit
+
+from carom.engines.edmd import calendar, collide, loop, neighbours, predict
+from carom.geometry import toi
+from carom.jit import KernelOnly
+from carom.laws import kernels
+from tests.conftest import JIT_DISABLED
+
+needs_dispatchers = pytest.mark.skipif(
+    JIT_DISABLED, reason="without the JIT the helpers are plain Python functions"
+)
+
+
+def _calendar(n: int) -> calendar.Calendar:
+    return (
+        np.full(n + 1, -1, np.int32),
+        np.full(n, -1, np.int32),
+        np.full(n, -1, np.int32),
+        np.full(n, -2, np.int32),
+        np.zeros(n, np.int32),
+        np.full(n, np.inf),
+        np.zeros(n, np.int32),
+        np.array([0.0, 1.0]),
+        np.zeros(4, np.int64),
+    )
+
+
+@njit
+def _top(keys, cal):  # type: ignore[no-untyped-def]
+    return calendar.calendar_top(keys, cal)
+
+
+@needs_dispatchers
+@pytest.mark.parametrize(
+    "helper",
+    [
+        calendar.calendar_top,
+        calendar.calendar_update,
+        collide.collide_pair,
+        collide.collide_face,
+        neighbours.rebuild_shell,
+        predict.predict,
+        loop.write_frame,
+        toi.shell_exit_time,
+        toi.toi_sphere_sphere,
+        kernels.impulse_spheres,
+    ],
+)
+def test_helpers_of_the_loop_have_no_python_entry(helper: object) -> None:
+    assert isinstance(helper, KernelOnly)
+    with pytest.raises(TypeError, match=r"runs only inside compiled kernels.*py_func"):
+        helper()  # type: ignore[operator]
+
+
+@needs_dispatchers
+def test_a_helper_compiles_without_wrappers_and_runs_from_compiled_code() -> None:
+    keys = np.array([3.0, 1.0, 2.0])
+    cal = _calendar(keys.size)
+    calendar.calendar_build(keys, cal)
+    assert _top(keys, cal) == 1  # the earliest event, through a jitted caller
+    with pytest.raises(TypeError, match=r"calendar\.calendar_top"):
+        calendar.calendar_top(keys, cal)
+    # what was compiled (or loaded from the cache) has no Python wrapper and no C wrapper:
+    # neither symbol is defined in its machine code
+    assert calendar.calendar_top.overloads
+    for compiled in calendar.calendar_top.overloads.values():
+        library, fndesc = compiled.library, compiled.fndesc
+        assert library.get_pointer_to_function(fndesc.llvm_cpython_wrapper_name) == 0
+        assert library.get_pointer_to_function(fndesc.llvm_cfunc_wrapper_name) == 0
+        assert library.get_pointer_to_function(fndesc.mangled_name) != 0
