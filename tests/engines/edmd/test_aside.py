@@ -45,12 +45,19 @@ def _types(engine: EdmdEngine) -> tuple[object, ...]:
 
 @pytest.mark.needs_jit
 def test_every_kind_of_scene_has_the_helpers_kernel_types() -> None:
-    bodies, env = aside.two_spheres()
-    helper = _types(EdmdEngine(bodies, env, EdmdSettings(), 0.0))
+    # two helpers, with gravity and without: a model without gravity types it as None, so that
+    # its kernels are compiled without parabolas and supports; within each, one set of types
+    helpers = {
+        gravity: _types(EdmdEngine(*aside.two_spheres(gravity), EdmdSettings(), 0.0))
+        for gravity in (False, True)
+    }
+    assert helpers[False] != helpers[True]
     for name, world in _kinds().items():
         engine = world.build()
         assert isinstance(engine, EdmdEngine), name
-        assert _types(engine) == helper, name
+        gravity = bool(np.any(world.gravity != 0.0))
+        assert (engine.model.gravity is not None) == gravity, name
+        assert _types(engine) == helpers[gravity], name
 
 
 @pytest.mark.needs_jit
@@ -65,10 +72,10 @@ def test_the_loop_compiled_ahead_is_the_one_the_engine_calls() -> None:
 
 def test_no_helper_when_the_loop_is_compiled_or_from_a_helper(monkeypatch) -> None:  # type: ignore[no-untyped-def]
     monkeypatch.setattr(aside, "loop_ready", lambda: True)
-    assert aside.start() is None
+    assert aside.start(False) is None
     monkeypatch.setattr(aside, "loop_ready", lambda: False)
     monkeypatch.setenv(aside.HELPER_FLAG, "1")
-    assert aside.start() is None
+    assert aside.start(False) is None
 
 
 @pytest.mark.needs_jit
@@ -92,7 +99,7 @@ def test_no_helper_on_one_cpu(monkeypatch) -> None:  # type: ignore[no-untyped-d
     monkeypatch.setattr(aside, "loop_ready", lambda: False)
     monkeypatch.delenv(aside.HELPER_FLAG, raising=False)
     monkeypatch.setattr(aside, "usable_cpus", lambda: 1)
-    assert aside.start() is None
+    assert aside.start(False) is None
 
 
 def test_a_failed_compile_stops_the_helper(monkeypatch) -> None:  # type: ignore[no-untyped-def]

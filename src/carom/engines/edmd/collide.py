@@ -113,8 +113,7 @@ def collide_pair(
     material: np.ndarray,
     pair_table: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     face_e: np.ndarray,
-    gravity: np.ndarray,
-    accelerated: bool,
+    gravity: np.ndarray | None,
     plane_normal: np.ndarray,
     box: np.ndarray,
     periodic: bool,
@@ -188,7 +187,7 @@ def collide_pair(
     # gives is booked apart from the law's dissipation (S_KE_GIVEN).
     u = g0 * n0 + g1 * n1 + g2 * n2
     u_pull = 0.0
-    if accelerated:
+    if gravity is not None:
         a_n = 0.0
         for k in range(dim):
             nk = n0 if k == 0 else (n1 if k == 1 else n2)
@@ -206,7 +205,8 @@ def collide_pair(
     # the floor, which stopped it), was back too slowly, and was given that speed again at
     # every hop: galton-board gained 0.21 J that way. (Smooth law: the impulse is along n.)
     held_i = held_j = False
-    if unlikely(support[i] >= 0 or support[j] >= 0) and law == LAW_SMOOTH:
+    # (supports exist only under gravity; without it, this code is pruned before typing)
+    if gravity is not None and unlikely(support[i] >= 0 or support[j] >= 0) and law == LAW_SMOOTH:
         push = jn + extra
         ci = held_cosine(i, push, n0, n1, n2, support, inv_i, face_e, gravity, plane_normal, t_c)
         cj = held_cosine(j, -push, n0, n1, n2, support, inv_j, face_e, gravity, plane_normal, t_c)
@@ -235,9 +235,9 @@ def collide_pair(
         jk = j0 if k == 0 else (j1 if k == 1 else j2)
         v[i, k] += jk * inv_i
         v[j, k] -= jk * inv_j
-    if held_i:
+    if gravity is not None and held_i:
         hold_on_support(i, v, support, plane_normal)
-    if held_j:
+    if gravity is not None and held_j:
         hold_on_support(j, v, support, plane_normal)
     if unlikely(law != LAW_SMOOTH):
         # the spins change: first turn both bodies to now at their old spins
@@ -274,9 +274,9 @@ def collide_pair(
     counts[C_PAIR] += 1
     sums[S_VIRIAL] += j0 * r0 + j1 * r1 + j2 * r2
     # a body resting on a support: lifted off, or pushed into it (the support pushes back)
-    if support[i] >= 0:
+    if gravity is not None and support[i] >= 0:
         support_reaction(i, v, acc, support, face_e, gravity, plane_normal, mass, t_c, sums)
-    if support[j] >= 0:
+    if gravity is not None and support[j] >= 0:
         support_reaction(j, v, acc, support, face_e, gravity, plane_normal, mass, t_c, sums)
     if log_on:
         # the contact point: on j's surface towards i (raw coordinates; periodic boxes wrap
@@ -419,7 +419,7 @@ def collide_face(
     radius: np.ndarray,
     mass: np.ndarray,
     face_e: np.ndarray,
-    gravity: np.ndarray,
+    gravity: np.ndarray | None,
     plane_normal: np.ndarray,
     t_c: float,
     counts: np.ndarray,
@@ -459,7 +459,7 @@ def collide_face(
         nk = face_normal(plane_normal, dim, face, k)
         v[i, k] -= (1.0 + e) * un * nk
         x_dot_j += x[i, k] * jn * nk
-    if rest:
+    if gravity is not None and rest:  # (rest needs a pull: never without gravity)
         set_support(gravity, plane_normal, support, acc, i, face)
     counter[i] += 1
     last_coll[i] = T

@@ -200,7 +200,7 @@ class EdmdEngine:
         state = new_state()
         # a cold cache: the build kernels compile in a helper process while the loop compiles
         # here (engines/edmd/aside.py)
-        aside.compile_beside(aside.start(), model, state, order)
+        aside.compile_beside(aside.start(model.gravity is not None), model, state, order)
         while True:
             status = loop.initialise(model, state)
             if status == codes.DONE:
@@ -248,8 +248,7 @@ class EdmdEngine:
             box=env.box.copy(),
             inv_box=1.0 / env.box,
             periodic=env.periodic,
-            gravity=env.gravity.copy(),
-            accelerated=bool(np.any(env.gravity != 0.0)),
+            gravity=env.gravity.copy() if np.any(env.gravity != 0.0) else None,
             mobile=mobile,
             radius=radius,
             mass=mass,

@@ -105,7 +105,7 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
         return LISTS_FULL if status == LIST_FULL else CELLS_FULL
     T = s.clock[0]
     for i in range(x.shape[0]):
-        free_flight(x, v, s.acc, m.accelerated, t, i, T)
+        free_flight(x, v, s.acc, m.gravity, t, i, T)
         predict(
             i,
             T,
@@ -113,7 +113,7 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
             x,
             v,
             s.acc,
-            m.accelerated,
+            m.gravity,
             t,
             s.shell,
             s.support,
@@ -186,7 +186,6 @@ def run_frames(  # type: ignore[no-untyped-def]
     material, face_e = m.material, m.face_e
     pair_table = (m.pair_law, m.pair_e, m.pair_beta, m.pair_friction)
     gravity, box, periodic, delta, t_c = m.gravity, m.box, m.periodic, m.shell_thickness, m.t_c
-    accelerated = m.accelerated
     inv_box = m.inv_box
     plane_point, plane_normal = m.plane_point, m.plane_normal
     cell_size, ncell = m.cell_size, m.ncell
@@ -250,7 +249,7 @@ def run_frames(  # type: ignore[no-untyped-def]
         counts[C_EVENTS] += 1
         kind = ev_kind[i]
         j = -1
-        free_flight(x, v, acc, accelerated, t, i, T)  # every event moves its own body to now
+        free_flight(x, v, acc, gravity, t, i, T)  # every event moves its own body to now
         if kind == EV_PAIR:
             j = ev_other[i]
             prefetch_row(kin, j)
@@ -259,7 +258,7 @@ def run_frames(  # type: ignore[no-untyped-def]
                 counts[C_STALE] += 1
                 j = -1  # stale: the partner collided since; just re-predict
             else:
-                free_flight(x, v, acc, accelerated, t, j, T)
+                free_flight(x, v, acc, gravity, t, j, T)
                 collide_pair(
                     i,
                     j,
@@ -280,7 +279,6 @@ def run_frames(  # type: ignore[no-untyped-def]
                     pair_table,
                     face_e,
                     gravity,
-                    accelerated,
                     plane_normal,
                     box,
                     periodic,
@@ -345,7 +343,7 @@ def run_frames(  # type: ignore[no-untyped-def]
             if body < 0:
                 continue
             predict(
-                body, T, kin, x, v, acc, accelerated, t, shell, support, nbr, nbr_count, near,
+                body, T, kin, x, v, acc, gravity, t, shell, support, nbr, nbr_count, near,
                 counter, radius, mobile, box, inv_box, periodic, delta, plane_point, plane_normal,
                 ev_time, ev_kind, ev_other, ev_stamp,
             )  # fmt: skip

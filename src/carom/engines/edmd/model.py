@@ -27,10 +27,11 @@ class Model(NamedTuple):
         ``1 / box`` [1/m] (a multiplication is cheaper than a division in the hot loop).
     periodic : bool
         Periodic boundaries (no walls) when true.
-    gravity : (d,) float64
-        Uniform acceleration [m/s^2].
-    accelerated : bool
-        Whether any gravity acts (bodies fly on parabolas); false selects straight-line paths.
+    gravity : (d,) float64 or None
+        Uniform acceleration [m/s^2]; None when no gravity acts (every path is a straight
+        line). None is a type of its own to Numba: the kernels are compiled without the code
+        for parabolas and supports then (the branches on ``gravity is None`` are pruned
+        before typing), a smaller and faster compile.
     mobile : (N,) bool
         False for static bodies (pegs, obstacles): infinite mass, never move.
     radius, mass, inv_mass, q : (N,) float64
@@ -60,8 +61,7 @@ class Model(NamedTuple):
     box: NDArray[np.float64]
     inv_box: NDArray[np.float64]
     periodic: bool
-    gravity: NDArray[np.float64]
-    accelerated: bool
+    gravity: NDArray[np.float64] | None
     mobile: NDArray[np.bool_]
     radius: NDArray[np.float64]
     mass: NDArray[np.float64]

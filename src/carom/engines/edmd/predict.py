@@ -106,18 +106,18 @@ def free_flight(
     x: np.ndarray,
     v: np.ndarray,
     acc: np.ndarray,
-    accelerated: bool,
+    gravity: np.ndarray | None,
     t: np.ndarray,
     i: int,
     T: float,
 ) -> None:
     """Move body ``i`` along its free flight to time ``T`` and set its clock. Without gravity
-    (not ``accelerated``) every acceleration is +0.0 and is not read (a cache miss saved at
+    (``gravity`` None) every acceleration is +0.0 and is not read (a cache miss saved at
     large N; the same arithmetic)."""
     dt = T - t[i]
     if dt != 0.0:
         for k in range(x.shape[1]):
-            a = acc[i, k] if accelerated else 0.0
+            a = 0.0 if gravity is None else acc[i, k]
             x[i, k] += (v[i, k] + 0.5 * a * dt) * dt
             v[i, k] += a * dt
     t[i] = T
@@ -202,7 +202,7 @@ def predict(
     x: np.ndarray,
     v: np.ndarray,
     acc: np.ndarray,
-    accelerated: bool,
+    gravity: np.ndarray | None,
     t: np.ndarray,
     shell: np.ndarray,
     support: np.ndarray,
@@ -239,7 +239,7 @@ def predict(
         off2 += d * d
         off_v += d * v[i, k]
         speed2 += v[i, k] * v[i, k]
-        a = acc[i, k] if accelerated else 0.0  # all +0.0 without gravity: not read
+        a = 0.0 if gravity is None else acc[i, k]  # all +0.0 without gravity: not read
         acc2 += a * a
     # leave the shell a hair early, so that round-off in the exit time never lets a body
     # stray beyond delta from its centre
@@ -280,43 +280,46 @@ def predict(
             other = face
 
     # neighbours: relative motion r + v t + da t^2 / 2, j extrapolated to T on the fly
-    if not accelerated:
+    if gravity is None:
         tp, j = _first_pair_straight(i, T, best, kin, nbr, nbr_count, near, box, periodic)
         if j >= 0:
             best = tp
             kind = EV_PAIR
             other = j
-    for slot in range(nbr_count[i] if accelerated else 0):
-        j = nbr[i, slot]
-        dtj = T - t[j]
-        rr = 0.0
-        rv = 0.0
-        vv = 0.0
-        rda = 0.0
-        vda = 0.0
-        dada = 0.0
-        for k in range(dim):
-            aj = acc[j, k]
-            r = x[i, k] - (x[j, k] + (v[j, k] + 0.5 * aj * dtj) * dtj)
-            dv = v[i, k] - (v[j, k] + aj * dtj)
-            da = acc[i, k] - aj
-            if periodic:
-                r -= box[k] * np.floor(r * inv_box[k] + 0.5)
-            rr += r * r
-            rv += r * dv
-            vv += dv * dv
-            rda += r * da
-            vda += dv * da
-            dada += da * da
-        reach = rad + radius[j]
-        if dada == 0.0:
-            tp = toi_sphere_sphere(rr - reach * reach, rv, vv)
-        else:
-            tp = first_root_quartic(0.25 * dada, vda, vv + rda, 2.0 * rv, rr - reach * reach, best)
-        if tp < best:
-            best = tp
-            kind = EV_PAIR
-            other = j
+    else:  # parabolas: pruned before typing when gravity is None (see Model.gravity)
+        for slot in range(nbr_count[i]):
+            j = nbr[i, slot]
+            dtj = T - t[j]
+            rr = 0.0
+            rv = 0.0
+            vv = 0.0
+            rda = 0.0
+            vda = 0.0
+            dada = 0.0
+            for k in range(dim):
+                aj = acc[j, k]
+                r = x[i, k] - (x[j, k] + (v[j, k] + 0.5 * aj * dtj) * dtj)
+                dv = v[i, k] - (v[j, k] + aj * dtj)
+                da = acc[i, k] - aj
+                if periodic:
+                    r -= box[k] * np.floor(r * inv_box[k] + 0.5)
+                rr += r * r
+                rv += r * dv
+                vv += dv * dv
+                rda += r * da
+                vda += dv * da
+                dada += da * da
+            reach = rad + radius[j]
+            if dada == 0.0:
+                tp = toi_sphere_sphere(rr - reach * reach, rv, vv)
+            else:
+                tp = first_root_quartic(
+                    0.25 * dada, vda, vv + rda, 2.0 * rv, rr - reach * reach, best
+                )
+            if tp < best:
+                best = tp
+                kind = EV_PAIR
+                other = j
 
     ev_time[i] = T + best
     ev_kind[i] = kind

@@ -251,7 +251,10 @@ def allocate_state(
             kin[a:b, KIN_R] = radius
             shell[a:b, :dim] = x
             shell[a:b, 3] = radius
-            acc[a:b] = np.where(model.mobile[a:b, None], model.gravity[None, :], 0.0)
+            if model.gravity is not None:
+                acc[a:b] = np.where(model.mobile[a:b, None], model.gravity[None, :], 0.0)
+            else:
+                acc[a:b] = 0.0
             w[a:b] = angular_velocity[rows]
             orient[a:b, : orientation.shape[1]] = orientation[rows]
         if filling is not None:
