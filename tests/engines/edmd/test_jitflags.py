@@ -4,6 +4,8 @@ TypeError rather than jumping to a wrapper that was never made."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from numba import njit
@@ -13,6 +15,7 @@ from carom.geometry import toi
 from carom.jit import KernelOnly
 from carom.laws import kernels
 from tests.conftest import JIT_DISABLED
+from tests.processes import fresh_python
 
 needs_dispatchers = pytest.mark.skipif(
     JIT_DISABLED, reason="without the JIT the helpers are plain Python functions"
@@ -76,3 +79,37 @@ def test_a_helper_compiles_without_wrappers_and_runs_from_compiled_code() -> Non
         assert library.get_pointer_to_function(fndesc.llvm_cpython_wrapper_name) == 0
         assert library.get_pointer_to_function(fndesc.llvm_cfunc_wrapper_name) == 0
         assert library.get_pointer_to_function(fndesc.mangled_name) != 0
+
+
+COMPILED_FOR = """
+import json, sys
+from numba.core import event
+compiled = set()
+
+class Compiles(event.Listener):
+    def on_start(self, e): pass
+    def on_end(self, e): compiled.add(e.data["dispatcher"].py_func.__qualname__)
+
+event.register("numba:compile", Compiles())
+from tests.worlds import gas
+world = gas(3, 2, 0.3, seed=1, e=0.9, boundary="walls")
+if sys.argv[1:] == ["gravity"]:
+    world.gravity[:] = (0.0, 0.0, -1.0)
+world.run(until=world.time + 0.01)
+print(json.dumps(sorted(compiled)))
+"""
+
+
+@needs_dispatchers
+@pytest.mark.parametrize("gravity", [False, True])
+def test_a_scene_without_gravity_compiles_no_parabolas_or_supports(
+    gravity: bool, tmp_path: Path
+) -> None:
+    # Model.gravity is None without gravity: the kernels' branches on it are pruned before
+    # typing, so the quartic time of impact and the support rules are never compiled; under
+    # gravity they are. From an empty cache, in a fresh process (this one has compiled both).
+    code = COMPILED_FOR.replace("sys.argv[1:]", repr(["gravity"] if gravity else []))
+    compiled = set(fresh_python(code, NUMBA_CACHE_DIR=str(tmp_path)))
+    assert {"predict", "collide_pair", "collide_face", "run_frames"} <= compiled
+    pruned = {"first_root_quartic", "set_support", "support_reaction", "held_cosine"}
+    assert (pruned <= compiled) if gravity else not (pruned & compiled)
