@@ -1,15 +1,19 @@
 """A cold start: how long the first run on a fresh install spends compiling the event-driven
 engine's kernels (issue 16, item 4: under 15 s).
 
-Each trial runs ``carom run case-1`` in a fresh process with an empty kernel cache (its own
-``NUMBA_CACHE_DIR``), and reads the seconds the command itself reports for compiling or
-loading the kernels before the run ("kernels compiled or loaded in ... s"), and the command's
-wall time (imports, the run and its outputs too; animation off). With ``--base``, another
-carom source tree takes the same trials, alternating with this one, so that both see the same
-minutes of a noisy machine; trials with the helper process off (``--one-core``: the command
+Each trial runs ``carom run case-1`` (or ``--scene``) in a fresh process with an empty kernel
+cache (its own ``NUMBA_CACHE_DIR``), and reads the seconds the command itself reports for
+compiling or loading the kernels before the run ("kernels compiled or loaded in ... s"), and the
+command's wall time (imports, the run and its outputs too; animation off). With ``--base``,
+another carom source tree takes the same trials, alternating with this one, so that both see the
+same minutes of a noisy machine; trials with the helper process off (``--one-core``: the command
 pinned to one CPU) show what compiling costs without a second core.
 
 Run:  python benchmarks/cold_start.py [--trials 3] [--base /tmp/base/src] [--one-core]
+          [--scene bouncing-ball]
+
+A scene without gravity compiles less than one with it (no parabolas or supports:
+``Model.gravity``); case-1 has none, bouncing-ball has it.
 """
 
 from __future__ import annotations
@@ -33,12 +37,12 @@ SRC = HERE.parent / "src"
 REPORTED = re.compile(r"kernels compiled or loaded in ([0-9.]+) s")
 
 
-def trial(src: Path, one_core: bool) -> tuple[float, float]:
-    """One cold ``carom run case-1`` with the tree at ``src``: the compile seconds it reports,
+def trial(src: Path, one_core: bool, scene: str = "case-1") -> tuple[float, float]:
+    """One cold ``carom run scene`` with the tree at ``src``: the compile seconds it reports,
     and its wall time [s]."""
     with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as out:
         pin = ["taskset", "-c", "0"] if one_core else []
-        command = [*pin, sys.executable, "-m", "carom", "run", "case-1", "--out", out]
+        command = [*pin, sys.executable, "-m", "carom", "run", scene, "--out", out]
         env = {**os.environ, "NUMBA_CACHE_DIR": cache, "PYTHONPATH": str(src)}
         began = time.perf_counter()
         done = subprocess.run(
@@ -61,6 +65,7 @@ def main() -> None:
     parser.add_argument("--trials", type=int, default=3)
     parser.add_argument("--base", type=Path, help="another carom tree's src/ to compare with")
     parser.add_argument("--one-core", action="store_true", help="also pinned to one CPU")
+    parser.add_argument("--scene", default="case-1", help="the scene run (default case-1)")
     parser.add_argument("--no-record", action="store_true", help="do not append to RESULTS.md")
     args = parser.parse_args()
 
@@ -71,7 +76,7 @@ def main() -> None:
         names = list(trees) if k % 2 == 0 else list(reversed(trees))
         for name in names:
             for one_core in modes:
-                compile_s, wall = trial(trees[name], one_core)
+                compile_s, wall = trial(trees[name], one_core, args.scene)
                 results.setdefault((name, one_core), []).append((compile_s, wall))
                 cores = "1 CPU" if one_core else "all CPUs"
                 print(f"trial {k + 1}, {name}, {cores}: compile {compile_s:.1f} s, "
@@ -91,7 +96,7 @@ def main() -> None:
     print(body)
     if not args.no_record:
         record(
-            "Cold start: carom run case-1 with an empty kernel cache",
+            f"Cold start: carom run {args.scene} with an empty kernel cache",
             body,
             (
                 f"{args.trials} trials per row, each a fresh process and an empty "
