@@ -11,6 +11,7 @@ import pytest
 
 import carom
 from carom.engines.edmd import state
+from carom.engines.edmd.driver import EdmdEngine
 from carom.scene import find_scene, load_scene
 from carom.scene.layouts import lattice_gas
 from tests.processes import fresh_python
@@ -281,3 +282,43 @@ def test_a_state_filled_by_two_threads_is_the_one_filled_by_one(
     assert submitted == ["fill_constant"]  # no thread the second time
     for name in state.State._fields:
         np.testing.assert_array_equal(getattr(two, name), getattr(one, name), err_msg=name)
+
+
+def _walled_gas() -> carom.World:
+    return gas(3, 3, 0.3, seed=1, boundary="walls")
+
+
+def _galton() -> carom.World:
+    return load_scene(find_scene("galton-board")).build()
+
+
+def test_without_gravity_the_state_holds_no_accelerations_or_supports() -> None:
+    # Model.gravity is None without gravity, and the state then has no acc (every
+    # acceleration is +0.0) and no support (nothing rests): 32 bytes a sphere in 3D; under
+    # gravity both are there
+    flat, heavy = _walled_gas(), _galton()
+    for world in (flat, heavy):
+        world.run(until=world.time + 0.5)
+    assert isinstance(flat.engine, EdmdEngine)
+    assert isinstance(heavy.engine, EdmdEngine)
+    assert flat.engine.model.gravity is None
+    assert flat.engine.state.acc is None
+    assert flat.engine.state.support is None
+    np.testing.assert_array_equal(flat.engine.resting(), np.full(27, -1))
+    assert heavy.engine.model.gravity is not None
+    assert heavy.engine.state.acc is not None
+    assert heavy.engine.state.support is not None
+
+
+@pytest.mark.parametrize("make", [_walled_gas, _galton], ids=["no gravity", "gravity"])
+def test_a_checkpoint_with_or_without_gravity_resumes_bit_for_bit(make, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # (without gravity the checkpoint holds no acc or support: the state has none)
+    straight = make()
+    straight.run(until=straight.time + 1.0)
+    first = make()
+    first.run(until=first.time + 0.5)
+    first.save(tmp_path / "mid.npz")
+    resumed = carom.World.load(tmp_path / "mid.npz")
+    resumed.run(until=straight.time)
+    np.testing.assert_array_equal(resumed.positions, straight.positions)
+    np.testing.assert_array_equal(resumed.velocities, straight.velocities)

@@ -433,7 +433,8 @@ def collide_face(
     for k in range(dim):
         nk = face_normal(plane_normal, dim, face, k)
         un += v[i, k] * nk
-        acc_n += acc[i, k] * nk
+        if gravity is not None:  # (else acc is None: no acceleration)
+            acc_n += acc[i, k] * nk
     # Leaving (un > 0) flies off, unless so slowly that gravity brings it back within t_c
     # (the gap reopens for 2 u / |a_n|, which can be below the clock's resolution: a loop of
     # events at one time); then it rests, by the rule for impacts below.

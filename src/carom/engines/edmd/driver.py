@@ -476,7 +476,10 @@ class EdmdEngine:
         )
 
     def resting(self) -> NDArray[np.int64]:
-        return self._to_user(self.state.support)
+        support = self.state.support
+        if support is None:  # no gravity: nothing rests
+            return np.full(self.bodies.n, -1, np.int64)
+        return self._to_user(support)
 
     def neighbour_counts(self) -> NDArray[np.int64]:
         """How many neighbours each body's list holds now, (N,) (diagnostics and tests)."""
@@ -489,8 +492,11 @@ class EdmdEngine:
     # -- checkpoints ------------------------------------------------------------------------
 
     def arrays(self) -> dict[str, NDArray[Any]]:
+        # (a field that is None, as acc and support are without gravity, is not written)
         arrays: dict[str, NDArray[Any]] = {
-            f"state.{name}": value for name, value in self.state._asdict().items()
+            f"state.{name}": value
+            for name, value in self.state._asdict().items()
+            if value is not None
         }
         arrays["order"] = self.order
         arrays["capacity"] = np.array([self.capacity, self.cell_capacity])
@@ -505,7 +511,13 @@ class EdmdEngine:
         arrays: dict[str, NDArray[Any]],
     ) -> EdmdEngine:
         """The engine saved by :meth:`arrays`, continuing bit for bit."""
-        fields = {name: arrays[f"state.{name}"] for name in State._fields}
+        # acc and support are None without gravity, and then not written
+        fields: dict[str, Any] = {name: arrays.get(f"state.{name}") for name in State._fields}
+        missing = [
+            name for name, v in fields.items() if v is None and name not in ("acc", "support")
+        ]
+        if missing:
+            raise KeyError(f"state.{missing[0]}")  # (the checkpoint reader calls it damaged)
         fields["kin"] = aligned_records(len(fields["kin"]), fields["kin"])
         state = State(**fields)
         capacity, cell_capacity = (int(c) for c in arrays["capacity"])

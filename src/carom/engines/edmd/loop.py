@@ -367,7 +367,7 @@ def write_frame(  # type: ignore[no-untyped-def]
         r = order[i]
         dt = t_f - t[i]
         for k in range(dim):
-            a = acc[i, k]
+            a = 0.0 if acc is None else acc[i, k]  # (None without gravity)
             x_out[f, r, k] = x[i, k] + (v[i, k] + 0.5 * a * dt) * dt
             v_out[f, r, k] = v[i, k] + a * dt
             if periodic:

@@ -250,19 +250,20 @@ def predict(
     # walls (faces 0 .. 2 dim - 1, none when periodic) and planes (faces 2 dim + p): the gap
     # d(t) = d0 + u t + acc t^2 / 2 along each inward normal
     first_face = 2 * dim if periodic else 0
+    # (without gravity, acc and support are None: every acceleration is +0.0, nothing rests)
     for face in range(first_face, 2 * dim + plane_normal.shape[0]):
-        if face == support[i]:
+        if gravity is not None and face == support[i]:
             continue
         if face < 2 * dim:
             k = face // 2
             if face % 2 == 0:
                 d0 = x[i, k] - rad
                 u = v[i, k]
-                a_n = acc[i, k]
+                a_n = 0.0 if gravity is None else acc[i, k]
             else:
                 d0 = box[k] - x[i, k] - rad
                 u = -v[i, k]
-                a_n = -acc[i, k]
+                a_n = -(0.0 if gravity is None else acc[i, k])
         else:
             p = face - 2 * dim
             d0 = -rad
@@ -272,7 +273,8 @@ def predict(
                 nq = plane_normal[p, q]
                 d0 += nq * (x[i, q] - plane_point[p, q])
                 u += nq * v[i, q]
-                a_n += nq * acc[i, q]
+                if gravity is not None:
+                    a_n += nq * acc[i, q]
         tf = toi_gap(d0, u, a_n)
         if tf < best:
             best = tf

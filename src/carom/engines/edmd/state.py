@@ -60,8 +60,9 @@ class State(NamedTuple):
         ``KIN_T``, velocity [m/s] in ``KIN_V`` .. ``KIN_V + 2`` (position and velocity as of
         ``t``: lazy clocks; z zero in 2D), and the radius [m] in ``KIN_R`` (a copy of
         ``Model.radius``, kept here so that a neighbour's data is one cache line).
-    acc : (N, d) float64
+    acc : (N, d) float64 or None
         Acceleration [m/s^2]: gravity, less the normal part a support bears; zero if static.
+        None without gravity (``Model.gravity`` None: every acceleration is zero).
     w : (N, 3) float64
         Spin [rad/s] (2D: about z, in column 2).
     orient : (N, 4) float64; orient_t : (N,) float64
@@ -70,8 +71,9 @@ class State(NamedTuple):
         which bring it up to date first (:mod:`carom.geometry.rotation`).
     last_coll : (N,) float64
         Time of each body's last collision [s] (TC model).
-    support : (N,) int64
-        Wall face or plane a body rests on, -1 when flying.
+    support : (N,) int64 or None
+        Wall face or plane a body rests on, -1 when flying. None without gravity (nothing
+        rests).
     shell : (N, 4) float64
         Each body's neighbour shell: centre [m] in columns 0-2 (z zero in 2D), the body's
         radius [m] in column 3.
@@ -106,12 +108,12 @@ class State(NamedTuple):
     """
 
     kin: NDArray[np.float64]
-    acc: NDArray[np.float64]
+    acc: NDArray[np.float64] | None
     w: NDArray[np.float64]
     orient: NDArray[np.float64]
     orient_t: NDArray[np.float64]
     last_coll: NDArray[np.float64]
-    support: NDArray[np.int64]
+    support: NDArray[np.int64] | None
     shell: NDArray[np.float64]
     nbr: NDArray[np.int32]
     nbr_count: NDArray[np.int64]
@@ -203,7 +205,8 @@ def allocate_state(
     n_cells = int(np.prod(model.ncell))
     kin = aligned_records(n)
     shell = np.zeros((n, 4))
-    acc = np.empty((n, dim))
+    gravity = model.gravity
+    acc = np.empty((n, dim)) if gravity is not None else None  # (as Model.gravity: a type)
     w = np.empty((n, 3))
     orient = np.zeros((n, 4))
     # the arrays that start at one value each and are written through at the build, filled
@@ -212,7 +215,6 @@ def allocate_state(
     constant: dict[str, tuple[NDArray[Any], float]] = {
         "orient_t": (np.empty(n), time),
         "last_coll": (np.empty(n), -np.inf),
-        "support": (np.empty(n, np.int64), -1),
         "nbr": (np.empty((n, capacity), np.int32), 0),
         "nbr_count": (np.empty(n, np.int64), 0),
         "cell": (np.empty(n, np.int64), 0),
@@ -251,10 +253,8 @@ def allocate_state(
             kin[a:b, KIN_R] = radius
             shell[a:b, :dim] = x
             shell[a:b, 3] = radius
-            if model.gravity is not None:
-                acc[a:b] = np.where(model.mobile[a:b, None], model.gravity[None, :], 0.0)
-            else:
-                acc[a:b] = 0.0
+            if acc is not None and gravity is not None:
+                acc[a:b] = np.where(model.mobile[a:b, None], gravity[None, :], 0.0)
             w[a:b] = angular_velocity[rows]
             orient[a:b, : orientation.shape[1]] = orientation[rows]
         if filling is not None:
@@ -264,6 +264,7 @@ def allocate_state(
     return State(
         kin=kin,
         acc=acc,
+        support=np.full(n, -1, np.int64) if gravity is not None else None,
         w=w,
         orient=orient,
         shell=shell,
