@@ -20,7 +20,7 @@ from carom.jit import kernel_only
 INF = math.inf
 
 
-@kernel_only(error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def toi_sphere_sphere(c: float, b: float, a: float) -> float:
     """First contact of two spheres in linear relative motion.
 
@@ -208,7 +208,7 @@ def _first_fall(c4: float, c3: float, c2: float, c1: float, c0: float, t_max: fl
     return INF
 
 
-@kernel_only(error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def shell_exit_time(off2: float, off_v: float, speed2: float, acc: float, delta: float) -> float:
     """When a body may first be ``delta`` from its shell centre [s] (a lower bound).
 

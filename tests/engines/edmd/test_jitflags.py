@@ -52,8 +52,8 @@ def _top(keys, cal):  # type: ignore[no-untyped-def]
         neighbours.rebuild_shell,
         predict.predict,
         loop.write_frame,
-        toi.shell_exit_time,
-        toi.toi_sphere_sphere,
+        toi._first_fall,
+        toi._quadratic_roots,
         kernels.impulse_spheres,
     ],
 )
