@@ -29,7 +29,8 @@ def calendar_next(cal, k):  # type: ignore[no-untyped-def]
     return calendar_kernels.calendar_next(cal, k)
 
 
-def _calendar(n: int) -> Calendar:
+def empty_calendar(n: int) -> Calendar:
+    """A calendar for ``n`` bodies as the engine allocates it, before any event is filed."""
     return (
         np.full(n + 1, -1, np.int32),  # cal_head
         np.full(n, -1, np.int32),  # cal_next
@@ -63,7 +64,7 @@ def test_calendar_pops_in_time_then_body_order(seed: int) -> None:
     keys = rng.exponential(1.0, n)
     keys[rng.random(n) < 0.1] = np.inf
     keys[rng.random(n) < 0.2] = 0.5  # ties
-    cal = _calendar(n)
+    cal = empty_calendar(n)
     calendar_build(keys, cal)
     now = 0.0
     for step in range(3000):
@@ -99,7 +100,7 @@ def test_the_next_event_is_hinted_whenever_the_heap_holds_it() -> None:
     rng = np.random.default_rng(5)
     n = 200
     keys = rng.exponential(1.0, n)
-    cal = _calendar(n)
+    cal = empty_calendar(n)
     calendar_build(keys, cal)
     hinted = 0
     for _ in range(4000):

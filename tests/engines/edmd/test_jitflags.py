@@ -8,37 +8,19 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from numba import njit
 
 from carom.engines.edmd import calendar, collide, loop, neighbours, predict
 from carom.geometry import toi
 from carom.jit import KernelOnly
 from carom.laws import kernels
 from tests.conftest import JIT_DISABLED
+from tests.engines.edmd.test_calendar import calendar_top as jitted_top
+from tests.engines.edmd.test_calendar import empty_calendar
 from tests.processes import fresh_python
 
 needs_dispatchers = pytest.mark.skipif(
     JIT_DISABLED, reason="without the JIT the helpers are plain Python functions"
 )
-
-
-def _calendar(n: int) -> calendar.Calendar:
-    return (
-        np.full(n + 1, -1, np.int32),
-        np.full(n, -1, np.int32),
-        np.full(n, -1, np.int32),
-        np.full(n, -2, np.int32),
-        np.zeros(n, np.int32),
-        np.full(n, np.inf),
-        np.zeros(n, np.int32),
-        np.array([0.0, 1.0]),
-        np.zeros(4, np.int64),
-    )
-
-
-@njit
-def _top(keys, cal):  # type: ignore[no-untyped-def]
-    return calendar.calendar_top(keys, cal)
 
 
 @needs_dispatchers
@@ -66,9 +48,9 @@ def test_helpers_of_the_loop_have_no_python_entry(helper: object) -> None:
 @needs_dispatchers
 def test_a_helper_compiles_without_wrappers_and_runs_from_compiled_code() -> None:
     keys = np.array([3.0, 1.0, 2.0])
-    cal = _calendar(keys.size)
+    cal = empty_calendar(keys.size)
     calendar.calendar_build(keys, cal)
-    assert _top(keys, cal) == 1  # the earliest event, through a jitted caller
+    assert jitted_top(keys, cal) == 1  # the earliest event, through a jitted caller
     with pytest.raises(TypeError, match=r"calendar\.calendar_top"):
         calendar.calendar_top(keys, cal)
     # what was compiled (or loaded from the cache) has no Python wrapper and no C wrapper:
