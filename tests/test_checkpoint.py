@@ -54,3 +54,22 @@ def test_truncated_checkpoint_is_refused(tmp_path) -> None:  # type: ignore[no-u
     path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
     with pytest.raises(CaromError, match=r"checkpoint .*cut.npz"):
         carom.World.load(path)
+
+
+@pytest.mark.parametrize("drop", ["state.orient", "state.support"])
+def test_checkpoint_with_half_of_a_group_of_arrays_is_refused(tmp_path, drop) -> None:  # type: ignore[no-untyped-def]
+    # spins, orientations and their clocks are written together or not at all (a state
+    # without spins has none), as are accelerations and supports (none without gravity): a
+    # file with one of a group missing is damaged
+    world = carom.World(2, [2.0, 2.0], gravity=[0.0, -1.0])
+    x, v = [[0.5, 0.5], [1.5, 1.5]], [[1.0, 0.0], [0.0, 1.0]]
+    world.add_spheres(x, v, angular_velocities=[1.0, 0.0], radius=0.1)
+    world.run(until=0.5)
+    path = tmp_path / "half.npz"
+    world.save(path)
+    with np.load(path) as data:
+        arrays = {name: data[name] for name in data.files if not name.endswith(drop)}
+    assert len(arrays) < len(np.load(path).files)
+    np.savez(path, **arrays)
+    with pytest.raises(CaromError, match=r"damaged|missing"):
+        carom.World.load(path)

@@ -32,7 +32,7 @@ __all__ = ["FORMAT", "VERSION", "load_world", "save_world"]
 
 FORMAT = "carom-checkpoint"
 #: bumped whenever the layout of the file or of an engine's arrays changes
-VERSION = 10
+VERSION = 11
 BODY_FIELDS = (
     "position",
     "velocity",

@@ -29,12 +29,26 @@ def _kinds() -> dict[str, carom.World]:
     rough = carom.World(dim=3, box=(1.0, 1.0, 1.0))
     steel = rough.add_material(carom.Material(restitution=0.8, beta=0.5))
     rough.add_spheres([[0.3, 0.5, 0.5], [0.7, 0.5, 0.5]], radius=0.1, material=steel)
+    rough_falling = carom.World(dim=2, box=(1.0, 1.0), gravity=(0.0, -9.81))
+    steel = rough_falling.add_material(carom.Material(restitution=0.8, beta=0.5))
+    rough_falling.add_spheres([[0.3, 0.5], [0.7, 0.5]], radius=0.1, material=steel)
+    spinning = gas(3, 4, 0.3, seed=1)  # smooth, but one sphere spins
+    spinning.add_spheres([[0.0, 0.0, 0.0]], angular_velocities=[[0.0, 0.0, 2.0]], radius=0.01)
     return {
         "3D periodic gas": gas(3, 4, 0.3, seed=1),
         "2D walled gas": gas(2, 6, 0.4, seed=1, boundary="walls"),
         "gravity and planes": planes.build(),
         "rough spheres": rough,
+        "rough spheres falling": rough_falling,
+        "a smooth gas with one spin": spinning,
     }
+
+
+def _kind(world: carom.World) -> tuple[bool, bool]:
+    """(gravity, spins) of a world: whether gravity acts, and whether a body may spin."""
+    rough = any(m.law != "smooth" for m in world.materials)
+    spins = rough or bool(np.any(world.angular_velocities != 0.0))
+    return bool(np.any(world.gravity != 0.0)), spins
 
 
 def _types(engine: EdmdEngine) -> tuple[object, ...]:
@@ -45,19 +59,23 @@ def _types(engine: EdmdEngine) -> tuple[object, ...]:
 
 @pytest.mark.needs_jit
 def test_every_kind_of_scene_has_the_helpers_kernel_types() -> None:
-    # two helpers, with gravity and without: a model without gravity types it as None, so that
-    # its kernels are compiled without parabolas and supports; within each, one set of types
+    # four helpers, with gravity and without, spinning and not: a model without gravity types
+    # it as None, so that its kernels are compiled without parabolas and supports, and one
+    # whose bodies never spin its inertia factors; within each kind, one set of types
+    kinds = [(gravity, spins) for gravity in (False, True) for spins in (False, True)]
     helpers = {
-        gravity: _types(EdmdEngine(*aside.two_spheres(gravity), EdmdSettings(), 0.0))
-        for gravity in (False, True)
+        kind: _types(EdmdEngine(*aside.two_spheres(*kind), EdmdSettings(), 0.0)) for kind in kinds
     }
-    assert helpers[False] != helpers[True]
+    assert len(set(helpers.values())) == 4
+    seen = set()
     for name, world in _kinds().items():
         engine = world.build()
         assert isinstance(engine, EdmdEngine), name
-        gravity = bool(np.any(world.gravity != 0.0))
-        assert (engine.model.gravity is not None) == gravity, name
-        assert _types(engine) == helpers[gravity], name
+        kind = _kind(world)
+        assert (engine.model.gravity is not None, engine.model.q is not None) == kind, name
+        assert _types(engine) == helpers[kind], name
+        seen.add(kind)
+    assert seen == set(kinds)
 
 
 @pytest.mark.needs_jit
@@ -72,10 +90,10 @@ def test_the_loop_compiled_ahead_is_the_one_the_engine_calls() -> None:
 
 def test_no_helper_when_the_loop_is_compiled_or_from_a_helper(monkeypatch) -> None:  # type: ignore[no-untyped-def]
     monkeypatch.setattr(aside, "loop_ready", lambda: True)
-    assert aside.start(False) is None
+    assert aside.start(False, False) is None
     monkeypatch.setattr(aside, "loop_ready", lambda: False)
     monkeypatch.setenv(aside.HELPER_FLAG, "1")
-    assert aside.start(False) is None
+    assert aside.start(False, False) is None
 
 
 @pytest.mark.needs_jit
@@ -99,7 +117,7 @@ def test_no_helper_on_one_cpu(monkeypatch) -> None:  # type: ignore[no-untyped-d
     monkeypatch.setattr(aside, "loop_ready", lambda: False)
     monkeypatch.delenv(aside.HELPER_FLAG, raising=False)
     monkeypatch.setattr(aside, "usable_cpus", lambda: 1)
-    assert aside.start(False) is None
+    assert aside.start(False, False) is None
 
 
 def test_a_failed_compile_stops_the_helper(monkeypatch) -> None:  # type: ignore[no-untyped-def]

@@ -310,9 +310,76 @@ def test_without_gravity_the_state_holds_no_accelerations_or_supports() -> None:
     assert heavy.engine.state.support is not None
 
 
-@pytest.mark.parametrize("make", [_walled_gas, _galton], ids=["no gravity", "gravity"])
+def _rough_gas() -> carom.World:
+    """A walled 2D gas of rough disks with spins and a falling stone among them."""
+    world = carom.World(dim=2, box=(6.0, 6.0), gravity=(0.0, -1.0))
+    rough = world.add_material(carom.Material(restitution=0.9, beta=0.4))
+    rng = np.random.default_rng(4)
+    grid = (np.arange(6) + 0.5) * 1.0
+    x = np.stack(np.meshgrid(grid, grid, indexing="ij"), -1).reshape(-1, 2)
+    v, spins = rng.normal(size=(36, 2)), rng.normal(size=36)
+    world.add_spheres(x, v, angular_velocities=spins, radius=0.3, material=rough)
+    return world
+
+
+def _spin_of_minus_zero() -> carom.World:
+    world = _walled_gas()
+    world.add_spheres([[0.05, 0.05, 0.05]], angular_velocities=[[0.0, -0.0, 0.0]], radius=0.01)
+    return world
+
+
+def test_a_state_holds_spins_and_orientations_only_when_a_body_can_spin() -> None:
+    # Model.q is None when every pair law is smooth, every spin zero and every orientation
+    # the identity: the state then has no spins, orientations or their clocks (64 bytes a
+    # sphere), and frames give every body the identity and no spin, as before
+    flat = _walled_gas()
+    flat.run(until=flat.time + 0.5)
+    assert isinstance(flat.engine, EdmdEngine)
+    assert flat.engine.model.q is None
+    for name in ("w", "orient", "orient_t"):
+        assert getattr(flat.engine.state, name) is None, name
+    frame = flat.frame()
+    np.testing.assert_array_equal(frame.orientations, np.tile([1.0, 0.0, 0.0, 0.0], (27, 1)))
+    assert not np.signbit(frame.orientations).any()
+    np.testing.assert_array_equal(frame.angular_velocities, np.zeros((27, 3)))
+    assert not np.signbit(frame.angular_velocities).any()
+    # a rough law, a spin, or a spin of -0.0 (given back as it was) keep them
+    for world in (_rough_gas(), _spin_of_minus_zero()):
+        engine = world.build()
+        assert isinstance(engine, EdmdEngine)
+        assert engine.model.q is not None
+        assert engine.state.w is not None
+        assert engine.state.orient is not None
+    minus = _spin_of_minus_zero()
+    minus.run(until=minus.time + 0.5)
+    assert np.signbit(minus.angular_velocities[27, 1])
+
+
+def test_a_turned_body_keeps_its_orientation_in_an_engine_without_spins() -> None:
+    # a sphere turned (not the identity) but not spinning, smooth laws: the orientation is
+    # state, so the engine keeps orientations (carom.engines.edmd.driver.spinning)
+    from carom.bodies import Bodies
+    from carom.engines.edmd.driver import spinning
+
+    world = _walled_gas()
+    env = world._environment()
+    assert not spinning(world.bodies, env)
+    for dim, turned in ((3, [0.0, 1.0, 0.0, 0.0]), (3, [-0.0, 0.0, 0.0, 0.0]), (2, [0.5])):
+        bodies = Bodies(dim)
+        bodies.append_spheres(np.zeros((2, dim)), np.zeros((2, dim)), np.zeros((2, 3)),
+                              np.ones(2), np.ones(2), 0.4, 0)  # fmt: skip
+        same_env = env._replace(box=np.ones(dim))
+        assert not spinning(bodies, same_env)
+        bodies.orientation[1] = turned
+        assert spinning(bodies, same_env), turned
+
+
+@pytest.mark.parametrize(
+    "make", [_walled_gas, _galton, _rough_gas], ids=["no gravity", "gravity", "rough, gravity"]
+)
 def test_a_checkpoint_with_or_without_gravity_resumes_bit_for_bit(make, tmp_path) -> None:  # type: ignore[no-untyped-def]
-    # (without gravity the checkpoint holds no acc or support: the state has none)
+    # (without gravity the checkpoint holds no acc or support, and without spins no w, orient
+    # or orient_t: the state has none)
     straight = make()
     straight.run(until=straight.time + 1.0)
     first = make()
@@ -322,3 +389,5 @@ def test_a_checkpoint_with_or_without_gravity_resumes_bit_for_bit(make, tmp_path
     resumed.run(until=straight.time)
     np.testing.assert_array_equal(resumed.positions, straight.positions)
     np.testing.assert_array_equal(resumed.velocities, straight.velocities)
+    np.testing.assert_array_equal(resumed.orientations, straight.orientations)
+    np.testing.assert_array_equal(resumed.angular_velocities, straight.angular_velocities)

@@ -73,25 +73,29 @@ class Compiles(event.Listener):
     def on_end(self, e): compiled.add(e.data["dispatcher"].py_func.__qualname__)
 
 event.register("numba:compile", Compiles())
+import carom
 from tests.worlds import gas
 world = gas(3, 2, 0.3, seed=1, e=0.9, boundary="walls")
-if sys.argv[1:] == ["gravity"]:
+if sys.argv[1:] == ["gravity and spins"]:
     world.gravity[:] = (0.0, 0.0, -1.0)
+    world.add_material(carom.Material(restitution=0.9, beta=0.3))  # a rough law: spins
 world.run(until=world.time + 0.01)
 print(json.dumps(sorted(compiled)))
 """
 
 
 @needs_dispatchers
-@pytest.mark.parametrize("gravity", [False, True])
-def test_a_scene_without_gravity_compiles_no_parabolas_or_supports(
-    gravity: bool, tmp_path: Path
+@pytest.mark.parametrize("both", [False, True], ids=["neither", "gravity and spins"])
+def test_a_scene_without_gravity_or_spins_compiles_no_parabolas_supports_or_turns(
+    both: bool, tmp_path: Path
 ) -> None:
-    # Model.gravity is None without gravity: the kernels' branches on it are pruned before
-    # typing, so the quartic time of impact and the support rules are never compiled; under
-    # gravity they are. From an empty cache, in a fresh process (this one has compiled both).
-    code = COMPILED_FOR.replace("sys.argv[1:]", repr(["gravity"] if gravity else []))
+    # Model.gravity is None without gravity, and Model.q when no body can spin: the kernels'
+    # branches on them are pruned before typing, so the quartic time of impact, the support
+    # rules and the spin's contact velocity are never compiled; under gravity, with a rough
+    # law, they are. From an empty cache, in a fresh process (this one has compiled both).
+    code = COMPILED_FOR.replace("sys.argv[1:]", repr(["gravity and spins"] if both else []))
     compiled = set(fresh_python(code, NUMBA_CACHE_DIR=str(tmp_path)))
     assert {"predict", "collide_pair", "collide_face", "run_frames"} <= compiled
-    pruned = {"first_root_quartic", "set_support", "support_reaction", "held_cosine"}
-    assert (pruned <= compiled) if gravity else not (pruned & compiled)
+    gravity = {"first_root_quartic", "set_support", "support_reaction", "held_cosine"}
+    spins = {"contact_velocity"}
+    assert (gravity | spins <= compiled) if both else not ((gravity | spins) & compiled)

@@ -6,11 +6,11 @@ independent halves of about the same size: the kernels that build an engine (``i
 the neighbour lists, the calendar, the handle, sampling) and the event loop
 (:func:`carom.engines.edmd.loop.run_frames`). When the kernel cache is cold, a fresh engine
 starts :func:`start`: a second Python process (``python -m carom.engines.edmd.aside``) builds a
-two-sphere engine of the same kind (with gravity or without: the kernels differ) and samples
-it, which compiles the first half into the shared cache, while this process compiles the loop
-for its own model and state (:func:`compile_beside`). It then waits for the helper and loads
-the first half from the cache. Machine code is the same whichever process compiled it: the
-cache only moves it.
+two-sphere engine of the same kind (with gravity or without, spinning or not: the kernels
+differ) and samples it, which compiles the first half into the shared cache, while this
+process compiles the loop for its own model and state (:func:`compile_beside`). It then waits
+for the helper and loads the first half from the cache. Machine code is the same whichever
+process compiled it: the cache only moves it.
 
 Nothing depends on the helper: if it cannot start, fails or outlives :data:`WAIT_SECONDS`, this
 process compiles what is missing itself. It is not started on one CPU, without the JIT, when
@@ -50,16 +50,17 @@ HELPER_FLAG = "CAROM_COMPILE_HELPER"
 WAIT_SECONDS = 600.0
 
 
-def start(gravity: bool) -> subprocess.Popen[bytes] | None:
+def start(gravity: bool, spins: bool) -> subprocess.Popen[bytes] | None:
     """Start the helper process if the kernel cache is cold and a second CPU can run it; its
-    engine has ``gravity`` when the caller's has (:func:`two_spheres`)."""
+    engine has ``gravity`` and ``spins`` when the caller's has (:func:`two_spheres`)."""
     if config.DISABLE_JIT or os.environ.get(HELPER_FLAG) or loop_ready():  # type: ignore[attr-defined]
         return None
     if usable_cpus() < 2:
         return None
     try:
+        flags = [flag for flag, on in (("--gravity", gravity), ("--spins", spins)) if on]
         return subprocess.Popen(
-            [sys.executable, "-m", "carom.engines.edmd.aside", *(["--gravity"] if gravity else [])],
+            [sys.executable, "-m", "carom.engines.edmd.aside", *flags],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
@@ -128,18 +129,20 @@ def compile_beside(
     finish(helper)
 
 
-def two_spheres(gravity: bool = False) -> tuple[Bodies, Environment]:
-    """The helper's engine inputs: two spheres in a walled 3D box, under gravity or not. Every
-    scene the event-driven engine runs has the kernel argument types of one of the two (the
-    tests hold this): a model without gravity has none (``Model.gravity`` is None), and its
-    kernels are compiled without the code for parabolas and supports."""
+def two_spheres(gravity: bool = False, spins: bool = False) -> tuple[Bodies, Environment]:
+    """The helper's engine inputs: two spheres in a walled 3D box, under gravity or not, one
+    spinning or neither. Every scene the event-driven engine runs has the kernel argument
+    types of one of the four (the tests hold this): a model without gravity has none
+    (``Model.gravity`` is None), and its kernels are compiled without the code for parabolas
+    and supports; one whose bodies never spin has no inertia factors (``Model.q`` is None),
+    and its kernels are compiled without the code that turns them."""
     from carom.engines.edmd.driver import Environment  # (the driver imports this module)
 
     bodies = Bodies(3)
     bodies.append_spheres(
         np.array([[0.3, 0.5, 0.5], [0.7, 0.5, 0.5]]),
         np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]),
-        np.zeros((2, 3)),
+        np.array([[0.0, 0.0, 1.0 if spins else 0.0], [0.0, 0.0, 0.0]]),
         np.full(2, 0.1),
         np.ones(2),
         0.4,
@@ -159,10 +162,11 @@ def two_spheres(gravity: bool = False) -> tuple[Bodies, Environment]:
 
 def main() -> None:
     """The helper: build a two-sphere engine and sample it (compiling the build kernels), under
-    gravity if called with ``--gravity``."""
+    gravity if called with ``--gravity``, one sphere spinning with ``--spins``."""
     from carom.engines.edmd.driver import EdmdEngine
 
-    bodies, env = two_spheres("--gravity" in sys.argv[1:])
+    flags = sys.argv[1:]
+    bodies, env = two_spheres("--gravity" in flags, "--spins" in flags)
     EdmdEngine(bodies, env, EdmdSettings(), 0.0).sample()
 
 

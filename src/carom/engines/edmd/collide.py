@@ -109,7 +109,7 @@ def collide_pair(
     radius: np.ndarray,
     mass: np.ndarray,
     inv_mass: np.ndarray,
-    q: np.ndarray,
+    q: np.ndarray | None,
     material: np.ndarray,
     pair_table: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     face_e: np.ndarray,
@@ -123,9 +123,11 @@ def collide_pair(
     logbuf: LogBuffer,
 ) -> None:
     """Bodies ``i`` and ``j`` (both at time ``T``) meet: the impulse law, then the engine's
-    rules. ``rot`` is (spins (N, 3), orientations (N, 4), their clocks (N,))."""
+    rules. ``rot`` is (spins (N, 3), orientations (N, 4), their clocks (N,)): three Nones,
+    with ``q`` None, when no body spins (every law is smooth). The branches on ``q is None``
+    are pruned before typing then (Numba prunes on an argument that is None, not on a tuple's
+    item), and the code that turns bodies is not compiled."""
     dim = x.shape[1]
-    w, orient, orient_t = rot
     # separation r = x_i - x_j (nearest image) and relative velocity, as three components
     r0 = r1 = r2 = 0.0
     dv0 = dv1 = dv2 = 0.0
@@ -153,9 +155,16 @@ def collide_pair(
         e = 1.0
     a_i = radius[i]
     a_j = radius[j]
-    g0, g1, g2 = contact_velocity(dv0, dv1, dv2, w, i, j, a_i, a_j, n0, n1, n2, law)
     inv_i = inv_mass[i]
     inv_j = inv_mass[j]
+    if q is None:  # no spins: every law is smooth, which needs only dv (contact_velocity)
+        g0, g1, g2 = dv0, dv1, dv2
+        inv_qi = inv_qj = 0.0
+    else:
+        g0, g1, g2 = contact_velocity(dv0, dv1, dv2, rot[0], i, j, a_i, a_j, n0, n1, n2, law)
+        smooth = law == LAW_SMOOTH  # (spins do not enter the smooth law)
+        inv_qi = 0.0 if smooth else 1.0 / q[i]
+        inv_qj = 0.0 if smooth else 1.0 / q[j]
     j0, j1, j2 = impulse_spheres(
         n0,
         n1,
@@ -169,8 +178,8 @@ def collide_pair(
         law,
         pair_beta[mat_i, mat_j],
         pair_friction[mat_i, mat_j],
-        1.0 / q[i] if law != LAW_SMOOTH else 0.0,  # (spins do not enter the smooth law)
-        1.0 / q[j] if law != LAW_SMOOTH else 0.0,
+        inv_qi,
+        inv_qj,
     )
     # They must part: else the next prediction finds them meeting now again, a loop of
     # events at one time. The impulse law makes them part at e times the approach speed,
@@ -239,8 +248,9 @@ def collide_pair(
         hold_on_support(i, v, support, plane_normal)
     if gravity is not None and held_j:
         hold_on_support(j, v, support, plane_normal)
-    if unlikely(law != LAW_SMOOTH):
+    if q is not None and unlikely(law != LAW_SMOOTH):
         # the spins change: first turn both bodies to now at their old spins
+        w, orient, orient_t = rot
         turn(orient, i, w[i, 0], w[i, 1], w[i, 2], T - orient_t[i], dim)
         turn(orient, j, w[j, 0], w[j, 1], w[j, 2], T - orient_t[j], dim)
         orient_t[i] = T
@@ -262,7 +272,10 @@ def collide_pair(
     u1 = v[i, 1] - v[j, 1]
     u2 = v[i, 2] - v[j, 2] if dim == 3 else 0.0
     un_after = u0 * n0 + u1 * n1 + u2 * n2
-    h0, h1, h2 = contact_velocity(u0, u1, u2, w, i, j, a_i, a_j, n0, n1, n2, law)
+    if q is None:
+        h0, h1, h2 = u0, u1, u2
+    else:
+        h0, h1, h2 = contact_velocity(u0, u1, u2, rot[0], i, j, a_i, a_j, n0, n1, n2, law)
     # energy dissipated = minus the impulse's work, J . (g_before + g_after) / 2 for rigid
     # bodies (exact, and free of the cancellation of KE_before - KE_after); the law's part
     # is that plus what the floor gave

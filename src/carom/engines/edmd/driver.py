@@ -34,6 +34,7 @@ from carom.engines.edmd.ordering import spatial_order
 from carom.engines.edmd.settings import SHELL_DEFAULT, EdmdSettings
 from carom.engines.edmd.state import State, aligned_records, allocate_state, scratch
 from carom.errors import CaromError
+from carom.laws.kernels import LAW_SMOOTH
 from carom.materials import PairTable
 
 __all__ = ["OVERLAP_TOLERANCE", "EdmdEngine", "Environment", "grid_cells"]
@@ -168,7 +169,7 @@ class EdmdEngine:
         if state is not None:
             assert order is not None
             self.order = order
-            self.model = self._build_model(order)
+            self.model = self._build_model(order, state.w is not None)
             self.state = state
             return
         x = bodies.position.copy()
@@ -177,7 +178,7 @@ class EdmdEngine:
         # the grid only orders the bodies; the model below sets the shells (the same sizes)
         _, ncell = self._shell_grid(bodies.radius, bodies.mobile)
         order = spatial_order(x, env.box / ncell, ncell)
-        model = self._build_model(order)
+        model = self._build_model(order, spinning(bodies, env))
         cells = np.clip(np.floor(x / model.cell_size).astype(np.int64), 0, model.ncell - 1)
         occupancy = np.bincount(np.ravel_multi_index(cells.T, model.ncell)).max()
         self.cell_capacity = max(self.cell_capacity, 8, 2 * int(occupancy))
@@ -200,7 +201,8 @@ class EdmdEngine:
         state = new_state()
         # a cold cache: the build kernels compile in a helper process while the loop compiles
         # here (engines/edmd/aside.py)
-        aside.compile_beside(aside.start(model.gravity is not None), model, state, order)
+        helper = aside.start(model.gravity is not None, model.q is not None)
+        aside.compile_beside(helper, model, state, order)
         while True:
             status = loop.initialise(model, state)
             if status == codes.DONE:
@@ -235,8 +237,9 @@ class EdmdEngine:
             )
         return delta, grid_cells(env.box, shell_diameter, n)
 
-    def _build_model(self, order: NDArray[np.int64]) -> Model:
-        """The Model with bodies in engine order ``order``."""
+    def _build_model(self, order: NDArray[np.int64], spins: bool) -> Model:
+        """The Model with bodies in engine order ``order``; without inertia factors (``q``
+        None: the engine holds no spins) unless some body ``spins`` (:func:`spinning`)."""
         b, env = self.bodies, self.env
         mass = b.mass[order]
         mobile = np.isfinite(mass)
@@ -253,7 +256,7 @@ class EdmdEngine:
             radius=radius,
             mass=mass,
             inv_mass=inv_mass,
-            q=b.inertia_factor[order],
+            q=b.inertia_factor[order] if spins else None,
             material=b.material[order],
             pair_law=env.pairs.law,
             pair_e=env.pairs.e,
@@ -492,7 +495,7 @@ class EdmdEngine:
     # -- checkpoints ------------------------------------------------------------------------
 
     def arrays(self) -> dict[str, NDArray[Any]]:
-        # (a field that is None, as acc and support are without gravity, is not written)
+        # (a field that is None is not written: OPTIONAL names them)
         arrays: dict[str, NDArray[Any]] = {
             f"state.{name}": value
             for name, value in self.state._asdict().items()
@@ -511,11 +514,12 @@ class EdmdEngine:
         arrays: dict[str, NDArray[Any]],
     ) -> EdmdEngine:
         """The engine saved by :meth:`arrays`, continuing bit for bit."""
-        # acc and support are None without gravity, and then not written
         fields: dict[str, Any] = {name: arrays.get(f"state.{name}") for name in State._fields}
-        missing = [
-            name for name, v in fields.items() if v is None and name not in ("acc", "support")
-        ]
+        missing = [name for name, v in fields.items() if v is None and name not in OPTIONAL]
+        for group in (GRAVITY_FIELDS, SPIN_FIELDS):  # each all there or all absent
+            there = [fields[name] is not None for name in group]
+            if any(there) and not all(there):
+                missing.append(group[there.index(False)])
         if missing:
             raise KeyError(f"state.{missing[0]}")  # (the checkpoint reader calls it damaged)
         fields["kin"] = aligned_records(len(fields["kin"]), fields["kin"])
@@ -533,6 +537,28 @@ class EdmdEngine:
         )
         bodies.set_state(*engine.sample())  # the table as of the checkpoint's clock
         return engine
+
+
+#: the state's fields a checkpoint may lack: acc and support are None without gravity, the
+#: spins and orientations when no body spins (and then not written)
+GRAVITY_FIELDS = ("acc", "support")
+SPIN_FIELDS = ("w", "orient", "orient_t")
+OPTIONAL = (*GRAVITY_FIELDS, *SPIN_FIELDS)
+
+
+def spinning(bodies: Bodies, env: Environment) -> bool:
+    """Whether a body may ever spin or is turned: some pair law is not smooth (walls and
+    planes are), or some body has a spin or an orientation other than the identity (compared
+    bit for bit: a spin of -0.0 counts, so that frames give it back as it was)."""
+    if np.any(env.pairs.law != LAW_SMOOTH):
+        return True
+    if np.any(bodies.angular_velocity.view(np.int64) != 0):
+        return True
+    orientation = bodies.orientation
+    if env.dim == 3 and np.any(orientation[:, 0] != 1.0):  # (1.0 has one bit pattern)
+        return True
+    rest = orientation[:, 1:] if env.dim == 3 else orientation
+    return bool(np.any(rest.view(np.int64) != 0))
 
 
 def _calendar(s: State) -> Calendar:

@@ -168,8 +168,8 @@ def run_frames(  # type: ignore[no-untyped-def]
     m, s, order = h.model, h.state, h.order
     kin = s.kin
     x, v, t = kinematic_views(kin, m.box.shape[0])
-    acc, w = s.acc, s.w
-    rot = (w, s.orient, s.orient_t)
+    acc = s.acc
+    rot = (s.w, s.orient, s.orient_t)
     shell, support, last_coll = s.shell, s.support, s.last_coll
     nbr, nbr_count, nbr_mark, nbr_old, near = s.nbr, s.nbr_count, s.nbr_mark, s.nbr_old, s.near
     scan, scan_body = s.scan, s.scan_body
@@ -208,7 +208,7 @@ def run_frames(  # type: ignore[no-untyped-def]
             f = done[0]
             if sample:
                 write_frame(
-                    kin, acc, s.orient, s.orient_t, w, box, periodic, order, t_stop, f,
+                    kin, acc, s.orient, s.orient_t, s.w, box, periodic, order, t_stop, f,
                     t_out, x_out, v_out, orient_out, w_out,
                 )  # fmt: skip
             done[0] = f + 1
@@ -372,8 +372,14 @@ def write_frame(  # type: ignore[no-untyped-def]
             v_out[f, r, k] = v[i, k] + a * dt
             if periodic:
                 x_out[f, r, k] -= box[k] * np.floor(x_out[f, r, k] / box[k])
-        for k in range(frame.shape[1]):
-            frame[r, k] = orient[i, k]
-        turn(frame, r, w[i, 0], w[i, 1], w[i, 2], t_f - orient_t[i], dim)
-        for k in range(3):
-            w_out[f, r, k] = w[i, k]
+        if w is None:  # no spins: every orientation is the identity (pruned otherwise)
+            for k in range(frame.shape[1]):
+                frame[r, k] = 1.0 if k == 0 and dim == 3 else 0.0
+            for k in range(3):
+                w_out[f, r, k] = 0.0
+        else:
+            for k in range(frame.shape[1]):
+                frame[r, k] = orient[i, k]
+            turn(frame, r, w[i, 0], w[i, 1], w[i, 2], t_f - orient_t[i], dim)
+            for k in range(3):
+                w_out[f, r, k] = w[i, k]

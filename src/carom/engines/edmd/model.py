@@ -34,9 +34,13 @@ class Model(NamedTuple):
         before typing), a smaller and faster compile.
     mobile : (N,) bool
         False for static bodies (pegs, obstacles): infinite mass, never move.
-    radius, mass, inv_mass, q : (N,) float64
-        Radius [m], mass [kg] (inf when static), 1/mass [1/kg], inertia factor
-        ``I = q m a^2`` [-].
+    radius, mass, inv_mass : (N,) float64
+        Radius [m], mass [kg] (inf when static), 1/mass [1/kg].
+    q : (N,) float64 or None
+        Inertia factor ``I = q m a^2`` [-]. None when no body ever spins (every pair law
+        smooth, every spin zero, every orientation the identity): the state then holds no
+        spins or orientations, and the kernels are compiled without the code that turns
+        bodies (branches on None are pruned before typing, as for ``gravity``).
     material : (N,) int64
         Material index of each body.
     pair_law : (M, M) int64
@@ -66,7 +70,7 @@ class Model(NamedTuple):
     radius: NDArray[np.float64]
     mass: NDArray[np.float64]
     inv_mass: NDArray[np.float64]
-    q: NDArray[np.float64]
+    q: NDArray[np.float64] | None
     material: NDArray[np.int64]
     pair_law: NDArray[np.int64]
     pair_e: NDArray[np.float64]

@@ -63,12 +63,14 @@ class State(NamedTuple):
     acc : (N, d) float64 or None
         Acceleration [m/s^2]: gravity, less the normal part a support bears; zero if static.
         None without gravity (``Model.gravity`` None: every acceleration is zero).
-    w : (N, 3) float64
+    w : (N, 3) float64 or None
         Spin [rad/s] (2D: about z, in column 2).
-    orient : (N, 4) float64; orient_t : (N,) float64
+    orient : (N, 4) float64 or None; orient_t : (N,) float64 or None
         Orientation as of the clock ``orient_t`` [s] (2D: angle [rad] in column 0; 3D: unit
         quaternion ``w, x, y, z``): spins change only in rough or frictional collisions,
-        which bring it up to date first (:mod:`carom.geometry.rotation`).
+        which bring it up to date first (:mod:`carom.geometry.rotation`). ``w``, ``orient``
+        and ``orient_t`` are None when no body ever spins (``Model.q`` None): every spin
+        stays zero and every orientation the identity.
     last_coll : (N,) float64
         Time of each body's last collision [s] (TC model).
     support : (N,) int64 or None
@@ -109,9 +111,9 @@ class State(NamedTuple):
 
     kin: NDArray[np.float64]
     acc: NDArray[np.float64] | None
-    w: NDArray[np.float64]
-    orient: NDArray[np.float64]
-    orient_t: NDArray[np.float64]
+    w: NDArray[np.float64] | None
+    orient: NDArray[np.float64] | None
+    orient_t: NDArray[np.float64] | None
     last_coll: NDArray[np.float64]
     support: NDArray[np.int64] | None
     shell: NDArray[np.float64]
@@ -188,9 +190,10 @@ def allocate_state(
         Centres [m] and velocities [m/s] in the caller's numbering (positions are wrapped
         into a periodic box here).
     angular_velocity : (N, 3) float64
-        Spins [rad/s] (2D: about z, column 2).
+        Spins [rad/s] (2D: about z, column 2); not read when ``model.q`` is None (no body
+        spins: the state has no spins or orientations).
     orientation : (N, 1) or (N, 4) float64
-        Angles [rad] (2D) or unit quaternions (3D).
+        Angles [rad] (2D) or unit quaternions (3D); not read when ``model.q`` is None.
     order : (N,) int64
         Engine row ``e`` holds the caller's body ``order[e]``.
     model : Model
@@ -207,13 +210,14 @@ def allocate_state(
     shell = np.zeros((n, 4))
     gravity = model.gravity
     acc = np.empty((n, dim)) if gravity is not None else None  # (as Model.gravity: a type)
-    w = np.empty((n, 3))
-    orient = np.zeros((n, 4))
+    spinning = model.q is not None  # (as Model.q: None when no body spins)
+    w = np.empty((n, 3)) if spinning else None
+    orient = np.zeros((n, 4)) if spinning else None
+    orient_t = np.empty(n) if spinning else None
     # the arrays that start at one value each and are written through at the build, filled
     # beside the records (below); nbr_mark, cur_heap and cur_where stay untouched zeros until
     # used (a rebuild's marks; the heap holds a bucket's few events)
     constant: dict[str, tuple[NDArray[Any], float]] = {
-        "orient_t": (np.empty(n), time),
         "last_coll": (np.empty(n), -np.inf),
         "nbr": (np.empty((n, capacity), np.int32), 0),
         "nbr_count": (np.empty(n, np.int64), 0),
@@ -255,8 +259,10 @@ def allocate_state(
             shell[a:b, 3] = radius
             if acc is not None and gravity is not None:
                 acc[a:b] = np.where(model.mobile[a:b, None], gravity[None, :], 0.0)
-            w[a:b] = angular_velocity[rows]
-            orient[a:b, : orientation.shape[1]] = orientation[rows]
+            if w is not None and orient is not None and orient_t is not None:
+                w[a:b] = angular_velocity[rows]
+                orient[a:b, : orientation.shape[1]] = orientation[rows]
+                orient_t[a:b] = time
         if filling is not None:
             filling.result()  # (its error, if any, raised here)
         else:
@@ -267,6 +273,7 @@ def allocate_state(
         support=np.full(n, -1, np.int64) if gravity is not None else None,
         w=w,
         orient=orient,
+        orient_t=orient_t,
         shell=shell,
         **{name: array for name, (array, _) in constant.items()},
         nbr_mark=np.zeros(n, np.int64),
