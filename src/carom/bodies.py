@@ -105,6 +105,21 @@ def identity_orientations(n: int, dim: int) -> FloatArray:
     return q
 
 
+def all_unrotated(orientation: FloatArray, dim: int) -> bool:
+    """Whether every row of ``orientation`` ((n, 1) angles in 2D, (n, 4) quaternions in 3D)
+    is the identity, bit for bit (an angle of -0.0 is not: it is given back as it was)."""
+    if dim == 3:
+        if np.any(orientation[:, 0] != 1.0):  # (1.0 has one bit pattern)
+            return False
+        orientation = orientation[:, 1:]
+    return not np.any(orientation.view(np.int64))
+
+
+def all_still(angular_velocity: FloatArray) -> bool:
+    """Whether every spin in ``angular_velocity`` (n, 3) [rad/s] is +0.0, bit for bit."""
+    return not np.any(angular_velocity.view(np.int64))
+
+
 def _sphere_tensors(
     dim: int, mass: FloatArray, radius: FloatArray, inertia_factor: FloatArray
 ) -> FloatArray:
@@ -129,9 +144,12 @@ class Bodies:
     velocity : (N, d) float64
         [m/s].
     orientation : (N, 1) float64 in 2D, (N, 4) in 3D
-        Angle about z [rad]; unit quaternion ``w, x, y, z`` (body to world).
+        Angle about z [rad]; unit quaternion ``w, x, y, z`` (body to world). While every
+        body is unrotated it is not stored but made on each read (:attr:`unrotated`).
     angular_velocity : (N, 3) float64
-        [rad/s], world frame (2D: about z, column 2).
+        [rad/s], world frame (2D: about z, column 2). While no body spins it is not stored
+        but made on each read (:attr:`still`). Together with the orientations, 56 bytes a
+        sphere in 3D that a gas of smooth spheres does not keep.
     shape : (N,) int8
         Shape code (:data:`carom.shapes.SHAPE_CODES`).
     radius : (N,) float64
@@ -160,8 +178,8 @@ class Bodies:
         self.dim = dim
         self.position = np.zeros((0, dim))
         self.velocity = np.zeros((0, dim))
-        self.orientation = identity_orientations(0, dim)
-        self.angular_velocity = np.zeros((0, 3))
+        self._orientation: FloatArray | None = None  # None: every body unrotated
+        self._angular_velocity: FloatArray | None = None  # None: no body spins
         self.shape = np.zeros(0, np.int8)
         self.radius = np.zeros(0)
         self.mass = np.zeros(0)
@@ -174,6 +192,54 @@ class Bodies:
     @property
     def n(self) -> int:
         return int(self.position.shape[0])
+
+    @property
+    def orientation(self) -> FloatArray:
+        """Every body's orientation (see the class docstring); a new array of identities
+        while :attr:`unrotated`, so write a whole new array rather than into this one."""
+        if self._orientation is not None:
+            return self._orientation
+        return identity_orientations(self.n, self.dim)
+
+    @orientation.setter
+    def orientation(self, value: FloatArray) -> None:
+        value = np.asarray(value, np.float64)
+        self._orientation = None if all_unrotated(value, self.dim) else value
+
+    @property
+    def angular_velocity(self) -> FloatArray:
+        """Every body's spin [rad/s], (N, 3); a new array of zeros while :attr:`still`, so
+        write a whole new array rather than into this one."""
+        if self._angular_velocity is not None:
+            return self._angular_velocity
+        return np.zeros((self.n, 3))
+
+    @angular_velocity.setter
+    def angular_velocity(self, value: FloatArray) -> None:
+        value = np.asarray(value, np.float64)
+        self._angular_velocity = None if all_still(value) else value
+
+    def _orientations(self, n: int) -> FloatArray:
+        """The first ``n`` orientations (stored, or identities)."""
+        if self._orientation is not None:
+            return self._orientation[:n]
+        return identity_orientations(n, self.dim)
+
+    def _spins(self, n: int) -> FloatArray:
+        """The first ``n`` spins (stored, or zeros) [rad/s], (n, 3)."""
+        if self._angular_velocity is not None:
+            return self._angular_velocity[:n]
+        return np.zeros((n, 3))
+
+    @property
+    def unrotated(self) -> bool:
+        """True when every body's orientation is the identity (then none is stored)."""
+        return self._orientation is None
+
+    @property
+    def still(self) -> bool:
+        """True when no body spins, every spin +0.0 (then none is stored)."""
+        return self._angular_velocity is None
 
     @property
     def mobile(self) -> NDArray[np.bool_]:
@@ -219,8 +285,12 @@ class Bodies:
         start, n = self.n, position.shape[0]
         self.position = np.concatenate([self.position, position])
         self.velocity = np.concatenate([self.velocity, velocity])
-        self.orientation = np.concatenate([self.orientation, identity_orientations(n, self.dim)])
-        self.angular_velocity = np.concatenate([self.angular_velocity, angular_velocity])
+        if self._orientation is not None:  # (spheres are added unrotated)
+            self.orientation = np.concatenate(
+                [self._orientation, identity_orientations(n, self.dim)]
+            )
+        if self._angular_velocity is not None or not all_still(angular_velocity):
+            self.angular_velocity = np.concatenate([self._spins(start), angular_velocity])
         self.shape = np.concatenate([self.shape, np.full(n, SHAPE_CODES["sphere"], np.int8)])
         self.radius = np.concatenate([self.radius, radius])
         self.mass = np.concatenate([self.mass, mass])
@@ -273,8 +343,8 @@ class Bodies:
             moment = float(np.trace(full)) / 3.0
         self.position = np.concatenate([self.position, position])
         self.velocity = np.concatenate([self.velocity, velocity])
-        self.orientation = np.concatenate([self.orientation, orient])
-        self.angular_velocity = np.concatenate([self.angular_velocity, w])
+        self.orientation = np.concatenate([self._orientations(start), orient])
+        self.angular_velocity = np.concatenate([self._spins(start), w])
         self.shape = np.concatenate([self.shape, np.full(n, shape, np.int8)])
         self.radius = np.concatenate([self.radius, np.full(n, reach)])
         self.mass = np.concatenate([self.mass, np.full(n, mass)])

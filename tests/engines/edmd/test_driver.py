@@ -370,7 +370,9 @@ def test_a_turned_body_keeps_its_orientation_in_an_engine_without_spins() -> Non
                               np.ones(2), np.ones(2), 0.4, 0)  # fmt: skip
         same_env = env._replace(box=np.ones(dim))
         assert not spinning(bodies, same_env)
-        bodies.orientation[1] = turned
+        orientation = bodies.orientation
+        orientation[1] = turned
+        bodies.orientation = orientation
         assert spinning(bodies, same_env), turned
 
 

@@ -185,11 +185,12 @@ class EdmdEngine:
         del x, cells  # the state is filled from the bodies, block by block
 
         def new_state() -> State:
+            spins = model.q is not None  # (else the bodies' spins and turns are not read)
             return allocate_state(
                 bodies.position,
                 bodies.velocity,
-                bodies.angular_velocity,
-                bodies.orientation,
+                bodies.angular_velocity if spins else None,
+                bodies.orientation if spins else None,
                 order,
                 model,
                 time,
@@ -550,15 +551,8 @@ def spinning(bodies: Bodies, env: Environment) -> bool:
     """Whether a body may ever spin or is turned: some pair law is not smooth (walls and
     planes are), or some body has a spin or an orientation other than the identity (compared
     bit for bit: a spin of -0.0 counts, so that frames give it back as it was)."""
-    if np.any(env.pairs.law != LAW_SMOOTH):
-        return True
-    if np.any(bodies.angular_velocity.view(np.int64) != 0):
-        return True
-    orientation = bodies.orientation
-    if env.dim == 3 and np.any(orientation[:, 0] != 1.0):  # (1.0 has one bit pattern)
-        return True
-    rest = orientation[:, 1:] if env.dim == 3 else orientation
-    return bool(np.any(rest.view(np.int64) != 0))
+    # (the table stores spins and orientations only when some are not +0.0 and the identity)
+    return bool(np.any(env.pairs.law != LAW_SMOOTH)) or not (bodies.still and bodies.unrotated)
 
 
 def _calendar(s: State) -> Calendar:

@@ -173,8 +173,8 @@ FILL_THREAD_BODIES = 1 << 16
 def allocate_state(
     position: NDArray[np.float64],
     velocity: NDArray[np.float64],
-    angular_velocity: NDArray[np.float64],
-    orientation: NDArray[np.float64],
+    angular_velocity: NDArray[np.float64] | None,
+    orientation: NDArray[np.float64] | None,
     order: NDArray[np.int64],
     model: Model,
     time: float,
@@ -189,11 +189,11 @@ def allocate_state(
     position, velocity : (N, d) float64
         Centres [m] and velocities [m/s] in the caller's numbering (positions are wrapped
         into a periodic box here).
-    angular_velocity : (N, 3) float64
-        Spins [rad/s] (2D: about z, column 2); not read when ``model.q`` is None (no body
+    angular_velocity : (N, 3) float64 or None
+        Spins [rad/s] (2D: about z, column 2); None when ``model.q`` is None (no body
         spins: the state has no spins or orientations).
-    orientation : (N, 1) or (N, 4) float64
-        Angles [rad] (2D) or unit quaternions (3D); not read when ``model.q`` is None.
+    orientation : (N, 1) or (N, 4) float64 or None
+        Angles [rad] (2D) or unit quaternions (3D); None when ``model.q`` is None.
     order : (N,) int64
         Engine row ``e`` holds the caller's body ``order[e]``.
     model : Model
@@ -260,6 +260,7 @@ def allocate_state(
             if acc is not None and gravity is not None:
                 acc[a:b] = np.where(model.mobile[a:b, None], gravity[None, :], 0.0)
             if w is not None and orient is not None and orient_t is not None:
+                assert angular_velocity is not None and orientation is not None
                 w[a:b] = angular_velocity[rows]
                 orient[a:b, : orientation.shape[1]] = orientation[rows]
                 orient_t[a:b] = time
