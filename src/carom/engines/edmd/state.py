@@ -79,7 +79,7 @@ class State(NamedTuple):
     shell : (N, 4) float64
         Each body's neighbour shell: centre [m] in columns 0-2 (z zero in 2D), the body's
         radius [m] in column 3.
-    nbr : (N, K) int32; nbr_count : (N,) int64
+    nbr : (N, K) int32; nbr_count : (N,) int32
         Neighbour lists.
     nbr_mark : (N,) int64; nbr_old : (K,) int32
         Scratch for rebuilding one list (:func:`carom.engines.edmd.neighbours.rebuild_shell`).
@@ -89,7 +89,7 @@ class State(NamedTuple):
     scan : (5, M) float64; scan_body : (M,) int32
         Scratch for one scan of the cell grid, M = 3^d B: the candidates' shell records,
         column by column, and the candidates (:mod:`carom.engines.edmd.neighbours`).
-    cell, slot : (N,) int64; cell_count : (C,) int64; cell_body : (C, B) int32
+    cell, slot : (N,) int32; cell_count : (C,) int32; cell_body : (C, B) int32
         The cell grid of shell centres: cell ``c`` holds bodies ``cell_body[c, :cell_count[c]]``;
         body ``i`` is in cell ``cell[i]`` at place ``slot[i]``.
     ev_time : (N,) float64
@@ -118,15 +118,15 @@ class State(NamedTuple):
     support: NDArray[np.int64] | None
     shell: NDArray[np.float64]
     nbr: NDArray[np.int32]
-    nbr_count: NDArray[np.int64]
+    nbr_count: NDArray[np.int32]
     nbr_mark: NDArray[np.int64]
     nbr_old: NDArray[np.int32]
     near: NDArray[np.float64]
     scan: NDArray[np.float64]
     scan_body: NDArray[np.int32]
-    cell: NDArray[np.int64]
-    slot: NDArray[np.int64]
-    cell_count: NDArray[np.int64]
+    cell: NDArray[np.int32]
+    slot: NDArray[np.int32]
+    cell_count: NDArray[np.int32]
     cell_body: NDArray[np.int32]
     ev_time: NDArray[np.float64]
     sched: NDArray[np.int64]
@@ -220,10 +220,10 @@ def allocate_state(
     constant: dict[str, tuple[NDArray[Any], float]] = {
         "last_coll": (np.empty(n), -np.inf),
         "nbr": (np.empty((n, capacity), np.int32), 0),
-        "nbr_count": (np.empty(n, np.int64), 0),
-        "cell": (np.empty(n, np.int64), 0),
-        "slot": (np.empty(n, np.int64), 0),
-        "cell_count": (np.empty(n_cells, np.int64), 0),
+        "nbr_count": (np.empty(n, np.int32), 0),
+        "cell": (np.empty(n, np.int32), 0),
+        "slot": (np.empty(n, np.int32), 0),
+        "cell_count": (np.empty(n_cells, np.int32), 0),
         "cell_body": (np.empty((n_cells, cell_capacity), np.int32), 0),
         "ev_time": (np.empty(n), np.inf),
         "sched": (np.empty((n, 4), np.int64), 0),
