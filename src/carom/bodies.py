@@ -10,7 +10,7 @@ convex pieces in the body's frame, centred on its centre of mass.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -44,6 +44,9 @@ PIECE_ARRAYS = ("owner", "radius", "corners", "vertices", "faces", "triangles")
 
 #: a body's pieces: rounded convex polygons in 2D, rounded convex solids in 3D
 Pieces = tuple[ConvexPiece, ...] | tuple[ConvexPiece3D, ...]
+
+#: every body's position, velocity, orientation and spin, as an engine samples them
+Motion = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
 
 
 def pieces_to_arrays(pieces: list[Pieces], dim: int = 2) -> dict[str, NDArray[Any]]:
@@ -172,12 +175,19 @@ class Bodies:
     pieces : list of N tuples of ConvexPiece (2D) or ConvexPiece3D (3D)
         Each body's pieces in its frame, centred on its centre of mass [m] (spheres of the
         event-driven engine: none).
+
+    While an engine runs the bodies, the table may lend it their motion (:meth:`lend`):
+    it then stores no positions, velocities, orientations or spins, and reads them from the
+    engine, at its clock; :meth:`set_state` stores them again. An engine holds its own copy
+    of the motion in its own layout, so the table's would only be a stale duplicate (48 MB
+    for 10^6 spheres in 3D, at the peak of the engine's build).
     """
 
     def __init__(self, dim: int) -> None:
         self.dim = dim
-        self.position = np.zeros((0, dim))
-        self.velocity = np.zeros((0, dim))
+        self._lender: Callable[[], Motion] | None = None  # an engine's sampler (lend)
+        self._position: FloatArray | None = np.zeros((0, dim))
+        self._velocity: FloatArray | None = np.zeros((0, dim))
         self._orientation: FloatArray | None = None  # None: every body unrotated
         self._angular_velocity: FloatArray | None = None  # None: no body spins
         self.shape = np.zeros(0, np.int8)
@@ -191,18 +201,66 @@ class Bodies:
 
     @property
     def n(self) -> int:
-        return int(self.position.shape[0])
+        return int(self.radius.shape[0])
+
+    def lend(self, sample: Callable[[], Motion]) -> None:
+        """Hand the bodies' motion to an engine whose ``sample()`` gives every body's position,
+        velocity, orientation and spin at its clock, in this table's numbering: the table
+        drops its own, and each read of one of them samples the engine (a new array) until
+        :meth:`set_state` stores them again."""
+        self._lender = sample
+        self._position = self._velocity = self._orientation = self._angular_velocity = None
+
+    @property
+    def lent(self) -> bool:
+        """True while an engine holds the bodies' motion (:meth:`lend`)."""
+        return self._lender is not None
+
+    def _stored(self) -> None:
+        """Refuse a change to the table while its motion is lent (the World takes it back
+        first: ``World._invalidate``)."""
+        if self._lender is not None:
+            raise RuntimeError("the bodies' motion is lent to an engine: set_state it first")
+
+    @property
+    def position(self) -> FloatArray:
+        """Every body's centre of mass [m], (N, d) (see the class docstring)."""
+        if self._lender is not None:
+            return self._lender()[0]
+        assert self._position is not None
+        return self._position
+
+    @position.setter
+    def position(self, value: FloatArray) -> None:
+        self._stored()
+        self._position = value
+
+    @property
+    def velocity(self) -> FloatArray:
+        """Every body's velocity [m/s], (N, d) (see the class docstring)."""
+        if self._lender is not None:
+            return self._lender()[1]
+        assert self._velocity is not None
+        return self._velocity
+
+    @velocity.setter
+    def velocity(self, value: FloatArray) -> None:
+        self._stored()
+        self._velocity = value
 
     @property
     def orientation(self) -> FloatArray:
         """Every body's orientation (see the class docstring); a new array of identities
         while :attr:`unrotated`, so write a whole new array rather than into this one."""
+        if self._lender is not None:
+            return self._lender()[2]
         if self._orientation is not None:
             return self._orientation
         return identity_orientations(self.n, self.dim)
 
     @orientation.setter
     def orientation(self, value: FloatArray) -> None:
+        self._stored()
         value = np.asarray(value, np.float64)
         self._orientation = None if all_unrotated(value, self.dim) else value
 
@@ -210,12 +268,15 @@ class Bodies:
     def angular_velocity(self) -> FloatArray:
         """Every body's spin [rad/s], (N, 3); a new array of zeros while :attr:`still`, so
         write a whole new array rather than into this one."""
+        if self._lender is not None:
+            return self._lender()[3]
         if self._angular_velocity is not None:
             return self._angular_velocity
         return np.zeros((self.n, 3))
 
     @angular_velocity.setter
     def angular_velocity(self, value: FloatArray) -> None:
+        self._stored()
         value = np.asarray(value, np.float64)
         self._angular_velocity = None if all_still(value) else value
 
@@ -234,11 +295,15 @@ class Bodies:
     @property
     def unrotated(self) -> bool:
         """True when every body's orientation is the identity (then none is stored)."""
+        if self._lender is not None:
+            return all_unrotated(self.orientation, self.dim)
         return self._orientation is None
 
     @property
     def still(self) -> bool:
         """True when no body spins, every spin +0.0 (then none is stored)."""
+        if self._lender is not None:
+            return all_still(self.angular_velocity)
         return self._angular_velocity is None
 
     @property
@@ -282,6 +347,7 @@ class Bodies:
         material: int,
     ) -> NDArray[np.int64]:
         """Add spheres (checked by the caller); return their indices."""
+        self._stored()
         start, n = self.n, position.shape[0]
         self.position = np.concatenate([self.position, position])
         self.velocity = np.concatenate([self.velocity, velocity])
@@ -325,6 +391,7 @@ class Bodies:
         angular velocities (n, 3) [rad/s] and the body-frame tensor ``inertia`` (3, 3);
         ``pieces`` about the centre of mass; infinite ``mass`` and ``inertia`` unless
         dynamic. Return their indices."""
+        self._stored()
         n = position.shape[0]
         start = self.n
         stored = self.inertia_tensor  # every tensor is stored from now on, the spheres' too
@@ -363,7 +430,9 @@ class Bodies:
         orientation: FloatArray,
         angular_velocity: FloatArray,
     ) -> None:
-        """Replace the pose and motion of every body (from an engine, at its clock)."""
+        """Replace the pose and motion of every body (from an engine, at its clock); a table
+        that lent them (:meth:`lend`) stores them again."""
+        self._lender = None
         self.position = position
         self.velocity = velocity
         self.orientation = orientation

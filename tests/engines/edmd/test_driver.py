@@ -393,3 +393,58 @@ def test_a_checkpoint_with_or_without_gravity_resumes_bit_for_bit(make, tmp_path
     np.testing.assert_array_equal(resumed.velocities, straight.velocities)
     np.testing.assert_array_equal(resumed.orientations, straight.orientations)
     np.testing.assert_array_equal(resumed.angular_velocities, straight.angular_velocities)
+
+
+def test_the_bodies_lend_their_motion_to_the_engine_while_it_runs() -> None:
+    # the table keeps no positions, velocities, orientations or spins while the engine runs
+    # (its own copy would be a stale duplicate: 48 MB at 10^6 spheres in 3D); a read samples
+    # the engine, at its clock, and a change to the world takes them back
+    world = _rough_gas()
+    world.run(until=world.time + 0.5)
+    assert world.bodies.lent
+    assert world.bodies._position is None
+    assert world.bodies._velocity is None
+    np.testing.assert_array_equal(world.bodies.position, world.positions)
+    np.testing.assert_array_equal(world.bodies.velocity, world.velocities)
+    np.testing.assert_array_equal(world.bodies.angular_velocity, world.angular_velocities)
+    moved = world.positions
+    world.add_spheres([[5.5, 5.5]], radius=0.05)  # the engine is dropped, the motion kept
+    assert not world.bodies.lent
+    np.testing.assert_array_equal(world.bodies.position[:36], moved)
+    world.build()
+    one = np.zeros((1, 2))
+    with pytest.raises(RuntimeError, match="lent"):  # (the World takes the motion back first)
+        world.bodies.append_spheres(one, one, np.zeros((1, 3)), np.ones(1), np.ones(1), 0.4, 0)
+
+
+@pytest.mark.parametrize("failure", ["overlap", "interrupt"])
+def test_a_failed_build_gives_the_motion_back_bit_for_bit(failure: str, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # the build lends the bodies' motion to the engine before it checks overlaps and before
+    # its kernels run: if it fails there, the table gets it back as it was (walls: positions
+    # are not wrapped)
+    world = gas(3, 3, 0.3, seed=2, boundary="walls")
+    world.add_spheres(
+        [[0.1, 0.1, 0.1]], [[0.5, -0.0, 1.0]], angular_velocities=[[0.0, 0.0, 3.0]], radius=0.01
+    )
+    if failure == "overlap":
+        world.add_spheres([[0.105, 0.1, 0.1]], radius=0.01)
+        error: type[BaseException] = carom.CaromError
+    else:
+        from carom.engines.edmd import loop
+
+        def interrupted(*args: object) -> int:
+            raise KeyboardInterrupt
+
+        monkeypatch.setattr(loop, "initialise", interrupted)
+        error = KeyboardInterrupt
+    before = [np.copy(a) for a in (world.bodies.position, world.bodies.velocity)]
+    spins = np.copy(world.bodies.angular_velocity)
+    with pytest.raises(error):
+        world.build()
+    assert world.engine is None
+    assert not world.bodies.lent
+    for kept, now in zip(before, (world.bodies.position, world.bodies.velocity), strict=True):
+        assert kept.tobytes() == now.tobytes()
+    assert spins.tobytes() == world.bodies.angular_velocity.tobytes()
+    n = world.n_bodies
+    np.testing.assert_array_equal(world.bodies.orientation, np.tile([1.0, 0, 0, 0], (n, 1)))

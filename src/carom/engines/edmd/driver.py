@@ -14,7 +14,8 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.bodies import Bodies
+from carom._memory import release_free_memory
+from carom.bodies import Bodies, identity_orientations
 from carom.engines.base import (
     COLLISION_DTYPE,
     KIND_PAIR,
@@ -32,7 +33,14 @@ from carom.engines.edmd.model import Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
 from carom.engines.edmd.ordering import spatial_order
 from carom.engines.edmd.settings import SHELL_DEFAULT, EdmdSettings
-from carom.engines.edmd.state import State, aligned_records, allocate_state, scratch
+from carom.engines.edmd.state import (
+    KIN_V,
+    Records,
+    State,
+    aligned_records,
+    allocate_state,
+    scratch,
+)
 from carom.errors import CaromError
 from carom.laws.kernels import LAW_SMOOTH
 from carom.materials import PairTable
@@ -183,37 +191,45 @@ class EdmdEngine:
         occupancy = np.bincount(np.ravel_multi_index(cells.T, model.ncell)).max()
         self.cell_capacity = max(self.cell_capacity, 8, 2 * int(occupancy))
         del x, cells  # the state is filled from the bodies, block by block
+        spins = model.q is not None  # (else the bodies' spins and turns are not read)
+        # the bodies' motion is lent to this engine once copied into the state: the table
+        # keeps none while the engine runs (Bodies.lend), and takes it back if the build fails
+        start: list[Records] = []
 
-        def new_state() -> State:
-            spins = model.q is not None  # (else the bodies' spins and turns are not read)
-            return allocate_state(
-                bodies.position,
-                bodies.velocity,
-                bodies.angular_velocity if spins else None,
-                bodies.orientation if spins else None,
+        def copied(records: Records) -> None:
+            start.append(records)
+            bodies.lend(self.sample)
+            release_free_memory()  # (the table's motion, freed in the heap: carom._memory)
+
+        try:
+            state = allocate_state(
+                bodies,
                 order,
                 model,
                 time,
                 self.cell_capacity,
                 self.capacity,
                 LOG_CAPACITY,
+                copied=copied,
             )
-
-        state = new_state()
-        # a cold cache: the build kernels compile in a helper process while the loop compiles
-        # here (engines/edmd/aside.py)
-        helper = aside.start(model.gravity is not None, model.q is not None)
-        aside.compile_beside(helper, model, state, order)
-        while True:
-            status = loop.initialise(model, state)
-            if status == codes.DONE:
-                break
-            self._grow(status)
-            state = new_state()
-        calendar_build(state.ev_time, _calendar(state))
-        self.order = order
-        self.model, self.state = model, state
-        self._check_overlaps()
+            # a cold cache: the build kernels compile in a helper process while the loop
+            # compiles here (engines/edmd/aside.py)
+            helper = aside.start(model.gravity is not None, spins)
+            aside.compile_beside(helper, model, state, order)
+            while True:
+                status = loop.initialise(model, state)
+                if status == codes.DONE:
+                    break
+                self._grow(status)
+                state = with_capacities(state, env.dim, self.capacity, self.cell_capacity)
+            calendar_build(state.ev_time, _calendar(state))
+            self.order = order
+            self.model, self.state = model, state
+            self._check_overlaps()
+        except BaseException:
+            if start:
+                bodies.set_state(*motion_at_start(start[0], order, env.dim))
+            raise
 
     # -- building ---------------------------------------------------------------------------
 
@@ -379,11 +395,7 @@ class EdmdEngine:
         """
         model, state = self.model, self.state
         while True:
-            state = state._replace(
-                nbr=np.zeros((state.kin.shape[0], capacity), np.int32),
-                cell_body=np.zeros((state.cell_count.shape[0], cell_capacity), np.int32),
-                **scratch(model.box.shape[0], capacity, cell_capacity),
-            )
+            state = with_capacities(state, model.dim, capacity, cell_capacity)
             status = build_all(
                 state.shell,
                 model.mobile,
@@ -536,7 +548,7 @@ class EdmdEngine:
             capacity=capacity,
             cell_capacity=cell_capacity,
         )
-        bodies.set_state(*engine.sample())  # the table as of the checkpoint's clock
+        bodies.lend(engine.sample)  # the table's motion: the engine's, at its clock
         return engine
 
 
@@ -553,6 +565,37 @@ def spinning(bodies: Bodies, env: Environment) -> bool:
     bit for bit: a spin of -0.0 counts, so that frames give it back as it was)."""
     # (the table stores spins and orientations only when some are not +0.0 and the identity)
     return bool(np.any(env.pairs.law != LAW_SMOOTH)) or not (bodies.still and bodies.unrotated)
+
+
+def with_capacities(state: State, dim: int, capacity: int, cell_capacity: int) -> State:
+    """``state`` of bodies in ``dim`` dimensions with empty neighbour lists of ``capacity``
+    and cell rows of ``cell_capacity`` (and scratch to match), to be filled again
+    (``build_all``)."""
+    return state._replace(
+        nbr=np.zeros((state.kin.shape[0], capacity), np.int32),
+        cell_body=np.zeros((state.cell_count.shape[0], cell_capacity), np.int32),
+        **scratch(dim, capacity, cell_capacity),
+    )
+
+
+def motion_at_start(
+    records: Records, order: NDArray[np.int64], dim: int
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Every body's position, velocity, orientation and spin in the caller's numbering, from
+    a new state's ``records`` (its ``kin``, ``w`` and ``orient``, in engine ``order``) before
+    any event: what a failed build gives back to the bodies that lent them (positions
+    wrapped into a periodic box, as the state holds them)."""
+    kin, w_rows, orient_rows = records
+    n = kin.shape[0]
+    x, v = np.empty((n, dim)), np.empty((n, dim))
+    x[order] = kin[:, :dim]
+    v[order] = kin[:, KIN_V : KIN_V + dim]
+    if w_rows is None or orient_rows is None:
+        return x, v, identity_orientations(n, dim), np.zeros((n, 3))
+    orient, w = np.empty((n, 4 if dim == 3 else 1)), np.empty((n, 3))
+    orient[order] = orient_rows[:, : orient.shape[1]]
+    w[order] = w_rows
+    return x, v, orient, w
 
 
 def _calendar(s: State) -> Calendar:

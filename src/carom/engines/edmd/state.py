@@ -7,6 +7,7 @@ arrays resumes a run bit for bit.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import nullcontext
 from typing import Any, NamedTuple
@@ -14,6 +15,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from carom.bodies import Bodies
 from carom.engines.edmd.model import Model
 from carom.engines.edmd.neighbours import SCAN_ROWS, scan_size
 
@@ -26,6 +28,7 @@ __all__ = [
     "SCHED_KIND",
     "SCHED_OTHER",
     "SCHED_STAMP",
+    "Records",
     "State",
     "aligned_records",
     "allocate_state",
@@ -163,6 +166,9 @@ def aligned_records(n: int, values: NDArray[np.float64] | None = None) -> NDArra
     return kin
 
 
+#: a new state's kinematic records, spins and orientations (``State.kin``, ``w``, ``orient``)
+Records = tuple[NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.float64] | None]
+
 #: Rows filled at a time when a state is built from the bodies: each block's records are
 #: written while in cache, and no array of all the bodies is made on the way
 FILL_ROWS = 8192
@@ -171,29 +177,23 @@ FILL_THREAD_BODIES = 1 << 16
 
 
 def allocate_state(
-    position: NDArray[np.float64],
-    velocity: NDArray[np.float64],
-    angular_velocity: NDArray[np.float64] | None,
-    orientation: NDArray[np.float64] | None,
+    bodies: Bodies,
     order: NDArray[np.int64],
     model: Model,
     time: float,
     cell_capacity: int,
     capacity: int,
     log_capacity: int,
+    copied: Callable[[Records], None] | None = None,
 ) -> State:
     """A fresh state at time ``time`` (schedule still empty: call ``edmd.initialise``).
 
     Parameters
     ----------
-    position, velocity : (N, d) float64
-        Centres [m] and velocities [m/s] in the caller's numbering (positions are wrapped
-        into a periodic box here).
-    angular_velocity : (N, 3) float64 or None
-        Spins [rad/s] (2D: about z, column 2); None when ``model.q`` is None (no body
-        spins: the state has no spins or orientations).
-    orientation : (N, 1) or (N, 4) float64 or None
-        Angles [rad] (2D) or unit quaternions (3D); None when ``model.q`` is None.
+    bodies : Bodies
+        Their positions and velocities (positions are wrapped into a periodic box here), and
+        their spins and orientations unless ``model.q`` is None (no body spins: the state
+        has none), in the caller's numbering.
     order : (N,) int64
         Engine row ``e`` holds the caller's body ``order[e]``.
     model : Model
@@ -202,7 +202,17 @@ def allocate_state(
         The clock of every body [s].
     cell_capacity, capacity, log_capacity : int
         Bodies per cell row, neighbours per list, collisions the log buffer holds.
+    copied : callable, optional
+        Called with the state's ``kin``, ``w`` and ``orient`` once the bodies' motion is
+        copied into them, before the neighbour lists' memory is first written: the caller
+        may drop the bodies' own copy of the motion then (``Bodies.lend``: this function
+        holds no reference to it by then), so that the two are never in memory together
+        with the lists, and get it back from these if the build fails.
     """
+    position, velocity = bodies.position, bodies.velocity
+    spinning = model.q is not None  # (as Model.q: None when no body spins)
+    angular_velocity = bodies.angular_velocity if spinning else None
+    orientation = bodies.orientation if spinning else None
     n, dim = position.shape
     box = model.box
     n_cells = int(np.prod(model.ncell))
@@ -210,16 +220,15 @@ def allocate_state(
     shell = np.zeros((n, 4))
     gravity = model.gravity
     acc = np.empty((n, dim)) if gravity is not None else None  # (as Model.gravity: a type)
-    spinning = model.q is not None  # (as Model.q: None when no body spins)
     w = np.empty((n, 3)) if spinning else None
     orient = np.zeros((n, 4)) if spinning else None
     orient_t = np.empty(n) if spinning else None
+    nbr = np.empty((n, capacity), np.int32)  # zeroed after `copied` (below)
     # the arrays that start at one value each and are written through at the build, filled
     # beside the records (below); nbr_mark, cur_heap and cur_where stay untouched zeros until
     # used (a rebuild's marks; the heap holds a bucket's few events)
     constant: dict[str, tuple[NDArray[Any], float]] = {
         "last_coll": (np.empty(n), -np.inf),
-        "nbr": (np.empty((n, capacity), np.int32), 0),
         "nbr_count": (np.empty(n, np.int32), 0),
         "cell": (np.empty(n, np.int32), 0),
         "slot": (np.empty(n, np.int32), 0),
@@ -244,6 +253,7 @@ def allocate_state(
     # each new page can cost microseconds), and NumPy's fills run without the GIL.
     with ThreadPoolExecutor(1) if n >= FILL_THREAD_BODIES else nullcontext() as pool:
         filling = pool.submit(fill_constant) if pool is not None else None
+        x = position[:0]  # (each block's positions, below)
         for a in range(0, n, FILL_ROWS):
             rows = order[a : a + FILL_ROWS]
             b = a + rows.shape[0]
@@ -264,6 +274,10 @@ def allocate_state(
                 w[a:b] = angular_velocity[rows]
                 orient[a:b, : orientation.shape[1]] = orientation[rows]
                 orient_t[a:b] = time
+        del position, velocity, angular_velocity, orientation, x  # (copied: see `copied`)
+        if copied is not None:
+            copied((kin, w, orient))
+        nbr.fill(0)  # the largest array, here while the other thread fills the rest
         if filling is not None:
             filling.result()  # (its error, if any, raised here)
         else:
@@ -276,6 +290,7 @@ def allocate_state(
         orient=orient,
         orient_t=orient_t,
         shell=shell,
+        nbr=nbr,
         **{name: array for name, (array, _) in constant.items()},
         nbr_mark=np.zeros(n, np.int64),
         cur_heap=np.zeros(n, np.int32),
