@@ -14,7 +14,8 @@ import carom
 
 ROOT = Path(carom.__file__).parent
 LAYERS = [
-    {"errors", "limits", "_inputs", "_text", "jit"},  # the base: they import only each other
+    # the base: they import only each other
+    {"errors", "limits", "_inputs", "_text", "_memory", "jit"},
     {"geometry", "laws"},  # world-free kernels and closed forms
     {"shapes", "shapes3d", "meshes", "materials", "bodies"},  # the engine-neutral core
     {"engines"},
