@@ -5,8 +5,9 @@ NumPy takes an array's memory from the C library's allocator. With glibc, arrays
 of its own rises to the largest freed, up to 32 MB), and a freed block in the middle of the
 heap stays with the process: its pages count in the resident size until something reuses
 them. Where a large build drops arrays before it allocates larger ones, which the heap cannot
-serve, :func:`release_free_memory` hands those pages back (glibc's ``malloc_trim``; measured:
-57 MB at 10^6 spheres, ``EdmdEngine``'s build). Elsewhere it does nothing.
+serve, :func:`release_free_memory` hands those pages back (glibc's ``malloc_trim``; measured
+in ``EdmdEngine``'s build of 10^6 spheres in 3D: 57 MB of free heap pages handed back, the
+peak 610 -> 592 MB). Elsewhere it does nothing.
 """
 
 from __future__ import annotations

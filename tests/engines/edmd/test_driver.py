@@ -448,3 +448,19 @@ def test_a_failed_build_gives_the_motion_back_bit_for_bit(failure: str, monkeypa
     assert spins.tobytes() == world.bodies.angular_velocity.tobytes()
     n = world.n_bodies
     np.testing.assert_array_equal(world.bodies.orientation, np.tile([1.0, 0, 0, 0], (n, 1)))
+
+
+def test_lists_that_overflow_at_the_build_grow_without_changing_a_bit() -> None:
+    # 18 neighbours a sphere on the lattice: lists of 4 overflow while the build links them,
+    # and grow (4 -> 8 -> 16 -> 32) in the state already filled; the run is the same as from
+    # lists that fit at once
+    world = gas(3, 4, 0.3, seed=3, e=0.9)
+    env, settings = world._environment(), world.settings
+    tight = EdmdEngine(world.bodies, env, settings, 0.0, capacity=4)
+    assert tight.capacity == 32
+    roomy = EdmdEngine(world.bodies, env, settings, 0.0)  # (the motion: lent, sampled)
+    for engine in (tight, roomy):
+        engine.advance(5.0, 1 << 40, None)
+    for got, want in zip(tight.sample(), roomy.sample(), strict=True):
+        assert got.tobytes() == want.tobytes()
+    assert tight.counters().collisions == roomy.counters().collisions > 0
