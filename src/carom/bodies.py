@@ -254,9 +254,7 @@ class Bodies:
         while :attr:`unrotated`, so write a whole new array rather than into this one."""
         if self._lender is not None:
             return self._lender()[2]
-        if self._orientation is not None:
-            return self._orientation
-        return identity_orientations(self.n, self.dim)
+        return self._orientations(self.n)
 
     @orientation.setter
     def orientation(self, value: FloatArray) -> None:
@@ -270,9 +268,7 @@ class Bodies:
         write a whole new array rather than into this one."""
         if self._lender is not None:
             return self._lender()[3]
-        if self._angular_velocity is not None:
-            return self._angular_velocity
-        return np.zeros((self.n, 3))
+        return self._spins(self.n)
 
     @angular_velocity.setter
     def angular_velocity(self, value: FloatArray) -> None:
@@ -353,7 +349,7 @@ class Bodies:
         self.velocity = np.concatenate([self.velocity, velocity])
         if self._orientation is not None:  # (spheres are added unrotated)
             self.orientation = np.concatenate(
-                [self._orientation, identity_orientations(n, self.dim)]
+                [self._orientations(start), identity_orientations(n, self.dim)]
             )
         if self._angular_velocity is not None or not all_still(angular_velocity):
             self.angular_velocity = np.concatenate([self._spins(start), angular_velocity])

@@ -185,7 +185,7 @@ class EdmdEngine:
             x -= env.box * np.floor(x / env.box)
         # the grid only orders the bodies; the model below sets the shells (the same sizes)
         _, ncell = self._shell_grid(bodies.radius, bodies.mobile)
-        order = spatial_order(x, env.box / ncell, ncell)
+        order = self.order = spatial_order(x, env.box / ncell, ncell)
         model = self._build_model(order, spinning(bodies, env))
         cells = np.clip(np.floor(x / model.cell_size).astype(np.int64), 0, model.ncell - 1)
         occupancy = np.bincount(np.ravel_multi_index(cells.T, model.ncell)).max()
@@ -223,12 +223,11 @@ class EdmdEngine:
                 self._grow(status)
                 state = with_capacities(state, env.dim, self.capacity, self.cell_capacity)
             calendar_build(state.ev_time, _calendar(state))
-            self.order = order
             self.model, self.state = model, state
             self._check_overlaps()
         except BaseException:
             if start:
-                bodies.set_state(*motion_at_start(start[0], order, env.dim))
+                bodies.set_state(*self._motion_at_start(start[0]))
             raise
 
     # -- building ---------------------------------------------------------------------------
@@ -462,6 +461,20 @@ class EdmdEngine:
         out[self.order] = rows
         return out
 
+    def _motion_at_start(
+        self, records: Records
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Every body's position, velocity, orientation and spin in the caller's numbering,
+        from a new state's ``records`` (its ``kin``, ``w`` and ``orient``) before any event:
+        what a failed build gives back to the bodies that lent them (positions wrapped into
+        a periodic box, as the state holds them)."""
+        kin, w, orient = records
+        n, dim = kin.shape[0], self.env.dim
+        x, v = self._to_user(kin[:, :dim]), self._to_user(kin[:, KIN_V : KIN_V + dim])
+        if w is None or orient is None:
+            return x, v, identity_orientations(n, dim), np.zeros((n, 3))
+        return x, v, self._to_user(orient[:, : 4 if dim == 3 else 1]), self._to_user(w)
+
     def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Positions (N, d), velocities (N, d), orientations ((N, 1) or (N, 4)) and angular
         velocities (N, 3) at the engine's clock, in the caller's numbering."""
@@ -576,26 +589,6 @@ def with_capacities(state: State, dim: int, capacity: int, cell_capacity: int) -
         cell_body=np.zeros((state.cell_count.shape[0], cell_capacity), np.int32),
         **scratch(dim, capacity, cell_capacity),
     )
-
-
-def motion_at_start(
-    records: Records, order: NDArray[np.int64], dim: int
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Every body's position, velocity, orientation and spin in the caller's numbering, from
-    a new state's ``records`` (its ``kin``, ``w`` and ``orient``, in engine ``order``) before
-    any event: what a failed build gives back to the bodies that lent them (positions
-    wrapped into a periodic box, as the state holds them)."""
-    kin, w_rows, orient_rows = records
-    n = kin.shape[0]
-    x, v = np.empty((n, dim)), np.empty((n, dim))
-    x[order] = kin[:, :dim]
-    v[order] = kin[:, KIN_V : KIN_V + dim]
-    if w_rows is None or orient_rows is None:
-        return x, v, identity_orientations(n, dim), np.zeros((n, 3))
-    orient, w = np.empty((n, 4 if dim == 3 else 1)), np.empty((n, 3))
-    orient[order] = orient_rows[:, : orient.shape[1]]
-    w[order] = w_rows
-    return x, v, orient, w
 
 
 def _calendar(s: State) -> Calendar:
