@@ -32,6 +32,7 @@ from carom.engines.edmd.handle import new_handle, sample_now
 from carom.engines.edmd.model import Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
 from carom.engines.edmd.ordering import spatial_order
+from carom.engines.edmd.renumber import renumber
 from carom.engines.edmd.settings import SHELL_DEFAULT, EdmdSettings
 from carom.engines.edmd.state import (
     KIN_V,
@@ -48,6 +49,13 @@ from carom.materials import PairTable
 __all__ = ["OVERLAP_TOLERANCE", "EdmdEngine", "Environment", "grid_cells"]
 
 FloatArray = NDArray[np.float64]
+
+#: Engines of at least this many bodies renumber them along the Morton curve as they run
+#: (:mod:`carom.engines.edmd.renumber`); below it all of a gas's arrays stay in the caches
+#: (a random numbering of 10^4 spheres cost 0-2% more a collision, of 32768 6-7%)
+RENUMBER_MIN_BODIES = 1 << 14
+#: Events a body, on average, between two renumberings
+RENUMBER_EVENTS_PER_BODY = 64
 LOG_CAPACITY = 1 << 16
 #: Overlaps and box excursions smaller than this fraction of the radii are round-off, not errors
 OVERLAP_TOLERANCE = 1e-12
@@ -172,6 +180,9 @@ class EdmdEngine:
         self.bodies = bodies
         self.env = env
         self.settings = settings
+        n = bodies.n
+        self.renumber_every = RENUMBER_EVENTS_PER_BODY * n if n >= RENUMBER_MIN_BODIES else 0
+        self._renumbered_at = -1
         self.capacity = capacity if capacity is not None else (16 if env.dim == 2 else 32)
         self.cell_capacity = cell_capacity
         if state is not None:
@@ -362,10 +373,18 @@ class EdmdEngine:
         frames = out if out is not None else _NO_FRAMES
         done = np.zeros(1, dtype=np.int64)
         remaining = max_events
+        every = self.renumber_every
         while True:
             counts = self.state.counts
             before = int(counts[codes.C_EVENTS])
             block = min(remaining, STOP_CHECK_EVENTS)
+            if every > 0:
+                # renumbered after every `every`-th event, however the run is cut into calls
+                # and blocks (a permutation: the same event order up to ties in time)
+                if before > 0 and before % every == 0 and before != self._renumbered_at:
+                    self._renumbered_at = before
+                    renumber(self.model, self.state, self.order)
+                block = min(block, every - before % every)
             status = loop.run_frames(
                 self.handle, times, block, sink is not None, out is not None, done, *frames
             )

@@ -6,9 +6,12 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["spatial_order"]
+__all__ = ["morton_keys", "spatial_order"]
 
 FloatArray = NDArray[np.float64]
+
+#: Bodies whose Morton keys are computed at a time
+KEY_ROWS = 1 << 16
 
 
 def _spread_bits(c: NDArray[np.uint64], dim: int) -> NDArray[np.uint64]:
@@ -36,18 +39,29 @@ def _spread_bits(c: NDArray[np.uint64], dim: int) -> NDArray[np.uint64]:
     return c
 
 
+def morton_keys(cells: NDArray[np.integer]) -> NDArray[np.uint64]:
+    """The Morton (Z-order) key of each cell of integer coordinates ``cells`` (M, d)."""
+    m, dim = cells.shape
+    key = np.zeros(m, np.uint64)
+    for a in range(0, m, KEY_ROWS):  # (a block at a time: the temporaries stay small)
+        for k in range(dim):
+            spread = _spread_bits(cells[a : a + KEY_ROWS, k].astype(np.uint64), dim)
+            key[a : a + KEY_ROWS] |= spread << np.uint64(k)
+    return key
+
+
 def spatial_order(
     x: FloatArray, cell_size: FloatArray, ncell: NDArray[np.int64]
 ) -> NDArray[np.int64]:
     """Bodies sorted along a Morton (Z-order) curve through the cells of the grid.
 
     Neighbours in space get nearby indices, so the engine's random accesses to neighbours
-    mostly hit cache lines it has just used.
+    mostly hit cache lines it has just used. Bodies in one cell keep their order.
     """
-    dim = x.shape[1]
-    cells = np.clip(np.floor(x / cell_size).astype(np.int64), 0, ncell - 1).astype(np.uint64)
-    key = np.zeros(x.shape[0], np.uint64)
-    for k in range(dim):
-        key |= _spread_bits(cells[:, k], dim) << np.uint64(k)
-    order: NDArray[np.int64] = np.argsort(key, kind="stable").astype(np.int64)
+    n = x.shape[0]
+    key = np.empty(n, np.uint64)
+    for a in range(0, n, KEY_ROWS):
+        cells = np.clip(np.floor(x[a : a + KEY_ROWS] / cell_size).astype(np.int64), 0, ncell - 1)
+        key[a : a + KEY_ROWS] = morton_keys(cells)
+    order: NDArray[np.int64] = np.argsort(key, kind="stable").astype(np.int64, copy=False)
     return order
