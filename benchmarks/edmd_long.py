@@ -21,6 +21,7 @@ import json
 import statistics
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -61,6 +62,74 @@ print(json.dumps(dict(
 """
 
 
+DRIFT = """
+import sys
+sys.path.insert(0, {here!r})
+from edmd import lattice_gas
+import carom.engines.edmd.driver as driver
+driver.RENUMBER_MIN_BODIES = 1 << 62  # the build's numbering kept while the bodies drift
+world = lattice_gas({dim}, {n}, {packing})
+world.run(until=0.3, log=False)
+start = world.engine.state.counts[0]
+world.run(until=world.time + 0.2, log=False)
+rate = (world.engine.state.counts[0] - start) / 0.2
+world.run(until=world.time + {events} * world.n_bodies / rate, log=False)
+world.save({path!r})
+print(rate, world.n_bodies)
+"""
+
+PROBE = """
+import json, sys, time
+sys.path.insert(0, {here!r})
+from edmd import lattice_gas
+import carom
+import carom.engines.edmd.driver as driver
+from carom.engines.edmd.renumber import renumber
+driver.RENUMBER_MIN_BODIES = 1 << 62  # no renumbering while timed
+warm = lattice_gas({dim}, 64, {packing})
+warm.run(until=0.1, log=False)
+world = carom.World.load({path!r})
+world.prepare()
+engine = world.engine
+if {arm!r} == "renumbered":
+    renumber(engine.model, engine.state, engine.order)
+before = world.stats.collisions
+began = time.perf_counter()
+world.run(until=world.time + {span}, log=False)
+seconds = time.perf_counter() - began
+print(json.dumps(dict(us=seconds / (world.stats.collisions - before) * 1e6,
+                      collisions=world.stats.collisions - before)))
+"""
+
+
+def drifted(dim: int, n: int, events: float, probe: float, rounds: int, path: Path) -> str:
+    """Run a gas ``events`` events a body with the build's numbering, save it, then time
+    ``probe`` events a body from the checkpoint with that numbering (``fixed``) and with the
+    bodies renumbered first (``renumbered``), arms alternating: a table row."""
+    packing = 0.3 if dim == 3 else 0.5
+    here = str(Path(__file__).resolve().parent)
+    code = DRIFT.format(here=here, dim=dim, n=n, packing=packing, events=events, path=str(path))
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True, timeout=7200)  # fmt: skip
+    rate_text, bodies = done.stdout.strip().splitlines()[-1].split()
+    n, rate = int(bodies), float(rate_text)
+    span = probe * n / rate
+    times: dict[str, list[float]] = {arm: [] for arm in ARMS}
+    for _ in range(rounds):
+        for arm in ARMS:
+            code = PROBE.format(here=here, dim=dim, packing=packing, path=str(path), arm=arm,
+                                span=span)  # fmt: skip
+            out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                 check=True, timeout=7200)  # fmt: skip
+            times[arm].append(json.loads(out.stdout.strip().splitlines()[-1])["us"])
+    fixed, again = statistics.median(times["fixed"]), statistics.median(times["renumbered"])
+    return (
+        f"| {dim} | {n:,} | {events:.0f} | {probe:.0f} | "
+        f"{', '.join(f'{t:.2f}' for t in times['fixed'])} | "
+        f"{', '.join(f'{t:.2f}' for t in times['renumbered'])} | {fixed / again:.3f} |"
+    )
+
+
 def measure(arm: str, dim: int, n: int, events: float, windows: int) -> dict[str, object]:
     packing = 0.3 if dim == 3 else 0.5
     code = CHILD.format(
@@ -87,7 +156,37 @@ def main() -> None:
     parser.add_argument("--windows", type=int, default=4)
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--no-record", action="store_true", help="do not append to RESULTS.md")
+    parser.add_argument(
+        "--drifted",
+        type=float,
+        metavar="PROBE",
+        help="instead: drift --events a body, then time PROBE events a body from there, "
+        "with the drifted numbering and renumbered, arms alternating --rounds times",
+    )
     args = parser.parse_args()
+    if args.drifted is not None:
+        rows = [
+            "| dim | N | events a body drifted | events a body timed | fixed [µs/coll] | "
+            "renumbered [µs/coll] | fixed / renumbered (medians) |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        with tempfile.TemporaryDirectory() as tmp:
+            for dim in args.dims:
+                for n in args.sizes:
+                    row = drifted(dim, n, args.events, args.drifted, args.rounds,
+                                  Path(tmp) / "drifted.npz")  # fmt: skip
+                    print(row, flush=True)
+                    rows.append(row)
+        if not args.no_record:
+            record(
+                "Long runs: a drifted numbering against the same bodies renumbered",
+                "\n".join(rows) + "\n",
+                (
+                    "each timing a fresh process loading the same checkpoint; arms alternating; "
+                    "no renumbering while timed",
+                ),
+            )
+        return
 
     measure("renumbered", args.dims[0], 1_000, 1.0, 1)  # compiles the kernels if need be
     lines = [
