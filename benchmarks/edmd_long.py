@@ -102,6 +102,14 @@ print(json.dumps(dict(us=seconds / (world.stats.collisions - before) * 1e6,
 """
 
 
+def _child(code: str) -> str:
+    """The last line a fresh Python process running ``code`` prints."""
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=7200
+    )
+    return done.stdout.strip().splitlines()[-1]
+
+
 def drifted(dim: int, n: int, events: float, probe: float, rounds: int, path: Path) -> str:
     """Run a gas ``events`` events a body with the build's numbering, save it, then time
     ``probe`` events a body from the checkpoint with that numbering (``fixed``) and with the
@@ -109,9 +117,7 @@ def drifted(dim: int, n: int, events: float, probe: float, rounds: int, path: Pa
     packing = 0.3 if dim == 3 else 0.5
     here = str(Path(__file__).resolve().parent)
     code = DRIFT.format(here=here, dim=dim, n=n, packing=packing, events=events, path=str(path))
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          check=True, timeout=7200)  # fmt: skip
-    rate_text, bodies = done.stdout.strip().splitlines()[-1].split()
+    rate_text, bodies = _child(code).split()
     n, rate = int(bodies), float(rate_text)
     span = probe * n / rate
     times: dict[str, list[float]] = {arm: [] for arm in ARMS}
@@ -119,9 +125,7 @@ def drifted(dim: int, n: int, events: float, probe: float, rounds: int, path: Pa
         for arm in ARMS:
             code = PROBE.format(here=here, dim=dim, packing=packing, path=str(path), arm=arm,
                                 span=span)  # fmt: skip
-            out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                                 check=True, timeout=7200)  # fmt: skip
-            times[arm].append(json.loads(out.stdout.strip().splitlines()[-1])["us"])
+            times[arm].append(json.loads(_child(code))["us"])
     fixed, again = statistics.median(times["fixed"]), statistics.median(times["renumbered"])
     return (
         f"| {dim} | {n:,} | {events:.0f} | {probe:.0f} | "
@@ -141,10 +145,7 @@ def measure(arm: str, dim: int, n: int, events: float, windows: int) -> dict[str
         events=events,
         windows=windows,
     )
-    done = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=7200
-    )
-    result: dict[str, object] = json.loads(done.stdout.strip().splitlines()[-1])
+    result: dict[str, object] = json.loads(_child(code))
     return result
 
 

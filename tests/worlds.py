@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 import carom
 from carom.scene.layouts import lattice_gas
 
@@ -19,3 +21,16 @@ def gas(
         boundary=boundary,  # type: ignore[arg-type]
         restitution=e,
     )
+
+
+def rough_disks(side: int) -> carom.World:
+    """A walled 2D gas of ``side``^2 rough disks with spins, under gravity: its spins, turns
+    and supports exercise every array of the event-driven engine's state."""
+    world = carom.World(dim=2, box=(float(side), float(side)), gravity=(0.0, -1.0))
+    rough = world.add_material(carom.Material(restitution=0.9, beta=0.4))
+    rng = np.random.default_rng(4)
+    grid = (np.arange(side) + 0.5) * 1.0
+    x = np.stack(np.meshgrid(grid, grid, indexing="ij"), -1).reshape(-1, 2)
+    v, spins = rng.normal(size=(side * side, 2)), rng.normal(size=side * side)
+    world.add_spheres(x, v, angular_velocities=spins, radius=0.3, material=rough)
+    return world

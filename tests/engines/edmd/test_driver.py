@@ -15,7 +15,7 @@ from carom.engines.edmd.driver import EdmdEngine
 from carom.scene import find_scene, load_scene
 from carom.scene.layouts import lattice_gas
 from tests.processes import fresh_python
-from tests.worlds import gas
+from tests.worlds import gas, rough_disks
 
 EPS = float(np.finfo(np.float64).eps)
 
@@ -312,14 +312,7 @@ def test_without_gravity_the_state_holds_no_accelerations_or_supports() -> None:
 
 def _rough_gas() -> carom.World:
     """A walled 2D gas of rough disks with spins and a falling stone among them."""
-    world = carom.World(dim=2, box=(6.0, 6.0), gravity=(0.0, -1.0))
-    rough = world.add_material(carom.Material(restitution=0.9, beta=0.4))
-    rng = np.random.default_rng(4)
-    grid = (np.arange(6) + 0.5) * 1.0
-    x = np.stack(np.meshgrid(grid, grid, indexing="ij"), -1).reshape(-1, 2)
-    v, spins = rng.normal(size=(36, 2)), rng.normal(size=36)
-    world.add_spheres(x, v, angular_velocities=spins, radius=0.3, material=rough)
-    return world
+    return rough_disks(6)
 
 
 def _spin_of_minus_zero() -> carom.World:

@@ -20,33 +20,20 @@ from carom.engines.edmd.ordering import morton_keys
 from carom.engines.edmd.renumber import renumber
 from carom.engines.edmd.state import SCHED_KIND, SCHED_OTHER
 from carom.scene import find_scene, load_scene
-from tests.worlds import gas
+from tests.worlds import gas, rough_disks
 
 EPS = float(np.finfo(np.float64).eps)
-
-
-def _rough_fall() -> carom.World:
-    """A walled 2D gas of rough disks with spins, under gravity (supports, spins, turns)."""
-    world = carom.World(dim=2, box=(7.0, 7.0), gravity=(0.0, -1.0))
-    rough = world.add_material(carom.Material(restitution=0.9, beta=0.4))
-    rng = np.random.default_rng(4)
-    grid = (np.arange(7) + 0.5) * 1.0
-    x = np.stack(np.meshgrid(grid, grid, indexing="ij"), -1).reshape(-1, 2)
-    world.add_spheres(x, rng.normal(size=(49, 2)), angular_velocities=rng.normal(size=49),
-                      radius=0.3, material=rough)  # fmt: skip
-    return world
 
 
 WORLDS: dict[str, Callable[[], carom.World]] = {
     "3D periodic gas": lambda: gas(3, 6, 0.3, seed=5, e=0.95),
     "2D walled gas": lambda: gas(2, 12, 0.5, seed=2, boundary="walls", e=0.9),
-    "rough disks falling": _rough_fall,
+    "rough disks falling": lambda: rough_disks(7),
     "galton board (static pegs)": lambda: load_scene(find_scene("galton-board")).build(),
 }
 #: the galton board's balls collide about 10^5 times a second of its time: with the JIT only
 NAMES = [
-    pytest.param(name, marks=[pytest.mark.needs_jit] if "galton" in name else [])
-    for name in WORLDS
+    pytest.param(name, marks=[pytest.mark.needs_jit] if "galton" in name else []) for name in WORLDS
 ]
 
 
