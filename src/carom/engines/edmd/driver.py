@@ -32,7 +32,7 @@ from carom.engines.edmd.handle import new_handle, sample_now
 from carom.engines.edmd.model import Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
 from carom.engines.edmd.ordering import spatial_order
-from carom.engines.edmd.renumber import renumber
+from carom.engines.edmd.renumber import cell_ranks, renumber
 from carom.engines.edmd.settings import SHELL_DEFAULT, EdmdSettings
 from carom.engines.edmd.state import (
     KIN_V,
@@ -183,6 +183,7 @@ class EdmdEngine:
         n = bodies.n
         self.renumber_every = RENUMBER_EVENTS_PER_BODY * n if n >= RENUMBER_MIN_BODIES else 0
         self._renumbered_at = -1
+        self._cell_rank: NDArray[np.int32] | None = None  # (renumber's, made when first used)
         self.capacity = capacity if capacity is not None else (16 if env.dim == 2 else 32)
         self.cell_capacity = cell_capacity
         if state is not None:
@@ -383,7 +384,9 @@ class EdmdEngine:
                 # and blocks (a permutation: the same event order up to ties in time)
                 if before > 0 and before % every == 0 and before != self._renumbered_at:
                     self._renumbered_at = before
-                    renumber(self.model, self.state, self.order)
+                    if self._cell_rank is None:
+                        self._cell_rank = cell_ranks(self.model.ncell)
+                    renumber(self.model, self.state, self.order, self._cell_rank)
                 block = min(block, every - before % every)
             status = loop.run_frames(
                 self.handle, times, block, sink is not None, out is not None, done, *frames

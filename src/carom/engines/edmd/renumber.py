@@ -32,7 +32,7 @@ from carom.engines.edmd.model import Model
 from carom.engines.edmd.ordering import KEY_ROWS, morton_keys
 from carom.engines.edmd.state import SCHED_KIND, SCHED_OTHER, State
 
-__all__ = ["renumber"]
+__all__ = ["cell_ranks", "renumber"]
 
 #: Arrays of rows of 4-byte words that one renumbering moves at most (all of a state's)
 MOVED_ARRAYS = 28
@@ -128,9 +128,11 @@ def _move(arrays: tuple[NDArray[Any] | None, ...], number: NDArray[np.int32]) ->
     _move_rows(tuple(views), number, np.zeros(n, np.bool_))
 
 
-def _cell_ranks(ncell: NDArray[np.int64]) -> NDArray[np.int32]:
-    """The place of each cell of the grid (row-major index, as ``State.cell``) along the
-    Morton curve that :func:`carom.engines.edmd.ordering.spatial_order` follows."""
+def cell_ranks(ncell: NDArray[np.int64]) -> NDArray[np.int32]:
+    """The place of each cell of a grid of ``ncell`` (d,) cells (row-major index, as
+    ``State.cell``) along the Morton curve that
+    :func:`carom.engines.edmd.ordering.spatial_order` follows: (C,) int32, made once for an
+    engine's grid (:func:`renumber` takes it)."""
     n_cells = int(np.prod(ncell))
     key = np.empty(n_cells, np.uint64)
     for a in range(0, n_cells, KEY_ROWS):
@@ -143,7 +145,12 @@ def _cell_ranks(ncell: NDArray[np.int64]) -> NDArray[np.int32]:
     return rank
 
 
-def renumber(model: Model, state: State, order: NDArray[np.int64]) -> bool:
+def renumber(
+    model: Model,
+    state: State,
+    order: NDArray[np.int64],
+    cell_rank: NDArray[np.int32] | None = None,
+) -> bool:
     """Renumber the bodies of an engine along the Morton curve through its cell grid, by
     the cells their shells are filed in, changing every array in place (module docstring).
 
@@ -156,6 +163,8 @@ def renumber(model: Model, state: State, order: NDArray[np.int64]) -> bool:
         must be empty (drained).
     order : (N,) int64
         The caller's number of each engine row: reordered with the rows.
+    cell_rank : (C,) int32, optional
+        :func:`cell_ranks` of the model's grid, if the caller keeps it (made here if not).
 
     Returns
     -------
@@ -165,11 +174,11 @@ def renumber(model: Model, state: State, order: NDArray[np.int64]) -> bool:
     """
     assert state.log_n[0] == 0, "drain the event log before renumbering"
     n = order.shape[0]
-    cell_rank = _cell_ranks(model.ncell)
+    if cell_rank is None:
+        cell_rank = cell_ranks(model.ncell)
     number = np.empty(n, np.int32)
     if not _new_numbers(state.cell, cell_rank, number):
         return False
-    del cell_rank
     per_body = (
         model.mobile, model.radius, model.mass, model.inv_mass, model.q, model.material,
         state.kin, state.acc, state.support, state.w, state.orient, state.orient_t,
@@ -181,6 +190,7 @@ def renumber(model: Model, state: State, order: NDArray[np.int64]) -> bool:
     # the arrays that hold body numbers; places past a list's or a row's count are spare,
     # and hold numbers of bodies too (or zeros): they are mapped like the rest
     for numbers in (state.nbr, state.cell_body, state.cal_head, state.cal_next, state.cal_prev):
+        assert numbers.flags.c_contiguous  # (so that the flat view below is no copy)
         _map_numbers(numbers.reshape(-1), number)
     sched = state.sched
     for a in range(0, n, MAP_ROWS):
