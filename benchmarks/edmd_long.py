@@ -79,7 +79,7 @@ print(rate, world.n_bodies)
 """
 
 PROBE = """
-import json, sys, time
+import json, resource, sys, time
 sys.path.insert(0, {here!r})
 from edmd import lattice_gas
 import carom
@@ -91,14 +91,24 @@ warm.run(until=0.1, log=False)
 world = carom.World.load({path!r})
 world.prepare()
 engine = world.engine
+renumbering = 0.0
 if {arm!r} == "renumbered":
+    import numpy as np
+    from carom.engines.edmd import renumber as kernels  # loaded on a few rows, not timed
+    few = np.arange(4, dtype=np.int32)[::-1].copy()
+    kernels._new_numbers(np.zeros(4, np.int32), np.zeros(1, np.int32), few.copy())
+    kernels._move((np.zeros(4),), few)
+    kernels._map_numbers(np.zeros(4, np.int32), few)
+    began = time.perf_counter()
     renumber(engine.model, engine.state, engine.order)
+    renumbering = time.perf_counter() - began
 before = world.stats.collisions
 began = time.perf_counter()
 world.run(until=world.time + {span}, log=False)
 seconds = time.perf_counter() - began
 print(json.dumps(dict(us=seconds / (world.stats.collisions - before) * 1e6,
-                      collisions=world.stats.collisions - before)))
+                      collisions=world.stats.collisions - before, renumbering=renumbering,
+                      peak=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)))
 """
 
 
@@ -120,17 +130,21 @@ def drifted(dim: int, n: int, events: float, probe: float, rounds: int, path: Pa
     rate_text, bodies = _child(code).split()
     n, rate = int(bodies), float(rate_text)
     span = probe * n / rate
-    times: dict[str, list[float]] = {arm: [] for arm in ARMS}
+    runs: dict[str, list[dict[str, float]]] = {arm: [] for arm in ARMS}
     for _ in range(rounds):
         for arm in ARMS:
             code = PROBE.format(here=here, dim=dim, packing=packing, path=str(path), arm=arm,
                                 span=span)  # fmt: skip
-            times[arm].append(json.loads(_child(code))["us"])
+            runs[arm].append(json.loads(_child(code)))
+    times = {arm: [r["us"] for r in runs[arm]] for arm in ARMS}
     fixed, again = statistics.median(times["fixed"]), statistics.median(times["renumbered"])
+    renumbering = statistics.median(r["renumbering"] for r in runs["renumbered"])
     return (
         f"| {dim} | {n:,} | {events:.0f} | {probe:.0f} | "
         f"{', '.join(f'{t:.2f}' for t in times['fixed'])} | "
-        f"{', '.join(f'{t:.2f}' for t in times['renumbered'])} | {fixed / again:.3f} |"
+        f"{', '.join(f'{t:.2f}' for t in times['renumbered'])} | {fixed / again:.3f} | "
+        f"{renumbering:.2f} | {max(r['peak'] for r in runs['fixed']):.0f} | "
+        f"{max(r['peak'] for r in runs['renumbered']):.0f} |"
     )
 
 
@@ -168,8 +182,9 @@ def main() -> None:
     if args.drifted is not None:
         rows = [
             "| dim | N | events a body drifted | events a body timed | fixed [µs/coll] | "
-            "renumbered [µs/coll] | fixed / renumbered (medians) |",
-            "|---|---|---|---|---|---|---|",
+            "renumbered [µs/coll] | fixed / renumbered (medians) | one renumbering [s] | "
+            "peak, fixed [MB] | peak, renumbered [MB] |",
+            "|---|---|---|---|---|---|---|---|---|---|",
         ]
         with tempfile.TemporaryDirectory() as tmp:
             for dim in args.dims:
