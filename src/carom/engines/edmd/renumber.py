@@ -46,7 +46,7 @@ def _new_numbers(cell: np.ndarray, cell_rank: np.ndarray, number: np.ndarray) ->
     ``cell_rank`` (C,) of their cell ``cell`` (N,), ties kept in the present order (a stable
     counting sort). Returns whether any number changed."""
     n_cells = cell_rank.shape[0]
-    start = np.zeros(n_cells + 1, np.int64)
+    start = np.zeros(n_cells + 1, np.int32)  # (int32: at most 10^8 bodies, carom.limits)
     for i in range(cell.shape[0]):
         start[cell_rank[cell[i]] + 1] += 1
     for r in range(n_cells):
