@@ -311,7 +311,7 @@ def test_without_gravity_the_state_holds_no_accelerations_or_supports() -> None:
 
 
 def _rough_gas() -> carom.World:
-    """A walled 2D gas of rough disks with spins and a falling stone among them."""
+    """36 rough disks with spins, falling in a walled 2D box (tests.worlds.rough_disks)."""
     return rough_disks(6)
 
 

@@ -40,13 +40,12 @@ def _spread_bits(c: NDArray[np.uint64], dim: int) -> NDArray[np.uint64]:
 
 
 def morton_keys(cells: NDArray[np.integer]) -> NDArray[np.uint64]:
-    """The Morton (Z-order) key of each cell of integer coordinates ``cells`` (M, d)."""
+    """The Morton (Z-order) key of each cell of integer coordinates ``cells`` (M, d) (its
+    temporaries are a few times ``cells``: callers pass blocks of :data:`KEY_ROWS`)."""
     m, dim = cells.shape
     key = np.zeros(m, np.uint64)
-    for a in range(0, m, KEY_ROWS):  # (a block at a time: the temporaries stay small)
-        for k in range(dim):
-            spread = _spread_bits(cells[a : a + KEY_ROWS, k].astype(np.uint64), dim)
-            key[a : a + KEY_ROWS] |= spread << np.uint64(k)
+    for k in range(dim):
+        key |= _spread_bits(cells[:, k].astype(np.uint64), dim) << np.uint64(k)
     return key
 
 
@@ -60,7 +59,7 @@ def spatial_order(
     """
     n = x.shape[0]
     key = np.empty(n, np.uint64)
-    for a in range(0, n, KEY_ROWS):
+    for a in range(0, n, KEY_ROWS):  # (a block at a time: the temporaries stay small)
         cells = np.clip(np.floor(x[a : a + KEY_ROWS] / cell_size).astype(np.int64), 0, ncell - 1)
         key[a : a + KEY_ROWS] = morton_keys(cells)
     order: NDArray[np.int64] = np.argsort(key, kind="stable").astype(np.int64, copy=False)

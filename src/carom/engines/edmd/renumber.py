@@ -61,14 +61,14 @@ def _new_numbers(cell: np.ndarray, cell_rank: np.ndarray, number: np.ndarray) ->
 
 
 @njit(cache=True, inline="always")
-def _carry(arrays, carried: np.ndarray, first: int, j: int) -> None:  # type: ignore[no-untyped-def]
-    """Row ``j`` of each array takes the row in ``carried`` (one row an array), which takes
-    row ``j``'s old contents (or, with ``first`` < 0, ``carried`` takes row ``j``)."""
+def _carry(arrays, carried: np.ndarray, j: int, put: bool) -> None:  # type: ignore[no-untyped-def]
+    """``carried`` (one row an array) takes row ``j`` of each array; with ``put``, row ``j``
+    takes what ``carried`` held (the two are swapped)."""
     for k in range(len(arrays)):
         a = arrays[k]
         for b in range(a.shape[1]):
             held = a[j, b]
-            if first >= 0:
+            if put:
                 a[j, b] = carried[k, b]
             carried[k, b] = held
 
@@ -86,9 +86,9 @@ def _move_rows(arrays, number: np.ndarray, seen: np.ndarray) -> None:  # type: i
         j = number[first]
         if j == first:
             continue
-        _carry(arrays, carried, -1, first)
+        _carry(arrays, carried, first, False)
         while True:  # the rows carried go to j; j's rows are carried on
-            _carry(arrays, carried, first, j)
+            _carry(arrays, carried, j, True)
             seen[j] = True
             if j == first:
                 break
