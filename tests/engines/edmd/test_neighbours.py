@@ -8,15 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from carom.engines.edmd.neighbours import (
-    CELL_FULL,
-    FITS,
-    LIST_FULL,
-    SCAN_ROWS,
-    build_all,
-    first_overlap,
-    scan_size,
-)
+from carom.engines.edmd import threads
+from carom.engines.edmd.neighbours import CELL_FULL, FITS, LIST_FULL, build_all, first_overlap
 
 
 def _grid(
@@ -50,9 +43,6 @@ def _grid(
         "delta": np.float64(delta),
         "cell_size": box / ncell,
         "ncell": ncell,
-        "mark": np.zeros(n, np.int64),
-        "scan": np.zeros((SCAN_ROWS, scan_size(dim, cell_capacity))),
-        "scan_body": np.zeros(scan_size(dim, cell_capacity), np.int32),
     }
 
 
@@ -120,7 +110,9 @@ def test_the_first_overlap_is_the_first_by_brute_force(dim: int, periodic: bool)
     assert len(i_all) > 1  # the case is not empty
     pairs = zip(i_all.tolist(), j_all.tolist(), strict=True)
     first = min(min(i, j) if mobile[i] and mobile[j] else (i if mobile[i] else j) for i, j in pairs)
-    i, j, amount = first_overlap(kin, g["nbr"], g["count"], mobile, a, g["box"], periodic, tol)
+    i, j, amount = first_overlap(
+        0, len(a), kin, g["nbr"], g["count"], mobile, a, g["box"], periodic, tol
+    )
     assert i == first
     assert over[i, j]
     # the same sum, in the kernel's order: equal to the last bit or two
@@ -129,5 +121,50 @@ def test_the_first_overlap_is_the_first_by_brute_force(dim: int, periodic: bool)
     # hold every pair that could touch): nothing overlaps
     apart = np.sqrt(np.sum(d * d, axis=2))[~np.eye(len(a), dtype=bool)].min()
     small = np.full(len(a), 0.45 * apart)
-    found = first_overlap(kin, g["nbr"], g["count"], mobile, small, g["box"], periodic, tol)
+    found = first_overlap(
+        0, len(a), kin, g["nbr"], g["count"], mobile, small, g["box"], periodic, tol
+    )
     assert found == (-1, -1, 0.0)
+
+
+def _lists(g: dict[str, np.ndarray]) -> list[list[int]]:
+    return [g["nbr"][i, : g["count"][i]].tolist() for i in range(len(g["count"]))]
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("periodic", [False, True])
+def test_lists_in_the_order_of_filing_the_bodies_one_by_one(dim: int, periodic: bool) -> None:
+    # build_all gives the lists of filing the bodies in the order of their numbers, each
+    # linked with those already filed: a moving body lists first its neighbours numbered
+    # below it (in the order of the scan of the grid), then those above it, each appended
+    # when it was filed, so in increasing numbers
+    g = _grid(dim, 400, periodic, seed=20 + dim)
+    assert _build(g) == FITS
+    above_seen = 0
+    for i, listed in enumerate(_lists(g)):
+        below = [j for j in listed if j < i]
+        above = [j for j in listed if j > i]
+        assert listed == below + above, i
+        assert above == sorted(above), i
+        above_seen += len(above)
+    assert above_seen > 100  # (the case is not empty)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("periodic", [False, True])
+@pytest.mark.parametrize("ranges", [2, 3, 7])
+def test_the_same_bits_on_any_number_of_ranges(
+    dim: int, periodic: bool, ranges: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # the scans run over ranges of bodies on threads (carom.engines.edmd.threads); every
+    # array the build writes, scratch left in the rows included, is the same with one range
+    # as with several
+    one = _grid(dim, 400, periodic, seed=30 + dim)
+    assert _build(one) == FITS
+    monkeypatch.setattr(threads, "range_count", lambda n: min(ranges, n))
+    many = _grid(dim, 400, periodic, seed=30 + dim)
+    assert _build(many) == FITS
+    for name in ("nbr", "count", "cell_count", "cell_body", "slot", "cell"):
+        np.testing.assert_array_equal(many[name], one[name], err_msg=name)
+    # and a list that overflows is reported from any range
+    assert _build(_grid(3, 300, False, seed=1, capacity=1)) == LIST_FULL

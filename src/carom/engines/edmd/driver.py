@@ -42,6 +42,7 @@ from carom.engines.edmd.state import (
     allocate_state,
     scratch,
 )
+from carom.engines.edmd.threads import in_ranges
 from carom.errors import CaromError
 from carom.laws.kernels import LAW_SMOOTH
 from carom.materials import PairTable
@@ -229,11 +230,12 @@ class EdmdEngine:
             helper = aside.start(model.gravity is not None, spins)
             aside.compile_beside(helper, model, state, order)
             while True:
-                status = loop.initialise(model, state)
-                if status == codes.DONE:
+                status = _build_lists(model, state)
+                if status == FITS:
                     break
-                self._grow(status)
+                self._grow(codes.LISTS_FULL if status == LIST_FULL else codes.CELLS_FULL)
                 state = with_capacities(state, env.dim, self.capacity, self.cell_capacity)
+            in_ranges(loop.initialise, n, model, state)  # every body's first event
             calendar_build(state.ev_time, _calendar(state))
             self.model, self.state = model, state
             self._check_overlaps()
@@ -302,7 +304,9 @@ class EdmdEngine:
     def _check_overlaps(self) -> None:
         """Refuse overlapping spheres: every overlapping pair shares a neighbour list."""
         model, state = self.model, self.state
-        i, j, overlap = neighbours.first_overlap(
+        found = in_ranges(
+            neighbours.first_overlap,
+            model.mobile.shape[0],
             state.kin,
             state.nbr,
             state.nbr_count,
@@ -312,6 +316,7 @@ class EdmdEngine:
             model.periodic,
             OVERLAP_TOLERANCE,
         )
+        i, j, overlap = next((f for f in found if f[0] >= 0), found[0])
         if i >= 0:
             a, b = sorted((int(self.order[i]), int(self.order[j])))
             pos, rad = self.bodies.position, self.bodies.radius
@@ -417,24 +422,7 @@ class EdmdEngine:
         model, state = self.model, self.state
         while True:
             state = with_capacities(state, model.dim, capacity, cell_capacity)
-            status = build_all(
-                state.shell,
-                model.mobile,
-                state.nbr,
-                state.nbr_count,
-                state.cell_count,
-                state.cell_body,
-                state.slot,
-                state.cell,
-                model.box,
-                model.periodic,
-                model.shell_thickness,
-                model.cell_size,
-                model.ncell,
-                state.nbr_mark,
-                state.scan,
-                state.scan_body,
-            )
+            status = _build_lists(model, state)
             if status == FITS:
                 break
             if status == LIST_FULL:
@@ -610,6 +598,27 @@ def with_capacities(state: State, dim: int, capacity: int, cell_capacity: int) -
         nbr=np.zeros((state.kin.shape[0], capacity), np.int32),
         cell_body=np.zeros((state.cell_count.shape[0], cell_capacity), np.int32),
         **scratch(dim, capacity, cell_capacity),
+    )
+
+
+def _build_lists(model: Model, state: State) -> int:
+    """Every neighbour list and cell row of ``state`` built afresh from its shells
+    (:func:`carom.engines.edmd.neighbours.build_all`): ``FITS``, ``LIST_FULL`` or
+    ``CELL_FULL``."""
+    return build_all(
+        state.shell,
+        model.mobile,
+        state.nbr,
+        state.nbr_count,
+        state.cell_count,
+        state.cell_body,
+        state.slot,
+        state.cell,
+        model.box,
+        model.periodic,
+        model.shell_thickness,
+        model.cell_size,
+        model.ncell,
     )
 
 

@@ -54,7 +54,7 @@ from carom.engines.edmd.codes import (
 )
 from carom.engines.edmd.collide import collide_face, collide_pair
 from carom.engines.edmd.jitflags import njit_without_refcounting
-from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all, rebuild_shell
+from carom.engines.edmd.neighbours import FITS, LIST_FULL, rebuild_shell
 from carom.engines.edmd.predict import (
     calendar_of,
     free_flight,
@@ -71,41 +71,22 @@ from carom.geometry.toi import INF
 LOOKAHEAD_BODIES = 4096
 
 
-@njit(cache=True, error_model="numpy")
-def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
-    """Build every shell and neighbour list and predict every body's event (the caller then
-    files the events: :func:`carom.engines.edmd.calendar.calendar_build`).
+@njit(cache=True, error_model="numpy", nogil=True)
+def initialise(lo: int, hi: int, m, s) -> int:  # type: ignore[no-untyped-def]
+    """Predict the first event of every body ``i``, ``lo <= i < hi``, once the lists are
+    built (:func:`carom.engines.edmd.neighbours.build_all`); the caller then files the events
+    (:func:`carom.engines.edmd.calendar.calendar_build`). Returns ``DONE``.
 
-    Returns ``DONE``, or ``LISTS_FULL`` / ``CELLS_FULL`` when the arrays need to grow.
+    Every body's clock reads the engine's (a fresh state), so no body moves before it is
+    predicted: a prediction reads only records no range writes, and ranges of bodies run on
+    threads at once (the GIL released; :func:`carom.engines.edmd.threads.in_ranges`). Its
+    scratch is its own.
     """
     x, v, t = kinematic_views(s.kin, m.box.shape[0])
     ev_kind, ev_other, ev_stamp, counter = schedule_views(s.sched)
-    for i in range(x.shape[0]):
-        for k in range(m.box.shape[0]):
-            s.shell[i, k] = x[i, k]
-    status = build_all(
-        s.shell,
-        m.mobile,
-        s.nbr,
-        s.nbr_count,
-        s.cell_count,
-        s.cell_body,
-        s.slot,
-        s.cell,
-        m.box,
-        m.periodic,
-        m.shell_thickness,
-        m.cell_size,
-        m.ncell,
-        s.nbr_mark,
-        s.scan,
-        s.scan_body,
-    )
-    if status != FITS:
-        return LISTS_FULL if status == LIST_FULL else CELLS_FULL
+    near = np.empty_like(s.near)
     T = s.clock[0]
-    for i in range(x.shape[0]):
-        free_flight(x, v, s.acc, m.gravity, t, i, T)
+    for i in range(lo, hi):
         predict(
             i,
             T,
@@ -119,7 +100,7 @@ def initialise(m, s) -> int:  # type: ignore[no-untyped-def]
             s.support,
             s.nbr,
             s.nbr_count,
-            s.near,
+            near,
             counter,
             m.radius,
             m.mobile,

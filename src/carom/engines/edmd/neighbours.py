@@ -27,6 +27,7 @@ from numba import njit
 
 from carom.engines.edmd.jitflags import njit_inlined
 from carom.engines.edmd.prefetch import prefetch_row
+from carom.engines.edmd.threads import in_ranges
 
 FITS = 0
 LIST_FULL = 1
@@ -120,42 +121,25 @@ def _axis_cells(c: int, n: int, periodic: bool) -> tuple[int, int, int, int]:
 
 
 @njit_inlined
-def _link_overlapping(
+def _gather_candidates(
     i: int,
-    shell: np.ndarray,
-    mobile: np.ndarray,
-    nbr: np.ndarray,
-    count: np.ndarray,
     cell_count: np.ndarray,
     cell_body: np.ndarray,
     cell: np.ndarray,
-    box: np.ndarray,
     periodic: bool,
-    delta: float,
     ncell: np.ndarray,
-    mark: np.ndarray,
-    stamp: int,
-    scan: np.ndarray,
     scan_body: np.ndarray,
 ) -> int:
-    """Link ``i`` with every body in the grid whose shell overlaps its shell.
+    """Copy into ``scan_body`` (M,) int32, M = 27 times the cell capacity, every body filed in
+    the cells around ``i``'s (``i`` itself among them), cell by cell in order, each row in
+    its order; returns how many.
 
-    Each link goes into the list of each moving side, except for bodies marked ``stamp``
-    (``i`` is in their lists already; their mark is cleared). Returns ``FITS`` or
-    ``LIST_FULL``. ``scan`` (5, M) float64 and ``scan_body`` (M,) int32, M = 27 times the
-    cell capacity, are scratch.
-
-    The candidates are gathered first, then tested in flat loops: a loop per cell whose
-    length is the cell's count mispredicts its exit at every cell, 27 times a rebuild in 3D
-    (measured: half the rebuild's time). So each cell's row is copied with a loop of fixed
-    length (``HEAD`` bodies, and the rest only for a fuller cell), their shell records are
-    copied column by column, and the distances computed in one loop LLVM vectorises. On a
-    periodic axis each pair takes the nearest image by ``floor``: for a pair whose shells
-    can overlap that is the image of the cell it was found in, since an axis of 3 cells or
-    more reaches each cell once and a shell is narrower than a cell.
+    A loop per cell whose length is the cell's count mispredicts its exit at every cell, 27
+    times a rebuild in 3D (measured: half the rebuild's time), so each cell's row is copied
+    with a loop of fixed length (``HEAD`` bodies, and the rest only for a fuller cell). On a
+    periodic axis of 3 cells or more each cell is reached once.
     """
     three = ncell.shape[0] == 3
-    capacity = nbr.shape[1]
     # cell coordinates of i's cell, and the neighbouring coordinates on each axis
     rest = cell[i]
     n1 = ncell[1]
@@ -182,6 +166,35 @@ def _link_overlapping(
                     for s in range(head, k):
                         scan_body[m + s] = cell_body[index, s]
                 m += k
+    return m
+
+
+@njit_inlined
+def _list_overlapping(
+    i: int,
+    m: int,
+    shell: np.ndarray,
+    nbr: np.ndarray,
+    box: np.ndarray,
+    periodic: bool,
+    delta: float,
+    scan: np.ndarray,
+    scan_body: np.ndarray,
+) -> int:
+    """Write into ``i``'s row of ``nbr`` each of the ``m`` candidates ``scan_body[:m]``
+    (:func:`_gather_candidates`) whose shell overlaps ``i``'s, in their order; returns how
+    many, or -1 when they do not fit the row. ``scan`` (5, M) float64 is scratch.
+
+    The candidates' shell records are asked for all at once, copied column by column, and
+    the distances computed in one loop LLVM vectorises. On a periodic axis each pair takes
+    the nearest image by ``floor``: for a pair whose shells can overlap that is the image of
+    the cell it was found in, since an axis of 3 cells or more reaches each cell once and a
+    shell is narrower than a cell. Every candidate is written to the row, and only a kept one
+    advances it (a mispredicted branch per candidate costs more than the write), so the row
+    may hold one more candidate after the last kept.
+    """
+    three = box.shape[0] == 3
+    capacity = nbr.shape[1]
     # ask for every candidate's record before reading any (their misses then overlap)
     for q in range(m):
         prefetch_row(shell, scan_body[q])
@@ -206,30 +219,104 @@ def _link_overlapping(
             d2 -= L2 * np.floor(d2 * inv2 + 0.5)
         reach = reach_i + scan[3, q]
         scan[4, q] = 1.0 if d0 * d0 + d1 * d1 + d2 * d2 < reach * reach else 0.0
-    # every candidate is written to i's row and kept (found += 1) only if the shells overlap
-    # (a mispredicted branch per candidate costs more than the write)
     found = 0
     for q in range(m):
         j = scan_body[q]
         nbr[i, found] = j
         found += (scan[4, q] != 0.0) & (j != i)
         if found == capacity:
-            return LIST_FULL  # no room for the next candidate
-    # i goes into the list of each moving neighbour
-    for q in range(found):
-        j = nbr[i, q]
-        if mark[j] == stamp:
-            mark[j] = 0  # a neighbour before and after
-        elif mobile[j]:
-            if count[j] >= capacity:
-                return LIST_FULL
-            nbr[j, count[j]] = i
-            count[j] += 1
-    count[i] = found if mobile[i] else 0  # a static body's row was only scratch
+            return -1  # no room for the next candidate
+    return found
+
+
+@njit(cache=True, error_model="numpy")
+def fill_cells(
+    shell: np.ndarray,
+    cell_count: np.ndarray,
+    cell_body: np.ndarray,
+    slot: np.ndarray,
+    cell: np.ndarray,
+    cell_size: np.ndarray,
+    ncell: np.ndarray,
+) -> int:
+    """File every body in an emptied grid, in the order of their numbers (so each row holds
+    its bodies in increasing numbers). Returns ``FITS`` or ``CELL_FULL``."""
+    cell_count[:] = 0
+    for i in range(shell.shape[0]):
+        if not cell_insert(
+            i, cell_of(shell, i, cell_size, ncell), cell_count, cell_body, slot, cell
+        ):
+            return CELL_FULL
+    return FITS
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def link_earlier(
+    lo: int,
+    hi: int,
+    shell: np.ndarray,
+    nbr: np.ndarray,
+    count: np.ndarray,
+    cell_count: np.ndarray,
+    cell_body: np.ndarray,
+    cell: np.ndarray,
+    box: np.ndarray,
+    periodic: bool,
+    delta: float,
+    ncell: np.ndarray,
+) -> int:
+    """For each body ``i`` of ``lo <= i < hi``, list in its row the bodies numbered below it
+    whose shells overlap its own (``count[i]`` of them), in the order in which a grid filled
+    with the bodies up to ``i`` gives them: its rows are the first entries of the rows of a
+    grid filled in the order of the numbers (:func:`fill_cells`). Returns ``FITS`` or
+    ``LIST_FULL``.
+
+    Reads the grid and the shells and writes only rows ``lo`` to ``hi``, each zeroed first
+    (a fresh state's rows are unwritten memory): ranges of bodies run on threads at once
+    (the GIL released), each writing its own part of the largest array. Its scratch is its
+    own.
+    """
+    size = 3 ** ncell.shape[0] * cell_body.shape[1]  # (scan_size)
+    scan = np.empty((SCAN_ROWS, size))
+    scan_body = np.empty(size, np.int32)
+    for i in range(lo, hi):
+        for s in range(nbr.shape[1]):
+            nbr[i, s] = 0  # (the row's first write: a fresh state leaves it unwritten)
+        m = _gather_candidates(i, cell_count, cell_body, cell, periodic, ncell, scan_body)
+        # only those numbered up to i (the first of each row), in the same order: one flat
+        # pass without a branch (a count per cell was 1.5x slower)
+        kept = 0
+        for q in range(m):
+            j = scan_body[q]
+            scan_body[kept] = j
+            kept += j <= i
+        found = _list_overlapping(i, kept, shell, nbr, box, periodic, delta, scan, scan_body)
+        if found < 0:
+            return LIST_FULL
+        count[i] = found
     return FITS
 
 
 @njit(cache=True, error_model="numpy")
+def link_later(mobile: np.ndarray, nbr: np.ndarray, count: np.ndarray) -> int:
+    """Complete the lists that :func:`link_earlier` began: each body, in the order of their
+    numbers, goes into the list of each moving neighbour numbered below it, after the
+    bodies already there; a static body's row was only scratch (``count`` 0). Returns
+    ``FITS`` or ``LIST_FULL``."""
+    capacity = nbr.shape[1]
+    for i in range(nbr.shape[0]):
+        for q in range(count[i]):  # (the bodies below i: none has been added to i's list)
+            j = nbr[i, q]
+            if mobile[j]:
+                if count[j] >= capacity:
+                    return LIST_FULL
+                nbr[j, count[j]] = i
+                count[j] += 1
+        if not mobile[i]:
+            count[i] = 0
+    return FITS
+
+
 def build_all(
     shell: np.ndarray,
     mobile: np.ndarray,
@@ -244,44 +331,36 @@ def build_all(
     delta: float,
     cell_size: np.ndarray,
     ncell: np.ndarray,
-    mark: np.ndarray,
-    scan: np.ndarray,
-    scan_body: np.ndarray,
 ) -> int:
-    """Insert every body into an empty grid, linking each overlapping pair once (``scan``
-    and ``scan_body`` are scratch: :func:`_link_overlapping`).
+    """File every body in an empty grid and link each overlapping pair.
 
-    Returns ``FITS``, ``LIST_FULL`` or ``CELL_FULL``.
+    The lists are those of inserting the bodies one by one in the order of their numbers,
+    each linked with the bodies already in the grid (in the order of the scan) and then
+    appended to each moving one's list, to the last entry. The scans, nearly all the work,
+    run on threads over ranges of bodies (:func:`carom.engines.edmd.threads.in_ranges`):
+    each body's own scan reads only the grid, the appends follow in one pass, so the lists
+    are the same whatever the number of threads. Returns ``FITS``, ``LIST_FULL`` or
+    ``CELL_FULL``.
     """
-    cell_count[:] = 0
-    count[:] = 0
-    for i in range(shell.shape[0]):
-        if not cell_insert(
-            i, cell_of(shell, i, cell_size, ncell), cell_count, cell_body, slot, cell
-        ):
-            return CELL_FULL
-        # only bodies inserted before i are in the grid: each pair is met once
-        status = _link_overlapping(
-            i,
-            shell,
-            mobile,
-            nbr,
-            count,
-            cell_count,
-            cell_body,
-            cell,
-            box,
-            periodic,
-            delta,
-            ncell,
-            mark,
-            np.int64(-1),  # type: ignore[arg-type]  # none is marked -1; typed, not a literal
-            scan,
-            scan_body,
-        )
-        if status != FITS:
-            return status
-    return FITS
+    if fill_cells(shell, cell_count, cell_body, slot, cell, cell_size, ncell) != FITS:
+        return CELL_FULL
+    linked = in_ranges(
+        link_earlier,
+        shell.shape[0],
+        shell,
+        nbr,
+        count,
+        cell_count,
+        cell_body,
+        cell,
+        box,
+        periodic,
+        delta,
+        ncell,
+    )
+    if any(status != FITS for status in linked):
+        return LIST_FULL
+    return int(link_later(mobile, nbr, count))
 
 
 @njit_inlined
@@ -326,26 +405,22 @@ def rebuild_shell(
         cell_remove(i, cell_count, cell_body, slot, cell)
         if not cell_insert(i, c, cell_count, cell_body, slot, cell):
             return CELL_FULL
-    status = _link_overlapping(
-        i,
-        shell,
-        mobile,
-        nbr,
-        count,
-        cell_count,
-        cell_body,
-        cell,
-        box,
-        periodic,
-        delta,
-        ncell,
-        mark,
-        stamp,
-        scan,
-        scan_body,
-    )
-    if status != FITS:
-        return status
+    capacity = nbr.shape[1]
+    m = _gather_candidates(i, cell_count, cell_body, cell, periodic, ncell, scan_body)
+    found = _list_overlapping(i, m, shell, nbr, box, periodic, delta, scan, scan_body)
+    if found < 0:
+        return LIST_FULL
+    # i goes into the list of each moving neighbour not marked (a neighbour before and after)
+    for q in range(found):
+        j = nbr[i, q]
+        if mark[j] == stamp:
+            mark[j] = 0
+        elif mobile[j]:
+            if count[j] >= capacity:
+                return LIST_FULL
+            nbr[j, count[j]] = i
+            count[j] += 1
+    count[i] = found if mobile[i] else 0  # (a static body's row would be only scratch)
     for s in range(n_old):
         j = old[s]
         if mark[j] == stamp:  # no longer a neighbour
@@ -357,8 +432,10 @@ def rebuild_shell(
     return FITS
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def first_overlap(
+    lo: int,
+    hi: int,
     kin: np.ndarray,
     nbr: np.ndarray,
     nbr_count: np.ndarray,
@@ -369,12 +446,13 @@ def first_overlap(
     tolerance: float,
 ) -> tuple[int, int, float]:
     """The first pair of bodies that overlap by more than ``tolerance`` of the sum of their
-    radii, scanning each moving body's list in order: ``(i, j, overlap [m])``, or
-    ``(-1, -1, 0.0)`` when none does. Every overlapping pair shares a list (their shells
+    radii, scanning the list of each moving body ``i``, ``lo <= i < hi``, in order:
+    ``(i, j, overlap [m])``, or ``(-1, -1, 0.0)`` when none does (ranges of bodies may run
+    on threads at once). Every overlapping pair shares a list (their shells
     overlap), so this finds any overlap there is. A pair of moving bodies is in both their
     lists and is measured once, from the first body's."""
     dim = box.shape[0]
-    for i in range(nbr.shape[0]):
+    for i in range(lo, hi):
         if not mobile[i]:
             continue
         for s in range(nbr_count[i]):

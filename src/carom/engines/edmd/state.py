@@ -186,7 +186,9 @@ def allocate_state(
     log_capacity: int,
     copied: Callable[[Records], None] | None = None,
 ) -> State:
-    """A fresh state at time ``time`` (schedule still empty: call ``edmd.initialise``).
+    """A fresh state at time ``time`` (lists and schedule still empty: the neighbour lists
+    ``nbr``, the largest array, are not even written until the build fills them, row by row
+    on its threads: :func:`carom.engines.edmd.neighbours.build_all`).
 
     Parameters
     ----------
@@ -223,7 +225,7 @@ def allocate_state(
     w = np.empty((n, 3)) if spinning else None
     orient = np.zeros((n, 4)) if spinning else None
     orient_t = np.empty(n) if spinning else None
-    nbr = np.empty((n, capacity), np.int32)  # zeroed after `copied` (below)
+    nbr = np.empty((n, capacity), np.int32)  # first written by the build, row by row
     # the arrays that start at one value each and are written through at the build, filled
     # beside the records (below); nbr_mark, cur_heap and cur_where stay untouched zeros until
     # used (a rebuild's marks; the heap holds a bucket's few events)
@@ -277,7 +279,6 @@ def allocate_state(
         del position, velocity, angular_velocity, orientation, x  # (copied: see `copied`)
         if copied is not None:
             copied((kin, w, orient))
-        nbr.fill(0)  # the largest array, here while the other thread fills the rest
         if filling is not None:
             filling.result()  # (its error, if any, raised here)
         else:
