@@ -50,7 +50,7 @@ def memory_per_particle(world: carom.World) -> float:
     for value in engine.model._asdict().values():
         total += getattr(value, "nbytes", 0)
     for name, value in engine.state._asdict().items():
-        if not name.startswith("log_"):
+        if not name.startswith("log_") and value is not None:  # (None: not held, e.g. no spins)
             total += value.nbytes
     return total / world.n_bodies
 
