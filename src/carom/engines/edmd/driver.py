@@ -593,9 +593,9 @@ def spinning(bodies: Bodies, env: Environment) -> bool:
 def with_capacities(state: State, dim: int, capacity: int, cell_capacity: int) -> State:
     """``state`` of bodies in ``dim`` dimensions with empty neighbour lists of ``capacity``
     and cell rows of ``cell_capacity`` (and scratch to match), to be filled again
-    (``build_all``)."""
+    (``build_all``, which zeroes each list's row as it first writes it)."""
     return state._replace(
-        nbr=np.zeros((state.kin.shape[0], capacity), np.int32),
+        nbr=np.empty((state.kin.shape[0], capacity), np.int32),
         cell_body=np.zeros((state.cell_count.shape[0], cell_capacity), np.int32),
         **scratch(dim, capacity, cell_capacity),
     )

@@ -29,7 +29,7 @@ def range_count(n: int) -> int:
     """How many ranges :func:`in_ranges` splits ``n`` bodies into."""
     if config.DISABLE_JIT or n < THREAD_BODIES:  # type: ignore[attr-defined]
         return 1
-    return max(1, min(numba.get_num_threads(), n // (THREAD_BODIES // 2)))
+    return min(numba.get_num_threads(), n // (THREAD_BODIES // 2))
 
 
 def in_ranges(kernel: Callable[..., Any], n: int, *args: Any) -> list[Any]:
