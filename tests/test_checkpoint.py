@@ -1,5 +1,6 @@
 """Checkpoints (carom/checkpoint.py): what is not one, older formats and damage are refused by
-name; the round trip itself is tested in tests/engines/edmd/test_driver.py and tests/cli."""
+name; what the file holds; the round trip itself is tested in tests/engines/edmd/test_driver.py
+and tests/cli."""
 
 from __future__ import annotations
 
@@ -73,3 +74,79 @@ def test_checkpoint_with_half_of_a_group_of_arrays_is_refused(tmp_path, drop) ->
     np.savez(path, **arrays)
     with pytest.raises(CaromError, match=r"damaged|missing"):
         carom.World.load(path)
+
+
+def test_checkpoint_without_the_bodies_motion_is_refused(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # a world not yet run has no engine: its positions and velocities are the table's, and a
+    # file without them is damaged (orientations and spins may be absent: none are stored)
+    world = carom.World(2, [2.0, 2.0])
+    world.add_spheres([[0.5, 0.5], [1.5, 1.5]], [[1.0, 0.0], [0.0, 1.0]], radius=0.1)
+    path = tmp_path / "still.npz"
+    world.save(path)
+    assert carom.World.load(path).positions.tolist() == [[0.5, 0.5], [1.5, 1.5]]
+    with np.load(path) as data:
+        arrays = {name: data[name] for name in data.files if name != "body.velocity"}
+    np.savez(path, **arrays)
+    with pytest.raises(CaromError, match=r"damaged"):
+        carom.World.load(path)
+
+
+def _members(path) -> set[str]:  # type: ignore[no-untyped-def]
+    with np.load(path) as data:
+        return set(data.files)
+
+
+def test_a_gas_of_smooth_spheres_writes_no_identities_or_zeros(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # every sphere unrotated, none spinning, every tensor a sphere's: the table stores none of
+    # them, so the file holds none, and the loaded table stores none either; its motion is the
+    # engine's (lent), the same to the bit as the saved world's, and runs on as it would have
+    rng = np.random.default_rng(7)
+    world = carom.World(3, [3.0, 3.0, 3.0])
+    grid = (np.stack(np.meshgrid(*[np.arange(4)] * 3), -1).reshape(-1, 3) + 0.5) * 0.75
+    world.add_spheres(grid, rng.normal(size=(64, 3)), radius=0.1)
+    world.run(until=0.3)
+    path = tmp_path / "gas.npz"
+    world.save(path)
+    names = _members(path)
+    assert {"body.position", "body.velocity", "engine.state.kin"} <= names
+    assert not {"body.orientation", "body.angular_velocity", "body.inertia_tensor"} & names
+    loaded = carom.World.load(path)
+    bodies = loaded.bodies
+    assert bodies.lent
+    assert bodies.unrotated
+    assert bodies.still
+    assert bodies.stored_tensors is None
+    assert np.array_equal(bodies.inertia_tensor, world.bodies.inertia_tensor)
+    for name in ("positions", "velocities", "orientations", "angular_velocities"):
+        assert np.array_equal(getattr(loaded, name), getattr(world, name)), name
+    world.run(until=0.6)
+    loaded.run(until=0.6)
+    assert np.array_equal(loaded.positions, world.positions)
+    assert np.array_equal(loaded.velocities, world.velocities)
+
+
+def test_spins_turns_and_tensors_are_written_when_there_are_some(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # one spinning sphere among still ones (event-driven), and a turned box (rigid, 3D): what
+    # the table stores is written and read back as it was
+    world = carom.World(2, [2.0, 2.0])
+    world.add_spheres([[0.5, 0.5], [1.5, 1.5]], [[1.0, 0.0], [0.0, 1.0]],
+                      angular_velocities=[0.0, -2.5], radius=0.1)  # fmt: skip
+    world.run(until=0.5)
+    world.save(tmp_path / "spin.npz")
+    assert {"body.angular_velocity", "body.orientation"} <= _members(tmp_path / "spin.npz")
+    loaded = carom.World.load(tmp_path / "spin.npz")
+    assert np.array_equal(loaded.angular_velocities, world.angular_velocities)
+    assert np.array_equal(loaded.orientations, world.orientations)
+
+    from carom.shapes3d import Box
+
+    rigid = carom.World(3, box=[4, 4, 4], boundary="open")
+    q = np.array([0.8, 0.2, -0.4, 0.4])
+    rigid.add_body(Box([1.0, 2.0, 3.0]), [1, 2, 3], orientation=q / np.linalg.norm(q),
+                   angular_velocity=[0.3, -1.2, 2.0], mass=6.0)  # fmt: skip
+    rigid.save(tmp_path / "box.npz")
+    assert {"body.inertia_tensor", "body.orientation"} <= _members(tmp_path / "box.npz")
+    back = carom.World.load(tmp_path / "box.npz")
+    assert np.array_equal(back.bodies.inertia_tensor, rigid.bodies.inertia_tensor)
+    assert np.array_equal(back.orientations, rigid.orientations)
+    assert np.array_equal(back.angular_velocities, rigid.angular_velocities)

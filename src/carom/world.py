@@ -1293,7 +1293,7 @@ class World:
     def restore(
         self,
         time: float,
-        engine_arrays: dict[str, NDArray[Any]] | None,
+        engine_arrays: Mapping[str, NDArray[Any]] | None,
         counters_before: Counters,
         log: NDArray[Any],
         collisions_dropped: int,

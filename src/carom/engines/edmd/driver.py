@@ -8,7 +8,7 @@ numbering.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -547,10 +547,17 @@ class EdmdEngine:
         bodies: Bodies,
         env: Environment,
         settings: EdmdSettings,
-        arrays: dict[str, NDArray[Any]],
+        arrays: Mapping[str, NDArray[Any]],
     ) -> EdmdEngine:
-        """The engine saved by :meth:`arrays`, continuing bit for bit."""
-        fields: dict[str, Any] = {name: arrays.get(f"state.{name}") for name in State._fields}
+        """The engine saved by :meth:`arrays`, continuing bit for bit. The records are copied
+        onto cache lines (``aligned_records``) as soon as they are read, and the array read is
+        let go before the next one (a checkpoint's arrays are read as they are asked for)."""
+        fields: dict[str, Any] = {}
+        for name in State._fields:  # (kin first)
+            value = arrays.get(f"state.{name}")
+            fields[name] = (
+                value if name != "kin" or value is None else aligned_records(len(value), value)
+            )
         missing = [name for name, v in fields.items() if v is None and name not in OPTIONAL]
         for group in (GRAVITY_FIELDS, SPIN_FIELDS):  # each all there or all absent
             there = [fields[name] is not None for name in group]
@@ -558,7 +565,6 @@ class EdmdEngine:
                 missing.append(group[there.index(False)])
         if missing:
             raise KeyError(f"state.{missing[0]}")  # (the checkpoint reader calls it damaged)
-        fields["kin"] = aligned_records(len(fields["kin"]), fields["kin"])
         state = State(**fields)
         capacity, cell_capacity = (int(c) for c in arrays["capacity"])
         engine = cls(

@@ -19,7 +19,7 @@ One step (``dt = 1/rate``) runs these stages, in this order (docs/rigid.md):
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -148,7 +148,7 @@ class SteppedEngine:
             ),
         }
 
-    def _restore_totals(self, arrays: dict[str, NDArray[Any]]) -> None:
+    def _restore_totals(self, arrays: Mapping[str, NDArray[Any]]) -> None:
         """Take the clock and totals back from :meth:`_totals`' arrays."""
         self.steps = int(arrays["steps"][0])
         collisions, walls, lost, given, work = (float(t) for t in arrays["totals"])
@@ -266,7 +266,7 @@ class RigidEngine(SteppedEngine):
         model: RigidModel,
         settings: RigidSettings,
         partners: Partners,
-        arrays: dict[str, NDArray[Any]],
+        arrays: Mapping[str, NDArray[Any]],
     ) -> RigidEngine:
         """The engine that wrote ``arrays`` (:meth:`arrays`), to continue bit for bit."""
         state = RigidState(*(np.array(arrays[name]) for name in RigidState._fields))

@@ -22,6 +22,7 @@ The settings are the 2D engine's (:class:`carom.engines.rigid.settings.RigidSett
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -152,7 +153,7 @@ class RigidEngine3D(SteppedEngine):
         model: Model3D,
         settings: RigidSettings,
         partners: Partners,
-        arrays: dict[str, NDArray[Any]],
+        arrays: Mapping[str, NDArray[Any]],
     ) -> RigidEngine3D:
         """The engine that wrote ``arrays`` (:meth:`arrays`), to continue bit for bit."""
         kept = empty_manifolds(0)  # a checkpoint written before manifolds were kept
