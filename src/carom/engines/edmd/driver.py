@@ -229,12 +229,9 @@ class EdmdEngine:
             # compiles here (engines/edmd/aside.py)
             helper = aside.start(model.gravity is not None, spins)
             aside.compile_beside(helper, model, state, order)
-            while True:
-                status = _build_lists(model, state)
-                if status == FITS:
-                    break
-                self._grow(codes.LISTS_FULL if status == LIST_FULL else codes.CELLS_FULL)
-                state = with_capacities(state, env.dim, self.capacity, self.cell_capacity)
+            state, self.capacity, self.cell_capacity = _fit_lists(
+                model, state, self.capacity, self.cell_capacity
+            )
             in_ranges(loop.initialise, n, model, state)  # every body's first event
             calendar_build(state.ev_time, _calendar(state))
             self.model, self.state = model, state
@@ -419,18 +416,10 @@ class EdmdEngine:
 
         Lists only say which pairs to examine; every scheduled event stays valid.
         """
-        model, state = self.model, self.state
-        while True:
-            state = with_capacities(state, model.dim, capacity, cell_capacity)
-            status = _build_lists(model, state)
-            if status == FITS:
-                break
-            if status == LIST_FULL:
-                capacity *= 2
-            else:
-                cell_capacity *= 2
-        self.capacity, self.cell_capacity = capacity, cell_capacity
-        self.state = state
+        state = with_capacities(self.state, self.model.dim, capacity, cell_capacity)
+        self.state, self.capacity, self.cell_capacity = _fit_lists(
+            self.model, state, capacity, cell_capacity
+        )
 
     def _drain(self, sink: Sink | None) -> None:
         """Hand the log buffer's collisions to ``sink``, in the caller's numbering."""
@@ -626,6 +615,23 @@ def _build_lists(model: Model, state: State) -> int:
         model.cell_size,
         model.ncell,
     )
+
+
+def _fit_lists(
+    model: Model, state: State, capacity: int, cell_capacity: int
+) -> tuple[State, int, int]:
+    """Build every list of ``state`` (made with room for ``capacity`` neighbours and
+    ``cell_capacity`` bodies a cell), doubling the room that runs out and building again
+    until all fit: the state and the two capacities it was built with."""
+    while True:
+        status = _build_lists(model, state)
+        if status == FITS:
+            return state, capacity, cell_capacity
+        if status == LIST_FULL:
+            capacity *= 2
+        else:
+            cell_capacity *= 2
+        state = with_capacities(state, model.dim, capacity, cell_capacity)
 
 
 def _calendar(s: State) -> Calendar:
