@@ -28,7 +28,7 @@ from carom._inputs import (
     dot,
 )
 from carom.errors import CaromError
-from carom.laws.batch import collide_rows
+from carom.laws.batch import CASE_PAIRS, case_of, collide_rows
 from carom.laws.kernels import LAW_ROUGH, LAW_SMOOTH, LAW_WALTON
 
 __all__ = [
@@ -308,6 +308,7 @@ def _collide_rows(
     # the same under NUMBA_DISABLE_JIT
     with np.errstate(all="ignore"):
         refused = collide_rows(
+            case_of(dim, law, spins) if n >= CASE_PAIRS else 0,
             inputs["x1"],
             inputs["v1"],
             inputs["m1"],
