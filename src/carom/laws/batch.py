@@ -15,20 +15,21 @@ The check is deliberately the simple one: a pair is flagged when any input lies 
 range :func:`carom.collide` accepts, when both masses are infinite, or when the centres
 coincide. The caller then runs the full argument checks, which name what is wrong and where.
 
-**Four pairs per instruction.** The pairs go through in blocks of :data:`LANES`, in three
-loops: the block's inputs are copied into a scratch block on the thread's stack, one row per
-component (broadcast inputs read with stride 0, absent ones as zeros); the law runs over the
-block, row by row; the results are copied out. The middle loop reads and writes only the two
-scratch blocks, which LLVM knows to overlap nothing, so it vectorises it (the vector square
-roots and divisions are IEEE-exact like the scalar ones, and nothing is reordered or fused:
-the same bits). Run over the caller's arrays, whose overlaps only a check at run time could
-rule out, the same loop stayed scalar: LLVM gives up past a few such checks, and there are
-about twenty arrays. The middle loop is written once (:func:`_law_block`) and inlined by LLVM.
-A batch of :data:`CASE_PAIRS` pairs or more runs in a pass compiled for its case alone (2D or
-3D; smooth without spins, smooth with, rough, Walton's: :func:`case_of`), where the copy
-carries no branch on them; smaller batches run in one pass for any case (case 0), which
-branches on each pair, so that single pairs and small batches never compile more than it.
-Measured at 10^6 pairs, two threads, with ``out=``: 1.05x (3D smooth) to 1.8x (2D Walton) the
+**Pairs side by side in vector instructions.** The pairs go through in blocks of
+:data:`LANES`, in three loops: the block's inputs are copied into a scratch block on the
+thread's stack, one row per component (broadcast inputs read with stride 0, absent ones as
+zeros); the law runs over the block, row by row; the results are copied out. The middle
+loop reads and writes only the two scratch blocks, which LLVM knows to overlap nothing, so it
+vectorises it (the vector square roots and divisions are IEEE-exact like the scalar ones, and
+nothing is reordered or fused: the same bits). Run over the caller's arrays, whose overlaps
+only a check at run time could rule out, the same loop stayed scalar: LLVM gives up past a
+few such checks, and there are about twenty arrays. The middle loop is written once
+(:func:`_law_block`) and inlined by LLVM. A batch of :data:`CASE_PAIRS` pairs or more runs
+in a pass compiled for its case alone (2D or 3D; smooth without spins, smooth with, rough,
+Walton's: :func:`case_of`), where the copy carries no branch on them; smaller batches run in
+one pass for any case (case 0), which branches on each pair, so that single pairs and small
+batches never compile more than it.
+Measured at 10^6 pairs, two threads, with ``out=``: 1.15x (3D smooth) to 1.85x (2D Walton) the
 pass before blocks, in the same run (benchmarks/RESULTS.md).
 """
 
@@ -320,7 +321,7 @@ def _make_pass(case: int) -> Any:
     """The compiled pass over a batch, for one case (:func:`case_of`) or, with 0, for any.
 
     Each case is its own function (a closure over ``case``, cached on disk by its value), so
-    that a program compiles only the cases it uses, about 2.5 s each, and small batches,
+    that a program compiles only the cases it uses, about 3 s each, and small batches,
     which all run in case 0, only that one.
     """
 
