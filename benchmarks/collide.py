@@ -7,8 +7,8 @@ best and median of ``--repeats`` calls after a warm-up call. Three ways are time
 * ``out``: every call writes over the previous result (``out=``), so no new memory is touched;
 * ``1 thread``: ``fresh`` with Numba limited to one thread.
 
-With ``--base SRC`` the same calls are timed on another carom source tree (``fresh`` only),
-in the same run, for the ratio: ``git worktree add /tmp/base REV`` then
+With ``--base SRC`` the same calls are timed on another carom source tree, in every way,
+each cell right after this tree's, for the ratios: ``git worktree add /tmp/base REV`` then
 ``python benchmarks/collide.py --base /tmp/base/src``.
 
 Run:  python benchmarks/collide.py [--pairs 1000000] [--repeats 7] [--base SRC] [--record]
@@ -88,15 +88,19 @@ def main() -> None:
     modes = ["fresh", "out", "1 thread"]
     header = ["dim", "law"] + [f"{m} [pairs/s]" for m in modes]
     if a.base:
-        header += ["base fresh [pairs/s]", "fresh / base"]
+        header += [f"base {m} [pairs/s]" for m in modes] + [f"{m} / base" for m in modes]
     rows = []
     for dim in (2, 3):
         for law in LAWS:
-            got = {m: _time(SRC, dim, law, a.pairs, a.repeats, m)["median"] for m in modes}
+            got, base = {}, {}
+            for m in modes:
+                got[m] = _time(SRC, dim, law, a.pairs, a.repeats, m)["median"]
+                if a.base:
+                    base[m] = _time(a.base, dim, law, a.pairs, a.repeats, m)["median"]
             row = [str(dim), law] + [f"{got[m]:.3g}" for m in modes]
             if a.base:
-                base = _time(a.base, dim, law, a.pairs, a.repeats, "fresh")["median"]
-                row += [f"{base:.3g}", f"{got['fresh'] / base:.1f}"]
+                row += [f"{base[m]:.3g}" for m in modes]
+                row += [f"{got[m] / base[m]:.2f}" for m in modes]
             rows.append(row)
             print(" | ".join(row), flush=True)
     table = "\n".join(
