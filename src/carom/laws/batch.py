@@ -175,7 +175,7 @@ def _law_block(
 ) -> None:
     """The law on the first ``m`` pairs of the scratch block ``s`` (``IN_*`` rows), into
     ``o`` (``OUT_*`` rows); the arithmetic of the pass before blocks, operation for operation.
-    ``d3``, ``law`` and ``spins`` are constants at each call site (inlined by LLVM)."""
+    In a case's own pass ``d3``, ``law`` and ``spins`` are constants where LLVM inlines it."""
     for k in range(m):
         a0, a1, a2 = s[IN_X1, k], s[IN_X1 + 1, k], s[IN_X1 + 2, k]
         b0, b1, b2 = s[IN_X2, k], s[IN_X2 + 1, k], s[IN_X2 + 2, k]
@@ -299,12 +299,24 @@ _PASSES: dict[int, Any] = {}
 #: from this many pairs on, a batch runs in the pass of its own case (below, in case 0's)
 CASE_PAIRS = 65536
 
+#: the cases a pass is compiled for, with its own copy of the law: case k has the flags
+#: ``(3D, law, spins)`` of ``CASES[k - 1]``
+CASES = tuple(
+    (d3, law, law != LAW_SMOOTH or spins)
+    for d3 in (False, True)
+    for law, spins in (
+        (LAW_SMOOTH, False),
+        (LAW_SMOOTH, True),
+        (LAW_ROUGH, True),
+        (LAW_WALTON, True),
+    )
+)
+
 
 def case_of(dim: int, law: int, spins: bool) -> int:
-    """The case a pass is compiled for, with its own copy of the law: 1 to 4 in 2D, 5 to 8 in
-    3D, for smooth spheres without spins, smooth with, rough and Walton's."""
-    kind = 3 if law == LAW_WALTON else 2 if law == LAW_ROUGH else 1 if spins else 0
-    return 1 + 4 * (dim == 3) + kind
+    """The case of a batch in ``dim`` dimensions under ``law``, with or without spins (the
+    rough laws always have them): its index in :data:`CASES`, plus 1."""
+    return 1 + CASES.index((dim == 3, law, law != LAW_SMOOTH or spins))
 
 
 def collide_rows(case: int, *args: Any) -> int:
@@ -326,7 +338,7 @@ def _make_pass(case: int) -> Any:
     """
 
     @njit(cache=True, error_model="numpy", parallel=True)
-    def collide_rows(
+    def case_pass(
         x1: np.ndarray,
         v1: np.ndarray,
         m1: np.ndarray,
@@ -406,9 +418,8 @@ def _make_pass(case: int) -> Any:
                 if case == 0:
                     _law_block(s, o, m, d3, law, spins, q1, q2)
                 else:
-                    kind = (case - 1) % 4
-                    case_law = LAW_WALTON if kind == 3 else LAW_ROUGH if kind == 2 else LAW_SMOOTH
-                    _law_block(s, o, m, case > 4, case_law, kind > 0, q1, q2)
+                    case_d3, case_law, case_spins = CASES[case - 1]
+                    _law_block(s, o, m, case_d3, case_law, case_spins, q1, q2)
                 for k in range(m):  # out: the results, in the caller's layout
                     i = lo + k
                     for c in range(dim):
@@ -436,4 +447,4 @@ def _make_pass(case: int) -> Any:
             bad = min(bad, first[block])
         return -1 if bad == n else bad
 
-    return collide_rows
+    return case_pass
