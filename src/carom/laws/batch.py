@@ -45,7 +45,7 @@ from numba import config, njit, prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from carom.jit import kernel_only
+from carom.jit import kernel_cache, kernel_only
 from carom.laws.kernels import LAW_ROUGH, LAW_SMOOTH, LAW_WALTON
 
 # carom.limits' bounds, repeated here because a kernel's constants must live in the kernel
@@ -336,6 +336,13 @@ def _make_pass(case: int) -> Any:
     that a program compiles only the cases it uses, about 3 s each, and small batches,
     which all run in case 0, only that one.
     """
+
+    with kernel_cache():  # decorated here, long after the package's import: cache it with it
+        return _compile_pass(case)
+
+
+def _compile_pass(case: int) -> Any:
+    """:func:`_make_pass`'s work, decorated inside :func:`carom.jit.kernel_cache`."""
 
     @njit(cache=True, error_model="numpy", parallel=True)
     def case_pass(

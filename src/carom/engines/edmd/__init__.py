@@ -3,10 +3,19 @@
 ``settings`` (what a user may set), ``model`` and ``state`` (the constants and the changing
 arrays), ``predict`` (the next event of a body), ``collide`` (what an event does), ``loop``
 (events in time order), ``calendar`` (the event queue), ``neighbours`` (shells and the cell
-grid), ``prefetch``, and ``driver`` (the :class:`carom.engines.base.Engine` that a World runs).
+grid), ``renumber`` (bodies near in space put near in memory), ``prefetch``, and ``driver``
+(the :class:`carom.engines.base.Engine` that a World runs).
 """
 
 from carom.jit import kernel_cache
 
 with kernel_cache():
-    from carom.engines.edmd import calendar, collide, handle, loop, neighbours, predict  # noqa: F401
+    from carom.engines.edmd import (  # noqa: F401
+        calendar,
+        collide,
+        handle,
+        loop,
+        neighbours,
+        predict,
+        renumber,
+    )

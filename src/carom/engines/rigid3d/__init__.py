@@ -12,6 +12,7 @@ with kernel_cache():
     from carom.engines.rigid3d import (  # noqa: F401
         broadphase,
         contacts,
+        impacts,
         motion,
         solver,
     )
