@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -51,7 +52,7 @@ def _fields(result: carom.CollisionResult) -> dict[str, object]:
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("law", list(LAWS))
 @pytest.mark.parametrize("n", [64, 131])
-@pytest.mark.parametrize("case", ["any", "own"])
+@pytest.mark.parametrize("case", ["any", "own", "own, streaming"])
 def test_batch_equals_single_pairs_exactly(
     dim: int, law: str, n: int, case: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -59,13 +60,27 @@ def test_batch_equals_single_pairs_exactly(
     # 131 pairs end in a block of 3, and each pair sits in another lane than when alone.
     # Large batches run in a pass compiled for their own case (dimension, law, spins), with
     # the law vectorised; "own" sends this small batch there too, against single pairs in
-    # the pass for any case
+    # the pass for any case. There, results of STREAM_BYTES or more written over (out=) are
+    # stored two values at a time, in streaming stores ("streaming" sends these there too):
+    # 131 pairs end in an odd row, which is stored plainly
+    from carom.laws import batch as batch_pass
     from carom.laws import spheres
 
     b = _batch(dim, n)
-    if case == "own":
+    if case != "any":
         monkeypatch.setattr(spheres, "CASE_PAIRS", 2)
-    batch = carom.collide(**b, **LAWS[law]())
+    out = None
+    if case == "own, streaming":  # written over: out=
+        monkeypatch.setattr(batch_pass, "STREAM_BYTES", 0)
+        out = carom.collide(**{**b, "v1": b["v1"][::-1].copy()}, **LAWS[law]())
+    chosen: list[bool] = []
+    decide = spheres.streams
+    monkeypatch.setattr(
+        spheres, "streams", lambda outputs: chosen.append(decide(outputs)) or chosen[-1]
+    )
+    batch = carom.collide(**b, **LAWS[law](), out=out)
+    # whether the pass streamed: asked only in a case's own pass
+    assert chosen == ([True] if case == "own, streaming" else [])
     monkeypatch.undo()
     for i in range(len(b["m1"])):
         single = carom.collide(**{k: v[i] for k, v in b.items()}, **LAWS[law]())
@@ -127,6 +142,40 @@ def test_out_is_written_over_with_the_bits_of_a_fresh_call(dim: int, law: str) -
             assert getattr(out, name) is None
         else:
             np.testing.assert_array_equal(getattr(out, name), value, err_msg=name)
+
+
+def test_streaming_stores_need_large_results_that_start_on_16_bytes(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from carom.laws import batch as batch_pass
+    from carom.laws import spheres
+
+    n = 64
+    aligned = np.empty(n)
+    assert aligned.ctypes.data % 16 == 0  # NumPy's allocations start on 16 bytes (or more)
+    # 8 bytes further on: a C-contiguous float64 array a streaming store cannot write two at
+    # a time
+    shifted = np.empty(3 * n + 1)[1:].reshape(n, 3)
+    assert not batch_pass.streams([aligned])  # 512 bytes, far below STREAM_BYTES
+    assert batch_pass.streams([np.empty(batch_pass.STREAM_BYTES // 8)])
+    monkeypatch.setattr(batch_pass, "STREAM_BYTES", 0)
+    monkeypatch.setattr(spheres, "CASE_PAIRS", 2)
+    assert batch_pass.streams([aligned, np.empty(n, dtype=bool)])
+    assert not batch_pass.streams([aligned, shifted])
+
+    # an out= whose arrays start 8 bytes off is written plainly, with the same bits
+    b = _batch(3, n)
+    fresh = carom.collide(**b, friction=0.4, beta0=0.2)
+    parts = {}
+    for name, value in _fields(fresh).items():
+        if isinstance(value, np.ndarray) and value.dtype == np.float64:
+            flat = np.empty(value.size + 1)[1:]
+            parts[name] = flat.reshape(value.shape)
+            parts[name][...] = np.nan
+    out = dataclasses.replace(fresh, **parts)
+    assert carom.collide(**b, friction=0.4, beta0=0.2, out=out) is out
+    for name, value in _fields(fresh).items():
+        np.testing.assert_array_equal(getattr(out, name), value, err_msg=name)
 
 
 def test_an_out_that_does_not_fit_is_refused_by_name() -> None:

@@ -31,11 +31,23 @@ one pass for any case (case 0), which branches on each pair, so that single pair
 batches never compile more than it.
 Measured at 10^6 pairs, two threads, with ``out=``: 1.15x (3D smooth) to 1.85x (2D Walton) the
 pass before blocks, in the same run (benchmarks/RESULTS.md).
+
+**Results past the caches.** A pair's results are 113 (2D smooth) to 201 bytes (3D Walton),
+and a plain store first reads the line it writes into the cache: at 10^6 pairs the pass moved
+about 1.5 times the bytes it had to. When a batch's results are written over
+(``out=``) and reach :data:`STREAM_BYTES` (:func:`streams`), a case's own pass writes them
+array by array in streaming stores of two values (``movntpd``, :func:`stream_pair`), which write whole lines without reading them, and
+ends each task with a fence (``sfence``) so that every store is seen before the threads join.
+The same values are stored: the bits do not change. A fresh result is stored plainly: its
+new pages are zeroed by the system as the pass first touches them, so they are in the cache
+then (streamed, a fresh result on one thread ran at 0.86-0.91x). 3D Walton at 10^6 pairs with ``out=``
+went from 4.3-4.4e7 to 5.5-5.7e7 pairs per second on two cores (benchmarks/RESULTS.md).
 """
 
 from __future__ import annotations
 
 import math
+import platform
 from collections.abc import Callable
 from typing import Any, cast
 
@@ -98,6 +110,103 @@ def _stack_block(typingctx: Any, rows: Any, cols: Any) -> Any:
         return array._getvalue()
 
     return array_type(rows, cols), codegen
+
+
+#: x86-64 has streaming stores (``movntpd``) and the fence that orders them (``sfence``); on
+#: other machines :func:`stream_pair` is a plain store and :func:`stream_fence` does nothing
+STREAMING = platform.machine().lower() in ("x86_64", "amd64")
+
+
+@intrinsic
+def _stream_pair(typingctx: Any, array: Any, flat: Any, a: Any, b: Any) -> Any:
+    """Store ``a, b`` at the flat indices ``flat, flat + 1`` of a C-contiguous float64
+    ``array``, past the caches (a streaming store: no read of the line it writes). The
+    address of ``flat`` must be a multiple of 16 bytes."""
+    if not (
+        isinstance(array, types.Array)
+        and array.dtype == types.float64
+        and array.layout == "C"
+        and isinstance(flat, types.Integer)
+    ):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        data = context.make_array(signature.args[0])(context, builder, args[0]).data
+        index = context.cast(builder, args[1], signature.args[1], types.intp)
+        pair_type = llvm_ir.VectorType(llvm_ir.DoubleType(), 2)
+        pair = llvm_ir.Constant(pair_type, None)
+        for lane, value in enumerate(args[2:]):
+            pair = builder.insert_element(pair, value, llvm_ir.Constant(llvm_ir.IntType(32), lane))
+        address = builder.bitcast(builder.gep(data, [index]), pair_type.as_pointer())
+        store = builder.store(pair, address, align=16)
+        if STREAMING:
+            one = llvm_ir.Constant(llvm_ir.IntType(32), 1)
+            store.set_metadata("nontemporal", builder.module.add_metadata([one]))
+        return context.get_dummy_value()
+
+    return types.void(array, flat, types.float64, types.float64), codegen
+
+
+@intrinsic
+def _stream_fence(typingctx: Any) -> Any:
+    """Order the streaming stores made so far before every later store (``sfence``)."""
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        if STREAMING:
+            fence_type = llvm_ir.FunctionType(llvm_ir.VoidType(), [])
+            fence = cgutils.get_or_insert_function(  # type: ignore[no-untyped-call]
+                builder.module, fence_type, "llvm.x86.sse.sfence"
+            )
+            builder.call(fence, [])
+        return context.get_dummy_value()
+
+    return types.void(), codegen
+
+
+@intrinsic
+def _put_flat(typingctx: Any, array: Any, flat: Any, value: Any) -> Any:
+    """Store ``value`` at the flat index ``flat`` of a C-contiguous float64 ``array``."""
+    if not (
+        isinstance(array, types.Array)
+        and array.dtype == types.float64
+        and array.layout == "C"
+        and isinstance(flat, types.Integer)
+    ):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        data = context.make_array(signature.args[0])(context, builder, args[0]).data
+        index = context.cast(builder, args[1], signature.args[1], types.intp)
+        builder.store(args[2], builder.gep(data, [index]))
+        return context.get_dummy_value()
+
+    return types.void(array, flat, types.float64), codegen
+
+
+def _heap_stream_pair(array: np.ndarray, flat: int, a: float, b: float) -> None:
+    """Without the JIT: two plain stores."""
+    array.reshape(-1)[flat : flat + 2] = a, b
+
+
+def _heap_put_flat(array: np.ndarray, flat: int, value: float) -> None:
+    """Without the JIT: a plain store."""
+    array.reshape(-1)[flat] = value
+
+
+def _no_fence() -> None:
+    """Without the JIT: nothing to order."""
+
+
+_jit = not config.DISABLE_JIT  # type: ignore[attr-defined]
+stream_pair: Callable[[np.ndarray, int, float, float], None] = (
+    cast(Callable[[np.ndarray, int, float, float], None], _stream_pair)
+    if _jit
+    else _heap_stream_pair
+)
+put_flat: Callable[[np.ndarray, int, float], None] = (
+    cast(Callable[[np.ndarray, int, float], None], _put_flat) if _jit else _heap_put_flat
+)
+stream_fence: Callable[[], None] = cast(Callable[[], None], _stream_fence) if _jit else _no_fence
 
 
 def _heap_block(rows: int, cols: int) -> np.ndarray:
@@ -293,6 +402,49 @@ def _law_block(
         o[OUT_REFUSED, k] = 1.0 if refused else 0.0
 
 
+@kernel_only(error_model="numpy", forceinline=True)
+def _stream_rows(dst: np.ndarray, o: np.ndarray, row: int, lo: int, m: int, width: int) -> None:
+    """Rows ``lo .. lo + m - 1`` of ``dst`` (C order, ``width`` values a row: 1, 2 or 3) from
+    the scratch rows ``row .. row + width - 1`` of ``o``, two values per streaming store.
+    ``dst``'s data must start on 16 bytes and ``lo`` be even; an odd last row of a width of
+    1 or 3 is stored plainly."""
+    f = lo * width
+    even = m - m % 2
+    if width == 2:
+        for k in range(m):
+            stream_pair(dst, f + 2 * k, o[row, k], o[row + 1, k])
+        even = m
+    elif width == 1:
+        for k in range(0, even, 2):
+            stream_pair(dst, f + k, o[row, k], o[row, k + 1])
+    else:
+        for k in range(0, even, 2):
+            g = f + 3 * k
+            stream_pair(dst, g, o[row, k], o[row + 1, k])
+            stream_pair(dst, g + 2, o[row + 2, k], o[row, k + 1])
+            stream_pair(dst, g + 4, o[row + 1, k + 1], o[row + 2, k + 1])
+    for k in range(even, m):
+        for c in range(width):
+            put_flat(dst, f + width * k + c, o[row + c, k])
+
+
+#: from this many bytes of results on (all fields of a batch), they are written past the
+#: caches. Measured here (2 cores, 4 MB of L2 each), a call with ``out=`` and a sum over two
+#: fields of its result after it: with streaming stores 3D Walton at 2^19 pairs (105 MB) went
+#: from 4.2-4.3e7 to 5.2e7 pairs/s; below about 64 MB plain stores win (2D smooth at 2^18
+#: pairs, 30 MB: 8.7e7 against 7.1-7.4e7)
+STREAM_BYTES = 1 << 26
+
+
+def streams(outputs: list[np.ndarray]) -> bool:
+    """Whether the pass is to write ``outputs`` (C-contiguous) past the caches, in
+    streaming stores: when they hold :data:`STREAM_BYTES` or more and each float64 one starts
+    on 16 bytes, as NumPy's own allocations do."""
+    return sum(a.nbytes for a in outputs) >= STREAM_BYTES and all(
+        a.ctypes.data % 16 == 0 for a in outputs if a.dtype == np.float64
+    )
+
+
 #: the passes compiled so far, by case (:func:`case_of`; 0: any case)
 _PASSES: dict[int, Any] = {}
 
@@ -363,6 +515,7 @@ def _compile_pass(case: int) -> Any:
         spins: bool,
         q1: float,
         q2: float,
+        stream: bool,
         out_v1: np.ndarray,
         out_v2: np.ndarray,
         out_w1: np.ndarray,
@@ -427,27 +580,52 @@ def _compile_pass(case: int) -> Any:
                 else:
                     case_d3, case_law, case_spins = CASES[case - 1]
                     _law_block(s, o, m, case_d3, case_law, case_spins, q1, q2)
-                for k in range(m):  # out: the results, in the caller's layout
-                    i = lo + k
-                    for c in range(dim):
-                        out_v1[i, c] = o[OUT_V1 + c, k]
-                        out_v2[i, c] = o[OUT_V2 + c, k]
-                        out_impulse[i, c] = o[OUT_J + c, k]
-                        out_normal[i, c] = o[OUT_N + c, k]
+                # out: past the caches, array by array, in a case's own pass (case 0 has no such
+                # code: its batches are far smaller than STREAM_BYTES)
+                if case != 0 and stream:
+                    _stream_rows(out_v1, o, OUT_V1, lo, m, dim)
+                    _stream_rows(out_v2, o, OUT_V2, lo, m, dim)
+                    _stream_rows(out_impulse, o, OUT_J, lo, m, dim)
+                    _stream_rows(out_normal, o, OUT_N, lo, m, dim)
                     if spins:
-                        for c in range(out_w1.shape[1]):
-                            out_w1[i, c] = o[OUT_W1 + c, k]
-                            out_w2[i, c] = o[OUT_W2 + c, k]
+                        _stream_rows(out_w1, o, OUT_W1, lo, m, out_w1.shape[1])
+                        _stream_rows(out_w2, o, OUT_W2, lo, m, out_w2.shape[1])
                     if rough:
-                        out_beta[i] = o[OUT_BETA, k]
-                    out_approach[i] = o[OUT_APPROACH, k]
-                    out_separation[i] = o[OUT_SEPARATION, k]
-                    out_relative[i] = o[OUT_RELATIVE, k]
-                    out_ke_before[i] = o[OUT_KE_BEFORE, k]
-                    out_ke_after[i] = o[OUT_KE_AFTER, k]
-                    out_ke_lost[i] = o[OUT_KE_LOST, k]
-                    out_applied[i] = o[OUT_APPLIED, k] != 0.0
-                    bad = min(bad, i if o[OUT_REFUSED, k] != 0.0 else n)
+                        _stream_rows(out_beta, o, OUT_BETA, lo, m, 1)
+                    _stream_rows(out_approach, o, OUT_APPROACH, lo, m, 1)
+                    _stream_rows(out_separation, o, OUT_SEPARATION, lo, m, 1)
+                    _stream_rows(out_relative, o, OUT_RELATIVE, lo, m, 1)
+                    _stream_rows(out_ke_before, o, OUT_KE_BEFORE, lo, m, 1)
+                    _stream_rows(out_ke_after, o, OUT_KE_AFTER, lo, m, 1)
+                    _stream_rows(out_ke_lost, o, OUT_KE_LOST, lo, m, 1)
+                    for k in range(m):
+                        i = lo + k
+                        out_applied[i] = o[OUT_APPLIED, k] != 0.0
+                        bad = min(bad, i if o[OUT_REFUSED, k] != 0.0 else n)
+                else:  # out: the results, in the caller's layout
+                    for k in range(m):
+                        i = lo + k
+                        for c in range(dim):
+                            out_v1[i, c] = o[OUT_V1 + c, k]
+                            out_v2[i, c] = o[OUT_V2 + c, k]
+                            out_impulse[i, c] = o[OUT_J + c, k]
+                            out_normal[i, c] = o[OUT_N + c, k]
+                        if spins:
+                            for c in range(out_w1.shape[1]):
+                                out_w1[i, c] = o[OUT_W1 + c, k]
+                                out_w2[i, c] = o[OUT_W2 + c, k]
+                        if rough:
+                            out_beta[i] = o[OUT_BETA, k]
+                        out_approach[i] = o[OUT_APPROACH, k]
+                        out_separation[i] = o[OUT_SEPARATION, k]
+                        out_relative[i] = o[OUT_RELATIVE, k]
+                        out_ke_before[i] = o[OUT_KE_BEFORE, k]
+                        out_ke_after[i] = o[OUT_KE_AFTER, k]
+                        out_ke_lost[i] = o[OUT_KE_LOST, k]
+                        out_applied[i] = o[OUT_APPLIED, k] != 0.0
+                        bad = min(bad, i if o[OUT_REFUSED, k] != 0.0 else n)
+            if case != 0 and stream:
+                stream_fence()
             first[block] = bad
         bad = n
         for block in range(blocks):
