@@ -32,15 +32,15 @@ batches never compile more than it.
 Measured at 10^6 pairs, two threads, with ``out=``: 1.15x (3D smooth) to 1.85x (2D Walton) the
 pass before blocks, in the same run (benchmarks/RESULTS.md).
 
-**Results past the caches.** A pair's results are 113 (2D smooth) to 201 bytes (3D Walton),
-and a plain store first reads the line it writes into the cache: at 10^6 pairs the pass moved
-about 1.5 times the bytes it had to. When a batch's results are written over
-(``out=``) and reach :data:`STREAM_BYTES` (:func:`streams`), a case's own pass writes them
-array by array in streaming stores of two values (``movntpd``, :func:`stream_pair`), which write whole lines without reading them, and
-ends each task with a fence (``sfence``) so that every store is seen before the threads join.
-The same values are stored: the bits do not change. A fresh result is stored plainly: its
-new pages are zeroed by the system as the pass first touches them, so they are in the cache
-then (streamed, a fresh result on one thread ran at 0.86-0.91x). 3D Walton at 10^6 pairs with ``out=``
+**Results past the caches.** A pair's results are 113 (2D smooth) to 201 bytes (3D Walton), and a
+plain store first reads the line it writes into the cache: at 10^6 pairs the pass moved about 1.5
+times the bytes it had to. When a batch's results are written over (``out=``) and reach
+:data:`STREAM_BYTES` (:func:`streams`), a case's own pass writes them array by array in streaming
+stores of two values (``movntpd``, :func:`stream_pair`), which write whole lines without reading
+them, and ends each task with a fence (``sfence``) so that every store is seen before the threads
+join. The same values are stored: the bits do not change. A fresh result is stored plainly: its new
+pages are zeroed by the system as the pass first touches them, so they are in the cache then
+(streamed, a fresh result on one thread ran at 0.86-0.91x). 3D Walton at 10^6 pairs with ``out=``
 went from 4.3-4.4e7 to 5.5-5.7e7 pairs per second on two cores (benchmarks/RESULTS.md).
 """
 
