@@ -1202,11 +1202,15 @@ class World:
     @property
     def positions(self) -> FloatArray:
         """Centres now, (N, d) [m] (periodic: wrapped into the box)."""
+        if self._engine is not None:
+            return self._engine.sample_motion()[0]
         return self._state_now()[0]
 
     @property
     def velocities(self) -> FloatArray:
         """Velocities now, (N, d) [m/s]."""
+        if self._engine is not None:
+            return self._engine.sample_motion()[1]
         return self._state_now()[1]
 
     @property

@@ -186,6 +186,10 @@ class Engine(Protocol):
         [rad/s], now."""
         ...
 
+    def sample_motion(self) -> tuple[FloatArray, FloatArray]:
+        """:meth:`sample`'s positions (N, d) [m] and velocities (N, d) [m/s] alone."""
+        ...
+
     def counters(self) -> Counters:
         """The running totals."""
         ...

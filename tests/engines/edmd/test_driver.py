@@ -410,6 +410,73 @@ def test_the_bodies_lend_their_motion_to_the_engine_while_it_runs() -> None:
         world.bodies.append_spheres(one, one, np.zeros((1, 3)), np.ones(1), np.ones(1), 0.4, 0)
 
 
+def _periodic_gas() -> carom.World:
+    return gas(3, 4, 0.3, seed=2)
+
+
+@pytest.mark.parametrize(
+    "make",
+    [_walled_gas, _periodic_gas, _galton, _rough_gas],
+    ids=["walls", "periodic", "gravity", "rough, gravity"],
+)
+def test_positions_and_velocities_alone_are_those_of_a_full_sample(make, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # World.positions and .velocities, and the lent table's, sample those two alone
+    # (EdmdEngine.sample_motion: loop.write_motion, write_frame's arithmetic): the same bits
+    # as a full sample, periodic positions wrapped, under gravity or not, spinning or not
+    world = make()
+    world.run(until=world.time + 0.5)
+    engine = world.engine
+    assert isinstance(engine, EdmdEngine)
+    x, v, orientation, spin = engine.sample()
+    for got, want in (
+        (engine.sample_motion(), (x, v)),
+        ((world.positions, world.velocities), (x, v)),
+    ):
+        for a, b in zip(got, want, strict=True):
+            assert a.shape == b.shape
+            assert a.tobytes() == b.tobytes()  # every bit, signed zeros too
+    assert world.bodies.position.tobytes() == x.tobytes()
+    assert world.bodies.velocity.tobytes() == v.tobytes()
+    # an engine whose bodies never turn or spin is not asked for orientations or spins: the
+    # table makes identities and zeros, and stores none of them when saved
+    assert engine.spinning == (make is _rough_gas)
+
+    def refused() -> None:
+        raise AssertionError("sampled orientations and spins")
+
+    if not engine.spinning:
+        monkeypatch.setattr(engine, "sample", refused)
+        bodies = world.bodies
+        np.testing.assert_array_equal(bodies.orientation, orientation)
+        np.testing.assert_array_equal(bodies.angular_velocity, spin)
+        assert bodies.unrotated
+        assert bodies.still
+        stored = bodies.stored_motion()
+        assert stored[0].tobytes() == x.tobytes()
+        assert stored[1].tobytes() == v.tobytes()
+        assert stored[2] is None
+        assert stored[3] is None
+
+
+def test_reading_the_positions_makes_no_orientations_or_spins() -> None:
+    # 3D smooth spheres: a full sample is 104 bytes a sphere (position, velocity, quaternion,
+    # spin); the positions and velocities alone are 48, and that is all a read allocates
+    import tracemalloc
+
+    world = gas(3, 20, 0.3, seed=3)  # 8000 spheres
+    world.run(until=world.time + 0.1)
+    motion = 2 * world.n_bodies * 3 * 8  # bytes of the positions and velocities
+    world.positions  # noqa: B018 (compiled and loaded before measuring)
+    tracemalloc.start()
+    try:
+        positions = world.positions
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert positions.shape == (8000, 3)
+    assert motion <= peak < motion + 64 * 1024  # a full sample would be 2.2x the motion
+
+
 @pytest.mark.parametrize("failure", ["overlap", "interrupt"])
 def test_a_failed_build_gives_the_motion_back_bit_for_bit(failure: str, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     # the build lends the bodies' motion to the engine before it checks overlaps and before

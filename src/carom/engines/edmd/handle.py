@@ -22,7 +22,7 @@ from numba import njit, types
 from numba.experimental import structref
 from numba.extending import overload
 
-from carom.engines.edmd.loop import write_frame
+from carom.engines.edmd.loop import write_frame, write_motion
 
 
 @structref.register
@@ -88,3 +88,12 @@ def sample_now(h, t_out, x_out, v_out, orient_out, w_out) -> None:  # type: igno
         s.kin, s.acc, s.orient, s.orient_t, s.w, m.box, m.periodic, h.order, s.clock[0], frame,
         t_out, x_out, v_out, orient_out, w_out,
     )  # fmt: skip
+
+
+@njit(cache=True, error_model="numpy")
+def sample_motion_now(h, t_out, x_out, v_out) -> None:  # type: ignore[no-untyped-def]
+    """Frame 0 of ``x_out`` and ``v_out``: every body's position and velocity at the engine's
+    clock, as :func:`sample_now` writes them, and no orientation or spin."""
+    m, s = h.model, h.state
+    frame = np.int64(0)
+    write_motion(s.kin, s.acc, m.box, m.periodic, h.order, s.clock[0], frame, t_out, x_out, v_out)

@@ -53,7 +53,7 @@ from carom.engines.edmd.codes import (
     MAX_EVENTS,
 )
 from carom.engines.edmd.collide import collide_face, collide_pair
-from carom.engines.edmd.jitflags import njit_without_refcounting
+from carom.engines.edmd.jitflags import njit_inlined, njit_without_refcounting
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, rebuild_shell
 from carom.engines.edmd.predict import (
     calendar_of,
@@ -331,6 +331,19 @@ def run_frames(  # type: ignore[no-untyped-def]
             calendar_update(ev_time, body, cal)
 
 
+@njit_inlined
+def _motion_at(x, v, t, acc, box, periodic, t_f, f, i, r, x_out, v_out) -> None:  # type: ignore[no-untyped-def]
+    """Body ``i``'s position and velocity at ``t_f`` [s] into ``[f, r]`` of ``x_out`` and
+    ``v_out`` (periodic positions wrapped into the box)."""
+    dt = t_f - t[i]
+    for k in range(box.shape[0]):
+        a = 0.0 if acc is None else acc[i, k]  # (None without gravity)
+        x_out[f, r, k] = x[i, k] + (v[i, k] + 0.5 * a * dt) * dt
+        v_out[f, r, k] = v[i, k] + a * dt
+        if periodic:
+            x_out[f, r, k] -= box[k] * np.floor(x_out[f, r, k] / box[k])
+
+
 @njit_without_refcounting
 def write_frame(  # type: ignore[no-untyped-def]
     kin, acc, orient, orient_t, w, box, periodic, order, t_f, f, t_out, x_out, v_out,
@@ -346,13 +359,7 @@ def write_frame(  # type: ignore[no-untyped-def]
     frame = orient_out[f]
     for i in range(x.shape[0]):
         r = order[i]
-        dt = t_f - t[i]
-        for k in range(dim):
-            a = 0.0 if acc is None else acc[i, k]  # (None without gravity)
-            x_out[f, r, k] = x[i, k] + (v[i, k] + 0.5 * a * dt) * dt
-            v_out[f, r, k] = v[i, k] + a * dt
-            if periodic:
-                x_out[f, r, k] -= box[k] * np.floor(x_out[f, r, k] / box[k])
+        _motion_at(x, v, t, acc, box, periodic, t_f, f, i, r, x_out, v_out)
         if w is None:  # no spins: every orientation is the identity (pruned otherwise)
             for k in range(frame.shape[1]):
                 frame[r, k] = 1.0 if k == 0 and dim == 3 else 0.0
@@ -364,3 +371,12 @@ def write_frame(  # type: ignore[no-untyped-def]
             turn(frame, r, w[i, 0], w[i, 1], w[i, 2], t_f - orient_t[i], dim)
             for k in range(3):
                 w_out[f, r, k] = w[i, k]
+
+
+@njit_without_refcounting
+def write_motion(kin, acc, box, periodic, order, t_f, f, t_out, x_out, v_out) -> None:  # type: ignore[no-untyped-def]
+    """:func:`write_frame`'s positions and velocities alone, the same numbers."""
+    t_out[f] = t_f
+    x, v, t = kinematic_views(kin, box.shape[0])
+    for i in range(x.shape[0]):
+        _motion_at(x, v, t, acc, box, periodic, t_f, f, i, order[i], x_out, v_out)

@@ -95,6 +95,11 @@ class SteppedEngine:
     def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         raise NotImplementedError
 
+    def sample_motion(self) -> tuple[FloatArray, FloatArray]:
+        """:meth:`sample`'s positions and velocities (a stepped engine's bodies are few)."""
+        x, v, _, _ = self.sample()
+        return x, v
+
     def advance_frames(
         self,
         times: FloatArray,
