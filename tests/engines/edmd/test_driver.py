@@ -233,29 +233,32 @@ def test_a_recording_too_large_for_memory_is_refused_first(monkeypatch: pytest.M
 SAMPLER_RUN = """
 import json
 from carom.engines.edmd.driver import EdmdEngine
-from carom.engines.edmd.handle import sample_now
+from carom.engines.edmd.handle import sample_motion_now, sample_now
 from carom.scene.layouts import lattice_gas
 world = lattice_gas(3, 5, 0.3, seed=2)
-before = len(sample_now.signatures)
-sample = EdmdEngine.sample
+def loaded():
+    return [len(sample_now.signatures), len(sample_motion_now.signatures)]
+before = loaded()
+sample, motion = EdmdEngine.sample, EdmdEngine.sample_motion
 def refuse(engine):
     raise AssertionError("prepare sampled every body")
-EdmdEngine.sample = refuse
+EdmdEngine.sample = EdmdEngine.sample_motion = refuse
 world.prepare()
-EdmdEngine.sample = sample
-prepared = len(sample_now.signatures)
+EdmdEngine.sample, EdmdEngine.sample_motion = sample, motion
+prepared = loaded()
 world.positions
-print(json.dumps([before, prepared, len(sample_now.signatures)]))
+world.frame()
+print(json.dumps([before, prepared, loaded()]))
 """
 
 
-@pytest.mark.needs_jit
 def test_prepare_loads_the_sampler_without_sampling() -> None:
-    # World.prepare loads every kernel a run and its frames call; the sampler is loaded by
-    # signature, without sampling (a frame of 10^6 spheres would be 100 MB of arrays made and
-    # dropped). In a fresh process: no sampler before prepare, one after it, loaded with the
-    # engine's sample() refusing to run, and reading positions needs no other.
-    assert fresh_python(SAMPLER_RUN) == [0, 1, 1]
+    # World.prepare loads every kernel a run and its frames call; the samplers (a frame, and
+    # positions and velocities alone) are loaded by signature, without sampling (a frame of
+    # 10^6 spheres would be 100 MB of arrays made and dropped). In a fresh process: no
+    # sampler before prepare, one of each after it, loaded with the engine's samplers
+    # refusing to run, and reading positions or a frame needs no other.
+    assert fresh_python(SAMPLER_RUN) == [[0, 0], [1, 1], [1, 1]]
 
 
 @pytest.mark.needs_jit

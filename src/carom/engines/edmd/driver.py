@@ -496,12 +496,14 @@ class EdmdEngine:
         return self.model.q is not None
 
     def load_sampler(self) -> None:
-        """Load the kernel of :meth:`sample` from the cache (or compile it) without sampling:
-        a sample of 10^6 spheres is 100 MB of new arrays that ``World.prepare`` would drop."""
-        compile_for = getattr(sample_now, "compile", None)  # none without the JIT
-        if compile_for is not None:
-            tiny = FrameArrays.empty(1, 1, self.env.dim)
-            compile_for(tuple(aside.typeof(a) for a in (self.handle, *tiny)))
+        """Load the kernels of :meth:`sample` and :meth:`sample_motion` from the cache (or
+        compile them) without sampling: a sample of 10^6 spheres is 100 MB of new arrays that
+        ``World.prepare`` would drop."""
+        tiny = FrameArrays.empty(1, 1, self.env.dim)
+        for kernel, arrays in ((sample_now, tiny), (sample_motion_now, tiny[:3])):
+            compile_for = getattr(kernel, "compile", None)  # none without the JIT
+            if compile_for is not None:
+                compile_for(tuple(aside.typeof(a) for a in (self.handle, *arrays)))
 
     def counters(self) -> Counters:
         c, s = self.state.counts, self.state.sums
