@@ -117,27 +117,40 @@ def _stack_block(typingctx: Any, rows: Any, cols: Any) -> Any:
 STREAMING = platform.machine().lower() in ("x86_64", "amd64")
 
 
+def _flat_float64(array: Any, flat: Any) -> bool:
+    """Whether an intrinsic's first two arguments are a C-contiguous float64 array and an
+    integer (a flat index into it)."""
+    return (
+        isinstance(array, types.Array)
+        and array.dtype == types.float64
+        and array.layout == "C"
+        and isinstance(flat, types.Integer)
+    )
+
+
+def _element(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+    """The address of the element at the flat index ``args[1]`` of the array ``args[0]``."""
+    data = context.make_array(signature.args[0])(context, builder, args[0]).data
+    index = context.cast(builder, args[1], signature.args[1], types.intp)
+    return builder.gep(data, [index])
+
+
 @intrinsic
 def _stream_pair(typingctx: Any, array: Any, flat: Any, a: Any, b: Any) -> Any:
     """Store ``a, b`` at the flat indices ``flat, flat + 1`` of a C-contiguous float64
     ``array``, past the caches (a streaming store: no read of the line it writes). The
     address of ``flat`` must be a multiple of 16 bytes."""
-    if not (
-        isinstance(array, types.Array)
-        and array.dtype == types.float64
-        and array.layout == "C"
-        and isinstance(flat, types.Integer)
-    ):
+    if not _flat_float64(array, flat):
         return None
 
     def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
-        data = context.make_array(signature.args[0])(context, builder, args[0]).data
-        index = context.cast(builder, args[1], signature.args[1], types.intp)
         pair_type = llvm_ir.VectorType(llvm_ir.DoubleType(), 2)
         pair = llvm_ir.Constant(pair_type, None)
         for lane, value in enumerate(args[2:]):
             pair = builder.insert_element(pair, value, llvm_ir.Constant(llvm_ir.IntType(32), lane))
-        address = builder.bitcast(builder.gep(data, [index]), pair_type.as_pointer())
+        address = builder.bitcast(
+            _element(context, builder, signature, args), pair_type.as_pointer()
+        )
         store = builder.store(pair, address, align=16)
         if STREAMING:
             one = llvm_ir.Constant(llvm_ir.IntType(32), 1)
@@ -166,18 +179,11 @@ def _stream_fence(typingctx: Any) -> Any:
 @intrinsic
 def _put_flat(typingctx: Any, array: Any, flat: Any, value: Any) -> Any:
     """Store ``value`` at the flat index ``flat`` of a C-contiguous float64 ``array``."""
-    if not (
-        isinstance(array, types.Array)
-        and array.dtype == types.float64
-        and array.layout == "C"
-        and isinstance(flat, types.Integer)
-    ):
+    if not _flat_float64(array, flat):
         return None
 
     def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
-        data = context.make_array(signature.args[0])(context, builder, args[0]).data
-        index = context.cast(builder, args[1], signature.args[1], types.intp)
-        builder.store(args[2], builder.gep(data, [index]))
+        builder.store(args[2], _element(context, builder, signature, args))
         return context.get_dummy_value()
 
     return types.void(array, flat, types.float64), codegen
