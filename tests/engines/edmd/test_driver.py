@@ -252,6 +252,7 @@ print(json.dumps([before, prepared, loaded()]))
 """
 
 
+@pytest.mark.needs_jit
 def test_prepare_loads_the_sampler_without_sampling() -> None:
     # World.prepare loads every kernel a run and its frames call; the samplers (a frame, and
     # positions and velocities alone) are loaded by signature, without sampling (a frame of
