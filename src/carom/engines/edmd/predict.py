@@ -124,6 +124,56 @@ def free_flight(
 
 
 @njit_inlined
+def _first_pair_plane(
+    i: int,
+    T: float,
+    best: float,
+    kin: np.ndarray,
+    nbr: np.ndarray,
+    count: int,
+    periodic: bool,
+    xi0: float,
+    xi1: float,
+    vi0: float,
+    vi1: float,
+    rad: float,
+    L0: float,
+    L1: float,
+    inv0: float,
+    inv1: float,
+) -> tuple[float, int]:
+    """:func:`_first_pair_straight` in 2D: one pass, a neighbour at a time, reading each
+    record in place. With eight or so neighbours a disk, the copy into columns and the
+    vector pass of 3D cost more than they save: interleaved A/B against them, the same at
+    10^4 disks (0.985 to 1.031) and 1.03 to 1.11x at 10^6. The same arithmetic without the z
+    terms, which are zeros in 2D (adding zero changes no sum): the same times, bit for bit."""
+    other = -1
+    for slot in range(count):
+        j = nbr[i, slot]
+        dtj = T - kin[j, KIN_T]
+        vj0, vj1 = kin[j, KIN_V], kin[j, KIN_V + 1]
+        r0 = xi0 - (kin[j, 0] + vj0 * dtj)
+        r1 = xi1 - (kin[j, 1] + vj1 * dtj)
+        if periodic:
+            r0 -= L0 * np.floor(r0 * inv0 + 0.5)
+            r1 -= L1 * np.floor(r1 * inv1 + 0.5)
+        dv0 = vi0 - vj0
+        dv1 = vi1 - vj1
+        rr = r0 * r0 + r1 * r1
+        rv = r0 * dv0 + r1 * dv1
+        vv = dv0 * dv0 + dv1 * dv1
+        reach = rad + kin[j, KIN_R]
+        c = rr - reach * reach
+        disc = rv * rv - vv * c
+        tp = max(c / (math.sqrt(max(disc, 0.0)) - rv if rv < 0.0 else 1.0), 0.0)
+        tp = tp if (rv < 0.0 and disc >= 0.0) else INF
+        if tp < best:
+            best = tp
+            other = j
+    return best, other
+
+
+@njit_inlined
 def _first_pair_straight(
     i: int,
     T: float,
@@ -139,13 +189,15 @@ def _first_pair_straight(
 
     Returns ``(time from T, neighbour)``, or ``(best, -1)``; of equal times, the first in
     ``i``'s list. The same arithmetic as :func:`carom.geometry.toi.toi_sphere_sphere`, written
-    out per component. The hot loop of the engine, in three passes so that the middle one runs
-    four neighbours per instruction (AVX2; measured 2x faster than one neighbour at a time in
-    3D): copy each neighbour's record of ``kin`` (one cache line; z is zero in 2D, so three
-    components serve both) into column ``slot`` of the scratch ``near`` (``KIN_WIDTH + 1``,
-    K) float64; compute every time of impact into its last row, without branches (a select
-    per neighbour, where a mispredicted branch would cost more than the square root and
-    division it skips); then take the first smallest. Vector square roots and divisions are
+    out per component. The hot loop of the engine: every neighbour's record is asked for first
+    (:func:`prefetch_row`), so that the misses overlap; in 2D one pass follows
+    (:func:`_first_pair_plane`); in 3D three, so that the middle one runs four neighbours per
+    instruction (AVX2; in 3D measured 2x faster than one neighbour at a time with branches, and
+    1.2x at 10^4 spheres than the 2D pass with z terms added): copy each neighbour's record of
+    ``kin`` (one cache line) into column ``slot`` of the scratch ``near`` (``KIN_WIDTH + 1``,
+    K) float64; compute every time of impact into its last row, without branches (a select per
+    neighbour, where a mispredicted branch would cost more than the square root and division it
+    skips); then take the first smallest. Vector square roots and divisions are
     IEEE-exact like scalar ones and nothing is reordered, so the times are the same bits.
     """
     xi0, xi1, xi2 = kin[i, 0], kin[i, 1], kin[i, 2]
@@ -157,6 +209,10 @@ def _first_pair_straight(
     count = nbr_count[i]
     for slot in range(count):
         prefetch_row(kin, nbr[i, slot])
+    if box.shape[0] == 2:
+        return _first_pair_plane(
+            i, T, best, kin, nbr, count, periodic, xi0, xi1, vi0, vi1, rad, L0, L1, inv0, inv1
+        )
     for slot in range(count):
         j = nbr[i, slot]
         for k in range(KIN_WIDTH):
