@@ -1199,19 +1199,22 @@ class World:
     def n_bodies(self) -> int:
         return self.bodies.n
 
+    def _motion_now(self) -> tuple[FloatArray, FloatArray]:
+        """Positions and velocities now: :meth:`_state_now`'s first two, without its
+        orientations and spins."""
+        if self._engine is None:
+            return self.bodies.position.copy(), self.bodies.velocity.copy()
+        return self._engine.sample_motion()
+
     @property
     def positions(self) -> FloatArray:
         """Centres now, (N, d) [m] (periodic: wrapped into the box)."""
-        if self._engine is not None:
-            return self._engine.sample_motion()[0]
-        return self._state_now()[0]
+        return self._motion_now()[0]
 
     @property
     def velocities(self) -> FloatArray:
         """Velocities now, (N, d) [m/s]."""
-        if self._engine is not None:
-            return self._engine.sample_motion()[1]
-        return self._state_now()[1]
+        return self._motion_now()[1]
 
     @property
     def angular_velocities(self) -> FloatArray:

@@ -124,7 +124,7 @@ def free_flight(
 
 
 @njit_inlined
-def _first_pair_plane(
+def _first_pair_2d(
     i: int,
     T: float,
     best: float,
@@ -191,7 +191,7 @@ def _first_pair_straight(
     ``i``'s list. The same arithmetic as :func:`carom.geometry.toi.toi_sphere_sphere`, written
     out per component. The hot loop of the engine: every neighbour's record is asked for first
     (:func:`prefetch_row`), so that the misses overlap; in 2D one pass follows
-    (:func:`_first_pair_plane`); in 3D three, so that the middle one runs four neighbours per
+    (:func:`_first_pair_2d`); in 3D three, so that the middle one runs four neighbours per
     instruction (AVX2; in 3D measured 2x faster than one neighbour at a time with branches, and
     1.2x at 10^4 spheres than the 2D pass with z terms added): copy each neighbour's record of
     ``kin`` (one cache line) into column ``slot`` of the scratch ``near`` (``KIN_WIDTH + 1``,
@@ -210,7 +210,7 @@ def _first_pair_straight(
     for slot in range(count):
         prefetch_row(kin, nbr[i, slot])
     if box.shape[0] == 2:
-        return _first_pair_plane(
+        return _first_pair_2d(
             i, T, best, kin, nbr, count, periodic, xi0, xi1, vi0, vi1, rad, L0, L1, inv0, inv1
         )
     for slot in range(count):
