@@ -29,3 +29,17 @@ def fresh_python(code: str, **env: str) -> Any:
     )
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout)
+
+
+def from_a_terminal(command: list[str]) -> list[str]:
+    """``command`` (a Python program's argument list, ``sys.executable`` first) started as a
+    terminal starts it, with Ctrl-C (SIGINT) at its default, however the test suite itself
+    was started: a background shell (``make test &``, ``nohup``, a scheduler) starts its
+    children ignoring SIGINT, and carom keeps an inherited SIG_IGN (POSIX's rule), so a test
+    that sends SIGINT as a terminal would must undo it first."""
+    assert command[0] == sys.executable
+    restore = (
+        "import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); "
+        "os.execv(sys.executable, [sys.executable, *sys.argv[1:]])"
+    )
+    return [sys.executable, "-c", restore, *command[1:]]

@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +19,7 @@ import pytest
 import carom
 from carom.run import runner
 from carom.run.runner import CHECKPOINT, Outputs, RunInterrupted, run_scene, work_directory
+from tests.processes import from_a_terminal
 
 h5py = pytest.importorskip("h5py", reason="the io extra (h5py) is not installed")
 pytest.importorskip("matplotlib", reason="the viz extra (matplotlib) is not installed")
@@ -103,6 +105,18 @@ def test_resume_refuses_what_it_cannot_continue(
     assert (out / "summary.json").exists()
 
 
+@pytest.fixture
+def sigint_as_in_a_terminal() -> Iterator[None]:
+    """SIGINT at Python's own handler for the test, as a terminal starts a program, however
+    the test suite was started (a background shell starts it ignoring SIGINT)."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+@pytest.mark.usefixtures("sigint_as_in_a_terminal")
 @pytest.mark.parametrize("first", [signal.SIGINT, signal.SIGTERM])
 def test_the_first_signal_asks_to_stop_and_the_second_interrupts(first: int) -> None:
     # Ctrl-C and SIGTERM (timeout, docker stop, batch schedulers) alike
@@ -116,6 +130,24 @@ def test_the_first_signal_asks_to_stop_and_the_second_interrupts(first: int) -> 
             signal.raise_signal(signal.SIGINT if first == signal.SIGTERM else signal.SIGTERM)
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     assert signal.getsignal(signal.SIGTERM) == before
+
+
+def test_a_run_started_ignoring_sigint_keeps_ignoring_it() -> None:
+    # A background shell (`make test &`, nohup, a scheduler) starts its children with SIGINT
+    # ignored, so that Ctrl-C in the terminal reaches only the foreground job; a run keeps
+    # that choice (POSIX), and SIGTERM still asks it to stop.
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        with runner.stop_on_signals() as stop:
+            signal.raise_signal(signal.SIGINT)
+            assert not stop
+            assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+            signal.raise_signal(signal.SIGTERM)
+            assert stop
+            assert stop.signal == signal.SIGTERM
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 @pytest.mark.needs_jit
@@ -133,7 +165,11 @@ def test_a_signal_on_the_command_line_then_resume_as_told(tmp_path: Path, sent: 
     command += ["--no-events"]
     env = {**os.environ, "MPLBACKEND": "Agg"}
     process = subprocess.Popen(
-        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+        from_a_terminal(command),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
     )
     deadline = time.monotonic() + 240
     while not work.exists() and time.monotonic() < deadline:

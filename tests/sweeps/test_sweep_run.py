@@ -19,6 +19,7 @@ import pytest
 from carom.errors import CaromError
 from carom.sweeps import SweepReport, load_sweep, sweep
 from carom.sweeps.observe import run_point
+from tests.processes import from_a_terminal
 from tests.sweeps.helpers import GAS, write_sweep
 
 # 20 spheres of radius 0.5 in a 5 m box fit up to packing 0.3; 200 do not: that point fails
@@ -217,7 +218,7 @@ def test_a_stop_keeps_what_finished_and_resume_completes_it(
     command = [sys.executable, "-m", "carom", "sweep", str(path), "--out", str(tmp_path / "out")]
     command += ["--workers", "2", "--no-plots"]
     process = subprocess.Popen(
-        command,
+        from_a_terminal(command),
         stdin=subprocess.DEVNULL,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,

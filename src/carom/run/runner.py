@@ -361,6 +361,10 @@ def stop_on_signals() -> Iterator[Stop]:
     """Turn the first SIGINT or SIGTERM into a request to stop cleanly (a second one
     interrupts at once, with KeyboardInterrupt).
 
+    A signal the process was started ignoring stays ignored: a shell starts background jobs
+    (``make test &``, ``nohup``, a scheduler's jobs) with SIGINT ignored so that the
+    terminal's Ctrl-C reaches only the job in the foreground, and a program keeps that
+    choice (POSIX's rule for such children; Python itself installs no Ctrl-C handler then).
     Only the main thread can own signal handlers; elsewhere the signals keep their meaning.
     """
     stop = Stop()
@@ -374,7 +378,11 @@ def stop_on_signals() -> Iterator[Stop]:
         stop.requested = True
         stop.signal = signum
 
-    previous = {s: signal.signal(s, handler) for s in STOP_SIGNALS}
+    previous = {
+        s: signal.signal(s, handler)
+        for s in STOP_SIGNALS
+        if signal.getsignal(s) is not signal.SIG_IGN
+    }
     try:
         yield stop
     finally:

@@ -60,9 +60,14 @@ class SweepInterrupted(Exception):  # noqa: N818 (the user asked to stop: not an
 def _stop_on_sigterm() -> Iterator[list[int]]:
     """SIGTERM (what timeout, docker stop and batch schedulers send) stops a sweep as Ctrl-C
     does, so that its cluster is closed and its table kept; yields the signals received.
-    Only the main thread can own signal handlers; elsewhere SIGTERM keeps its meaning."""
+    Only the main thread can own signal handlers; elsewhere SIGTERM keeps its meaning, and
+    so it does where the process was started ignoring it (as :func:`carom.run.runner.
+    stop_on_signals` keeps an ignored signal ignored)."""
     received: list[int] = []
-    if threading.current_thread() is not threading.main_thread():
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGTERM) is signal.SIG_IGN
+    ):
         yield received
         return
 
