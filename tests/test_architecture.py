@@ -17,9 +17,10 @@ LAYERS = [
     # the base: they import only each other
     {"errors", "limits", "_inputs", "_text", "_memory", "jit"},
     {"geometry", "laws"},  # world-free kernels and closed forms
-    {"shapes", "shapes3d", "meshes", "materials", "bodies"},  # the engine-neutral core
+    # the engine-neutral core
+    {"shapes", "shapes3d", "meshes", "materials", "bodies", "body_input"},
     {"engines"},
-    {"world", "observables", "checkpoint"},
+    {"world", "scenery", "recording", "collision_log", "observables", "checkpoint"},
     {"scene", "reference", "studies"},
     {"io", "viz"},
     {"run", "compare", "sweeps"},

@@ -283,7 +283,7 @@ def test_streamed_collisions_keep_memory_flat() -> None:
 
 
 def test_the_in_memory_log_is_bounded(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(carom.world, "LOG_LIMIT", 100)
+    monkeypatch.setattr(carom.collision_log, "LOG_LIMIT", 100)
     world = _gas_2d()
     with pytest.warns(carom.CaromWarning, match=r"collision log is full \(100 collisions"):
         world.run(until=1.0, log=True)

@@ -26,8 +26,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from carom.bodies import PIECE_ARRAYS, pieces_from_arrays, pieces_to_arrays
+from carom.engines import registry
 from carom.engines.base import Counters
-from carom.engines.rigid.settings import RigidSettings
 from carom.errors import CaromError
 from carom.materials import Material
 
@@ -38,7 +38,10 @@ __all__ = ["FORMAT", "VERSION", "load_world", "save_world"]
 
 FORMAT = "carom-checkpoint"
 #: bumped whenever the layout of the file or of an engine's arrays changes
-VERSION = 12
+VERSION = 13
+#: older versions this carom still reads: 12 kept the two built-in engines' settings under
+#: "settings" and "rigid" where 13 keeps every engine's under "engine_settings"
+READS = (12, VERSION)
 #: the body table's motion, and its other fields (read as they are)
 MOTION_FIELDS = ("position", "velocity", "orientation", "angular_velocity")
 BODY_FIELDS = ("shape", "radius", "mass", "inertia_factor", "material", "kind")
@@ -56,9 +59,8 @@ def save_world(world: World, path: Path, extra: Mapping[str, NDArray[Any]]) -> N
         "boundary": world.boundary,
         "gravity": world.gravity.tolist(),
         "walls": [asdict(m) for m in world.walls],
-        "settings": asdict(world.settings),
+        "engine_settings": {name: asdict(value) for name, value in world.engine_settings.items()},
         "engine_choice": world.engine_choice,
-        "rigid": asdict(world.rigid_settings),
         "combine": world.combine,
         "time": world.time,
         "materials": [asdict(m) for m in world.materials],
@@ -116,6 +118,12 @@ def _read(path: Path, data: Any) -> tuple[World, dict[str, NDArray[Any]]]:
 
     meta = json.loads(str(data["meta"]))
     _check_version(path, meta)
+    kept = meta.get("engine_settings") or {"edmd": meta["settings"], "rigid": meta["rigid"]}
+    settings = {}
+    for name, values in kept.items():
+        kind = registry.find(name).settings
+        if kind is not None:
+            settings[name] = kind(**values)
     world = World(
         meta["dim"],
         meta["box"],
@@ -124,8 +132,7 @@ def _read(path: Path, data: Any) -> tuple[World, dict[str, NDArray[Any]]]:
         walls=[Material(**m) for m in meta["walls"]],
         combine=meta["combine"],
         engine=meta["engine_choice"],
-        rigid=RigidSettings(**meta["rigid"]),
-        **meta["settings"],
+        settings=settings,
     )
     for m in meta["materials"]:
         world.add_material(Material(**m))
@@ -151,6 +158,7 @@ def _read(path: Path, data: Any) -> tuple[World, dict[str, NDArray[Any]]]:
         Counters(*meta["counters_before"]),
         data["log"],
         meta["collisions_dropped"],
+        meta["engine"],
     )
     extra = {k[len("extra.") :]: data[k] for k in data.files if k.startswith("extra.")}
     return world, extra
@@ -158,10 +166,11 @@ def _read(path: Path, data: Any) -> tuple[World, dict[str, NDArray[Any]]]:
 
 def _motion_in_engine(engine: str | None) -> bool:
     """Whether the engine's arrays hold the bodies' motion, so that the file holds no copy
-    of it: the event-driven engine's state does, and lends it to the table while it runs
-    (:meth:`carom.bodies.Bodies.lend`). The stepped engines assemble their model from the
-    table's positions before they restore their own arrays, so theirs is written."""
-    return engine == "edmd"
+    of it (its entry's ``motion_in_arrays``): the event-driven engine's state does, and lends
+    it to the table while it runs (:meth:`carom.bodies.Bodies.lend`). The stepped engines
+    assemble their model from the table's positions before they restore their own arrays,
+    so theirs is written."""
+    return engine is not None and registry.find(engine).motion_in_arrays
 
 
 def _check_version(path: Path, meta: dict[str, Any]) -> None:
@@ -173,14 +182,15 @@ def _check_version(path: Path, meta: dict[str, Any]) -> None:
         )
     if meta.get("format") != FORMAT:
         raise CaromError(f"{path} is not a carom checkpoint")
-    if meta.get("version") != VERSION:
+    if meta.get("version") not in READS:
         raise CaromError(
             f"checkpoint {path} has format version {meta.get('version')}, this carom reads "
             f"version {VERSION}; re-run the simulation with this version, or load it with the "
             f"carom that wrote it"
         )
-    if meta.get("engine") not in (None, "edmd", "rigid", "rigid3d"):
-        raise CaromError(f"checkpoint {path} is of engine {meta['engine']!r}, unknown here")
+    engine = meta.get("engine")
+    if engine is not None and not (isinstance(engine, str) and registry.known(engine)):
+        raise CaromError(f"checkpoint {path} is of engine {engine!r}, unknown here")
 
 
 class _Members(Mapping[str, NDArray[Any]]):

@@ -1,6 +1,7 @@
 """Rigid bodies in ``carom compare``: the scene as plain data, the closed form, the yardstick.
 
-A :class:`RigidScene` is what carom's rigid-body engine starts from (:meth:`World.rigid_parts`):
+A :class:`RigidScene` is what carom's rigid-body engine starts from
+(:func:`carom.engines.rigid.assemble.world_parts`):
 every body's convex pieces in its own frame, mass, inertia, kind, pose and velocities, and the
 restitution and friction of every pair of materials; the box's walls and the planes are static
 slabs, as carom sees them. Each peer builds the same bodies from it.
@@ -27,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from carom.compare.spec import steps_to
+from carom.engines.rigid.assemble import world_parts
 from carom.engines.rigid.driver import RigidEngine
 from carom.engines.rigid.model import RigidModel, RigidState, new_state
 from carom.engines.rigid.settings import RigidSettings
@@ -154,7 +156,7 @@ class RigidScene(RigidSceneBase):
     ) -> RigidScene:
         """Read the world ``build()`` makes, as its rigid engine would start."""
         world = build()
-        model, state, _ = world.rigid_parts()
+        model, state, _ = world_parts(world)
         if not isinstance(model, RigidModel) or not isinstance(state, RigidState):
             raise CaromError("carom compare's rigid scenes are 2D; 3D comparisons come later")
         rows = model.body_pieces

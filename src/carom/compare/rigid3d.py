@@ -1,11 +1,11 @@
 """3D rigid bodies in ``carom compare``: the scene as plain data, the closed form, the yardstick.
 
 A :class:`RigidScene3D` is what carom's 3D rigid-body engine starts from
-(:meth:`World.rigid_parts`): every body's pieces in its own frame (centre of mass at the
-origin), mass, inertia tensor, kind, pose and velocities, and the restitution and friction of
-every pair of materials. :func:`primitives` names each body's pieces as the peers' shapes
-(sphere, capsule, box, convex hull, triangle mesh, plane), so every peer builds the same
-bodies.
+(:func:`carom.engines.rigid3d.assemble.world_parts`): every body's pieces in its own frame
+(centre of mass at the origin), mass, inertia tensor, kind, pose and velocities, and the
+restitution and friction of every pair of materials. :func:`primitives` names each body's
+pieces as the peers' shapes (sphere, capsule, box, convex hull, triangle mesh, plane), so every
+peer builds the same bodies.
 
 :func:`impact_expectation3d` gives the closed form of one body landing on level ground (a box
 on an edge or a corner, a rod on its end, a spinning ball): the time of impact from free
@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 
 from carom.compare.rigid import RigidSceneBase, Yardstick, extent
 from carom.engines.rigid.settings import RigidSettings
+from carom.engines.rigid3d.assemble import world_parts
 from carom.engines.rigid3d.driver import RigidEngine3D
 from carom.engines.rigid3d.impacts import normal_lcp
 from carom.engines.rigid3d.model import (
@@ -119,7 +120,7 @@ class RigidScene3D(RigidSceneBase):
     ) -> RigidScene3D:
         """Read the 3D world ``build()`` makes, as its rigid engine would start."""
         world = build()
-        model, state, _ = world.rigid_parts()
+        model, state, _ = world_parts(world)
         if not isinstance(model, Model3D) or not isinstance(state, State3D):
             raise CaromError("RigidScene3D takes a 3D world; a 2D one is a RigidScene")
         m = model

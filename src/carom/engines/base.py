@@ -10,7 +10,7 @@ them in everything an engine returns.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, NamedTuple, Protocol
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -24,14 +24,41 @@ __all__ = [
     "Counters",
     "Engine",
     "FrameArrays",
+    "Partners",
     "Sink",
+    "WorldView",
+    "describe_partner",
 ]
+
+if TYPE_CHECKING:
+    from carom.bodies import Bodies
+    from carom.materials import CombineRule, Material
 
 FloatArray = NDArray[np.float64]
 
 KIND_PAIR = 0  # partner is a body
 KIND_WALL = 1  # partner is a wall face: 2k lower, 2k + 1 upper wall of axis k
 KIND_PLANE = 2  # partner is a static plane, by index
+
+
+def describe_partner(kind: int, partner: int) -> str:
+    """A readable name for a collision's partner: ``body 3``, ``wall x-``, ``plane 0``."""
+    if kind == KIND_PAIR:
+        return f"body {partner}"
+    if kind == KIND_WALL:
+        return f"wall {'xyz'[partner // 2]}{'-' if partner % 2 == 0 else '+'}"
+    return f"plane {partner}"
+
+
+class Partners(NamedTuple):
+    """What each of an engine's bodies is to a collision record, when the engine holds more
+    bodies than the caller's (walls and planes as static bodies): ``kind`` (N_engine,) int8
+    (``KIND_PAIR``, ``KIND_WALL``, ``KIND_PLANE``) and ``number`` (N_engine,) int64 (the
+    body, wall face or plane)."""
+
+    kind: NDArray[np.int8]
+    number: NDArray[np.int64]
+
 
 #: One logged collision: ``time`` [s]; ``body``; the ``kind`` of partner (``KIND_PAIR``,
 #: ``KIND_WALL``, ``KIND_PLANE``) and its index ``partner`` (a body, a wall face, a plane);
@@ -147,12 +174,49 @@ class FrameArrays(NamedTuple):
         )
 
 
+class WorldView(Protocol):
+    """What an engine reads of a :class:`carom.World` to build or restore itself: the
+    engine-neutral body table, what surrounds the bodies, the materials, the clock, and the
+    engine's own settings. Engines import nothing of the World itself."""
+
+    dim: int
+    #: box sides (d,) [m]
+    box: FloatArray
+    #: "walls", "periodic" or "open"
+    boundary: str
+    #: (d,) [m/s^2]
+    gravity: FloatArray
+    #: the walls' materials, lower and upper wall of each axis in turn (2 d)
+    walls: tuple[Material, ...]
+    #: static planes: point (d,) [m], unit normal (d,), material
+    planes: list[tuple[FloatArray, FloatArray, Material]]
+    materials: list[Material]
+    combine: CombineRule
+    bodies: Bodies
+
+    @property
+    def pair_overrides(self) -> dict[tuple[int, int], float]: ...
+
+    @property
+    def time(self) -> float: ...
+
+    def settings_of(self, engine: str) -> Any:
+        """The settings the world keeps for the engine called ``engine`` (its entry's
+        dataclass)."""
+        ...
+
+
 class Engine(Protocol):
-    """An engine that advances bodies in time."""
+    """An engine that advances bodies in time (built by its plug, :mod:`.registry`)."""
 
     name: str
     #: the engine's clock [s]
     time: float
+
+    def warm_up(self) -> None:
+        """Compile or load from the cache every kernel a run may call, so that a timed run
+        times the simulation alone; changes nothing."""
+        ...
 
     def advance(
         self,

@@ -118,8 +118,8 @@ def summary(
     closed = e0 + stats.work_done - (ke + pe) - stats.energy_lost + stats.energy_given
     balance = closed / e0 if e0 else 0.0
     events = stats.events_processed
-    rigid = world.engine_name == "rigid"
-    giver = "given_by_solver_J" if rigid else "given_by_parting_floor_J"
+    entry = world.engine_entry
+    giver = f"given_by_{entry.gives_energy.replace(' ', '_')}_J"
     data: dict[str, Any] = {
         "scene": scene,
         "bodies": world.n_bodies,
@@ -139,7 +139,7 @@ def summary(
             "rotational_end_J": rotational_energy(b, w, q),
             "dissipated_J": stats.energy_lost,
             giver: stats.energy_given,
-            **({"work_by_kinematic_bodies_J": stats.work_done} if rigid else {}),
+            **({"work_by_kinematic_bodies_J": stats.work_done} if entry.kinematic else {}),
             "balance_error_relative": balance,
         },
         "momentum": {

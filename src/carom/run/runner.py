@@ -253,7 +253,7 @@ def run_scene(
         written=written,
         resumed_at=run.resumed_at,
         prepare_seconds=run.prepare_seconds,
-        step=1.0 / world.rigid_settings.rate if world.engine_name == "rigid" else None,
+        step=world.fixed_step,
     )
 
 
@@ -261,9 +261,10 @@ def check_steps(world: World, **times: float | None) -> None:
     """A time-stepped engine stops on its steps: refuse a time (``until``, ``frame_interval``,
     ``warmup``: given by name, in seconds) that is not a whole number of them, naming the
     nearest that is."""
-    if world.engine_name != "rigid":
+    dt = world.fixed_step
+    if dt is None:
         return
-    dt = world.rigid_settings.dt
+    name_of = world.engine_name
     for name, value in times.items():
         if value is None:
             continue
@@ -271,9 +272,9 @@ def check_steps(world: World, **times: float | None) -> None:
         if abs(steps - round(steps)) > 1e-6 * max(1.0, steps) or round(steps) < 1:
             near = max(1, round(steps)) * dt
             raise CaromError(
-                f"{name} = {value:g} s is not a whole number of the rigid engine's steps "
-                f"(1/{world.rigid_settings.rate:g} s): frames and the end fall on steps; use "
-                f"{near:.6g} s ({max(1, round(steps))} steps), or change [rigid] rate"
+                f"{name} = {value:g} s is not a whole number of the {name_of} engine's steps "
+                f"(1/{1.0 / dt:g} s): frames and the end fall on steps; use "
+                f"{near:.6g} s ({max(1, round(steps))} steps), or change [{name_of}] rate"
             )
 
 

@@ -63,7 +63,7 @@ def build_world(scene: Scene) -> World:
             walls=_walls(w["walls"], materials),
             t_c=w["t_c"],
             combine=w["combine"],
-            engine="edmd" if w["engine"] == "event-driven" else w["engine"],
+            engine=w["engine"],
             rigid=rigid,
         )
     except CaromError as exc:

@@ -9,6 +9,7 @@ from collections.abc import Callable
 from typing import Any
 
 from carom._text import printable
+from carom.engines import registry
 from carom.errors import CaromError
 from carom.limits import LARGEST, MAX_BODIES, SMALLEST
 from carom.materials import COMBINE_RULES
@@ -69,6 +70,14 @@ def _choice(*options: str) -> Check:
         return f"must be one of {', '.join(repr(o) for o in options)}, got {_show(value)}"
 
     return check
+
+
+def _engine(value: Any) -> str | None:
+    """An engine of the table (:mod:`carom.engines.registry`), by name or older spelling."""
+    if isinstance(value, str) and registry.known(value):
+        return None
+    names = [*registry.engine_choices()] + [a for e in registry.engines() for a in e.aliases]
+    return f"must be one of {', '.join(repr(o) for o in names)}, got {_show(value)}"
 
 
 def _text(value: Any) -> str | None:
@@ -252,7 +261,7 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "walls": (_walls, False, 1.0),
         "t_c": (_positive, False, 1e-6),
         "combine": (_choice(*COMBINE_RULES), False, "mean"),
-        "engine": (_choice("auto", "event-driven", "rigid"), False, "auto"),
+        "engine": (_engine, False, "auto"),
     },
     "rigid": {
         "rate": (_positive, False, 60.0),

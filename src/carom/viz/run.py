@@ -30,7 +30,7 @@ def write_run_plots(folder: Path, world: World, history: RunHistory) -> list[str
     spin = np.array(history.angular_momentum)
     rot = np.array(history.rotational)
     # the angular momentum panel when anything turns (spin, or a rigid body's orbit)
-    turning = bool(np.any(rot) or world.engine_name == "rigid")
+    turning = bool(np.any(rot) or world.engine_entry.turns)
     rows = 3 if turning else 2
     fig, axes = plt.subplots(rows, 1, figsize=(7, 3 * rows), sharex=True)
     top, bottom = axes[0], axes[1]
@@ -51,7 +51,7 @@ def write_run_plots(folder: Path, world: World, history: RunHistory) -> list[str
     if np.any(lost):
         top.plot(t, lost, label="dissipated")
     if np.any(given):
-        source = "solver" if world.engine_name == "rigid" else "parting floor"
+        source = world.engine_entry.gives_energy
         top.plot(t, given, label=f"given ({source})")
     if np.any(work):
         top.plot(t, work, label="work by kinematic bodies")

@@ -11,6 +11,7 @@ import pytest
 
 import carom
 from carom.engines.edmd import state
+from carom.engines.edmd.assemble import environment
 from carom.engines.edmd.driver import EdmdEngine
 from carom.scene import find_scene, load_scene
 from carom.scene.layouts import lattice_gas
@@ -221,7 +222,7 @@ def test_bad_recording_times_are_refused_by_name(times: object, pattern: str) ->
 def test_a_recording_too_large_for_memory_is_refused_first(monkeypatch: pytest.MonkeyPatch) -> None:
     import carom.world
 
-    monkeypatch.setattr(carom.world, "RECORD_BYTES", 9_000)
+    monkeypatch.setattr(carom.recording, "RECORD_BYTES", 9_000)
     # 25 disks, 8 float64 each a frame (position 2, velocity 2, angle, spin 3): 1600 bytes
     world = gas(2, 5, 0.2, seed=0)
     with pytest.raises(carom.CaromError, match=r"6 frames of 25 bodies take .* stream them"):
@@ -359,7 +360,7 @@ def test_a_turned_body_keeps_its_orientation_in_an_engine_without_spins() -> Non
     from carom.engines.edmd.driver import spinning
 
     world = _walled_gas()
-    env = world._environment()
+    env = environment(world)
     assert not spinning(world.bodies, env)
     for dim, turned in ((3, [0.0, 1.0, 0.0, 0.0]), (3, [-0.0, 0.0, 0.0, 0.0]), (2, [0.5])):
         bodies = Bodies(dim)
@@ -519,7 +520,7 @@ def test_lists_that_overflow_at_the_build_grow_without_changing_a_bit() -> None:
     # and grow (4 -> 8 -> 16 -> 32) in the state already filled; the run is the same as from
     # lists that fit at once
     world = gas(3, 4, 0.3, seed=3, e=0.9)
-    env, settings = world._environment(), world.settings
+    env, settings = environment(world), world.settings
     tight = EdmdEngine(world.bodies, env, settings, 0.0, capacity=4)
     assert tight.capacity == 32
     roomy = EdmdEngine(world.bodies, env, settings, 0.0)  # (the motion: lent, sampled)

@@ -495,6 +495,12 @@ class EdmdEngine:
         law, and every body unrotated and still at the build)."""
         return self.model.q is not None
 
+    def warm_up(self) -> None:
+        """Load (or compile) the kernels of a run and of a sample, without a step or a
+        sample (:meth:`load_sampler`); changes nothing."""
+        self.advance(self.time, 0, None)  # no event is processed
+        self.load_sampler()
+
     def load_sampler(self) -> None:
         """Load the kernels of :meth:`sample` and :meth:`sample_motion` from the cache (or
         compile them) without sampling: a sample of 10^6 spheres is 100 MB of new arrays that

@@ -16,30 +16,44 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import NamedTuple, cast
+from typing import Any, Protocol, TypeVar, cast
 
 import numpy as np
 from numpy.typing import NDArray
 
 from carom.bodies import KIND_STATIC, Bodies
-from carom.engines.base import KIND_PAIR, KIND_PLANE, KIND_WALL
+from carom.engines.base import (
+    KIND_PAIR,
+    KIND_PLANE,
+    KIND_WALL,
+    Partners,
+    WorldView,
+    describe_partner,
+)
+from carom.engines.rigid.driver import RigidEngine
 from carom.engines.rigid.model import RigidModel, RigidState, build_model, new_state
+from carom.engines.rigid.settings import RigidSettings
 from carom.errors import CaromError
 from carom.materials import CombineRule, Material, combine, pair_table
 from carom.shapes import ConvexPiece
 
-__all__ = ["Partners", "assemble", "check_material", "pair_arrays"]
+__all__ = [
+    "NAME",
+    "Partners",
+    "assemble",
+    "build",
+    "check_material",
+    "pair_arrays",
+    "refuses",
+    "restore",
+    "world_parts",
+]
+
+#: the engine's name in the table (:mod:`carom.engines.registry`), in 2D and 3D
+NAME = "rigid"
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-
-class Partners(NamedTuple):
-    """What each engine body is to a collision record: ``kind`` (N_engine,) int8 (KIND_PAIR,
-    KIND_WALL, KIND_PLANE) and ``number`` (N_engine,) int64 (the body, wall face or plane)."""
-
-    kind: NDArray[np.int8]
-    number: IntArray
 
 
 def check_material(where: str, material: Material) -> None:
@@ -182,3 +196,81 @@ def assemble(
     )
     partners = Partners(np.array(partner_kind, np.int8), np.array(partner_index, np.int64))
     return model, state, partners
+
+
+# -- the plug (carom.engines.registry): 2D, and the 3D engine through its own parts ------------
+
+
+def refuses(world: WorldView) -> str | None:
+    """None when the rigid engine can run ``world`` (any bodies, walls or an open box); else
+    why not."""
+    if world.boundary == "periodic":
+        return "the rigid-body engine has no periodic boundary; use boundary='walls' or 'open'"
+    return None
+
+
+def settings_of(world: WorldView) -> RigidSettings:
+    """The rigid engine's settings that ``world`` keeps."""
+    settings = world.settings_of(NAME)
+    assert isinstance(settings, RigidSettings)
+    return settings
+
+
+def world_parts(world: WorldView) -> tuple[RigidModel, RigidState, Partners]:
+    """The 2D rigid engine's view of ``world``, as the engine would start from it
+    (:func:`assemble` of its bodies, box, walls, planes, gravity and materials)."""
+    why = refuses(world)
+    if why is not None:
+        raise CaromError(why)
+    return assemble(
+        world.bodies,
+        world.box,
+        world.boundary == "walls",
+        world.walls,
+        world.planes,
+        world.gravity,
+        world.materials,
+        world.combine,
+        world.pair_overrides,
+    )
+
+
+class _Stepped(Protocol):
+    """What :func:`checked_start` asks of a rigid engine, in either dimension."""
+
+    def deepest_overlap(self) -> tuple[int, int, float]: ...
+
+
+Built = TypeVar("Built", bound=_Stepped)
+
+
+def checked_start(engine: Built, partners: Partners, settings: RigidSettings) -> Built:
+    """``engine``, once no dynamic body starts overlapping another body, a wall or a plane
+    deeper than the linear slop (the solver would throw them apart); else a CaromError
+    naming the two."""
+    a, b, depth = engine.deepest_overlap()
+    slop = settings.linear_slop
+    if depth > slop:
+        names = [
+            describe_partner(int(partners.kind[body]), int(partners.number[body]))
+            for body in (a, b)
+        ]
+        raise CaromError(
+            f"{names[0]} and {names[1]} overlap by {depth:.3g} m at the start (more than "
+            f"the linear slop, {slop:g} m): move them apart"
+        )
+    return engine
+
+
+def build(world: WorldView) -> RigidEngine:
+    """The 2D rigid engine, from the world's bodies at its clock (:func:`checked_start`)."""
+    model, state, partners = world_parts(world)
+    settings = settings_of(world)
+    engine = RigidEngine(model, state, settings, world.time, partners)
+    return checked_start(engine, partners, settings)
+
+
+def restore(world: WorldView, arrays: Mapping[str, NDArray[Any]]) -> RigidEngine:
+    """The 2D rigid engine that wrote ``arrays`` into a checkpoint of ``world``."""
+    model, _, partners = world_parts(world)
+    return RigidEngine.restore(model, settings_of(world), partners, arrays)

@@ -30,10 +30,10 @@ from carom.engines.base import (
     KIND_PAIR,
     Counters,
     FrameArrays,
+    Partners,
     Sink,
 )
 from carom.engines.rigid import broadphase, contacts, impacts, islands, motion, solver
-from carom.engines.rigid.assemble import Partners
 from carom.engines.rigid.model import RigidModel, RigidState, grid_cell
 from carom.engines.rigid.settings import RigidSettings
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
@@ -69,6 +69,19 @@ class SteppedEngine:
 
     def step(self, sink: Sink | None = None) -> None:
         raise NotImplementedError
+
+    @staticmethod
+    def _warm_kernels() -> None:
+        """Load every kernel a step of this engine's dimension can call (a module's
+        ``warm_up``)."""
+        raise NotImplementedError
+
+    def warm_up(self) -> None:
+        """Load (or compile) every kernel a run may call: a step's, including those called
+        only on a first impact or sleep, and the sampler's. Changes nothing."""
+        self.advance(self.time, 0, None)  # no step is taken
+        self._warm_kernels()
+        self.sample()
 
     @property
     def time(self) -> float:
@@ -199,6 +212,10 @@ class RigidEngine(SteppedEngine):
     """
 
     name = "rigid"
+
+    @staticmethod
+    def _warm_kernels() -> None:
+        warm_up()
 
     def __init__(
         self,

@@ -9,13 +9,21 @@ flat polytope. A wall's or plane's restitution, friction and rolling resistance 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from carom.bodies import KIND_STATIC, Bodies
-from carom.engines.base import KIND_PAIR, KIND_PLANE, KIND_WALL
-from carom.engines.rigid.assemble import Partners, check_material, pair_arrays
+from carom.engines.base import KIND_PAIR, KIND_PLANE, KIND_WALL, Partners, WorldView
+from carom.engines.rigid.assemble import (
+    check_material,
+    checked_start,
+    pair_arrays,
+    settings_of,
+)
+from carom.engines.rigid.assemble import refuses as refuses
+from carom.engines.rigid3d.driver import RigidEngine3D
 from carom.engines.rigid3d.model import (
     Model3D,
     Piece3D,
@@ -26,10 +34,11 @@ from carom.engines.rigid3d.model import (
     plane_piece,
     triangle_piece,
 )
+from carom.errors import CaromError
 from carom.materials import CombineRule, Material
 from carom.shapes3d import Box, ConvexPiece3D
 
-__all__ = ["assemble3d", "engine_pieces"]
+__all__ = ["assemble3d", "build", "engine_pieces", "refuses", "restore", "world_parts"]
 
 FloatArray = NDArray[np.float64]
 
@@ -133,3 +142,40 @@ def assemble3d(
     )
     partners = Partners(np.array(partner_kind, np.int8), np.array(partner_index, np.int64))
     return model, state, partners
+
+
+# -- the plug (carom.engines.registry) --------------------------------------------------------
+
+
+def world_parts(world: WorldView) -> tuple[Model3D, State3D, Partners]:
+    """The 3D rigid engine's view of ``world``, as the engine would start from it
+    (:func:`assemble3d` of its bodies, box, walls, planes, gravity and materials)."""
+    why = refuses(world)
+    if why is not None:
+        raise CaromError(why)
+    return assemble3d(
+        world.bodies,
+        world.box,
+        world.boundary == "walls",
+        world.walls,
+        world.planes,
+        world.gravity,
+        world.materials,
+        world.combine,
+        world.pair_overrides,
+    )
+
+
+def build(world: WorldView) -> RigidEngine3D:
+    """The 3D rigid engine, from the world's bodies at its clock (overlaps refused as in
+    2D, :func:`carom.engines.rigid.assemble.checked_start`)."""
+    model, state, partners = world_parts(world)
+    settings = settings_of(world)
+    engine = RigidEngine3D(model, state, settings, world.time, partners)
+    return checked_start(engine, partners, settings)
+
+
+def restore(world: WorldView, arrays: Mapping[str, NDArray[Any]]) -> RigidEngine3D:
+    """The 3D rigid engine that wrote ``arrays`` into a checkpoint of ``world``."""
+    model, _, partners = world_parts(world)
+    return RigidEngine3D.restore(model, settings_of(world), partners, arrays)

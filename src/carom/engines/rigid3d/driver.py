@@ -28,9 +28,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, Sink
+from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, Partners, Sink
 from carom.engines.rigid import islands
-from carom.engines.rigid.assemble import Partners
 from carom.engines.rigid.broadphase import KeptPairs
 from carom.engines.rigid.driver import SteppedEngine
 from carom.engines.rigid.settings import RigidSettings
@@ -82,7 +81,11 @@ class RigidEngine3D(SteppedEngine):
     energy_lost - energy_given``.
     """
 
-    name = "rigid3d"
+    name = "rigid"
+
+    @staticmethod
+    def _warm_kernels() -> None:
+        warm_up()
 
     def __init__(
         self,
