@@ -38,6 +38,43 @@ def test_checkpoint_from_another_state_layout(tmp_path) -> None:  # type: ignore
         carom.World.load(path)
 
 
+def _as_version_12(path) -> None:  # type: ignore[no-untyped-def]
+    # Version 12 (carom at bf234ab) wrote the same arrays; its meta kept the event-driven
+    # engine's settings under "settings" and the rigid engine's under "rigid", where 13 keeps
+    # every engine's under "engine_settings" (a file written by bf234ab was checked to load
+    # and run on with the same bits as bf234ab gives, when this reader was written)
+    with np.load(path) as data:
+        arrays = dict(data)
+    meta = json.loads(str(arrays["meta"]))
+    kept = meta.pop("engine_settings")
+    meta |= {"version": 12, "settings": kept["edmd"], "rigid": kept["rigid"]}
+    arrays["meta"] = np.array(json.dumps(meta))
+    np.savez(path, **arrays)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_version_12_checkpoint_still_loads_and_runs_on_bit_for_bit(tmp_path, dim) -> None:  # type: ignore[no-untyped-def]
+    from carom.engines.rigid.settings import RigidSettings
+    from carom.shapes3d import Box
+
+    gas = carom.World(2, [1.0, 1.0], gravity=[0.0, -9.81], t_c=2e-6)
+    gas.add_spheres([[0.3, 0.5], [0.7, 0.52]], [[1.0, 0.0], [-1.0, 0.0]], radius=0.05)
+    boxes = carom.World(3, [1.0, 1.0, 1.0], gravity=[0, 0, -9.81], rigid=RigidSettings(rate=120.0))
+    boxes.add_body(Box([0.1, 0.1, 0.1]), [0.5, 0.5, 0.3], angular_velocity=[1.0, 2.0, 0.0])
+    world = gas if dim == 2 else boxes
+    world.run(0.25)
+    path = tmp_path / "v12.npz"
+    world.save(path)
+    _as_version_12(path)
+    loaded = carom.World.load(path)
+    assert loaded.settings.t_c == world.settings.t_c
+    assert loaded.rigid_settings == world.rigid_settings
+    loaded.run(0.5)
+    world.run(0.5)
+    np.testing.assert_array_equal(loaded.positions, world.positions)
+    np.testing.assert_array_equal(loaded.orientations, world.orientations)
+
+
 def test_checkpoint_of_the_older_format_is_refused_by_name(tmp_path) -> None:  # type: ignore[no-untyped-def]
     # carom before the two-engine layout wrote format 'carom-world' version 3 (no orientations)
     path = tmp_path / "v3.npz"
