@@ -14,6 +14,7 @@ OUT    := out
 help:
 	@echo "make demo   set up .venv and run the showcase (results under $(OUT)/)"
 	@echo "make test   set up .venv with the dev tools and run lint, type checks and all tests"
+	@echo "            (on every core; the kernels' own tests once more without the JIT)"
 	@echo "make clean  remove .venv and $(OUT)/"
 
 $(BIN)/python:
@@ -23,7 +24,7 @@ $(BIN)/python:
 
 # One stamp per set of extras: reinstall only when pyproject.toml changes.
 $(VENV)/.stamp-demo: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[viz,io,sweep]'
+	$(BIN)/python -m pip install --quiet -e '.[viz,io,sweep,rigid3d]'
 	@touch $@
 
 $(VENV)/.stamp-dev: pyproject.toml | $(BIN)/python
@@ -38,13 +39,20 @@ lint: $(VENV)/.stamp-dev
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
 
-unit: $(VENV)/.stamp-dev
-	$(BIN)/python -m pytest
+# Both cores (pytest-xdist: one worker a core); `-m "not slow"` leaves out the slow system tests
+# when iterating (CI and make test run them).
+PYTEST := $(BIN)/python -m pytest -n auto
 
-# The kernels once more as plain Python, so their code is exercised without the JIT
-# (DESIGN.md); runs of millions of collisions are skipped there (marker needs_jit).
+unit: $(VENV)/.stamp-dev
+	$(PYTEST)
+
+# The kernels' own tests once more as plain Python, so that kernel code is exercised without
+# the JIT (DESIGN.md): the kernel packages' tests and doctests, and the physics and regression
+# tests that drive them; runs of millions of collisions are skipped there (marker needs_jit).
+KERNEL_TESTS := tests/engines tests/geometry tests/laws tests/physics tests/reference \
+	tests/regression src/carom/engines src/carom/geometry src/carom/laws
 unit-nojit: $(VENV)/.stamp-dev
-	NUMBA_DISABLE_JIT=1 $(BIN)/python -m pytest -q tests
+	NUMBA_DISABLE_JIT=1 $(PYTEST) -q $(KERNEL_TESTS)
 
 test: lint unit unit-nojit
 

@@ -150,6 +150,7 @@ def test_a_run_started_ignoring_sigint_keeps_ignoring_it() -> None:
         signal.signal(signal.SIGINT, before)
 
 
+@pytest.mark.slow  # (a real run of 2e6 collisions in a fresh process)
 @pytest.mark.needs_jit
 @pytest.mark.parametrize("sent", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_on_the_command_line_then_resume_as_told(tmp_path: Path, sent: int) -> None:

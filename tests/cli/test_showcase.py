@@ -14,11 +14,15 @@ pytest.importorskip("h5py", reason="the io extra (h5py) is not installed")
 pytest.importorskip("imageio_ffmpeg", reason="the viz extra is not installed")
 
 
+@pytest.mark.slow  # (the whole showcase but its sweep)
 def test_the_page_shows_the_study_and_links_every_file(tmp_path: Path) -> None:
     out = tmp_path / "out"
     lines: list[str] = []
     page = build_showcase(
-        out, scenes=("case-4", "newtons-cradle", "rod-drop"), sweeps=("rebound",), say=lines.append
+        out,
+        scenes=("case-4", "newtons-cradle", "rod-drop", "ring-toss"),
+        sweeps=("rebound",),
+        say=lines.append,
     )
     assert page == out / "index.html"
     text = page.read_text()
@@ -31,6 +35,7 @@ def test_the_page_shows_the_study_and_links_every_file(tmp_path: Path) -> None:
     assert "cases/case-7.png" in links
     assert "scenes/rod-drop/animation.mp4" in links  # a rigid body, drawn turned
     assert "energy given by the solver" in text  # the rigid engine's ledger
+    assert "scenes/ring-toss/animation.mp4" in links  # 3D rigid bodies, drawn as shaded faces
     # the sweep: its plot and table, and the closed form beside each point
     assert "sweeps/rebound/plot-rebound_height.png" in links
     assert "sweeps/rebound/results.csv" in links
@@ -44,7 +49,7 @@ def test_the_page_shows_the_study_and_links_every_file(tmp_path: Path) -> None:
     assert files - links == {"index.html"}
     # the study, then each scene (and a line on compiling when the kernels were not cached)
     done = [line for line in lines if " -> " in line]
-    assert len(done) == 5
+    assert len(done) == 6
     assert done[0].startswith("the seven two-sphere cases")
 
 
@@ -54,6 +59,8 @@ def test_the_showcase_runs_what_the_issue_asks() -> None:
     assert SHOWCASE_SCENES[:7] == tuple(f"case-{n}" for n in range(1, 8))
     assert {"newtons-cradle", "billiards-break", "hard-sphere-gas"} <= set(SHOWCASE_SCENES)
     assert {"pyramid", "tumbler", "rod-drop"} <= set(SHOWCASE_SCENES)
+    # 3D rigid bodies beside them: a pyramid, the ring toss, the billiards break (issue 42)
+    assert {"pyramid-3d", "ring-toss", "billiards-3d"} <= set(SHOWCASE_SCENES)
 
 
 def test_the_showcase_says_when_it_compiles_first(

@@ -33,6 +33,7 @@ print(point_impulse(np.array([0.0, 0.0, -1.0]), np.array([0.0, 0.0, 1.0]), k, 0.
 """
 
 
+@pytest.mark.slow  # (a fresh process compiles every 3D kernel)
 @pytest.mark.needs_jit
 def test_the_3d_kernels_compile_without_scipy(tmp_path: Path) -> None:
     # a fresh kernel cache, so everything compiles here; SciPy blocked before Numba looks

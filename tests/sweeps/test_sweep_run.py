@@ -163,6 +163,7 @@ SLOW = '"gas.temperature" = [1.0, 1.5, 2.0, 2.5, 3.0, 3.5]'
 SLOW_HEAD = "until = 12.0\nwarmup = 0.0\nseeds = [1]"
 
 
+@pytest.mark.slow  # (a Dask cluster of two workers, one killed)
 @pytest.mark.needs_jit
 def test_a_worker_killed_mid_sweep_loses_nothing(tmp_path: Path) -> None:
     from distributed import Client, LocalCluster
@@ -202,6 +203,7 @@ def _lines(path: Path) -> list[str]:
     return path.read_text().splitlines() if path.exists() else []
 
 
+@pytest.mark.slow  # (a Dask cluster of two workers, stopped and resumed)
 @pytest.mark.needs_jit
 @pytest.mark.parametrize(
     ("how", "code"),

@@ -1,5 +1,5 @@
 """The showcase behind ``make demo``: the two-sphere study and a few scenes of both engines
-(spheres, event-driven; rigid bodies, time-stepped), on one page.
+(spheres, event-driven; rigid bodies in 2D and 3D, time-stepped), on one page.
 
 :func:`build_showcase` writes, into one output directory (all or nothing)::
 
@@ -31,7 +31,8 @@ from carom.sweeps.plots import series
 
 __all__ = ["SHOWCASE_SCENES", "SHOWCASE_SWEEPS", "build_showcase"]
 
-#: the scenes shown, in page order: the event-driven engine's, then the rigid engine's
+#: the scenes shown, in page order: the event-driven engine's, then the rigid engine's in 2D
+#: and in 3D
 SHOWCASE_SCENES = (
     *(f"case-{case.number}" for case in CASES),
     "newtons-cradle",
@@ -41,6 +42,9 @@ SHOWCASE_SCENES = (
     "card-house",
     "pyramid",
     "tumbler",
+    "pyramid-3d",
+    "ring-toss",
+    "billiards-3d",
 )
 #: the parameter sweeps shown (carom sweep, on a local Dask cluster: the sweep extra)
 SHOWCASE_SWEEPS = ("eos-2d",)

@@ -150,6 +150,7 @@ print(json.dumps({
 """
 
 
+@pytest.mark.slow  # (two fresh processes compile from a cold cache)
 @pytest.mark.needs_jit
 @pytest.mark.skipif(aside.usable_cpus() < 2, reason="the helper needs a second CPU")
 def test_a_cold_start_loads_what_the_helper_compiled_with_the_same_bits(tmp_path: Path) -> None:

@@ -84,6 +84,7 @@ print(json.dumps(sorted(compiled)))
 """
 
 
+@pytest.mark.slow  # (a fresh process compiles the loop twice)
 @needs_dispatchers
 @pytest.mark.parametrize("both", [False, True], ids=["neither", "gravity and spins"])
 def test_a_scene_without_gravity_or_spins_compiles_no_parabolas_supports_or_turns(
