@@ -47,10 +47,11 @@ unit: $(VENV)/.stamp-dev
 	$(PYTEST)
 
 # The kernels' own tests once more as plain Python, so that kernel code is exercised without
-# the JIT (DESIGN.md): the kernel packages' tests and doctests, and the physics and regression
-# tests that drive them; runs of millions of collisions are skipped there (marker needs_jit).
-KERNEL_TESTS := tests/engines tests/geometry tests/laws tests/physics tests/reference \
-	tests/regression src/carom/engines src/carom/geometry src/carom/laws
+# the JIT (DESIGN.md): the kernel packages' tests (their closed forms among them) and doctests,
+# the reference twins and the regression tests that drive them; runs of millions of collisions
+# are skipped there (marker needs_jit).
+KERNEL_TESTS := tests/engines tests/geometry tests/laws tests/reference tests/regression \
+	src/carom/engines src/carom/geometry src/carom/laws
 unit-nojit: $(VENV)/.stamp-dev
 	NUMBA_DISABLE_JIT=1 $(PYTEST) -q $(KERNEL_TESTS)
 

@@ -1,5 +1,5 @@
 """carom.shapes3d: the 3D shapes' checks and messages (the mass formulas are in
-tests/physics/test_mass3d.py)."""
+tests/geometry/test_mass3d.py)."""
 
 from __future__ import annotations
 

@@ -17,22 +17,19 @@ from __future__ import annotations
 
 import json
 import zipfile
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import asdict
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.bodies import PIECE_ARRAYS, pieces_from_arrays, pieces_to_arrays
+from carom.bodies import PIECE_ARRAYS, Bodies, pieces_from_arrays, pieces_to_arrays
 from carom.engines import registry
-from carom.engines.base import Counters
+from carom.engines.base import Counters, Engine
 from carom.errors import CaromError
-from carom.materials import Material
-
-if TYPE_CHECKING:
-    from carom.world import World
+from carom.materials import CombineRule, Material
 
 __all__ = ["FORMAT", "VERSION", "load_world", "save_world"]
 
@@ -47,7 +44,61 @@ MOTION_FIELDS = ("position", "velocity", "orientation", "angular_velocity")
 BODY_FIELDS = ("shape", "radius", "mass", "inertia_factor", "material", "kind")
 
 
-def save_world(world: World, path: Path, extra: Mapping[str, NDArray[Any]]) -> None:
+class Checkpointed(Protocol):
+    """What a checkpoint holds of a :class:`carom.World` (which calls this module: it is
+    typed by this protocol, not imported) and how a World is set back to it."""
+
+    dim: int
+    box: NDArray[np.float64]
+    boundary: str
+    gravity: NDArray[np.float64]
+    walls: tuple[Material, ...]
+    planes: list[tuple[NDArray[np.float64], NDArray[np.float64], Material]]
+    materials: list[Material]
+    combine: CombineRule
+    engine_choice: str
+    engine_settings: dict[str, Any]
+    bodies: Bodies
+
+    @property
+    def engine(self) -> Engine | None: ...
+
+    @property
+    def time(self) -> float: ...
+
+    @property
+    def pair_overrides(self) -> dict[tuple[int, int], float]: ...
+
+    @property
+    def counters_before(self) -> Counters: ...
+
+    @property
+    def collisions(self) -> NDArray[Any]: ...
+
+    @property
+    def collisions_dropped(self) -> int: ...
+
+    def add_material(self, material: Material) -> int: ...
+
+    def set_pair(self, material_a: int, material_b: int, restitution: float) -> None: ...
+
+    def add_plane(self, point: Any, normal: Any, *, material: Material | None = None) -> int: ...
+
+    def restore(
+        self,
+        time: float,
+        engine_arrays: Mapping[str, NDArray[Any]] | None,
+        counters_before: Counters,
+        log: NDArray[Any],
+        collisions_dropped: int,
+        engine_name: str | None = None,
+    ) -> None: ...
+
+
+W = TypeVar("W", bound=Checkpointed)
+
+
+def save_world(world: Checkpointed, path: Path, extra: Mapping[str, NDArray[Any]]) -> None:
     """Write ``world`` (and ``extra`` arrays, by name) to ``path``, atomically."""
     engine = world.engine
     meta = {
@@ -90,8 +141,9 @@ def save_world(world: World, path: Path, extra: Mapping[str, NDArray[Any]]) -> N
     tmp.replace(path)
 
 
-def load_world(path: Path) -> tuple[World, dict[str, NDArray[Any]]]:
-    """The world saved by :func:`save_world` at ``path``, and its ``extra`` arrays."""
+def load_world(path: Path, make: Callable[..., W]) -> tuple[W, dict[str, NDArray[Any]]]:
+    """The world saved by :func:`save_world` at ``path``, made again by ``make`` (the World
+    class, called as ``World(dim, box, ...)``), and its ``extra`` arrays."""
     try:
         handle = path.open("rb")
     except OSError as exc:
@@ -103,7 +155,7 @@ def load_world(path: Path) -> tuple[World, dict[str, NDArray[Any]]]:
             raise CaromError(f"cannot read checkpoint {path}: {exc}") from None
         try:
             with data:
-                return _read(path, data)
+                return _read(path, data, make)
         except CaromError:
             raise
         except (KeyError, ValueError, OSError, zipfile.BadZipFile, EOFError) as exc:
@@ -113,9 +165,7 @@ def load_world(path: Path) -> tuple[World, dict[str, NDArray[Any]]]:
             ) from None
 
 
-def _read(path: Path, data: Any) -> tuple[World, dict[str, NDArray[Any]]]:
-    from carom.world import World
-
+def _read(path: Path, data: Any, make: Callable[..., W]) -> tuple[W, dict[str, NDArray[Any]]]:
     meta = json.loads(str(data["meta"]))
     _check_version(path, meta)
     kept = meta.get("engine_settings") or {"edmd": meta["settings"], "rigid": meta["rigid"]}
@@ -124,7 +174,7 @@ def _read(path: Path, data: Any) -> tuple[World, dict[str, NDArray[Any]]]:
         kind = registry.find(name).settings
         if kind is not None:
             settings[name] = kind(**values)
-    world = World(
+    world = make(
         meta["dim"],
         meta["box"],
         meta["boundary"],

@@ -27,7 +27,9 @@ def _build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="carom",
         description=(
-            "carom: exact, impulse-based collision response of rigid spheres. "
+            "carom: impulse-based collision response of rigid bodies: spheres and disks "
+            "simulated exactly, event by event; bodies of any shape in 2D and 3D, step by "
+            "step. "
             "Run 'carom COMMAND --help' for the options of each command."
         ),
     )

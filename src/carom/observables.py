@@ -9,17 +9,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from carom.bodies import Bodies
 from carom.engines.base import Counters
+from carom.recording import Frame
 from carom.shapes3d import rotation_matrices
-
-if TYPE_CHECKING:
-    from carom.world import Frame, World
 
 __all__ = [
     "RunHistory",
@@ -154,10 +152,34 @@ def _peculiar_kinetic_energy(bodies: Bodies, velocities: FloatArray) -> float:
     return float(0.5 * np.sum(mass * np.sum(dv * dv, axis=1)))
 
 
+class Observed(Protocol):
+    """What the observables read of a :class:`carom.World` (which imports this module)."""
+
+    dim: int
+    bodies: Bodies
+    #: (d,) [m]
+    box: NDArray[np.float64]
+    #: (d,) [m/s^2]
+    gravity: NDArray[np.float64]
+
+    @property
+    def time(self) -> float: ...
+
+    @property
+    def velocities(self) -> NDArray[np.float64]: ...
+
+    @property
+    def angular_velocities(self) -> NDArray[np.float64]: ...
+
+    def counters(self) -> Counters: ...
+
+    def frame(self) -> Frame: ...
+
+
 class Stats:
     """Observables of a :class:`carom.World`; averages run since the last :meth:`reset`."""
 
-    def __init__(self, world: World) -> None:
+    def __init__(self, world: Observed) -> None:
         self._world = world
         self._t0 = world.time
         self._start = world.counters()
@@ -288,7 +310,7 @@ class RunHistory:
     angular_momentum: list[NDArray[np.float64]] = field(default_factory=list)
     collisions: list[int] = field(default_factory=list)
 
-    def add(self, world: World, frame: Frame) -> None:
+    def add(self, world: Observed, frame: Frame) -> None:
         """Record ``frame`` of ``world`` (taken now: the dissipation so far is the world's)."""
         b = world.bodies
         x, v, w = frame.positions, frame.velocities, frame.angular_velocities

@@ -24,6 +24,7 @@ __all__ = [
     "Recording",
     "advance_frame_by_frame",
     "check_interval",
+    "check_steps",
     "check_times",
     "check_until",
     "frame_grid",
@@ -225,3 +226,22 @@ def advance_frame_by_frame(
         if target >= until:
             return
         k += 1
+
+
+def check_steps(dt: float | None, engine: str, **times: float | None) -> None:
+    """A time-stepped engine stops on its steps (``dt`` [s]; None: it stops at any time):
+    refuse a time (``until``, ``frame_interval``, ``warmup``: given by name, in seconds) that
+    is not a whole number of them, naming the nearest that is and the ``engine``'s table."""
+    if dt is None:
+        return
+    for name, value in times.items():
+        if value is None:
+            continue
+        steps = value / dt
+        if abs(steps - round(steps)) > 1e-6 * max(1.0, steps) or round(steps) < 1:
+            near = max(1, round(steps)) * dt
+            raise CaromError(
+                f"{name} = {value:g} s is not a whole number of the {engine} engine's steps "
+                f"(1/{1.0 / dt:g} s): frames and the end fall on steps; use "
+                f"{near:.6g} s ({max(1, round(steps))} steps), or change [{engine}] rate"
+            )

@@ -38,7 +38,7 @@ class Scenery:
         gravity: ArrayLike | None = None,
         *,
         walls: Material | float | Sequence[Material | float] = 1.0,
-        t_c: float = 1e-6,
+        t_c: float | None = None,
         combine: CombineRule = "mean",
         shell_thickness: float | None = None,
         engine: str = AUTO,
@@ -68,7 +68,11 @@ class Scenery:
         self.engine_settings: dict[str, Any] = {
             e.name: e.settings() for e in registry.engines() if e.settings is not None
         }
-        self.engine_settings["edmd"] = EdmdSettings(t_c=t_c, shell_thickness=shell_thickness)
+        if t_c is not None or shell_thickness is not None:
+            given = {"t_c": t_c, "shell_thickness": shell_thickness}
+            self.engine_settings["edmd"] = EdmdSettings(
+                **{k: v for k, v in given.items() if v is not None}
+            )
         if rigid is not None:
             self.engine_settings["rigid"] = rigid
         for name, value in (settings or {}).items():

@@ -78,8 +78,9 @@ class World(Scenery):
         The walls' material: one for all, or the lower and upper wall of each axis in turn
         (``x-, x+, y-, ...``); a number is a smooth material of that restitution [-]. A wall's
         restitution is its own, not combined with the body's.
-    t_c : float, default 1e-6
-        TC-model time [s] (:class:`carom.engines.edmd.settings.EdmdSettings`).
+    t_c : float, optional
+        TC-model time [s] (:class:`carom.engines.edmd.settings.EdmdSettings`, whose default
+        it keeps when not given).
     combine : {"mean", "min", "max", "geometric", "product"}, default "mean"
         How two materials' coefficients combine; :meth:`set_pair` overrides a pair.
     shell_thickness : float, optional
@@ -565,7 +566,7 @@ class World(Scenery):
         """Read a checkpoint written by :meth:`save`, and the ``extra`` arrays saved with it."""
         from carom.checkpoint import load_world
 
-        return load_world(Path(path))
+        return load_world(Path(path), cls)
 
     @property
     def counters_before(self) -> Counters:

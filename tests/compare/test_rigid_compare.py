@@ -16,7 +16,8 @@ from carom.compare import compare
 from carom.compare.driver import RigidComparison, peer_scene
 from carom.compare.engines import ENGINES
 from carom.compare.report import format_table, write_comparison
-from carom.compare.rigid import RigidMonitor, RigidScene, _segments_cross, shape_coefficients
+from carom.compare.rigid import RigidMonitor, RigidScene, _segments_cross
+from carom.compare.yardstick import shape_coefficients
 from carom.errors import CaromError
 from carom.materials import Material
 from carom.scene import Scene

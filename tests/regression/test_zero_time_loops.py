@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import carom
+from carom.engines.edmd.settings import EdmdSettings
 from carom.observables import potential_energy
 from carom.scene import find_scene, load_scene
 
@@ -34,7 +35,7 @@ def test_the_rain_reaches_its_pile() -> None:
     # The scene that hung, with the TC time it had then (1 us; the scene now uses 1 ms so
     # that its pile costs fewer events): past both places it froze. About 1.3 million events.
     scene = load_scene(find_scene("rain-3d"))
-    scene.world["t_c"] = 1e-6
+    scene.settings["edmd"] = EdmdSettings(t_c=1e-6)
     world = scene.build()
     _run_bounded(world, 0.72, 100_000)
     assert world.stats.collisions > 100_000

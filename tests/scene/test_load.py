@@ -108,7 +108,7 @@ BAD_SCENES: list[tuple[tuple[str, str], str]] = [
     # restitution outside [0, 1]
     (
         ("restitution = 0.8", "restitution = 1.2"),
-        r"scene\.toml:10: \[\[materials\]\] #1 restitution: must lie in \[0, 1\], got 1\.2",
+        r"scene\.toml:10: \[\[materials\]\] #1 restitution: must lie in \[0, 1\]; got 1\.2",
     ),
     # bodies overlapping at the start
     (

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.compare.rigid import RigidSceneBase, Yardstick, extent
+from carom.compare.yardstick import RigidSceneBase, Yardstick, extent
 from carom.engines.rigid.settings import RigidSettings
 from carom.engines.rigid3d.assemble import world_parts
 from carom.engines.rigid3d.driver import RigidEngine3D

@@ -32,6 +32,7 @@ from carom._text import plural
 from carom.errors import CaromError
 from carom.limits import LARGEST, MAX_FRAMES, SMALLEST
 from carom.observables import RunHistory
+from carom.recording import check_steps
 from carom.scene import Scene, find_scene, load_scene
 from carom.world import World
 
@@ -39,7 +40,6 @@ __all__ = [
     "Outputs",
     "RunInterrupted",
     "RunReport",
-    "check_steps",
     "run_scene",
     "stop_on_signals",
     "work_directory",
@@ -207,7 +207,12 @@ def run_scene(
         run.world.prepare()
     else:
         world = scene.build()  # refuses a bad scene before anything is written
-        check_steps(world, until=until, frame_interval=scene.run["frame_interval"])
+        check_steps(
+            world.fixed_step,
+            world.engine_name,
+            until=until,
+            frame_interval=scene.run["frame_interval"],
+        )
         world.prepare()  # compiled (or loaded) apart from the run's own time
         _make_directory(work)
         try:
@@ -255,27 +260,6 @@ def run_scene(
         prepare_seconds=run.prepare_seconds,
         step=world.fixed_step,
     )
-
-
-def check_steps(world: World, **times: float | None) -> None:
-    """A time-stepped engine stops on its steps: refuse a time (``until``, ``frame_interval``,
-    ``warmup``: given by name, in seconds) that is not a whole number of them, naming the
-    nearest that is."""
-    dt = world.fixed_step
-    if dt is None:
-        return
-    name_of = world.engine_name
-    for name, value in times.items():
-        if value is None:
-            continue
-        steps = value / dt
-        if abs(steps - round(steps)) > 1e-6 * max(1.0, steps) or round(steps) < 1:
-            near = max(1, round(steps)) * dt
-            raise CaromError(
-                f"{name} = {value:g} s is not a whole number of the {name_of} engine's steps "
-                f"(1/{1.0 / dt:g} s): frames and the end fall on steps; use "
-                f"{near:.6g} s ({max(1, round(steps))} steps), or change [{name_of}] rate"
-            )
 
 
 def _check_size(scene: Scene, until: float, outputs: Outputs, target: Path) -> None:

@@ -7,18 +7,16 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Mapping
 from pathlib import Path
-from typing import Any, Literal, cast
+from typing import Any, Literal, Protocol, cast
 
 import numpy as np
 
 from carom import shapes, shapes3d
-from carom.engines.rigid.settings import RigidSettings
 from carom.errors import CaromError
 from carom.limits import check_body_count
 from carom.materials import Material
 from carom.meshes import Mesh, decompose, load_mesh
 from carom.scene import layouts
-from carom.scene.load import Scene
 from carom.scene.schema import GENERATORS, Locator, SceneError
 from carom.world import World
 
@@ -28,6 +26,24 @@ __all__ = ["build_world", "count_bodies"]
 #: Jullien 1986; spheres: Torquato, Uche & Stillinger 2006): a [[gas]] denser than this cannot
 #: be placed at random
 RSA_JAMMING = {2: 0.547, 3: 0.384}
+
+
+class Scene(Protocol):
+    """What the build reads of a checked :class:`carom.scene.Scene` (whose ``build`` calls
+    this module: it is typed by this protocol, not imported)."""
+
+    world: dict[str, Any]
+    materials: list[dict[str, Any]]
+    bodies: list[dict[str, Any]]
+    row: list[dict[str, Any]]
+    rack: list[dict[str, Any]]
+    lattice: list[dict[str, Any]]
+    pegs: list[dict[str, Any]]
+    pyramid: list[dict[str, Any]]
+    gas: list[dict[str, Any]]
+    settings: dict[str, Any]
+    source: str
+    text: str
 
 
 def build_world(scene: Scene) -> World:
@@ -48,23 +64,27 @@ def build_world(scene: Scene) -> World:
                 rolling=m["rolling"],
             )
         except CaromError as exc:
-            raise where.error(["materials"], str(exc), "", index) from None
+            raise where.refused("materials", exc, m, index) from None
     w = scene.world
+    if "t_c" in w:  # (a checked scene keeps it in settings["edmd"]: a key set since is not read)
+        raise SceneError(
+            f"{scene.source}: the scene's world holds t_c; a checked scene keeps the engines' "
+            f"settings in Scene.settings: set scene.settings['edmd'] = EdmdSettings(t_c=...)"
+        )
     try:
-        rigid = RigidSettings(**scene.rigid)
+        walls = _walls(w["walls"], materials)
     except CaromError as exc:
-        raise where.error(["rigid"], str(exc), "") from None
+        raise where.error(["world", "walls"], str(exc), "") from None
     try:
         world = World(
             w["dimension"],
             w["box"],
             w["boundary"],
             w["gravity"],
-            walls=_walls(w["walls"], materials),
-            t_c=w["t_c"],
+            walls=walls,
             combine=w["combine"],
             engine=w["engine"],
-            rigid=rigid,
+            settings=scene.settings,
         )
     except CaromError as exc:
         raise where.error(["world"], str(exc), "") from None
@@ -563,6 +583,7 @@ def _random_positions(
 
 
 def _walls(value: Any, materials: Mapping[str, Material]) -> list[Material | float]:
+    # (a number is a smooth material of that restitution: Material checks its range)
     """``[world] walls``: restitutions or material names, one or one per wall face."""
     items = value if isinstance(value, list) else [value]
-    return [materials[v] if isinstance(v, str) else float(v) for v in items]
+    return [materials[v] if isinstance(v, str) else Material(float(v)) for v in items]

@@ -10,7 +10,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from carom.scene.schema import ARRAYS, GENERATORS, RENAMED, SCHEMA, Locator, SceneError
+from carom.engines import registry
+from carom.errors import CaromError
+from carom.scene.schema import (
+    ARRAYS,
+    GENERATORS,
+    RENAMED,
+    Locator,
+    SceneError,
+    all_tables,
+    settings_tables,
+)
 
 if TYPE_CHECKING:
     from carom.world import World
@@ -32,8 +42,9 @@ class Scene:
         The ``[[materials]]``, ``[[bodies]]``, generator (``[[row]]``, ``[[rack]]``,
         ``[[lattice]]``, ``[[pegs]]``, ``[[pyramid]]``) and ``[[gas]]`` tables, defaults
         filled in.
-    rigid : dict
-        The ``[rigid]`` table: the rigid-body engine's step and solver settings.
+    settings : dict of str to settings
+        Each engine's settings (its dataclass, made from the table named as the engine:
+        ``[rigid]``, ``[edmd]``; the dataclass's defaults for what the file leaves out).
     run : dict
         The ``[run]`` table: ``until`` [s] and ``frame_interval`` [s] (None: no frames).
     outputs : dict
@@ -53,7 +64,7 @@ class Scene:
     pyramid: list[dict[str, Any]] = field(default_factory=list)
     gas: list[dict[str, Any]] = field(default_factory=list)
     run: dict[str, Any] = field(default_factory=dict)
-    rigid: dict[str, Any] = field(default_factory=dict)
+    settings: dict[str, Any] = field(default_factory=dict)
     outputs: dict[str, Any] = field(default_factory=dict)
     source: str = "<dict>"
     text: str = ""
@@ -62,15 +73,16 @@ class Scene:
     def from_dict(cls, data: Mapping[str, Any], source: str = "<dict>", text: str = "") -> Scene:
         """Check a scene given as nested dicts and lists (the shape of the TOML file)."""
         where = Locator(source, text)
+        tables = all_tables()
         for table in data:
-            if table not in SCHEMA:
+            if table not in tables:
                 raise where.error(
                     [table],
                     f"unknown table [{table}]",
-                    f"use one of {', '.join('[' + t + ']' for t in SCHEMA)}",
+                    f"use one of {', '.join('[' + t + ']' for t in tables)}",
                 )
         parts: dict[str, Any] = {}
-        for table in SCHEMA:
+        for table in tables:
             value = data.get(table)
             if table in ARRAYS:
                 entries = [] if value is None else value
@@ -89,7 +101,8 @@ class Scene:
                 if not isinstance(value, dict):
                     raise where.error([table], f"[{table}] must be a table", "")
                 parts[table] = _check_table(table, value, where, None)
-        scene = cls(source=source, text=text, **parts)
+        settings = _engine_settings(parts, data, where)
+        scene = cls(source=source, text=text, settings=settings, **parts)
         scene._check_consistency(where)
         return scene
 
@@ -290,10 +303,38 @@ def find_scene(name_or_path: str | Path) -> Path:
     )
 
 
+def _engine_settings(
+    parts: dict[str, Any], data: Mapping[str, Any], where: Locator
+) -> dict[str, Any]:
+    """Each engine's settings, made from (and taken out of) its table in ``parts``: the one
+    check of every setting is its dataclass's; a setting it refuses is named by line. The
+    older ``[world] t_c`` is the event-driven engine's ``t_c``."""
+    older = parts["world"].pop("t_c")
+    settings: dict[str, Any] = {}
+    for name, rows in settings_tables().items():
+        table = parts.pop(name)
+        if name == "edmd" and older is not None:
+            if "t_c" in (data.get("edmd") or {}):
+                raise where.error(
+                    ["world", "t_c"], "is also given as [edmd] t_c", "give it once, in [edmd]"
+                )
+            table["t_c"] = older
+        kind = registry.find(name).settings
+        assert kind is not None
+        try:
+            settings[name] = kind(**table)
+        except CaromError as exc:
+            moved = name == "edmd" and str(exc).startswith("t_c ") and older is not None
+            raise (
+                where.refused("world", exc, ["t_c"]) if moved else where.refused(name, exc, rows)
+            ) from None
+    return settings
+
+
 def _check_table(
     table: str, entry: Mapping[str, Any], where: Locator, index: int | None
 ) -> dict[str, Any]:
-    schema = SCHEMA[table]
+    schema = all_tables()[table]
     result: dict[str, Any] = {}
     for key, value in entry.items():
         if key in RENAMED.get(table, {}):

@@ -3,9 +3,10 @@ and how a scene's errors are worded (file, line, table, key, what is wrong, the 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 from carom._text import printable
@@ -14,7 +15,16 @@ from carom.errors import CaromError
 from carom.limits import LARGEST, MAX_BODIES, SMALLEST
 from carom.materials import COMBINE_RULES
 
-__all__ = ["ARRAYS", "GENERATORS", "RENAMED", "SCHEMA", "Locator", "SceneError"]
+__all__ = [
+    "ARRAYS",
+    "GENERATORS",
+    "RENAMED",
+    "SCHEMA",
+    "Locator",
+    "SceneError",
+    "all_tables",
+    "settings_tables",
+]
 
 
 class SceneError(CaromError):
@@ -41,10 +51,6 @@ def _positive(value: Any) -> str | None:
     if problem is None and value < SMALLEST:
         return f"must be at least {SMALLEST:g} (docs/scenes.md, Limits), got {value!r}"
     return problem
-
-
-def _unit_interval(value: Any) -> str | None:
-    return _number(value) or (None if 0 <= value <= 1 else f"must lie in [0, 1], got {value!r}")
 
 
 def _integer(value: Any) -> str | None:
@@ -78,6 +84,29 @@ def _engine(value: Any) -> str | None:
         return None
     names = [*registry.engine_choices()] + [a for e in registry.engines() for a in e.aliases]
     return f"must be one of {', '.join(repr(o) for o in names)}, got {_show(value)}"
+
+
+def _by_settings(value: Any) -> str | None:
+    """An engine setting: checked once, where its settings are made (the settings dataclass's
+    ``__post_init__``, :meth:`carom.scene.load.Scene.from_dict`), not here."""
+    return None
+
+
+def settings_tables() -> dict[str, dict[str, tuple[Check, bool, Any]]]:
+    """A table for each engine that has settings, named as the engine (``[rigid]``,
+    ``[edmd]``), with a row for every field of its settings dataclass and the field's default:
+    the dataclass is the one place a setting's default, range and check live."""
+    tables: dict[str, dict[str, tuple[Check, bool, Any]]] = {}
+    for entry in registry.engines():
+        if entry.settings is not None:
+            fields = dataclasses.fields(entry.settings)
+            tables[entry.name] = {f.name: (_by_settings, False, f.default) for f in fields}
+    return tables
+
+
+def all_tables() -> dict[str, dict[str, tuple[Check, bool, Any]]]:
+    """Every table a scene may hold: :data:`SCHEMA`'s and the engines' settings tables."""
+    return SCHEMA | settings_tables()
 
 
 def _text(value: Any) -> str | None:
@@ -115,9 +144,9 @@ def _walls(value: Any) -> str | None:
     for item in items:
         if isinstance(item, str):
             continue
-        problem = _unit_interval(item)
+        problem = _number(item)  # (its range: carom.Material's check)
         if problem:
-            return f"must be restitutions in [0, 1] or material names: an entry {problem}"
+            return f"must be restitutions or material names: an entry {problem}"
     return None
 
 
@@ -259,20 +288,13 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "boundary": (_choice("walls", "periodic", "open"), False, "walls"),
         "gravity": (_vector, False, None),
         "walls": (_walls, False, 1.0),
-        "t_c": (_positive, False, 1e-6),
+        "t_c": (_by_settings, False, None),  # the older place of [edmd] t_c
         "combine": (_choice(*COMBINE_RULES), False, "mean"),
         "engine": (_engine, False, "auto"),
     },
-    "rigid": {
-        "rate": (_positive, False, 60.0),
-        "substeps": (_count, False, 4),
-        "contact_hertz": (_positive, False, 30.0),
-        "damping_ratio": (_not_negative, False, 10.0),
-        "sleep": (_boolean, False, True),
-    },
     "materials": {
         "name": (_text, True, None),
-        "restitution": (_unit_interval, True, None),
+        "restitution": (_number, True, None),  # its range: carom.Material's check
         "beta": (_number, False, None),
         "friction": (_number, False, None),
         "beta0": (_number, False, None),
@@ -412,6 +434,16 @@ class Locator:
             if key.match(self.lines[number]):
                 return number + 1
         return start + 1
+
+    def refused(
+        self, table: str, exc: CaromError, keys: Iterable[str], index: int | None = None
+    ) -> SceneError:
+        """What a carom class refused (its own check, the one check of the value), named at
+        the key of ``table`` its message starts with ("restitution must lie in ...")."""
+        key, _, rest = str(exc).partition(" ")
+        if key in keys:
+            return self.error([table, key], rest, "", index)
+        return self.error([table], str(exc), "", index)
 
     def error(
         self, path: list[str], problem: str, fix: str, index: int | None = None

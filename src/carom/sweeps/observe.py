@@ -448,12 +448,14 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
 
 def _measure(task: dict[str, Any], out: dict[str, Any]) -> None:
     from carom.observables import kinetic_energy, momentum, potential_energy
-    from carom.run.runner import check_steps
+    from carom.recording import check_steps
     from carom.scene import Scene
 
     scene = Scene.from_dict(task["scene"], task["source"])
     world = scene.build()
-    check_steps(world, warmup=task["warmup"] or None, until=task["until"])
+    check_steps(
+        world.fixed_step, world.engine_name, warmup=task["warmup"] or None, until=task["until"]
+    )
     mark = time.perf_counter()
     world.prepare()
     out["prepare_s"] = time.perf_counter() - mark

@@ -567,9 +567,9 @@ def _resolve(base: dict[str, Any], path: str, where: str, what: str) -> None:
             if last and depth > 0:
                 return  # a key the scene leaves at its default: checked with the scene
             if depth == 0:
-                from carom.scene.schema import ARRAYS, SCHEMA
+                from carom.scene.schema import ARRAYS, all_tables
 
-                if part in SCHEMA and not last and part not in ARRAYS:
+                if part in all_tables() and not last and part not in ARRAYS:
                     node = {}
                     continue
             raise SweepError(

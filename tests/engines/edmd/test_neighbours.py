@@ -81,7 +81,8 @@ def test_lists_are_exactly_the_overlapping_shells(
 
 
 def test_full_lists_and_full_cells_are_reported() -> None:
-    # (the engine then doubles the room and builds again: tests/physics, cramped worlds)
+    # (the engine then doubles the room and builds again: cramped worlds in
+    # tests/engines/edmd/test_closed_forms.py)
     assert _build(_grid(3, 300, False, seed=1, capacity=1)) == LIST_FULL
     assert _build(_grid(3, 300, False, seed=1, cell_capacity=1)) == CELL_FULL
 

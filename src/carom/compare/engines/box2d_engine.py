@@ -25,7 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from carom.compare.rigid import RigidScene, shape_coefficients
+from carom.compare.rigid import RigidScene
+from carom.compare.yardstick import shape_coefficients
 from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
 

@@ -183,8 +183,8 @@ class MujocoRigidSimulation:
     """
 
     def __init__(self, scene: Any) -> None:
-        from carom.compare.rigid import shape_coefficients
         from carom.compare.rigid3d import primitives
+        from carom.compare.yardstick import shape_coefficients
 
         parts = [primitives(scene, i) for i in range(scene.bodies)]
         for i, own in enumerate(parts):

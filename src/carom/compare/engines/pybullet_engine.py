@@ -197,8 +197,8 @@ class PybulletRigidSimulation:
     """
 
     def __init__(self, scene: Any) -> None:
-        from carom.compare.rigid import shape_coefficients
         from carom.compare.rigid3d import primitives, principal_frame, quaternion_product
+        from carom.compare.yardstick import shape_coefficients
 
         e, notes = shape_coefficients(
             scene, scene.restitution, "product", "pybullet", "restitution"

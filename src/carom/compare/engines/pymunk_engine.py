@@ -19,8 +19,9 @@ import numpy as np
 import pymunk
 import pymunk.batch
 
-from carom.compare.rigid import RigidScene, shape_coefficients
+from carom.compare.rigid import RigidScene
 from carom.compare.spec import PeerScene, factor_restitution
+from carom.compare.yardstick import shape_coefficients
 from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
 
 __all__ = ["start"]

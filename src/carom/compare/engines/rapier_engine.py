@@ -22,8 +22,8 @@ from typing import Any
 import numpy as np
 import rapier3d as r
 
-from carom.compare.rigid import shape_coefficients
 from carom.compare.rigid3d import RigidScene3D, primitives, principal_frame
+from carom.compare.yardstick import shape_coefficients
 from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
 

@@ -5,7 +5,7 @@ Compiling is one thread's work in a process (Numba holds a lock), and a cold sta
 independent halves of about the same size: the kernels that build an engine (``initialise``,
 the neighbour lists, the calendar, the handle, sampling) and the event loop
 (:func:`carom.engines.edmd.loop.run_frames`). When the kernel cache is cold, a fresh engine
-starts :func:`start`: a second Python process (``python -m carom.engines.edmd.aside``) builds a
+starts :func:`start`: a second Python process (``python -m carom.engines.edmd.helper``) builds a
 two-sphere engine of the same kind (with gravity or without, spinning or not: the kernels
 differ) and samples it, which compiles the first half into the shared cache, while this
 process compiles the loop for its own model and state (:func:`compile_beside`). It then waits
@@ -23,7 +23,7 @@ import os
 import subprocess
 import sys
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, cast
+from typing import Any, cast
 
 import numpy as np
 from numba import config, types
@@ -33,14 +33,10 @@ from carom.bodies import Bodies
 from carom.engines.base import FrameArrays
 from carom.engines.edmd import loop
 from carom.engines.edmd.handle import handle_type
-from carom.engines.edmd.model import Model
-from carom.engines.edmd.settings import EdmdSettings
+from carom.engines.edmd.model import Environment, Model
 from carom.engines.edmd.state import State
 from carom.jit import kernels_cached
 from carom.materials import pair_table
-
-if TYPE_CHECKING:
-    from carom.engines.edmd.driver import Environment
 
 typeof = cast(Callable[[Any], Any], _typeof)
 
@@ -60,7 +56,7 @@ def start(gravity: bool, spins: bool) -> subprocess.Popen[bytes] | None:
     try:
         flags = [flag for flag, on in (("--gravity", gravity), ("--spins", spins)) if on]
         return subprocess.Popen(
-            [sys.executable, "-m", "carom.engines.edmd.aside", *flags],
+            [sys.executable, "-m", "carom.engines.edmd.helper", *flags],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
@@ -136,7 +132,6 @@ def two_spheres(gravity: bool = False, spins: bool = False) -> tuple[Bodies, Env
     (``Model.gravity`` is None), and its kernels are compiled without the code for parabolas
     and supports; one whose bodies never spin has no inertia factors (``Model.q`` is None),
     and its kernels are compiled without the code that turns them."""
-    from carom.engines.edmd.driver import Environment  # (the driver imports this module)
 
     bodies = Bodies(3)
     bodies.append_spheres(
@@ -158,17 +153,3 @@ def two_spheres(gravity: bool = False, spins: bool = False) -> tuple[Bodies, Env
         plane_normal=np.zeros((0, 3)),
     )
     return bodies, env
-
-
-def main() -> None:
-    """The helper: build a two-sphere engine and sample it (compiling the build kernels), under
-    gravity if called with ``--gravity``, one sphere spinning with ``--spins``."""
-    from carom.engines.edmd.driver import EdmdEngine
-
-    flags = sys.argv[1:]
-    bodies, env = two_spheres("--gravity" in flags, "--spins" in flags)
-    EdmdEngine(bodies, env, EdmdSettings(), 0.0).sample()
-
-
-if __name__ == "__main__":
-    main()

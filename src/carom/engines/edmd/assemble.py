@@ -14,7 +14,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from carom.engines.base import WorldView
-from carom.engines.edmd.driver import OVERLAP_TOLERANCE, EdmdEngine, Environment
+from carom.engines.edmd.driver import OVERLAP_TOLERANCE, EdmdEngine
+from carom.engines.edmd.model import Environment
 from carom.engines.edmd.settings import EdmdSettings
 from carom.errors import CaromError
 from carom.materials import pair_table

@@ -9,7 +9,7 @@ numbering.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,7 +29,7 @@ from carom.engines.base import (
 from carom.engines.edmd import aside, codes, loop, neighbours
 from carom.engines.edmd.calendar import Calendar, calendar_build
 from carom.engines.edmd.handle import new_handle, sample_motion_now, sample_now
-from carom.engines.edmd.model import Model
+from carom.engines.edmd.model import Environment, Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
 from carom.engines.edmd.ordering import spatial_order
 from carom.engines.edmd.renumber import cell_ranks, renumber
@@ -45,9 +45,8 @@ from carom.engines.edmd.state import (
 from carom.engines.edmd.threads import in_ranges
 from carom.errors import CaromError
 from carom.laws.kernels import LAW_SMOOTH
-from carom.materials import PairTable
 
-__all__ = ["OVERLAP_TOLERANCE", "EdmdEngine", "Environment", "grid_cells"]
+__all__ = ["OVERLAP_TOLERANCE", "EdmdEngine", "grid_cells"]
 
 FloatArray = NDArray[np.float64]
 
@@ -99,23 +98,6 @@ def grid_cells(box: FloatArray, reach: float, n: int) -> NDArray[np.int64]:
     if total > limit:
         cells = np.maximum(1.0, np.floor(cells * (limit / total) ** (1.0 / box.shape[0])))
     return cells.astype(np.int64)
-
-
-class Environment(NamedTuple):
-    """What surrounds the bodies: the box, gravity, the materials' pair table, and the static
-    faces (the box's walls, lower and upper per axis, then the planes)."""
-
-    box: FloatArray
-    periodic: bool
-    gravity: FloatArray
-    pairs: PairTable
-    face_e: FloatArray
-    plane_point: FloatArray
-    plane_normal: FloatArray
-
-    @property
-    def dim(self) -> int:
-        return int(self.box.shape[0])
 
 
 class EdmdEngine:

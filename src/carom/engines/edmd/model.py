@@ -13,7 +13,9 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Model"]
+from carom.materials import PairTable
+
+__all__ = ["Environment", "Model"]
 
 
 class Model(NamedTuple):
@@ -91,3 +93,20 @@ class Model(NamedTuple):
     @property
     def n_bodies(self) -> int:
         return int(self.radius.shape[0])
+
+
+class Environment(NamedTuple):
+    """What surrounds the bodies: the box, gravity, the materials' pair table, and the static
+    faces (the box's walls, lower and upper per axis, then the planes)."""
+
+    box: NDArray[np.float64]
+    periodic: bool
+    gravity: NDArray[np.float64]
+    pairs: PairTable
+    face_e: NDArray[np.float64]
+    plane_point: NDArray[np.float64]
+    plane_normal: NDArray[np.float64]
+
+    @property
+    def dim(self) -> int:
+        return int(self.box.shape[0])

@@ -15,7 +15,7 @@ in the event-driven engine).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Protocol, TypeVar, cast
 
 import numpy as np
@@ -216,13 +216,20 @@ def settings_of(world: WorldView) -> RigidSettings:
     return settings
 
 
-def world_parts(world: WorldView) -> tuple[RigidModel, RigidState, Partners]:
-    """The 2D rigid engine's view of ``world``, as the engine would start from it
-    (:func:`assemble` of its bodies, box, walls, planes, gravity and materials)."""
+Parts = TypeVar("Parts")
+
+
+def world_parts(
+    world: WorldView,
+    assembly: Callable[..., Parts],
+) -> Parts:
+    """The rigid engine's view of ``world``, as the engine would start from it: the model,
+    the state and the partners that ``assembly`` (:func:`assemble` in 2D, ``assemble3d``
+    in 3D) makes of its bodies, box, walls, planes, gravity and materials."""
     why = refuses(world)
     if why is not None:
         raise CaromError(why)
-    return assemble(
+    return assembly(
         world.bodies,
         world.box,
         world.boundary == "walls",
@@ -244,12 +251,12 @@ class _Stepped(Protocol):
 Built = TypeVar("Built", bound=_Stepped)
 
 
-def checked_start(engine: Built, partners: Partners, settings: RigidSettings) -> Built:
+def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
     """``engine``, once no dynamic body starts overlapping another body, a wall or a plane
     deeper than the linear slop (the solver would throw them apart); else a CaromError
     naming the two."""
     a, b, depth = engine.deepest_overlap()
-    slop = settings.linear_slop
+    slop = settings_of(world).linear_slop
     if depth > slop:
         names = [
             describe_partner(int(partners.kind[body]), int(partners.number[body]))
@@ -264,13 +271,12 @@ def checked_start(engine: Built, partners: Partners, settings: RigidSettings) ->
 
 def build(world: WorldView) -> RigidEngine:
     """The 2D rigid engine, from the world's bodies at its clock (:func:`checked_start`)."""
-    model, state, partners = world_parts(world)
-    settings = settings_of(world)
-    engine = RigidEngine(model, state, settings, world.time, partners)
-    return checked_start(engine, partners, settings)
+    model, state, partners = world_parts(world, assemble)
+    engine = RigidEngine(model, state, settings_of(world), world.time, partners)
+    return checked_start(engine, partners, world)
 
 
 def restore(world: WorldView, arrays: Mapping[str, NDArray[Any]]) -> RigidEngine:
     """The 2D rigid engine that wrote ``arrays`` into a checkpoint of ``world``."""
-    model, _, partners = world_parts(world)
+    model, _, partners = world_parts(world, assemble)
     return RigidEngine.restore(model, settings_of(world), partners, arrays)

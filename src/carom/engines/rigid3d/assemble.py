@@ -23,39 +23,24 @@ from carom.engines.rigid.assemble import (
     settings_of,
 )
 from carom.engines.rigid.assemble import refuses as refuses
+from carom.engines.rigid.assemble import world_parts as parts_of
 from carom.engines.rigid3d.driver import RigidEngine3D
 from carom.engines.rigid3d.model import (
     Model3D,
     Piece3D,
     State3D,
     build_model,
+    engine_pieces,
     new_state,
     piece_of,
     plane_piece,
-    triangle_piece,
 )
-from carom.errors import CaromError
 from carom.materials import CombineRule, Material
-from carom.shapes3d import Box, ConvexPiece3D
+from carom.shapes3d import Box
 
-__all__ = ["assemble3d", "build", "engine_pieces", "refuses", "restore", "world_parts"]
+__all__ = ["assemble3d", "build", "refuses", "restore", "world_parts"]
 
 FloatArray = NDArray[np.float64]
-
-
-def engine_pieces(pieces: Sequence[ConvexPiece3D], radius: float) -> list[Piece3D]:
-    """A body's pieces as the engine stores them: a mesh triangle (three corners) as a flat
-    polytope, the others by :func:`.model.piece_of`; no pieces is a ball of ``radius``."""
-    if not pieces:
-        return [piece_of(ConvexPiece3D(np.zeros((1, 3)), np.zeros((0, 3), np.int64), radius),
-                         np.zeros(3))]  # fmt: skip
-    out = []
-    for piece in pieces:
-        if piece.vertices.shape[0] == 3:
-            out.append(triangle_piece(piece.vertices))
-        else:
-            out.append(piece_of(piece, np.zeros(3)))
-    return out
 
 
 def assemble3d(
@@ -150,29 +135,15 @@ def assemble3d(
 def world_parts(world: WorldView) -> tuple[Model3D, State3D, Partners]:
     """The 3D rigid engine's view of ``world``, as the engine would start from it
     (:func:`assemble3d` of its bodies, box, walls, planes, gravity and materials)."""
-    why = refuses(world)
-    if why is not None:
-        raise CaromError(why)
-    return assemble3d(
-        world.bodies,
-        world.box,
-        world.boundary == "walls",
-        world.walls,
-        world.planes,
-        world.gravity,
-        world.materials,
-        world.combine,
-        world.pair_overrides,
-    )
+    return parts_of(world, assemble3d)
 
 
 def build(world: WorldView) -> RigidEngine3D:
     """The 3D rigid engine, from the world's bodies at its clock (overlaps refused as in
     2D, :func:`carom.engines.rigid.assemble.checked_start`)."""
     model, state, partners = world_parts(world)
-    settings = settings_of(world)
-    engine = RigidEngine3D(model, state, settings, world.time, partners)
-    return checked_start(engine, partners, settings)
+    engine = RigidEngine3D(model, state, settings_of(world), world.time, partners)
+    return checked_start(engine, partners, world)
 
 
 def restore(world: WorldView, arrays: Mapping[str, NDArray[Any]]) -> RigidEngine3D:

@@ -381,8 +381,13 @@ def warm_up() -> None:
     global _WARM
     if _WARM:
         return
-    from carom.engines.rigid3d.assemble import engine_pieces
-    from carom.engines.rigid3d.model import build_model, new_state, plane_piece, triangle_piece
+    from carom.engines.rigid3d.model import (
+        build_model,
+        engine_pieces,
+        new_state,
+        plane_piece,
+        triangle_piece,
+    )
     from carom.shapes3d import Box, Capsule, Sphere
 
     inf = math.inf

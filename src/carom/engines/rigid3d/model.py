@@ -38,6 +38,7 @@ __all__ = [
     "State3D",
     "build_model",
     "empty_manifolds",
+    "engine_pieces",
     "new_state",
     "plane_piece",
     "triangle_piece",
@@ -406,3 +407,18 @@ def empty_manifolds(rows: int) -> dict[str, NDArray[Any]]:
         "manifold_floats": np.zeros((rows, MANIFOLD_FLOATS)),
         "manifold_count": np.zeros(1, np.int64),
     }
+
+
+def engine_pieces(pieces: Sequence[ConvexPiece3D], radius: float) -> list[Piece3D]:
+    """A body's pieces as the engine stores them: a mesh triangle (three corners) as a flat
+    polytope, the others by :func:`.model.piece_of`; no pieces is a ball of ``radius``."""
+    if not pieces:
+        return [piece_of(ConvexPiece3D(np.zeros((1, 3)), np.zeros((0, 3), np.int64), radius),
+                         np.zeros(3))]  # fmt: skip
+    out = []
+    for piece in pieces:
+        if piece.vertices.shape[0] == 3:
+            out.append(triangle_piece(piece.vertices))
+        else:
+            out.append(piece_of(piece, np.zeros(3)))
+    return out

@@ -32,7 +32,7 @@ def test_kept_manifold_of_a_box_gliding_on_a_slab_measures_what_a_new_one_would(
     # clipping) is kept for a step or two and then made again, all run long. No tangential
     # force acts: the box goes on at constant velocity and spin (x = v t to round-off, and
     # yaw = w t). It sinks into the soft contact by the static deflection g / omega^2
-    # (tests/physics/test_rigid3d_solver.py) only if every kept separation is the gap a new
+    # (tests/engines/rigid3d/test_solver.py) only if every kept separation is the gap a new
     # manifold would measure (the faces are flat: the corners' gaps do not change as they
     # slide). A kept point sits midway between its two material points, which part by the
     # slide since the manifold was made (at most the 0.5 mm tolerance), so the normal
