@@ -47,8 +47,9 @@ LAYERS = [
     {"cli", "__init__"},
     {"__main__"},
 ]
-#: the packages of carom.engines, ranked the same way
-ENGINE_LAYERS = [{"base"}, {"edmd", "rigid"}, {"rigid3d"}, {"registry"}]
+#: the packages of carom.engines, ranked the same way: the rigid engines of the two
+#: dimensions side by side on their shared core, neither importing the other
+ENGINE_LAYERS = [{"base"}, {"stepped"}, {"edmd", "rigid", "rigid3d"}, {"registry"}]
 
 
 def _rank(layers: list[set[str]]) -> dict[str, int]:

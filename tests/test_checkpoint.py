@@ -54,7 +54,7 @@ def _as_version_12(path) -> None:  # type: ignore[no-untyped-def]
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_a_version_12_checkpoint_still_loads_and_runs_on_bit_for_bit(tmp_path, dim) -> None:  # type: ignore[no-untyped-def]
-    from carom.engines.rigid.settings import RigidSettings
+    from carom.engines.stepped.settings import RigidSettings
     from carom.shapes3d import Box
 
     gas = carom.World(2, [1.0, 1.0], gravity=[0.0, -9.81], t_c=2e-6)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import carom
-from carom.engines.rigid.settings import RigidSettings
+from carom.engines.stepped.settings import RigidSettings
 from carom.errors import CaromError
 from carom.meshes import Mesh
 from carom.shapes import Box as Box2D

@@ -16,7 +16,7 @@ from carom.body_input import vector
 from carom.engines import registry
 from carom.engines.edmd.settings import EdmdSettings
 from carom.engines.registry import AUTO
-from carom.engines.rigid.settings import RigidSettings
+from carom.engines.stepped.settings import RigidSettings
 from carom.errors import CaromError
 from carom.limits import check_magnitude, check_size
 from carom.materials import COMBINE_RULES, CombineRule, Material

@@ -92,7 +92,7 @@ class World(Scenery):
         spheres or disks in walls or a periodic box, "rigid" otherwise).
     rigid : RigidSettings, optional
         The rigid-body engine's step and solver settings
-        (:class:`carom.engines.rigid.settings.RigidSettings`).
+        (:class:`carom.engines.stepped.settings.RigidSettings`).
     settings : mapping of str to settings, optional
         Any engine's settings by its name (an engine registered beside the built-in ones).
     """

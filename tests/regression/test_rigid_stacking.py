@@ -18,7 +18,7 @@ import pytest
 
 from carom.engines.rigid.driver import RigidEngine
 from carom.engines.rigid.model import build_model, new_state
-from carom.engines.rigid.settings import RigidSettings
+from carom.engines.stepped.settings import RigidSettings
 from carom.observables import kinetic_energy, potential_energy
 from carom.scene import find_scene, load_scene
 from carom.shapes import Box

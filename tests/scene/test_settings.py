@@ -16,7 +16,7 @@ import pytest
 
 from carom.engines import registry
 from carom.engines.edmd.settings import EdmdSettings
-from carom.engines.rigid.settings import RigidSettings
+from carom.engines.stepped.settings import RigidSettings
 from carom.scene import Scene
 from carom.scene.schema import SceneError, settings_tables
 

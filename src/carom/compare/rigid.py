@@ -28,10 +28,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from carom.compare.yardstick import RigidSceneBase, Yardstick, extent
-from carom.engines.rigid.assemble import assemble, world_parts
+from carom.engines.rigid.assemble import assemble
 from carom.engines.rigid.driver import RigidEngine
 from carom.engines.rigid.model import RigidModel, RigidState, new_state
-from carom.engines.rigid.settings import RigidSettings
+from carom.engines.stepped.assemble import world_parts
+from carom.engines.stepped.settings import RigidSettings
 from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.laws.point_impulse import impulse

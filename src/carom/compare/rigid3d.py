@@ -30,7 +30,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from carom.compare.yardstick import RigidSceneBase, Yardstick, extent
-from carom.engines.rigid.settings import RigidSettings
 from carom.engines.rigid3d.assemble import world_parts
 from carom.engines.rigid3d.driver import RigidEngine3D
 from carom.engines.rigid3d.impacts import normal_lcp
@@ -43,6 +42,7 @@ from carom.engines.rigid3d.model import (
     new_state,
 )
 from carom.engines.rigid3d.motion import free_turn
+from carom.engines.stepped.settings import RigidSettings
 from carom.errors import CaromError
 from carom.geometry.rotation import turn
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC

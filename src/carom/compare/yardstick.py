@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from carom.compare.spec import steps_to
-from carom.engines.rigid.settings import RigidSettings
+from carom.engines.stepped.settings import RigidSettings
 from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC
 

@@ -204,7 +204,7 @@ def pick(choice: str, world: WorldView) -> EngineEntry:
 
 def _built_in() -> tuple[EngineEntry, ...]:
     from carom.engines.edmd.settings import EdmdSettings
-    from carom.engines.rigid.settings import RigidSettings
+    from carom.engines.stepped.settings import RigidSettings
 
     edmd = "carom.engines.edmd.assemble"
     return (

@@ -26,7 +26,7 @@ from hypothesis import strategies as st
 from carom.bodies import BODY_KINDS
 from carom.engines.rigid.driver import RigidEngine
 from carom.engines.rigid.model import build_model, new_state
-from carom.engines.rigid.settings import RigidSettings
+from carom.engines.stepped.settings import RigidSettings
 from carom.shapes import Box, Circle, Polygon, Shape2D
 
 G = 9.81

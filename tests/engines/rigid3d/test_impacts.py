@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import carom
-from carom.engines.rigid.settings import RigidSettings
+from carom.engines.stepped.settings import RigidSettings
 from carom.shapes3d import Box, Capsule, Hull, Sphere, rotation_matrix
 
 G = 9.81

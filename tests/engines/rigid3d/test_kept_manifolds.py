@@ -12,7 +12,7 @@ import pytest
 
 import carom
 from carom import CaromError
-from carom.engines.rigid.settings import RigidSettings
+from carom.engines.stepped.settings import RigidSettings
 from carom.shapes3d import Box, rotation_matrix
 
 G = 9.81

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import carom
-from carom.engines.rigid.settings import RigidSettings
+from carom.engines.stepped.settings import RigidSettings
 from carom.shapes3d import Box, Capsule, Hull, Sphere, rotation_matrix
 
 G = 9.81

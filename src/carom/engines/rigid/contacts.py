@@ -19,13 +19,22 @@ import numpy as np
 from numba import njit
 
 from carom.engines.rigid.motion import relative_velocity
+from carom.engines.stepped.contacts import find_cached
+from carom.engines.stepped.rows import (
+    I_BODY_A,
+    I_BODY_B,
+    I_COUNT,
+    I_ID0,
+    I_PIECE_A,
+    I_PIECE_B,
+    flags_column,
+)
 from carom.geometry.manifold2d import collide
 
 __all__ = [
     "CONTACT_FLOATS",
     "CONTACT_INTS",
     "extremes",
-    "find_cached",
     "narrow_phase",
     "point_offset",
 ]
@@ -54,35 +63,17 @@ P_Y = 12
 CONTACT_FLOATS = POINT0 + 2 * POINT_FLOATS
 
 # int columns of a contact row
-I_BODY_A = 0
-I_BODY_B = 1
-I_PIECE_A = 2
-I_PIECE_B = 3
-I_COUNT = 4  # points, 1 or 2
-I_ID0 = 5  # feature ids of the points
-I_ID1 = 6
-I_FLAGS = 7  # bit 0: solved exactly this step (isolated impact)
-CONTACT_INTS = 8
+# the declared integer columns (carom.engines.stepped.rows): bodies, pieces, points (1 or 2),
+# their feature ids, then the flags
+I_ID1 = I_ID0 + 1
+I_FLAGS = flags_column(2)
+CONTACT_INTS = I_FLAGS + 1
 
 
 @njit(cache=True, inline="always")
 def point_offset(j: int) -> int:
     """Column of point ``j``'s first float."""
     return POINT0 + POINT_FLOATS * j
-
-
-@njit(cache=True, inline="always")
-def find_cached(keys: np.ndarray, count: int, key: int, cursor: int) -> tuple[int, int]:
-    """Row of ``key`` in the sorted ``keys[:count]`` (-1 if absent), searched from row
-    ``cursor`` on, and where the next search may start.
-
-    Keys asked for in increasing order (the pairs come sorted) walk the cache once in all:
-    O(pairs + cache) per step, not a search per pair.
-    """
-    while cursor < count and keys[cursor] < key:
-        cursor += 1
-    row = cursor if cursor < count and keys[cursor] == key else -1
-    return row, cursor
 
 
 @njit(cache=True)
@@ -220,7 +211,7 @@ def narrow_phase(
 @njit(cache=True)
 def extremes(cf: np.ndarray, ci: np.ndarray, nc: int) -> tuple[np.ndarray, np.ndarray]:
     """Each contact's least separation [m] and least normal relative speed [m/s] over its
-    points, (nc,) each (:func:`carom.engines.rigid.islands.plan`)."""
+    points, (nc,) each (:func:`carom.engines.stepped.islands.plan`)."""
     closest = np.full(nc, np.inf)
     closing = np.full(nc, np.inf)
     for m in range(nc):

@@ -19,7 +19,7 @@ One step (``dt = 1/rate``) runs these stages, in this order (docs/rigid.md):
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -27,161 +27,20 @@ from numpy.typing import NDArray
 
 from carom.engines.base import (
     COLLISION_DTYPE,
-    KIND_PAIR,
-    Counters,
-    FrameArrays,
     Partners,
     Sink,
 )
-from carom.engines.rigid import broadphase, contacts, impacts, islands, motion, solver
+from carom.engines.rigid import broadphase, contacts, impacts, motion, solver
 from carom.engines.rigid.model import RigidModel, RigidState, grid_cell
-from carom.engines.rigid.settings import RigidSettings
+from carom.engines.stepped import islands
+from carom.engines.stepped.driver import SteppedEngine
+from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
+from carom.engines.stepped.settings import RigidSettings
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 
 __all__ = ["RigidEngine"]
 
 FloatArray = NDArray[np.float64]
-
-#: steps between looks at a run's stop request
-STOP_CHECK_STEPS = 64
-
-
-class SteppedEngine:
-    """What the 2D and 3D rigid engines share: the clock in whole steps, advancing to a time,
-    and the running totals (collisions with bodies and with walls or planes, the energy
-    ledger) that :meth:`counters` reports and a checkpoint keeps. A subclass sets ``dt``,
-    ``partners`` and ``n_bodies`` and defines ``step``."""
-
-    start: float
-    steps: int
-    dt: float
-    n_bodies: int
-    partners: Partners
-
-    def _start_totals(self, time: float) -> None:
-        self.start = float(time)
-        self.steps = 0
-        self._collisions = 0
-        self._wall_collisions = 0
-        self._energy_lost = 0.0
-        self._energy_given = 0.0
-        self._work_done = 0.0
-
-    def step(self, sink: Sink | None = None) -> None:
-        raise NotImplementedError
-
-    @staticmethod
-    def _warm_kernels() -> None:
-        """Load every kernel a step of this engine's dimension can call (a module's
-        ``warm_up``)."""
-        raise NotImplementedError
-
-    def warm_up(self) -> None:
-        """Load (or compile) every kernel a run may call: a step's, including those called
-        only on a first impact or sleep, and the sampler's. Changes nothing."""
-        self.advance(self.time, 0, None)  # no step is taken
-        self._warm_kernels()
-        self.sample()
-
-    @property
-    def time(self) -> float:
-        """The clock [s]: the start plus whole steps."""
-        return self.start + self.steps * self.dt
-
-    def advance(
-        self,
-        until: float,
-        max_events: int,
-        sink: Sink | None,
-        stop: Callable[[], bool] | None = None,
-    ) -> bool:
-        """Step until the clock reaches ``until`` [s] (to within a millionth of a step);
-        ``max_events`` bounds the steps. Impacts solved exactly go to ``sink``."""
-        target = math.floor((until - self.start) / self.dt + 1e-6)
-        todo = min(max(target - self.steps, 0), max_events)
-        for k in range(todo):
-            self.step(sink)
-            if stop is not None and (k + 1) % STOP_CHECK_STEPS == 0 and stop():
-                return False
-        return True
-
-    def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        raise NotImplementedError
-
-    def sample_motion(self) -> tuple[FloatArray, FloatArray]:
-        """:meth:`sample`'s positions and velocities (a stepped engine's bodies are few)."""
-        x, v, _, _ = self.sample()
-        return x, v
-
-    def advance_frames(
-        self,
-        times: FloatArray,
-        sink: Sink | None,
-        stop: Callable[[], bool] | None,
-        out: FrameArrays,
-    ) -> int:
-        """Step to each of ``times`` and sample there: a call from Python a frame, which
-        costs little beside a step. Returns the frames written (fewer if ``stop`` said so)."""
-        for f in range(len(times)):
-            if not self.advance(float(times[f]), np.iinfo(np.int64).max, sink, stop):
-                return f
-            x, v, orient, w = self.sample()
-            out.times[f] = self.time
-            out.positions[f] = x
-            out.velocities[f] = v
-            out.orientations[f] = orient.reshape(len(orient), -1)
-            out.angular_velocities[f] = w
-        return len(times)
-
-    def counters(self) -> Counters:
-        return Counters(
-            self.steps,
-            self._collisions,
-            self._wall_collisions,
-            0,
-            0,
-            0.0,
-            self._energy_lost,
-            0,
-            self._energy_given,
-            self._work_done,
-        )
-
-    def resting(self) -> NDArray[np.int64]:
-        return np.full(self.n_bodies, -1, np.int64)
-
-    def _totals(self) -> dict[str, NDArray[Any]]:
-        """The clock and the running totals, for :meth:`arrays`."""
-        return {
-            "steps": np.array([self.steps]),
-            "start": np.array([self.start]),
-            "totals": np.array(
-                [
-                    self._collisions,
-                    self._wall_collisions,
-                    self._energy_lost,
-                    self._energy_given,
-                    self._work_done,
-                ]
-            ),
-        }
-
-    def _restore_totals(self, arrays: Mapping[str, NDArray[Any]]) -> None:
-        """Take the clock and totals back from :meth:`_totals`' arrays."""
-        self.steps = int(arrays["steps"][0])
-        collisions, walls, lost, given, work = (float(t) for t in arrays["totals"])
-        self._collisions, self._wall_collisions = int(collisions), int(walls)
-        self._energy_lost, self._energy_given, self._work_done = lost, given, work
-
-    def _count(self, partner: NDArray[np.int64], lost: float, work: float) -> NDArray[np.int8]:
-        """Count exact impacts against ``partner`` rows and add their ledger; return what
-        each partner is (KIND_PAIR, KIND_WALL, KIND_PLANE)."""
-        against = self.partners.kind[partner]
-        self._wall_collisions += int(np.count_nonzero(against != KIND_PAIR))
-        self._collisions += int(np.count_nonzero(against == KIND_PAIR))
-        self._energy_lost += lost
-        self._work_done += work
-        return against
 
 
 class RigidEngine(SteppedEngine):
@@ -225,37 +84,11 @@ class RigidEngine(SteppedEngine):
         time: float = 0.0,
         partners: Partners | None = None,
     ) -> None:
-        self.model = model
-        self.state = state
-        self.settings = settings
-        self._start_totals(time)
-        self.dt = settings.dt
+        shape = (2, contacts.CONTACT_FLOATS, contacts.CONTACT_INTS)
+        self._begin(model, state, settings, time, partners, shape, grid_cell(model),
+                    broadphase.find_pairs)  # fmt: skip
         n = model.kind.shape[0]
-        if partners is None:
-            partners = Partners(np.zeros(n, np.int8), np.arange(n, dtype=np.int64))
-        self.partners = partners
-        #: the caller's bodies: the first ``n_bodies``
-        self.n_bodies = int(np.count_nonzero(partners.kind == KIND_PAIR))
-        self.cell = grid_cell(model)
-        self._cf = np.zeros((max(64, 2 * n), contacts.CONTACT_FLOATS))
-        self._ci = np.zeros((max(64, 2 * n), contacts.CONTACT_INTS), np.int64)
-        self._boxes = np.zeros((model.piece_start.shape[0], 4))
-        self._kept = broadphase.KeptPairs(
-            model.piece_start.shape[0],
-            2,
-            n,
-            lambda boxes, active, out: broadphase.find_pairs(
-                boxes, self.model.piece_body, active, self._dynamic, self.cell, out
-            ),
-        )
-        self._parent = np.zeros(n, np.int64)
-        self._role = np.zeros(n, np.int64)
-        self._dynamic = model.kind == islands.KIND_DYNAMIC
-        self._kinematic = model.kind == islands.KIND_KINEMATIC
-        self._accel = np.zeros((n, 2))
-        self._accel[self._dynamic] = model.gravity
         self._g = float(np.hypot(*model.gravity))
-        self.n_contacts = 0
         # place everything once: static pieces never move again
         motion.place_pieces(
             state.x,
@@ -278,10 +111,6 @@ class RigidEngine(SteppedEngine):
         w[:, 2] = s.omega[:n]
         return s.x[:n].copy(), s.v[:n].copy(), s.angle[:n].reshape(-1, 1).copy(), w
 
-    def arrays(self) -> dict[str, NDArray[Any]]:
-        s = self.state
-        return {name: np.array(value) for name, value in s._asdict().items()} | self._totals()
-
     @classmethod
     def restore(
         cls,
@@ -302,10 +131,10 @@ class RigidEngine(SteppedEngine):
         the depth [m] (positive; ``(-1, -1, 0.0)`` when nothing overlaps)."""
         nc = self._contacts()
         ci, cf = self._ci[:nc], self._cf[:nc]
-        a, b = ci[:, contacts.I_BODY_A], ci[:, contacts.I_BODY_B]
+        a, b = ci[:, I_BODY_A], ci[:, I_BODY_B]
         columns = [contacts.point_offset(j) + contacts.P_SEP for j in range(2)]
         depth = -cf[:, columns]  # (nc, 2); a contact's second point counts if it has one
-        depth[ci[:, contacts.I_COUNT] < 2, 1] = -np.inf
+        depth[ci[:, I_COUNT] < 2, 1] = -np.inf
         depth[~(self._dynamic[a] | self._dynamic[b])] = -np.inf
         if nc == 0 or float(depth.max()) <= 0.0:
             return (-1, -1, 0.0)
@@ -414,8 +243,8 @@ class RigidEngine(SteppedEngine):
         )
         if n_iso:
             rows = isolated[:n_iso]
-            ba = self._ci[rows, contacts.I_BODY_A]
-            bb = self._ci[rows, contacts.I_BODY_B]
+            ba = self._ci[rows, I_BODY_A]
+            bb = self._ci[rows, I_BODY_B]
             log = np.zeros((n_iso * impacts.MAX_IMPACTS, impacts.IMPACT_FIELDS))
             logged = impacts.exact_impacts(
                 isolated,

@@ -30,7 +30,7 @@ import math
 import numpy as np
 from numba import njit
 
-from carom.engines.rigid.contacts import I_BODY_A, I_BODY_B, I_FLAGS, I_PIECE_A, I_PIECE_B
+from carom.engines.rigid.contacts import I_FLAGS
 from carom.engines.rigid.motion import (
     apply_impulse,
     fixed_work,
@@ -38,7 +38,7 @@ from carom.engines.rigid.motion import (
     place_piece,
     relative_velocity,
 )
-from carom.engines.rigid.solver import FLAG_EXACT
+from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
 from carom.geometry.manifold2d import collide, core_witness
 
 __all__ = ["IMPACT_FIELDS", "exact_impacts"]

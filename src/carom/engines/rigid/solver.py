@@ -49,9 +49,6 @@ from carom.engines.rigid.contacts import (
     F_MU,
     F_NX,
     F_NY,
-    I_BODY_A,
-    I_BODY_B,
-    I_COUNT,
     I_FLAGS,
     P_BASE,
     P_JN,
@@ -66,15 +63,10 @@ from carom.engines.rigid.contacts import (
     point_offset,
 )
 from carom.engines.rigid.motion import apply_impulse, fixed_work, relative_velocity
+from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_COUNT
+from carom.engines.stepped.solver import LANE_MATH, LANES, color_groups, soft_bias, softness
 
-__all__ = ["LANES", "color_groups", "soft_bias", "softness", "solve_step"]
-
-FLAG_EXACT = 1  # the contact was solved exactly this step (an isolated impact)
-
-#: contacts solved together in one group
-LANES = 16
-#: colours a body can take (the bits of one mask); a contact finding none free is solved alone
-COLORS = 64
+__all__ = ["solve_step"]
 
 # rows of a group (each LANES wide, row r from r * LANES on): the contact ...
 R_NX = 0
@@ -126,11 +118,6 @@ STATE_COLS = 8
 #: a point that is not there: never touching, never pushed
 ABSENT_BASE = 1e30
 
-#: what the lane loops let the compiler assume: no NaN or infinity, and the sign of a zero
-#: does not matter. This lets it use vector min and max; nothing is reordered or fused, so
-#: every lane does the arithmetic as written.
-LANE_MATH = {"nnan", "ninf", "nsz"}
-
 
 # Taylor coefficients of cos and sin: (-1)^k / (2k)! and (-1)^k / (2k+1)!
 _C2, _C4, _C6, _C8, _C10, _C12 = ((-1.0) ** k / math.factorial(2 * k) for k in range(1, 7))
@@ -149,110 +136,6 @@ def turn(phi: float) -> tuple[float, float]:
     c = 1.0 + p2 * (_C2 + p2 * (_C4 + p2 * (_C6 + p2 * (_C8 + p2 * (_C10 + p2 * _C12)))))
     s = phi * (1.0 + p2 * (_S3 + p2 * (_S5 + p2 * (_S7 + p2 * (_S9 + p2 * (_S11 + p2 * _S13))))))
     return c, s
-
-
-@njit(cache=True)
-def softness(hertz: float, zeta: float, h: float) -> tuple[float, float, float]:
-    """Bias rate [1/s], mass scale and impulse scale [-] of a soft contact over substep h."""
-    omega = 2.0 * math.pi * hertz
-    a1 = 2.0 * zeta + h * omega
-    a2 = h * omega * a1
-    a3 = 1.0 / (1.0 + a2)
-    return omega / a1, a2 * a3, a3
-
-
-@njit(cache=True, inline="always")
-def soft_bias(
-    s: float, use_bias: bool, inv_h: float, push_speed: float, rate: float, mass_scale: float,
-    impulse_scale: float,
-) -> tuple[float, float, float]:  # fmt: skip
-    """The mass scale, impulse scale [-] and bias [m/s] of a contact point at separation ``s``
-    [m] in a pass (both engines' lanes): a point apart is speculative and may close the gap
-    in the substep, no more (rigid, bias ``s / h``); one that overlaps is the soft spring
-    (``rate``, ``mass_scale``, ``impulse_scale`` from :func:`softness`) pushing out at
-    ``push_speed`` [m/s] at most in a pass ``use_bias``, and rigid in a relax pass."""
-    spec = s > 0.0  # speculative: close the gap, no more
-    soft = use_bias and not spec
-    scale_m = mass_scale if soft else 1.0
-    scale_i = impulse_scale if soft else 0.0
-    if spec:
-        bias = s * inv_h
-    elif use_bias:
-        bias = max(scale_m * rate * s, -push_speed)
-    else:
-        bias = 0.0
-    return scale_m, scale_i, bias
-
-
-@njit(cache=True)
-def color_groups(ci: np.ndarray, nc: int, inv_mass: np.ndarray, flags: int = I_FLAGS) -> np.ndarray:
-    """The contacts in groups of :data:`LANES`, no two of a group sharing a body that moves.
-
-    Greedy colouring in row order: a contact takes the lowest colour that neither of its
-    bodies has used; a body of zero inverse mass (static, kinematic) takes none, so any number
-    of contacts with the ground share a colour. A contact whose bodies have used all
-    :data:`COLORS` colours gets a group to itself.
-
-    Parameters
-    ----------
-    ci : (M, CONTACT_INTS) int64
-        Contact rows (:mod:`.contacts`; the 3D engine's share the body columns); rows flagged
-        exact are left out.
-    nc : int
-        Rows in use.
-    inv_mass : (N,) float64
-        Inverse masses [1/kg].
-    flags : int
-        The column of the rows' flags (the 3D rows keep it further on).
-
-    Returns
-    -------
-    (G, LANES) int64
-        Contact rows, group by group: the colours in order, each cut into groups in row
-        order, then the contacts that found no colour one per group; -1 in a padding lane.
-    """
-    one = np.uint64(1)
-    used = np.zeros(inv_mass.shape[0], np.uint64)
-    color = np.full(nc, -1, np.int64)
-    counts = np.zeros(COLORS + 1, np.int64)
-    for m in range(nc):
-        if ci[m, flags] & FLAG_EXACT:
-            continue
-        a = ci[m, I_BODY_A]
-        b = ci[m, I_BODY_B]
-        taken = np.uint64(0)
-        if inv_mass[a] > 0.0:
-            taken |= used[a]
-        if inv_mass[b] > 0.0:
-            taken |= used[b]
-        c = 0
-        while c < COLORS and (taken >> np.uint64(c)) & one:
-            c += 1
-        color[m] = c
-        counts[c] += 1
-        if c < COLORS:
-            bit = one << np.uint64(c)
-            if inv_mass[a] > 0.0:
-                used[a] |= bit
-            if inv_mass[b] > 0.0:
-                used[b] |= bit
-    first = np.zeros(COLORS + 2, np.int64)  # each colour's first group
-    for c in range(COLORS):
-        first[c + 1] = first[c] + (counts[c] + LANES - 1) // LANES
-    first[COLORS + 1] = first[COLORS] + counts[COLORS]
-    lanes = np.full((first[COLORS + 1], LANES), -1, np.int64)
-    filled = np.zeros(COLORS + 1, np.int64)
-    for m in range(nc):
-        c = color[m]
-        if c < 0:
-            continue
-        k = filled[c]
-        filled[c] += 1
-        if c < COLORS:
-            lanes[first[c] + k // LANES, k % LANES] = m
-        else:
-            lanes[first[c] + k, 0] = m
-    return lanes
 
 
 @njit(cache=True)
@@ -665,7 +548,7 @@ def solve_step(
     state[:n, S_VY] = v[:, 1]
     state[:n, S_W] = omega
     state[:, S_COS] = 1.0
-    lanes = color_groups(ci, nc, inv_mass)
+    lanes = color_groups(ci, nc, inv_mass, I_FLAGS)
     groups = lanes.shape[0]
     group = np.empty((groups, GROUP_ROWS * LANES))
     pair = np.empty((groups, 2 * LANES), np.int64)

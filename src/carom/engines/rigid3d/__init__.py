@@ -3,7 +3,8 @@
 ``model`` (constants and state), ``motion`` (rotations, placing pieces, impulses, free
 flight), ``broadphase`` (swept boxes in a hashed grid), ``contacts`` (manifolds, warm start),
 ``solver`` (the soft step in named stages) and ``driver`` (the engine a World runs), in the
-2D engine's design (:mod:`carom.engines.rigid`).
+2D engine's design (:mod:`carom.engines.rigid`), on the core both share
+(:mod:`carom.engines.stepped`).
 """
 
 from carom.jit import kernel_cache

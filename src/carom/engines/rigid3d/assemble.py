@@ -8,22 +8,14 @@ flat polytope. A wall's or plane's restitution, friction and rolling resistance 
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.bodies import KIND_STATIC, Bodies
-from carom.engines.base import KIND_PAIR, KIND_PLANE, KIND_WALL, Partners, WorldView
-from carom.engines.rigid.assemble import (
-    check_material,
-    checked_start,
-    pair_arrays,
-    settings_of,
-)
-from carom.engines.rigid.assemble import refuses as refuses
-from carom.engines.rigid.assemble import world_parts as parts_of
+from carom.bodies import KIND_STATIC
+from carom.engines.base import Partners, WorldView
 from carom.engines.rigid3d.driver import RigidEngine3D
 from carom.engines.rigid3d.model import (
     Model3D,
@@ -35,7 +27,14 @@ from carom.engines.rigid3d.model import (
     piece_of,
     plane_piece,
 )
-from carom.materials import CombineRule, Material
+from carom.engines.stepped.assemble import (
+    checked_start,
+    pair_arrays,
+    settings_of,
+    statics,
+)
+from carom.engines.stepped.assemble import refuses as refuses
+from carom.engines.stepped.assemble import world_parts as parts_of
 from carom.shapes3d import Box
 
 __all__ = ["assemble3d", "build", "refuses", "restore", "world_parts"]
@@ -43,66 +42,37 @@ __all__ = ["assemble3d", "build", "refuses", "restore", "world_parts"]
 FloatArray = NDArray[np.float64]
 
 
-def assemble3d(
-    bodies: Bodies,
-    box: FloatArray,
-    walled: bool,
-    walls: Sequence[Material],
-    planes: Sequence[tuple[FloatArray, FloatArray, Material]],
-    gravity: FloatArray,
-    materials: Sequence[Material],
-    rule: CombineRule,
-    overrides: Mapping[tuple[int, int], float],
-) -> tuple[Model3D, State3D, Partners]:
-    """The 3D rigid engine's model and state for a 3D world, and the partner map.
+def assemble3d(world: WorldView) -> tuple[Model3D, State3D, Partners]:
+    """The 3D rigid engine's model and state for a 3D ``world``, and the partner map: its
+    bodies (spheres become balls), then a walled box's six walls (x-, x+, y-, y+, z-, z+) as
+    static slabs as thick as the box is wide, then each plane as a static plane piece
+    (:func:`carom.engines.stepped.assemble.statics`)."""
+    bodies = world.bodies
+    side = np.asarray(world.box, float)
 
-    Parameters
-    ----------
-    bodies : Bodies
-        The caller's bodies.
-    box : (3,) float64
-        Box sides [m]; ``walled`` gives it six walls with materials ``walls``
-        (x-, x+, y-, y+, z-, z+).
-    planes : sequence of (point (3,), unit normal (3,), Material)
-    gravity : (3,) float64
-        [m/s^2].
-    materials, rule, overrides
-        The bodies' materials, how two combine, and pairs given their own restitution.
-    """
-    for k, each in enumerate(materials):
-        check_material(f"material {k}", each)
-    n = bodies.n
-    pieces = [
-        engine_pieces(bodies.pieces[i], float(bodies.radius[i]))  # type: ignore[arg-type]
-        for i in range(n)
-    ]
-    extra: list[list[Piece3D]] = []
-    extra_materials: list[Material] = []
-    partner_kind = [KIND_PAIR] * n
-    partner_index = list(range(n))
-    side = np.asarray(box, float)
-    if walled:
+    def walls() -> list[list[Piece3D]]:
         t = float(side.max())  # thick: nothing tunnels through a slab as thick as the box
+        faces = []
         for face in range(6):
             axis, upper = divmod(face, 2)
             size = side + 2.0 * t
             size[axis] = t
             centre = side / 2.0
             centre[axis] = side[axis] + t / 2.0 if upper else -t / 2.0
-            check_material(f"wall {face}", walls[face])
-            extra.append([piece_of(p, centre) for p in Box(size).pieces()])
-            extra_materials.append(walls[face])
-            partner_kind.append(KIND_WALL)
-            partner_index.append(face)
-    for k, (point, normal, mat) in enumerate(planes):
-        check_material(f"plane {k}", mat)
-        extra.append([plane_piece(normal, float(np.dot(point, normal)))])
-        extra_materials.append(mat)
-        partner_kind.append(KIND_PLANE)
-        partner_index.append(k)
+            faces.append([piece_of(p, centre) for p in Box(size).pieces()])
+        return faces
 
+    def plane(point: FloatArray, normal: FloatArray) -> list[Piece3D]:
+        return [plane_piece(normal, float(np.dot(point, normal)))]
+
+    extra, extra_materials, partners = statics(world, walls, plane)
+    pieces = [
+        engine_pieces(bodies.pieces[i], float(bodies.radius[i]))  # type: ignore[arg-type]
+        for i in range(bodies.n)
+    ]
     m = len(extra)
-    e, mu, roll = pair_arrays(materials, rule, overrides, extra_materials)
+    overrides = world.pair_overrides
+    e, mu, roll = pair_arrays(world.materials, world.combine, overrides, extra_materials)
     n_mat = e.shape[0] - m
     inertia = np.concatenate([bodies.inertia_tensor, np.zeros((m, 3, 3))])
     model = build_model(
@@ -114,7 +84,7 @@ def assemble3d(
         e,
         mu,
         roll,
-        np.asarray(gravity, float),
+        np.asarray(world.gravity, float),
     )
     q = np.zeros((m, 4))
     q[:, 0] = 1.0
@@ -125,7 +95,6 @@ def assemble3d(
         np.concatenate([bodies.orientation, q]),
         np.concatenate([bodies.angular_velocity, np.zeros((m, 3))]),
     )
-    partners = Partners(np.array(partner_kind, np.int8), np.array(partner_index, np.int64))
     return model, state, partners
 
 
@@ -140,7 +109,7 @@ def world_parts(world: WorldView) -> tuple[Model3D, State3D, Partners]:
 
 def build(world: WorldView) -> RigidEngine3D:
     """The 3D rigid engine, from the world's bodies at its clock (overlaps refused as in
-    2D, :func:`carom.engines.rigid.assemble.checked_start`)."""
+    2D, :func:`carom.engines.stepped.assemble.checked_start`)."""
     model, state, partners = world_parts(world)
     engine = RigidEngine3D(model, state, settings_of(world), world.time, partners)
     return checked_start(engine, partners, world)

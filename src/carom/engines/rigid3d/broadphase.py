@@ -14,7 +14,7 @@ A plane's box is unbounded, except along the axis its normal lies on, if it lies
 floor's box ends at the floor). Pairs are sorted by key ``a * P + b`` (``a < b``).
 
 The driver keeps the pairs from step to step through fat boxes, as the 2D engine does
-(:class:`carom.engines.rigid.broadphase.KeptPairs`): a resting stack is paired once.
+(:class:`carom.engines.stepped.broadphase.KeptPairs`): a resting stack is paired once.
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ import math
 import numpy as np
 from numba import njit
 
-from carom.engines.rigid.broadphase import wanted_pair
 from carom.engines.rigid3d.model import PIECE_PLANE
+from carom.engines.stepped.broadphase import wanted_pair
 
 __all__ = ["MAX_CELLS", "find_pairs", "piece_boxes"]
 

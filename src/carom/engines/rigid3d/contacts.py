@@ -39,7 +39,6 @@ import math
 import numpy as np
 from numba import njit
 
-from carom.engines.rigid.contacts import find_cached
 from carom.engines.rigid3d.model import (
     M_COUNT,
     M_GAP,
@@ -53,6 +52,16 @@ from carom.engines.rigid3d.model import (
     PIECE_POLYTOPE,
 )
 from carom.engines.rigid3d.motion import matrix, relative_velocity
+from carom.engines.stepped.contacts import find_cached
+from carom.engines.stepped.rows import (
+    I_BODY_A,
+    I_BODY_B,
+    I_COUNT,
+    I_ID0,
+    I_PIECE_A,
+    I_PIECE_B,
+    flags_column,
+)
 from carom.geometry.manifold3d import (
     MAX_POINTS,
     OUT_SIZE,
@@ -119,13 +128,9 @@ POINT_FLOATS = 21
 CONTACT_FLOATS = POINT0 + MAX_POINTS * POINT_FLOATS
 
 # int columns of a contact row
-I_BODY_A = 0
-I_BODY_B = 1
-I_PIECE_A = 2
-I_PIECE_B = 3
-I_COUNT = 4  # points, 1 to 4
-I_ID0 = 5  # feature ids of the points: I_ID0 + j
-I_FLAGS = I_ID0 + MAX_POINTS  # bit 0: solved exactly this step (isolated impact)
+# the declared integer columns (carom.engines.stepped.rows): bodies, pieces, points (1 to
+# 4), their feature ids, then the flags
+I_FLAGS = flags_column(MAX_POINTS)
 CONTACT_INTS = I_FLAGS + 1
 
 
@@ -568,7 +573,7 @@ def narrow_phase(
 @njit(cache=True)
 def extremes(cf: np.ndarray, ci: np.ndarray, nc: int) -> tuple[np.ndarray, np.ndarray]:
     """Each contact's least separation [m] and least normal relative speed [m/s] over its
-    points, (nc,) each (:func:`carom.engines.rigid.islands.plan`)."""
+    points, (nc,) each (:func:`carom.engines.stepped.islands.plan`)."""
     closest = np.full(nc, np.inf)
     closing = np.full(nc, np.inf)
     for m in range(nc):

@@ -7,7 +7,7 @@ One step (``dt = 1/rate``) runs the 2D engine's stages (:mod:`carom.engines.rigi
 3. **narrow phase**: their manifolds, warm-started from the last step (:mod:`.contacts`);
    an awake body touching a sleeping island wakes it, and the phases run again;
 4. **islands**: each body's role: free flight, an isolated impact, or the solver
-   (:mod:`carom.engines.rigid.islands`, shared with 2D);
+   (:mod:`carom.engines.stepped.islands`, shared with 2D);
 5. **exact impacts**: isolated pairs advanced through the step with their impacts solved at
    the time of impact (:mod:`.impacts`);
 6. **free flight**: bodies with no contact (:func:`.motion.fly`);
@@ -16,7 +16,7 @@ One step (``dt = 1/rate``) runs the 2D engine's stages (:mod:`carom.engines.rigi
 8. **store** the impulses for the next step, and **sleep** the islands at rest (their bodies
    stop, as in Box2D; the kinetic energy they kept goes to the ledger as lost).
 
-The settings are the 2D engine's (:class:`carom.engines.rigid.settings.RigidSettings`).
+The settings are the 2D engine's (:class:`carom.engines.stepped.settings.RigidSettings`).
 """
 
 from __future__ import annotations
@@ -28,15 +28,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, Partners, Sink
-from carom.engines.rigid import islands
-from carom.engines.rigid.broadphase import KeptPairs
-from carom.engines.rigid.driver import SteppedEngine
-from carom.engines.rigid.settings import RigidSettings
+from carom.engines.base import COLLISION_DTYPE, Partners, Sink
 from carom.engines.rigid3d import broadphase, contacts, impacts, motion, solver
 from carom.engines.rigid3d.model import Model3D, State3D, empty_manifolds
+from carom.engines.stepped import islands
+from carom.engines.stepped.driver import SteppedEngine
+from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
+from carom.engines.stepped.settings import RigidSettings
 from carom.geometry.rotation import turn
-from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
+from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
 
 __all__ = ["RigidEngine3D", "grid_cell"]
 
@@ -95,32 +95,12 @@ class RigidEngine3D(SteppedEngine):
         time: float = 0.0,
         partners: Partners | None = None,
     ) -> None:
-        self.model = model
-        self.state = state
-        self.settings = settings
-        self._start_totals(time)
-        self.dt = settings.dt
+        shape = (3, contacts.CONTACT_FLOATS, contacts.CONTACT_INTS)
+        self._begin(model, state, settings, time, partners, shape, grid_cell(model),
+                    broadphase.find_pairs)  # fmt: skip
         n = model.kind.shape[0]
-        if partners is None:
-            partners = Partners(np.zeros(n, np.int8), np.arange(n, dtype=np.int64))
-        self.partners = partners
-        self.n_bodies = int(np.count_nonzero(partners.kind == KIND_PAIR))
-        self.cell = grid_cell(model)
-        self._cf = np.zeros((max(64, 2 * n), contacts.CONTACT_FLOATS))
-        self._ci = np.zeros((max(64, 2 * n), contacts.CONTACT_INTS), np.int64)
         self._made = _room(self._ci.shape[0])  # this step's manifolds, kept once it is taken
         self._made_count = 0
-        self._boxes = np.zeros((model.piece_body.shape[0], 6))
-        self._kept = KeptPairs(
-            model.piece_body.shape[0],
-            3,
-            n,
-            lambda boxes, active, out: broadphase.find_pairs(
-                boxes, self.model.piece_body, active, self._dynamic, self.cell, out
-            ),
-        )
-        self._dynamic = model.kind == KIND_DYNAMIC
-        self._kinematic = model.kind == KIND_KINEMATIC
         self._movers = np.flatnonzero(self._kinematic)
         self._g = float(np.linalg.norm(model.gravity))
         self._ints = (
@@ -128,11 +108,6 @@ class RigidEngine3D(SteppedEngine):
             model.piece_fstart, model.piece_fcount, model.piece_cstart, model.piece_ccount,
             model.piece_estart, model.piece_ecount,
         )  # fmt: skip
-        self._parent = np.zeros(n, np.int64)
-        self._role = np.zeros(n, np.int64)
-        self._accel = np.zeros((n, 3))
-        self._accel[self._dynamic] = model.gravity
-        self.n_contacts = 0
         everyone = np.ones(n, np.bool_)
         self._place(everyone)
         still = np.zeros((n, 3))
@@ -145,10 +120,6 @@ class RigidEngine3D(SteppedEngine):
         of the caller's bodies."""
         s, n = self.state, self.n_bodies
         return s.x[:n].copy(), s.v[:n].copy(), s.q[:n].copy(), s.w[:n].copy()
-
-    def arrays(self) -> dict[str, NDArray[Any]]:
-        s = self.state
-        return {name: np.array(value) for name, value in s._asdict().items()} | self._totals()
 
     @classmethod
     def restore(
@@ -172,10 +143,10 @@ class RigidEngine3D(SteppedEngine):
         depth [m] (positive; ``(-1, -1, 0.0)`` when nothing overlaps)."""
         nc = self._contacts()
         ci, cf = self._ci[:nc], self._cf[:nc]
-        a, b = ci[:, contacts.I_BODY_A], ci[:, contacts.I_BODY_B]
+        a, b = ci[:, I_BODY_A], ci[:, I_BODY_B]
         columns = [contacts.point_offset(j) + contacts.P_SEP for j in range(4)]
         depth = -cf[:, columns]
-        depth[np.arange(4)[None, :] >= ci[:, contacts.I_COUNT][:, None]] = -np.inf
+        depth[np.arange(4)[None, :] >= ci[:, I_COUNT][:, None]] = -np.inf
         depth[~(self._dynamic[a] | self._dynamic[b])] = -np.inf
         if nc == 0 or float(depth.max()) <= 0.0:
             return (-1, -1, 0.0)
@@ -248,8 +219,8 @@ class RigidEngine3D(SteppedEngine):
         )  # fmt: skip
         if n_iso:
             rows = isolated[:n_iso]
-            ba = m.material[self._ci[rows, contacts.I_BODY_A]]
-            bb = m.material[self._ci[rows, contacts.I_BODY_B]]
+            ba = m.material[self._ci[rows, I_BODY_A]]
+            bb = m.material[self._ci[rows, I_BODY_B]]
             log = np.zeros((n_iso * impacts.MAX_IMPACTS, impacts.IMPACT_FIELDS))
             logged = impacts.exact_impacts(
                 isolated, n_iso, closing, self._ci, s.x, s.q, s.v, s.w, self._accel,
@@ -314,7 +285,7 @@ class RigidEngine3D(SteppedEngine):
         return moving
 
     def _settle(self, nc: int) -> None:
-        """Stage 8: sleep the islands at rest (:func:`carom.engines.rigid.islands.settle`);
+        """Stage 8: sleep the islands at rest (:func:`carom.engines.stepped.islands.settle`);
         their bodies stop and the kinetic energy they kept goes to the ledger as lost."""
         m, s, st = self.model, self.state, self.settings
         before = s.awake.copy()

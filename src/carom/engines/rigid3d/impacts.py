@@ -31,11 +31,7 @@ import numpy as np
 from numba import njit
 
 from carom.engines.rigid3d.contacts import (
-    I_BODY_A,
-    I_BODY_B,
     I_FLAGS,
-    I_PIECE_A,
-    I_PIECE_B,
     collide_pieces,
 )
 from carom.engines.rigid3d.model import PIECE_POLYTOPE
@@ -47,7 +43,7 @@ from carom.engines.rigid3d.motion import (
     spin_energy,
     world_inverse_row,
 )
-from carom.engines.rigid3d.solver import FLAG_EXACT
+from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
 from carom.geometry.manifold3d import MAX_POINTS, OUT_SIZE, closest_hulls
 from carom.laws.rigid_impact import collision_matrix, point_impulse
 

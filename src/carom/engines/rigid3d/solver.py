@@ -28,7 +28,7 @@ substeps for the impulses, as Box2D does with its bodies' inertia.
 
 **Layout: colours and lanes**, as in 2D (:mod:`carom.engines.rigid.solver`, Box2D v3's
 graph colouring and wide solver): the contacts are coloured so that no two of a colour share a
-body that impulses move (:func:`carom.engines.rigid.solver.color_groups`), each colour cut into
+body that impulses move (:func:`carom.engines.stepped.solver.color_groups`), each colour cut into
 groups of ``LANES = 16`` contacts; a group's rows (its normal and tangents, softness, both
 bodies' inverse masses and world inverse tensors, and each of its four points' anchors,
 masses and impulses) are followed by rows for its bodies' velocities, moves and turns since
@@ -50,7 +50,6 @@ import math
 import numpy as np
 from numba import njit
 
-from carom.engines.rigid.solver import LANE_MATH, LANES, color_groups, soft_bias, softness
 from carom.engines.rigid3d.contacts import (
     F_E,
     F_JR1,
@@ -66,9 +65,6 @@ from carom.engines.rigid3d.contacts import (
     F_T2X,
     F_T2Y,
     F_T2Z,
-    I_BODY_A,
-    I_BODY_B,
-    I_COUNT,
     I_FLAGS,
     P_BASE,
     P_JN,
@@ -91,11 +87,12 @@ from carom.engines.rigid3d.motion import (
     relative_velocity,
     world_inverse_inertia,
 )
+from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_COUNT
+from carom.engines.stepped.solver import LANE_MATH, LANES, color_groups, soft_bias, softness
 from carom.geometry.manifold3d import MAX_POINTS
 
 __all__ = ["FLAG_EXACT", "solve_step"]
 
-FLAG_EXACT = 1  # the contact was solved exactly this step (an isolated impact)
 
 # rows of a group (each LANES wide, row r from r * LANES on): the contact's ...
 R_N = 0  # normal (3 rows), from B to A

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from carom.engines.rigid.contacts import I_BODY_A, I_BODY_B
+from carom.engines.stepped.rows import I_BODY_A, I_BODY_B
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 
 __all__ = ["KIND_DYNAMIC", "KIND_KINEMATIC", "KIND_STATIC", "plan", "settle", "wake"]

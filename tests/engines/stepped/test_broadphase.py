@@ -1,23 +1,18 @@
-"""The broad phase (:func:`carom.engines.rigid.broadphase.find_pairs`): every pair of pieces
-whose boxes overlap, of two bodies, one active and one dynamic, reported once and sorted by
-``(a, b)``; checked against the brute-force O(P^2) answer. Kept fat boxes
-(:func:`refit`, :func:`select_pairs`, :class:`KeptPairs`, which both engines use) give the
-same pairs while rebuilding only when a piece leaves its fat box, in 2D and 3D."""
+"""The broad phase (:func:`carom.engines.rigid.broadphase.find_pairs`, and its 3D twin):
+every pair of pieces whose boxes overlap, of two bodies, one active and one dynamic, reported
+once and sorted by ``(a, b)``; checked against the brute-force O(P^2) answer. Kept fat boxes
+(:func:`refit`, :func:`select_pairs`, :class:`KeptPairs` of :mod:`carom.engines.stepped`,
+which both engines use) give the same pairs while rebuilding only when a piece leaves its fat
+box, in 2D and 3D."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from carom.engines.rigid.broadphase import (
-    FAT,
-    MAX_CELLS,
-    KeptPairs,
-    find_pairs,
-    refit,
-    select_pairs,
-)
+from carom.engines.rigid.broadphase import MAX_CELLS, find_pairs
 from carom.engines.rigid3d.broadphase import find_pairs as find_pairs_3d
+from carom.engines.stepped.broadphase import FAT, KeptPairs, refit, select_pairs
 
 
 def _brute(

@@ -1,12 +1,12 @@
 """The warm start's cache search: each contact point starts a step with the impulse the same
 point ended the last step with, found in the sorted impulse cache by one walk in step with the
-sorted pairs (:func:`carom.engines.rigid.contacts.find_cached`)."""
+sorted pairs (:func:`carom.engines.stepped.contacts.find_cached`)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from carom.engines.rigid.contacts import find_cached
+from carom.engines.stepped.contacts import find_cached
 
 
 def _walk(keys: np.ndarray, queries: np.ndarray) -> list[int]:

@@ -1,5 +1,5 @@
 """The solver's layout: contacts coloured so that no two of a group share a body that impulses
-move, cut into groups of LANES lanes solved together (:func:`carom.engines.rigid.solver.
+move, cut into groups of LANES lanes solved together (:func:`carom.engines.stepped.solver.
 color_groups`), and a body with more contacts than there are colours (the overflow, each such
 contact in a group of its own) still held up.
 """
@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 
 import carom
-from carom.engines.rigid.contacts import CONTACT_INTS, I_BODY_A, I_BODY_B, I_FLAGS
-from carom.engines.rigid.settings import RigidSettings
-from carom.engines.rigid.solver import COLORS, FLAG_EXACT, LANES, color_groups
+from carom.engines.rigid.contacts import CONTACT_INTS, I_FLAGS
+from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B
+from carom.engines.stepped.settings import RigidSettings
+from carom.engines.stepped.solver import COLORS, LANES, color_groups
 from carom.shapes import Box
 
 G = 9.81
@@ -54,7 +55,7 @@ def test_random_contact_graphs_are_coloured_into_disjoint_groups() -> None:
         pairs = [tuple(sorted(rng.choice(n, 2, replace=False).tolist())) for _ in range(nc)]
         exact = tuple(np.flatnonzero(rng.random(nc) < 0.1).tolist())
         ci = _contacts(pairs, exact)  # type: ignore[arg-type]
-        lanes = color_groups(ci, nc, inv_mass)
+        lanes = color_groups(ci, nc, inv_mass, I_FLAGS)
         assert lanes.shape[1] == LANES
         _check(lanes, ci, nc, inv_mass)
 
@@ -65,13 +66,13 @@ def test_contacts_with_one_static_body_share_groups_and_a_hub_overflows_into_sin
     ci = _contacts([(0, k) for k in range(1, spokes + 1)])
     # body 0 moves: each of its contacts needs a colour of its own, so the first 64 fill one
     # lane of a group each and the other 6 get a group each (the overflow)
-    lanes = color_groups(ci, spokes, inv_mass)
+    lanes = color_groups(ci, spokes, inv_mass, I_FLAGS)
     _check(lanes, ci, spokes, inv_mass)
     assert lanes.shape[0] == spokes
     assert np.all(np.count_nonzero(lanes >= 0, axis=1) == 1)
     # body 0 static (the ground): every contact can be in colour 0, eight to a group
     inv_mass[0] = 0.0
-    lanes = color_groups(ci, spokes, inv_mass)
+    lanes = color_groups(ci, spokes, inv_mass, I_FLAGS)
     _check(lanes, ci, spokes, inv_mass)
     assert lanes.shape[0] == math.ceil(spokes / LANES)
 
