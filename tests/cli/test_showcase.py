@@ -73,7 +73,7 @@ def test_the_showcase_says_when_it_compiles_first(
     monkeypatch.setattr(showcase, "kernels_cached", lambda: False)
     lines: list[str] = []
     build_showcase(tmp_path / "out", scenes=("case-1",), sweeps=(), say=lines.append)
-    compiling = [k for k, line in enumerate(lines) if "compiling the engine's kernels" in line]
+    compiling = [k for k, line in enumerate(lines) if "compiling the engines' kernels" in line]
     case = [k for k, line in enumerate(lines) if "1 collision and 0 at walls in" in line]
     assert compiling
     assert case

@@ -11,9 +11,13 @@
 
 from __future__ import annotations
 
+import contextlib
 import html
 import json
-from collections.abc import Callable
+import multiprocessing
+import os
+from collections.abc import Callable, Iterator
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -22,7 +26,7 @@ import numpy as np
 from carom import __version__
 from carom.io.outdir import check_output, staged_output
 from carom.jit import kernels_cached
-from carom.run.runner import run_scene
+from carom.run.runner import RunReport, run_scene
 from carom.run.study import write_case_study
 from carom.scene import find_scene, load_scene
 from carom.studies.two_spheres import CASES, MODELS, run_study
@@ -93,10 +97,8 @@ def build_showcase(
         say(f"the seven two-sphere cases: {len(records)} impacts -> {out / 'cases'}/")
         shown: list[tuple[str, Path, list[str]]] = []
         if not kernels_cached():
-            say("compiling the engine's kernels (once per install; 10 to 20 s) ...")
-        for scene in scenes:
-            folder = staging / "scenes" / Path(scene).stem
-            report = run_scene(scene, folder, progress=False)
+            say("compiling the engines' kernels (once per install; a minute or two) ...")
+        for scene, folder, report in _run_scenes(scenes, staging / "scenes"):
             if report.prepare_seconds >= 1.0 and not shown:
                 say(
                     f"(the engine's kernels: compiled or loaded in {report.prepare_seconds:.1f} "
@@ -116,6 +118,35 @@ def build_showcase(
         page = _page(staging, json.loads((cases / "cases.json").read_text()), shown, swept)
         (staging / "index.html").write_text(page, encoding="utf-8")
     return out / "index.html"
+
+
+def _run_scenes(scenes: tuple[str, ...], folder: Path) -> Iterator[tuple[str, Path, RunReport]]:
+    """Run each scene into ``folder / NAME`` and yield it, its folder and its report, in the
+    order given. On two cores or more the scenes run in two processes, each taking whole
+    groups of scenes of one engine and dimension (alternately, in order of first appearance),
+    so that each compiles its engines' kernels once and the two compile side by side; a
+    scene's files are the same bits whichever process ran it."""
+    folders = {scene: folder / Path(scene).stem for scene in scenes}
+    groups: dict[tuple[str, int], list[str]] = {}
+    for scene in scenes:
+        world = load_scene(find_scene(scene)).build()  # (no engine is built: nothing compiles)
+        groups.setdefault((world.engine_name, world.dim), []).append(scene)
+    lanes: list[list[str]] = [[], []]
+    for k, group in enumerate(groups.values()):
+        lanes[k % 2] += group
+    if (os.cpu_count() or 1) < 2 or not lanes[1]:
+        for scene in scenes:
+            yield scene, folders[scene], run_scene(scene, folders[scene], progress=False)
+        return
+    spawn = multiprocessing.get_context("spawn")  # (no fork of a process with threads)
+    with contextlib.ExitStack() as stack:
+        futures = {}
+        for lane in lanes:
+            pool = stack.enter_context(ProcessPoolExecutor(1, mp_context=spawn))
+            for scene in lane:
+                futures[scene] = pool.submit(run_scene, scene, folders[scene], progress=False)
+        for scene in scenes:
+            yield scene, folders[scene], futures[scene].result()
 
 
 _STYLE = """
