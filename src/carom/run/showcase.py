@@ -89,7 +89,9 @@ def build_showcase(
     if specs and not _have_dask():
         say("(the sweeps are skipped: they run on Dask: pip install 'carom[sweep]')")
         specs = []
-    with staged_output(out, force=force) as staging:
+    with staged_output(out, force=force) as staging, contextlib.ExitStack() as pools:
+        # the scenes start first: on two cores their kernels compile while the study runs
+        ran = _start_scenes(scenes, staging / "scenes", pools)
         cases = staging / "cases"
         cases.mkdir()
         records = run_study()
@@ -98,7 +100,7 @@ def build_showcase(
         shown: list[tuple[str, Path, list[str]]] = []
         if not kernels_cached():
             say("compiling the engines' kernels (once per install; a minute or two) ...")
-        for scene, folder, report in _run_scenes(scenes, staging / "scenes"):
+        for scene, folder, report in ran:
             if report.prepare_seconds >= 1.0 and not shown:
                 say(
                     f"(the engine's kernels: compiled or loaded in {report.prepare_seconds:.1f} "
@@ -131,12 +133,16 @@ def _cold_seconds(group: tuple[str, int], scenes: int) -> float:
     return COLD_SECONDS.get(group, 30.0) + SCENE_SECONDS * scenes
 
 
-def _run_scenes(scenes: tuple[str, ...], folder: Path) -> Iterator[tuple[str, Path, RunReport]]:
-    """Run each scene into ``folder / NAME`` and yield it, its folder and its report, in the
-    order given. On two cores or more the scenes run in two processes, each taking whole
-    groups of scenes of one engine and dimension, so that each compiles those kernels once and
-    the two compile side by side; the groups go to the lane with less work so far, largest
-    first (:data:`COLD_SECONDS`). A scene's files are the same bits whichever process ran it."""
+def _start_scenes(
+    scenes: tuple[str, ...], folder: Path, pools: contextlib.ExitStack
+) -> Iterator[tuple[str, Path, RunReport]]:
+    """Start running each scene into ``folder / NAME``; the iterator yields it, its folder and
+    its report, in the order given. On two cores or more the scenes run now, in two processes
+    (shut down with ``pools``: on an error the scenes not started are dropped), each taking
+    whole groups of scenes of one engine and dimension, so that each compiles those kernels
+    once and the two compile side by side; the groups go to the lane with less work so far,
+    largest first (:data:`COLD_SECONDS`). A scene's files are the same bits whichever process
+    ran it."""
     folders = {scene: folder / Path(scene).stem for scene in scenes}
     groups: dict[tuple[str, int], list[str]] = {}
     for scene in scenes:
@@ -149,18 +155,18 @@ def _run_scenes(scenes: tuple[str, ...], folder: Path) -> Iterator[tuple[str, Pa
         lanes[emptier] += groups[key]
         work[emptier] += _cold_seconds(key, len(groups[key]))
     if (os.cpu_count() or 1) < 2 or not lanes[1]:
-        for scene in scenes:
-            yield scene, folders[scene], run_scene(scene, folders[scene], progress=False)
-        return
+        return (
+            (scene, folders[scene], run_scene(scene, folders[scene], progress=False))
+            for scene in scenes
+        )
     spawn = multiprocessing.get_context("spawn")  # (no fork of a process with threads)
-    with contextlib.ExitStack() as stack:
-        futures = {}
-        for lane in lanes:
-            pool = stack.enter_context(ProcessPoolExecutor(1, mp_context=spawn))
-            for scene in lane:
-                futures[scene] = pool.submit(run_scene, scene, folders[scene], progress=False)
-        for scene in scenes:
-            yield scene, folders[scene], futures[scene].result()
+    futures = {}
+    for lane in lanes:
+        pool = ProcessPoolExecutor(1, mp_context=spawn)
+        pools.callback(pool.shutdown, wait=True, cancel_futures=True)
+        for scene in lane:
+            futures[scene] = pool.submit(run_scene, scene, folders[scene], progress=False)
+    return ((scene, folders[scene], futures[scene].result()) for scene in scenes)
 
 
 _STYLE = """
