@@ -232,10 +232,12 @@ def _check_shape(shape: object, dim: int) -> None:
         )
     mine, other = (Shape2D, Shape3D) if dim == 2 else (Shape3D, Shape2D)
     if isinstance(shape, other):
-        package, fix = ("carom.shapes3d", "3D") if dim == 2 else ("carom.shapes", "2D")
+        theirs, ours = (
+            ("carom.shapes3d", "carom.shapes") if dim == 2 else ("carom.shapes", "carom.shapes3d")
+        )
         raise CaromError(
-            f"{type(shape).__name__} is a {fix} shape ({package}) and this world is {dim}D; "
-            f"use {'carom.shapes' if dim == 2 else 'carom.shapes3d'}, or World({5 - dim}, ...)"
+            f"{type(shape).__name__} is a {5 - dim}D shape ({theirs}) and this world is "
+            f"{dim}D; use {ours}, or World({5 - dim}, ...)"
         )
     if not isinstance(shape, mine):
         listed = (

@@ -168,7 +168,11 @@ def load_world(path: Path, make: Callable[..., W]) -> tuple[W, dict[str, NDArray
 def _read(path: Path, data: Any, make: Callable[..., W]) -> tuple[W, dict[str, NDArray[Any]]]:
     meta = json.loads(str(data["meta"]))
     _check_version(path, meta)
-    kept = meta.get("engine_settings") or {"edmd": meta["settings"], "rigid": meta["rigid"]}
+    kept = (
+        meta["engine_settings"]
+        if meta["version"] > 12
+        else {"edmd": meta["settings"], "rigid": meta["rigid"]}
+    )
     settings = {}
     for name, values in kept.items():
         kind = registry.find(name).settings

@@ -45,6 +45,7 @@ __all__ = [
     "kernel_only",
     "kernel_tag",
     "kernels_cached",
+    "usable_cpus",
 ]
 
 #: the packages that hold Numba kernels, or constants and functions a kernel reads
@@ -139,3 +140,12 @@ def kernel_only(**options: Any) -> Callable[[_F], _F]:
         return cast(_F, dispatcher)
 
     return decorate
+
+
+def usable_cpus() -> int:
+    """How many CPUs this process may run on (its affinity where the system has one, as on
+    Linux; else every CPU)."""
+    affinity = getattr(os, "sched_getaffinity", None)
+    if affinity is not None:
+        return len(affinity(0))
+    return os.cpu_count() or 1

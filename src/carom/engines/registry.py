@@ -116,31 +116,42 @@ class EngineEntry:
         """The dimensions it runs."""
         return tuple(sorted(self.plugs))
 
+    def _other_dims(self, dim: int) -> str | None:
+        """None when it runs ``dim`` dimensions, else why not."""
+        if dim in self.plugs:
+            return None
+        dims = " and ".join(f"{d}D" for d in self.dims)
+        return f"the {self.title} engine ({self.name!r}) runs {dims} worlds only"
+
     def plug(self, dim: int) -> Plug:
         """Its plug module for ``dim`` dimensions (imported on first use)."""
-        if dim not in self.plugs:
-            dims = " and ".join(f"{d}D" for d in self.dims)
-            raise CaromError(f"the {self.title} engine ({self.name!r}) runs {dims} worlds only")
+        why = self._other_dims(dim)
+        if why is not None:
+            raise CaromError(why)
         if dim not in self._loaded:
             self._loaded[dim] = cast(Plug, importlib.import_module(self.plugs[dim]))
         return self._loaded[dim]
 
     def refuses(self, world: WorldView) -> str | None:
         """None when this engine can run ``world``, else why not."""
-        if world.dim not in self.plugs:
-            dims = " and ".join(f"{d}D" for d in self.dims)
-            return f"the {self.title} engine ({self.name!r}) runs {dims} worlds only"
-        return self.plug(world.dim).refuses(world)
+        return self._other_dims(world.dim) or self.plug(world.dim).refuses(world)
 
 
 _TABLE: dict[str, EngineEntry] = {}
 
 
+def _lookup(name: str) -> EngineEntry | None:
+    """The engine called ``name`` or by one of its older spellings, if any."""
+    for entry in _TABLE.values():
+        if name == entry.name or name in entry.aliases:
+            return entry
+    return None
+
+
 def register(entry: EngineEntry) -> EngineEntry:
     """Add ``entry`` to the table (after the built-in engines: "auto" tries them first);
     return it. A name or alias already taken is refused."""
-    taken = {n for e in _TABLE.values() for n in (e.name, *e.aliases)} | {AUTO}
-    clash = sorted(taken & {entry.name, *entry.aliases})
+    clash = sorted(n for n in (entry.name, *entry.aliases) if known(n))
     if clash:
         raise CaromError(f"engine name {clash[0]!r} is taken; register the engine under another")
     _TABLE[entry.name] = entry
@@ -167,18 +178,16 @@ def engine_choices() -> tuple[str, ...]:
 
 def known(choice: str) -> bool:
     """Whether ``choice`` is "auto", an engine's name or one of its older spellings."""
-    return choice == AUTO or any(
-        choice == entry.name or choice in entry.aliases for entry in _TABLE.values()
-    )
+    return choice == AUTO or _lookup(choice) is not None
 
 
 def find(name: str) -> EngineEntry:
     """The engine called ``name`` (or by one of its older spellings), or a CaromError that
     lists the names there are."""
-    for entry in _TABLE.values():
-        if name == entry.name or name in entry.aliases:
-            return entry
-    raise CaromError(f"no engine {name!r}; the engines are {', '.join(map(repr, _TABLE))}")
+    entry = _lookup(name)
+    if entry is None:
+        raise CaromError(f"no engine {name!r}; the engines are {', '.join(map(repr, _TABLE))}")
+    return entry
 
 
 def pick(choice: str, world: WorldView) -> EngineEntry:

@@ -15,7 +15,6 @@ import contextlib
 import html
 import json
 import multiprocessing
-import os
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -25,7 +24,7 @@ import numpy as np
 
 from carom import __version__
 from carom.io.outdir import check_output, staged_output
-from carom.jit import kernels_cached
+from carom.jit import kernels_cached, usable_cpus
 from carom.run.runner import RunReport, run_scene
 from carom.run.study import write_case_study
 from carom.scene import find_scene, load_scene
@@ -159,7 +158,7 @@ def _start_scenes(
         emptier = int(work[1] < work[0])
         lanes[emptier] += groups[key]
         work[emptier] += _cold_seconds(key, len(groups[key]))
-    if (os.cpu_count() or 1) < 2 or not lanes[1]:
+    if usable_cpus() < 2 or not lanes[1]:
         return (
             (scene, folders[scene], run_scene(scene, folders[scene], progress=False))
             for scene in scenes

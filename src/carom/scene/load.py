@@ -16,10 +16,10 @@ from carom.scene.schema import (
     ARRAYS,
     GENERATORS,
     RENAMED,
+    SCHEMA,
     Locator,
     SceneError,
     all_tables,
-    settings_tables,
 )
 
 if TYPE_CHECKING:
@@ -89,7 +89,8 @@ class Scene:
                 if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
                     raise where.error([table], "must be written as [[" + table + "]] tables", "")
                 parts[table] = [
-                    _check_table(table, entry, where, index) for index, entry in enumerate(entries)
+                    _check_table(table, tables[table], entry, where, index)
+                    for index, entry in enumerate(entries)
                 ]
             else:
                 if value is None:
@@ -100,8 +101,8 @@ class Scene:
                     value = {}
                 if not isinstance(value, dict):
                     raise where.error([table], f"[{table}] must be a table", "")
-                parts[table] = _check_table(table, value, where, None)
-        settings = _engine_settings(parts, data, where)
+                parts[table] = _check_table(table, tables[table], value, where, None)
+        settings = _engine_settings(parts, tables, data, where)
         scene = cls(source=source, text=text, settings=settings, **parts)
         scene._check_consistency(where)
         return scene
@@ -304,14 +305,17 @@ def find_scene(name_or_path: str | Path) -> Path:
 
 
 def _engine_settings(
-    parts: dict[str, Any], data: Mapping[str, Any], where: Locator
+    parts: dict[str, Any], tables: Mapping[str, Any], data: Mapping[str, Any], where: Locator
 ) -> dict[str, Any]:
-    """Each engine's settings, made from (and taken out of) its table in ``parts``: the one
-    check of every setting is its dataclass's; a setting it refuses is named by line. The
-    older ``[world] t_c`` is the event-driven engine's ``t_c``."""
+    """Each engine's settings, made from (and taken out of) its table in ``parts`` (those of
+    ``tables`` not in :data:`SCHEMA`): the one check of every setting is its dataclass's; a
+    setting it refuses is named by line. The older ``[world] t_c`` is the event-driven
+    engine's ``t_c``."""
     older = parts["world"].pop("t_c")
     settings: dict[str, Any] = {}
-    for name, rows in settings_tables().items():
+    for name, rows in tables.items():
+        if name in SCHEMA:
+            continue
         table = parts.pop(name)
         if name == "edmd" and older is not None:
             if "t_c" in (data.get("edmd") or {}):
@@ -332,9 +336,12 @@ def _engine_settings(
 
 
 def _check_table(
-    table: str, entry: Mapping[str, Any], where: Locator, index: int | None
+    table: str,
+    schema: Mapping[str, tuple[Any, bool, Any]],
+    entry: Mapping[str, Any],
+    where: Locator,
+    index: int | None,
 ) -> dict[str, Any]:
-    schema = all_tables()[table]
     result: dict[str, Any] = {}
     for key, value in entry.items():
         if key in RENAMED.get(table, {}):

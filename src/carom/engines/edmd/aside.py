@@ -35,7 +35,7 @@ from carom.engines.edmd import loop
 from carom.engines.edmd.handle import handle_type
 from carom.engines.edmd.model import Environment, Model
 from carom.engines.edmd.state import State
-from carom.jit import kernels_cached
+from carom.jit import kernels_cached, usable_cpus
 from carom.materials import pair_table
 
 typeof = cast(Callable[[Any], Any], _typeof)
@@ -70,15 +70,6 @@ def loop_ready() -> bool:
     """Whether the event loop is compiled already: in this process (then the disk is not
     asked again), or in the kernel cache."""
     return bool(getattr(loop.run_frames, "overloads", None)) or kernels_cached()
-
-
-def usable_cpus() -> int:
-    """How many CPUs this process may run on (its affinity where the system has one, as on
-    Linux; else every CPU)."""
-    affinity = getattr(os, "sched_getaffinity", None)
-    if affinity is not None:
-        return len(affinity(0))
-    return os.cpu_count() or 1
 
 
 def finish(helper: subprocess.Popen[bytes]) -> None:

@@ -28,8 +28,8 @@ STOP_CHECK_STEPS = 64
 class SteppedEngine:
     """What the 2D and 3D rigid engines share: the clock in whole steps, advancing to a time,
     and the running totals (collisions with bodies and with walls or planes, the energy
-    ledger) that :meth:`counters` reports and a checkpoint keeps. A subclass sets ``dt``,
-    ``partners`` and ``n_bodies`` and defines ``step``."""
+    ledger) that :meth:`counters` reports and a checkpoint keeps. A subclass sets itself up
+    with :meth:`_begin` and defines ``step``, ``sample`` and ``_warm_kernels``."""
 
     start: float
     steps: int
