@@ -144,9 +144,8 @@ def _start_scenes(
     (shut down with ``pools``: on an error the scenes not started are dropped), each taking
     whole groups of scenes whose engine one plug builds (the event-driven engine in 2D and 3D
     alike, the rigid one per dimension), so that each compiles those kernels once and the two
-    compile side by side; the groups go to the lane with less work so far,
-    largest first (:data:`COLD_SECONDS`). A scene's files are the same bits whichever process
-    ran it."""
+    compile side by side; the groups go to the lane with less work so far, largest first
+    (:data:`COLD_SECONDS`). A scene's files are the same bits whichever process ran it."""
     folders = {scene: folder / Path(scene).stem for scene in scenes}
     groups: dict[str, list[str]] = {}
     for scene in scenes:
