@@ -172,7 +172,7 @@ def test_a_worker_killed_mid_sweep_loses_nothing(tmp_path: Path) -> None:
     expected = sweep(path, tmp_path / "expected", workers=2, plots=False)
     assert expected.failed == 0
     with (
-        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster,
+        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as cluster,
         Client(cluster) as client,
     ):
         done: list[SweepReport] = []
@@ -252,3 +252,23 @@ def test_no_more_local_workers_than_runs(tmp_path: Path) -> None:
     path = write_sweep(tmp_path / "in", '"gas.count" = [15]', head="seeds = [4]")
     report = sweep(path, tmp_path / "out", workers=2, plots=False)
     assert (report.runs, report.workers) == (1, 1)
+
+
+def test_a_sweep_runs_beside_a_cluster_already_on_the_dashboard_port(tmp_path: Path) -> None:
+    # regression: the local cluster's HTTP server took Dask's default port 8787; with it taken
+    # (a dashboard, a second sweep, a parallel test run) Dask warned and, warnings being
+    # errors here, the cluster failed to start (seen under make test on two workers)
+    import socket
+
+    taken = socket.socket()
+    try:
+        taken.bind(("", 8787))
+        taken.listen()
+    except OSError:
+        pass  # already taken by someone else: the case itself
+    try:
+        path = write_sweep(tmp_path / "in", '"gas.count" = [15]', head="seeds = [4]")
+        report = sweep(path, tmp_path / "out", workers=1, plots=False)
+    finally:
+        taken.close()
+    assert (report.runs, report.failed) == (1, 0)

@@ -335,7 +335,10 @@ def _cluster(
             n_workers=workers,
             threads_per_worker=1,
             processes=True,
-            dashboard_address=None,
+            # no dashboard wanted, but Dask starts its HTTP server anyway, on 8787 unless told:
+            # any free port, so that a dashboard or another cluster already on 8787 (a second
+            # sweep at once, a parallel test run) costs nothing, not a warning
+            dashboard_address=":0",
             # the sweep reports every failure itself (a row and its message); what Dask would
             # add is noise, such as the traceback of a worker whose heartbeat, delayed by a
             # kernel, finds the scheduler already closed after Ctrl-C (seen in CI)
