@@ -28,6 +28,7 @@ LAYERS = [
     {"geometry"},
     {"laws"},
     # the engine-neutral core
+    {"shape_base"},
     {"shapes", "shapes3d", "materials"},
     {"meshes"},
     {"bodies"},

@@ -36,6 +36,15 @@ from carom.geometry.outline import (
     rounded_polygon_integrals,
 )
 from carom.laws.spheres import default_inertia_factor
+from carom.shape_base import (
+    SHAPE_CODES,
+    SHAPE_NAMES,
+    CapsuleSize,
+    RoundSize,
+    ShapeBase,
+    compound_part,
+    compound_pieces,
+)
 
 __all__ = [
     "SHAPE_CODES",
@@ -56,22 +65,6 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
-
-#: shape codes, as stored per body (H5MD ``particles/all/shape`` holds these names)
-SHAPE_CODES = {
-    "sphere": 0,
-    "circle": 1,
-    "capsule": 2,
-    "box": 3,
-    "polygon": 4,
-    "compound": 5,
-    "segment": 6,
-    "chain": 7,
-    "hull": 8,  # 3D
-    "mesh": 9,  # 3D, static
-    "ball": 10,  # a 3D sphere added as a rigid body (World.add_body), not as an EDMD sphere
-}
-SHAPE_NAMES = {code: name for name, code in SHAPE_CODES.items()}
 
 
 def check_inertia_factor(q: float) -> float:
@@ -191,25 +184,20 @@ class ConvexPiece:
         return rounded_polygon_integrals(self.vertices, self.radius)
 
 
-class Shape2D:
-    """A 2D shape for the rigid-body engine: a list of rounded convex pieces in its own frame.
+class Shape2D(ShapeBase[ConvexPiece, MassIntegrals, MassProperties]):
+    """A 2D shape for the rigid-body engine: a list of rounded convex pieces in its own frame
+    (:class:`carom.shape_base.ShapeBase`: ``integrals``, ``mass_properties`` from a density
+    [kg/m^2] or a mass, giving a :class:`MassProperties`)."""
 
-    A body's position is its centre of mass; the engine places the pieces relative to the
-    shape's :attr:`centroid`.
-    """
+    INTEGRALS = MassIntegrals
+    MEASURE = "area"
+    DENSITY_UNIT = "kg/m^2"
 
-    kind: str = ""
-
-    def pieces(self) -> tuple[ConvexPiece, ...]:
-        """The convex pieces in the shape's frame."""
-        raise NotImplementedError
-
-    def integrals(self) -> MassIntegrals:
-        """Area [m^2], first [m^3] and second [m^4] moments about the shape's origin."""
-        total = MassIntegrals(0.0, np.zeros(2), 0.0)
-        for piece in self.pieces():
-            total = total + piece.integrals()
-        return total
+    @staticmethod
+    def _properties(density: float, integrals: MassIntegrals) -> MassProperties:
+        return MassProperties(
+            density * integrals.area, integrals.centroid, density * integrals.second_about_centroid
+        )
 
     @property
     def area(self) -> float:
@@ -224,74 +212,21 @@ class Shape2D:
             return np.zeros(2)
         return integrals.centroid
 
-    def mass_properties(
-        self, density: float | None = None, *, mass: float | None = None
-    ) -> MassProperties:
-        """Exact mass, centre of mass and moment of inertia, from a density or a mass.
-
-        Parameters
-        ----------
-        density : float, optional
-            Mass per area [kg/m^2].
-        mass : float, optional
-            Total mass [kg]; give this or ``density``, not both.
-
-        Returns
-        -------
-        MassProperties
-            ``inertia = density * int |x - c|^2 dA`` about the centroid ``c`` [kg m^2].
-        """
-        if (density is None) == (mass is None):
-            raise CaromError("give density [kg/m^2] or mass [kg] (one of them)")
-        integrals = self.integrals()
-        if not integrals.area > 0.0:
-            raise CaromError(
-                f"a {self.kind} with no area has no mass: give it a radius, or make the body "
-                'kind="static"'
-            )
-        if density is not None:
-            rho = finite_positive("density", density, "kg/m^2")
-        else:
-            rho = finite_positive("mass", mass, "kg") / integrals.area
-        return MassProperties(
-            rho * integrals.area, integrals.centroid, rho * integrals.second_about_centroid
-        )
-
 
 @dataclass(frozen=True)
-class Circle(Shape2D):
+class Circle(RoundSize, Shape2D):
     """A disk of ``radius`` [m]: ``I = m r^2/2``."""
 
-    radius: float
     kind = "circle"
-
-    def __post_init__(self) -> None:
-        finite_positive("Circle radius", self.radius, "m")
 
     def pieces(self) -> tuple[ConvexPiece, ...]:
         return (ConvexPiece(np.zeros((1, 2)), float(self.radius)),)
 
 
 @dataclass(frozen=True)
-class Capsule(Shape2D):
-    """A stadium: the points within ``radius`` of a segment of ``length`` along the x axis.
-
-    Parameters
-    ----------
-    length : float
-        Distance between the two cap centres [m], > 0 (the capsule is ``length + 2 radius``
-        long overall).
-    radius : float
-        [m], > 0.
-    """
-
-    length: float
-    radius: float
-    kind = "capsule"
-
-    def __post_init__(self) -> None:
-        finite_positive("Capsule length", self.length, "m")
-        finite_positive("Capsule radius", self.radius, "m")
+class Capsule(CapsuleSize, Shape2D):
+    """A stadium: the points within ``radius`` [m] of a segment of ``length`` [m] along the x
+    axis (:class:`carom.shape_base.CapsuleSize`)."""
 
     def pieces(self) -> tuple[ConvexPiece, ...]:
         h = float(self.length) / 2.0
@@ -384,41 +319,25 @@ class Compound(Shape2D):
     kind = "compound"
 
     def __post_init__(self) -> None:
-        parts = self.parts
-        if isinstance(parts, Shape2D) or not isinstance(parts, Sequence) or not parts:
-            raise CaromError(
-                "Compound takes a non-empty list of parts: shape, (shape, offset) or "
-                f"(shape, offset, angle); got {self.parts!r}"
-            )
-        placed: list[ConvexPiece] = []
-        for i, part in enumerate(self.parts):
-            shape, offset, angle = _part(i, part)
-            if isinstance(shape, Segment | Chain):
-                raise CaromError(
-                    f"Compound part {i}: a {shape.kind} has no area; it can only be a static "
-                    "body of its own"
-                )
-            placed.extend(piece.moved(offset, angle) for piece in shape.pieces())
-        object.__setattr__(self, "placed", tuple(placed))
+        object.__setattr__(self, "placed", compound_pieces(self.parts, Shape2D, "angle", _placed))
 
     def pieces(self) -> tuple[ConvexPiece, ...]:
         return self.placed
 
 
-def _part(i: int, part: Any) -> tuple[Shape2D, FloatArray, float]:
-    """A Compound part as (shape, offset, angle), or a CaromError naming part ``i``."""
-    if isinstance(part, Shape2D):
-        return part, np.zeros(2), 0.0
-    if isinstance(part, tuple | list) and len(part) in (2, 3) and isinstance(part[0], Shape2D):
-        offset = _points(f"Compound part {i} offset", part[1], count=1)[0]
-        angle = float(part[2]) if len(part) == 3 else 0.0
-        if not math.isfinite(angle):
-            raise CaromError(f"Compound part {i} angle must be finite [rad]; got {part[2]!r}")
-        return part[0], offset, angle
-    raise CaromError(
-        f"Compound part {i} must be a shape, (shape, offset) or (shape, offset, angle); "
-        f"got {part!r}"
-    )
+def _placed(i: int, part: Any) -> list[ConvexPiece]:
+    """Compound part ``i``'s pieces, turned and moved, or a CaromError naming the part."""
+    shape, at, turn = compound_part(i, part, Shape2D, "angle")
+    offset = np.zeros(2) if at is None else _points(f"Compound part {i} offset", at, count=1)[0]
+    angle = 0.0 if turn is None else float(turn)
+    if not math.isfinite(angle):
+        raise CaromError(f"Compound part {i} angle must be finite [rad]; got {turn!r}")
+    if isinstance(shape, Segment | Chain):
+        raise CaromError(
+            f"Compound part {i}: a {shape.kind} has no area; it can only be a static body of "
+            "its own"
+        )
+    return [piece.moved(offset, angle) for piece in shape.pieces()]
 
 
 @dataclass(frozen=True, eq=False)

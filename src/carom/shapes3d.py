@@ -37,6 +37,7 @@ from carom.geometry.mass3d import (
     polyhedron_integrals,
     sphere_integrals,
 )
+from carom.shape_base import CapsuleSize, RoundSize, ShapeBase, compound_part, compound_pieces
 
 __all__ = [
     "Box",
@@ -145,17 +146,9 @@ def matrix_quaternion(r: FloatArray) -> FloatArray:
 
 @dataclass(frozen=True)
 class MassProperties3D:
-    """Mass, centre of mass and inertia tensor of a 3D body.
-
-    Attributes
-    ----------
-    mass : float
-        [kg].
-    centroid : (3,) float64
-        Centre of mass in the shape's frame [m].
-    inertia : (3, 3) float64
-        Inertia tensor about the centre of mass, shape's axes [kg m^2] (symmetric, positive
-        definite).
+    """A 3D body's ``mass`` [kg], its ``centroid`` (3,) [m] in the shape's frame and its
+    ``inertia`` (3, 3) [kg m^2]: the tensor about the centre of mass along the shape's axes,
+    symmetric and positive definite.
     """
 
     mass: float
@@ -227,25 +220,22 @@ def _turn_z_onto(u: FloatArray) -> FloatArray:
     return turn
 
 
-class Shape3D:
-    """A 3D solid for the rigid-body engine: a list of rounded convex pieces in its own frame.
+class Shape3D(ShapeBase[ConvexPiece3D, SolidIntegrals, MassProperties3D]):
+    """A 3D solid made of rounded convex pieces in its own frame. Its integrals, and its mass
+    properties (a :class:`MassProperties3D`) from a density [kg/m^3] or a mass, are
+    :class:`carom.shape_base.ShapeBase`'s."""
 
-    A body's position is its centre of mass; the engine places the pieces relative to the
-    shape's :attr:`centroid`.
-    """
+    MEASURE = "volume"
+    DENSITY_UNIT = "kg/m^3"
+    INTEGRALS = SolidIntegrals
 
-    kind: str = ""
-
-    def pieces(self) -> tuple[ConvexPiece3D, ...]:
-        """The convex pieces in the shape's frame."""
-        raise NotImplementedError
-
-    def integrals(self) -> SolidIntegrals:
-        """Volume [m^3], first [m^4] and second [m^5] moments about the shape's origin."""
-        total = SolidIntegrals(0.0, np.zeros(3), np.zeros((3, 3)))
-        for piece in self.pieces():
-            total = total + piece.integrals()
-        return total
+    @staticmethod
+    def _properties(density: float, integrals: SolidIntegrals) -> MassProperties3D:
+        return MassProperties3D(
+            density * integrals.volume,
+            integrals.centroid,
+            density * inertia_tensor(integrals.second_about_centroid()),
+        )
 
     @property
     def volume(self) -> float:
@@ -257,72 +247,21 @@ class Shape3D:
         """Centre of the volume in the shape's frame [m], (3,)."""
         return self.integrals().centroid
 
-    def mass_properties(
-        self, density: float | None = None, *, mass: float | None = None
-    ) -> MassProperties3D:
-        """Exact mass, centre of mass and inertia tensor, from a density or a mass.
-
-        Parameters
-        ----------
-        density : float, optional
-            Mass per volume [kg/m^3].
-        mass : float, optional
-            Total mass [kg]; give this or ``density``, not both.
-
-        Returns
-        -------
-        MassProperties3D
-            ``inertia = density * int (|r|^2 I - r r^T) dV``, ``r = x - c``, about the
-            centroid ``c`` [kg m^2].
-        """
-        if (density is None) == (mass is None):
-            raise CaromError("give density [kg/m^3] or mass [kg] (one of them)")
-        integrals = self.integrals()
-        if density is not None:
-            rho = finite_positive("density", density, "kg/m^3")
-        else:
-            rho = finite_positive("mass", mass, "kg") / integrals.volume
-        return MassProperties3D(
-            rho * integrals.volume,
-            integrals.centroid,
-            rho * inertia_tensor(integrals.second_about_centroid()),
-        )
-
 
 @dataclass(frozen=True)
-class Sphere(Shape3D):
+class Sphere(RoundSize, Shape3D):
     """A ball of ``radius`` [m]: ``I = 2/5 m r^2`` about any axis."""
 
-    radius: float
     kind = "sphere"
-
-    def __post_init__(self) -> None:
-        finite_positive("Sphere radius", self.radius, "m")
 
     def pieces(self) -> tuple[ConvexPiece3D, ...]:
         return (ConvexPiece3D(np.zeros((1, 3)), np.zeros((0, 3), np.int64), float(self.radius)),)
 
 
 @dataclass(frozen=True)
-class Capsule(Shape3D):
-    """The points within ``radius`` of a segment of ``length`` along the z axis.
-
-    Parameters
-    ----------
-    length : float
-        Distance between the two cap centres [m], > 0 (the capsule is ``length + 2 radius``
-        long overall).
-    radius : float
-        [m], > 0.
-    """
-
-    length: float
-    radius: float
-    kind = "capsule"
-
-    def __post_init__(self) -> None:
-        finite_positive("Capsule length", self.length, "m")
-        finite_positive("Capsule radius", self.radius, "m")
+class Capsule(CapsuleSize, Shape3D):
+    """The points within ``radius`` [m] of a segment of ``length`` [m] along the z axis
+    (:class:`carom.shape_base.CapsuleSize`)."""
 
     def pieces(self) -> tuple[ConvexPiece3D, ...]:
         h = float(self.length) / 2.0
@@ -463,17 +402,8 @@ class Compound(Shape3D):
     kind = "compound"
 
     def __post_init__(self) -> None:
-        parts = self.parts
-        if isinstance(parts, Shape3D) or not isinstance(parts, Sequence) or not parts:
-            raise CaromError(
-                "Compound takes a non-empty list of parts: shape, (shape, offset) or "
-                f"(shape, offset, rotation); got {self.parts!r}"
-            )
-        placed: list[ConvexPiece3D] = []
-        for i, part in enumerate(parts):
-            shape, rotation, offset = _part(i, part)
-            placed.extend(piece.moved(rotation, offset) for piece in shape.pieces())
-        object.__setattr__(self, "placed", tuple(placed))
+        placed = compound_pieces(self.parts, Shape3D, "rotation", _placed)
+        object.__setattr__(self, "placed", placed)
 
     def pieces(self) -> tuple[ConvexPiece3D, ...]:
         return self.placed
@@ -482,26 +412,17 @@ class Compound(Shape3D):
         return self.solid if self.solid is not None else super().integrals()
 
 
-def _part(i: int, part: Any) -> tuple[Shape3D, FloatArray, FloatArray]:
-    """A Compound part as (shape, rotation matrix, offset), or a CaromError naming part i."""
+def _placed(i: int, part: Any) -> list[ConvexPiece3D]:
+    """Compound part ``i``'s pieces, turned and moved, or a CaromError naming the part."""
+    unbounded = f"Compound part {i}: a Plane is unbounded; it can only be static ground"
     if isinstance(part, Plane):
-        raise CaromError(f"Compound part {i}: a Plane is unbounded; it can only be static ground")
-    if isinstance(part, Shape3D):
-        return part, np.eye(3), np.zeros(3)
-    if isinstance(part, tuple | list) and len(part) in (2, 3) and isinstance(part[0], Shape3D):
-        if isinstance(part[0], Plane):
-            raise CaromError(
-                f"Compound part {i}: a Plane is unbounded; it can only be static ground"
-            )
-        offset = _vector(f"Compound part {i} offset", part[1], "m")
-        rotation = (
-            rotation_matrix(part[2], f"Compound part {i} rotation") if len(part) == 3 else np.eye(3)
-        )
-        return part[0], rotation, offset
-    raise CaromError(
-        f"Compound part {i} must be a shape, (shape, offset) or (shape, offset, rotation); "
-        f"got {part!r}"
-    )
+        raise CaromError(unbounded)
+    shape, at, turn = compound_part(i, part, Shape3D, "rotation")
+    if isinstance(shape, Plane):
+        raise CaromError(unbounded)
+    offset = np.zeros(3) if at is None else _vector(f"Compound part {i} offset", at, "m")
+    rotation = np.eye(3) if turn is None else rotation_matrix(turn, f"Compound part {i} rotation")
+    return [piece.moved(rotation, offset) for piece in shape.pieces()]
 
 
 @dataclass(frozen=True, eq=False)

@@ -138,7 +138,11 @@ def test_shapes_match_the_dimension_and_a_lattice_takes_radius_or_body(tmp_path:
         + text
         + "positions = [[1, 1, 1]]\n"
     )
-    with pytest.raises(SceneError, match=r"'polygon' is a 2D shape; in 3D use ball, box"):
+    with pytest.raises(
+        SceneError,
+        match=r"'polygon' is a 2D shape; in 3D use sphere, capsule, box, compound, ball, hull "
+        r"or mesh",
+    ):
         load_scene(path)
     with pytest.raises(SceneError, match=r"'hull' is a 3D shape"):
         scene("[[bodies]]\nshape = 'hull'\nvertices = [[0, 0]]\npositions = [[1, 1]]", tmp=tmp_path)

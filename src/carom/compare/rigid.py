@@ -17,17 +17,22 @@ largest rotation.
 
 from __future__ import annotations
 
-import copy
-import functools
 import math
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.compare.yardstick import RigidSceneBase, Yardstick, extent
+from carom.compare.yardstick import (
+    FLIGHT_STEP,
+    LEVEL,
+    ImpactBase,
+    RigidSceneBase,
+    Yardstick,
+    check_time,
+    next_contact,
+)
 from carom.engines.rigid.assemble import assemble
 from carom.engines.rigid.driver import RigidEngine
 from carom.engines.rigid.model import RigidModel, RigidState, new_state
@@ -44,61 +49,37 @@ __all__ = ["ImpactCheck", "RigidMonitor", "RigidScene", "impact_expectation"]
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-#: the closed form's post-impact flight is searched for a second contact at this step [s]
-FLIGHT_STEP = 1e-4
-#: two corners within this height of each other [m] land together (a face lands)
-LEVEL = 1e-12
-
 
 @dataclass(frozen=True)
 class RigidScene(RigidSceneBase):
-    """A 2D scene of rigid bodies as plain data, every body as carom's rigid engine sees it.
+    """A 2D scene of rigid bodies as plain data, every body as carom's rigid engine sees it
+    (:class:`carom.compare.yardstick.RigidSceneBase`: name, title, n, settings, until,
+    model, start, world).
 
     Attributes
     ----------
-    name, title : str
-        The scene's name and title.
-    n : int
-        The caller's bodies: the first ``n`` rows. The rows after them are the box's walls
-        and the planes, as static slabs.
     pieces : tuple of tuple of ConvexPiece
         Each body's convex pieces in its frame (centre of mass at the origin) [m]: one corner
         is a circle, two a capsule or segment, three or more a (rounded) polygon.
-    settings : RigidSettings
-        carom's engine settings (rate, substeps, sleep); the peers take the same rate.
-    model, start : RigidModel, RigidState
-        carom's engine's constants and its state at the start; the properties below read
-        them: ``kind`` (B,), ``mass`` and ``inertia`` (B,) [kg], [kg m^2] (inf for static and
-        kinematic bodies), ``material`` (B,), ``restitution`` and ``friction`` (M, M) [-],
-        ``gravity`` (2,) [m/s^2], ``position`` and ``velocity`` (B, 2) [m], [m/s] (centres of
-        mass), ``angle`` and ``omega`` (B,) [rad], [rad/s].
-    until : float
-        Simulated time [s].
-    world : callable
-        A fresh copy of the scene's :class:`World`, not yet run.
+
+    ``model`` and ``start`` are a :class:`RigidModel` and :class:`RigidState`: ``inertia``
+    (B,) [kg m^2], ``gravity`` (2,), ``position`` and ``velocity`` (B, 2), ``angle`` and
+    ``omega`` (B,) [rad], [rad/s].
     """
 
-    name: str
-    title: str
-    n: int
     pieces: tuple[tuple[ConvexPiece, ...], ...]
-    settings: RigidSettings
-    until: float
-    model: RigidModel = field(compare=False, repr=False)
-    start: RigidState = field(compare=False, repr=False)
-    world: Callable[[], World] = field(compare=False, repr=False)
 
     dim = 2
 
     @classmethod
-    def from_world(
-        cls, build: Callable[[], World], name: str, until: float, title: str = ""
-    ) -> RigidScene:
-        """Read the world ``build()`` makes, as its rigid engine would start."""
-        world = build()
+    def _parts(cls, world: World) -> tuple[RigidModel, RigidState]:
         model, state, _ = world_parts(world, assemble)
         if not isinstance(model, RigidModel) or not isinstance(state, RigidState):
             raise CaromError("carom compare's rigid scenes are 2D; 3D comparisons come later")
+        return model, state
+
+    @staticmethod
+    def _pieces(model: RigidModel) -> tuple[tuple[ConvexPiece, ...], ...]:
         rows = model.body_pieces
         pieces = []
         for body in range(model.kind.shape[0]):
@@ -108,17 +89,7 @@ class RigidScene(RigidSceneBase):
                 corners = model.local_vertices[start : start + count].copy()
                 own.append(ConvexPiece(corners, float(model.piece_radius[p])))
             pieces.append(tuple(own))
-        return cls(
-            name=name,
-            title=title or name,
-            n=world.n_bodies,
-            pieces=tuple(pieces),
-            settings=world.rigid_settings,
-            until=float(until),
-            model=model,
-            start=state,
-            world=functools.partial(copy.deepcopy, world),
-        )
+        return tuple(pieces)
 
     angle = property(lambda self: self.start.angle)
     omega = property(lambda self: self.start.omega)
@@ -135,37 +106,10 @@ class RigidScene(RigidSceneBase):
 
 
 @dataclass(frozen=True)
-class ImpactCheck:
-    """The closed form of one body landing on flat ground.
-
-    Attributes
-    ----------
-    body : int
-        The falling body.
-    impact_time : float
-        When its lowest point reaches the ground [s] (free fall).
-    time : float
-        When the engines are checked [s]: after the impact, before any second contact.
-    velocity : (2,) float64
-        Centre-of-mass velocity at ``time`` [m/s].
-    omega : float
-        Angular velocity after the impact [rad/s].
-    speed : float
-        Approach speed of the contact point at the impact [m/s] (the error scale).
-    reach : float
-        Farthest point of the body from its centre [m] (turns ω errors into speeds).
-    source : str
-        What the closed form is.
-    """
-
-    body: int
-    impact_time: float
-    time: float
-    velocity: FloatArray
-    omega: float
-    speed: float
-    reach: float
-    source: str
+class ImpactCheck(ImpactBase):
+    """The closed form of one body landing on flat ground, in 2D
+    (:class:`carom.compare.yardstick.ImpactBase`): ``velocity`` (2,) [m/s], ``omega`` a
+    float [rad/s] about z."""
 
 
 def _corners(scene: RigidScene, body: int, angle: float) -> tuple[FloatArray, FloatArray]:
@@ -245,21 +189,18 @@ def impact_expectation(scene: RigidScene, step: float) -> ImpactCheck | None:
     j = float(impulse(v_hit, normal, mass, math.inf, e=e, r_a=r, inertia_a=inertia))
     v_after = v_hit + j * normal / mass
     w_after = (r[0] * j * normal[1] - r[1] * j * normal[0]) / inertia
+
     # the flight after the impact, until a corner reaches the ground again
-    t_next = scene.until
-    t = t_hit + FLIGHT_STEP
-    while t < scene.until:
+    def lands(t: float) -> bool:
         tau = t - t_hit
         y = x0[1] + vy * t_hit - 0.5 * g * t_hit**2 + v_after[1] * tau - 0.5 * g * tau**2
         turned, rad = _corners(scene, body, float(scene.angle[body]) + w_after * tau)
-        if float(np.min(turned[:, 1] - rad)) + y <= top:
-            t_next = t
-            break
-        t += FLIGHT_STEP
-    first = math.ceil((t_hit + 2.0 * step) / step) * step
-    if first > t_next - step:
+        return bool(float(np.min(turned[:, 1] - rad)) + y <= top)
+
+    t_next = next_contact(t_hit, scene.until, FLIGHT_STEP, lands)
+    check = check_time(t_hit, t_next, step)
+    if check is None:
         return None
-    check = first
     velocity = v_after + scene.gravity * (check - t_hit)
     reach = max(piece.reach for piece in scene.pieces[body])
     speed = abs(float(v_hit[1]))  # the contact point's approach speed (no spin before)
@@ -291,14 +232,11 @@ class RigidMonitor(Yardstick):
     """
 
     scene: RigidScene
+    expected: ImpactCheck | None
 
-    def __init__(self, scene: RigidScene, expected: ImpactCheck | None, dt: float) -> None:
-        self.scene = scene
-        self.expected = expected
-        dyn = np.nonzero(scene.kind[: scene.n] == KIND_DYNAMIC)[0]
+    def _setup(self, dyn: IntArray) -> int:
+        scene = self.scene
         self._angle0 = scene.angle[dyn].copy()
-        top = int(dyn[np.argmax(scene.position[dyn, 1])]) if dyn.shape[0] else -1
-        self._begin(dt, dyn, top, extent(scene.pieces[top]) if top >= 0 else 1.0)
         # the static pieces in world coordinates (they never move)
         self._walls = [
             piece
@@ -311,6 +249,7 @@ class RigidMonitor(Yardstick):
         self._probe = RigidEngine(
             m, new_state(m, scene.position, scene.velocity, scene.angle, scene.omega), settings
         )
+        return int(dyn[np.argmax(scene.position[dyn, 1])]) if dyn.shape[0] else -1
 
     def _energy(
         self, x: FloatArray, v: FloatArray, turn: FloatArray, spin: FloatArray

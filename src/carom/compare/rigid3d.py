@@ -20,16 +20,14 @@ body's drift and the largest rotation.
 
 from __future__ import annotations
 
-import copy
-import functools
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.compare.yardstick import RigidSceneBase, Yardstick, extent
+from carom.compare import yardstick
+from carom.compare.yardstick import ImpactBase, RigidSceneBase, Yardstick
 from carom.engines.rigid3d.assemble import world_parts
 from carom.engines.rigid3d.driver import RigidEngine3D
 from carom.engines.rigid3d.impacts import normal_lcp
@@ -66,63 +64,35 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-#: the closed form's post-impact flight is searched for a second contact at this step [s]
-FLIGHT_STEP = 1e-4
-#: two corners within this height of each other [m] land together (an edge or face lands)
-LEVEL = 1e-12
 #: a box's corners lie on two planes per axis to within this [m]
 BOX_TOLERANCE = 1e-12
 
 
 @dataclass(frozen=True)
 class RigidScene3D(RigidSceneBase):
-    """A 3D scene of rigid bodies as plain data, every body as carom's 3D engine sees it.
+    """Plain data of a 3D rigid scene as carom's 3D engine starts it: the fields of
+    :class:`carom.compare.yardstick.RigidSceneBase` and each body's ``pieces`` (tuples of
+    :class:`Piece3D` in the body's frame, centre of mass at the origin [m]).
 
-    Attributes
-    ----------
-    name, title : str
-        The scene's name and title.
-    n : int
-        The caller's bodies: the first ``n`` rows. The rows after them are the box's walls
-        (static slabs) and the planes.
-    pieces : tuple of tuple of Piece3D
-        Each body's pieces in its frame (centre of mass at the origin) [m].
-    settings : RigidSettings
-        carom's engine settings (rate, substeps, sleep).
-    model, start : Model3D, State3D
-        carom's engine's constants and its state at the start; the properties below read
-        them: ``kind`` (B,), ``mass`` (B,) [kg] and ``inertia`` (B, 3, 3) [kg m^2] (inf for
-        static and kinematic bodies), ``material`` (B,), ``restitution`` and ``friction``
-        (M, M) [-], ``gravity`` (3,) [m/s^2], ``position`` and ``velocity`` (B, 3) [m],
-        [m/s] (centres of mass), ``orientation`` (B, 4) unit quaternions ``(w, x, y, z)``,
-        ``omega`` (B, 3) [rad/s] in the world frame.
-    until : float
-        Simulated time [s].
-    world : callable
-        A fresh copy of the scene's :class:`World`, not yet run.
+    Its ``model`` (a :class:`Model3D`) and ``start`` (a :class:`State3D`) give ``inertia``
+    (B, 3, 3) [kg m^2], ``gravity`` (3,), ``position`` and ``velocity`` (B, 3),
+    ``orientation`` (B, 4) unit quaternions ``(w, x, y, z)`` and ``omega`` (B, 3) [rad/s] in
+    the world frame.
     """
 
-    name: str
-    title: str
-    n: int
     pieces: tuple[tuple[Piece3D, ...], ...]
-    settings: RigidSettings
-    until: float
-    model: Model3D = field(compare=False, repr=False)
-    start: State3D = field(compare=False, repr=False)
-    world: Callable[[], World] = field(compare=False, repr=False)
 
     dim = 3
 
     @classmethod
-    def from_world(
-        cls, build: Callable[[], World], name: str, until: float, title: str = ""
-    ) -> RigidScene3D:
-        """Read the 3D world ``build()`` makes, as its rigid engine would start."""
-        world = build()
+    def _parts(cls, world: World) -> tuple[Model3D, State3D]:
         model, state, _ = world_parts(world)
         if not isinstance(model, Model3D) or not isinstance(state, State3D):
             raise CaromError("RigidScene3D takes a 3D world; a 2D one is a RigidScene")
+        return model, state
+
+    @staticmethod
+    def _pieces(model: Model3D) -> tuple[tuple[Piece3D, ...], ...]:
         m = model
         pieces = []
         for body in range(m.kind.shape[0]):
@@ -145,17 +115,7 @@ class RigidScene3D(RigidSceneBase):
                     )
                 )
             pieces.append(tuple(own))
-        return cls(
-            name=name,
-            title=title or name,
-            n=world.n_bodies,
-            pieces=tuple(pieces),
-            settings=world.rigid_settings,
-            until=float(until),
-            model=model,
-            start=state,
-            world=functools.partial(copy.deepcopy, world),
-        )
+        return tuple(pieces)
 
     rolling = property(lambda self: self.model.rolling_table)
     orientation = property(lambda self: self.start.q)
@@ -310,41 +270,19 @@ def turned_angle(q: FloatArray, q0: FloatArray) -> FloatArray:
 
 
 @dataclass(frozen=True)
-class ImpactCheck3D:
-    """The closed form of one body landing on level ground.
+class ImpactCheck3D(ImpactBase):
+    """The closed form of one body landing on level ground, in 3D
+    (:class:`carom.compare.yardstick.ImpactBase`): ``velocity`` (3,) [m/s], ``omega`` (3,)
+    [rad/s] in the world frame (torque-free flight after the impact keeps the angular
+    momentum).
 
     Attributes
     ----------
-    body : int
-        The falling body.
-    impact_time : float
-        When its lowest point reaches the ground [s] (free fall).
-    time : float
-        When the engines are checked [s]: after the impact, before any second contact.
-    velocity : (3,) float64
-        Centre-of-mass velocity at ``time`` [m/s].
-    omega : (3,) float64
-        Angular velocity at ``time`` [rad/s], world frame (torque-free flight after the
-        impact keeps the angular momentum).
     points : int
         Points that touch at the impact (1 a corner or a ball, 2 an edge, 3-4 a face).
-    speed : float
-        Approach speed of the contact points at the impact [m/s] (the error scale).
-    reach : float
-        Farthest point of the body from its centre [m] (turns ω errors into speeds).
-    source : str
-        What the closed form is.
     """
 
-    body: int
-    impact_time: float
-    time: float
-    velocity: FloatArray
-    omega: FloatArray
     points: int
-    speed: float
-    reach: float
-    source: str
 
 
 def _lowest(
@@ -359,7 +297,7 @@ def _lowest(
     every = np.concatenate(points)
     height = every @ up
     low = float(height.min())
-    return every[height <= low + LEVEL], low
+    return every[height <= low + yardstick.LEVEL], low
 
 
 def _ground(scene: RigidScene3D, feet: FloatArray, up: FloatArray) -> tuple[int, float]:
@@ -373,11 +311,11 @@ def _ground(scene: RigidScene3D, feet: FloatArray, up: FloatArray) -> tuple[int,
             normals = piece.normals @ r.T
             corners = piece.vertices @ r.T + scene.position[other]
             if piece.kind == PIECE_PLANE:
-                if abs(float(normals[0] @ up) - 1.0) > LEVEL:
+                if abs(float(normals[0] @ up) - 1.0) > yardstick.LEVEL:
                     continue
                 height = float(corners[0] @ up)
             else:
-                faces = np.nonzero(np.abs(normals @ up - 1.0) <= LEVEL)[0]
+                faces = np.nonzero(np.abs(normals @ up - 1.0) <= yardstick.LEVEL)[0]
                 if faces.shape[0] != 1 or piece.kind == PIECE_ROUND:
                     continue
                 f = int(faces[0])
@@ -387,10 +325,10 @@ def _ground(scene: RigidScene3D, feet: FloatArray, up: FloatArray) -> tuple[int,
                 # every foot inside the face's polygon, seen from above
                 for a, b in zip(ring, np.roll(ring, -1, axis=0), strict=True):
                     side = np.cross(b - a, feet - a) @ up
-                    if np.any(side < -LEVEL):
+                    if np.any(side < -yardstick.LEVEL):
                         height = -math.inf
                         break
-            if top < height <= below + LEVEL:
+            if top < height <= below + yardstick.LEVEL:
                 best, top = int(other), height
     return best, top
 
@@ -419,12 +357,7 @@ def impact_expectation3d(scene: RigidScene3D, step: float) -> ImpactCheck3D | No
     none pulling), so only when the pair has no friction. Then torque-free flight; the
     check waits two steps of ``step`` and must come before any second contact. None when
     the scene is not of this kind; a body that spins before the impact must be a ball.
-
-    Parameters
-    ----------
-    scene : RigidScene3D
-    step : float
-        The largest step of the engines compared [s]: the check waits two of them.
+    ``step`` is the largest step of the engines compared [s], as in 2D.
     """
     dyn = np.nonzero(scene.kind == KIND_DYNAMIC)[0]
     g_norm = float(np.linalg.norm(scene.gravity))
@@ -476,40 +409,30 @@ def impact_expectation3d(scene: RigidScene3D, step: float) -> ImpactCheck3D | No
     v_after = v_hit + impulses.sum(axis=0) / mass
     w_after = w0 + iw @ np.sum(np.cross(feet, impulses), axis=0)
     # the flight after the impact, until the body reaches the ground again
-    t_next = scene.until
-    t = t_hit + FLIGHT_STEP
     x_hit = x0 + v0 * t_hit + 0.5 * scene.gravity * t_hit**2
-    q, w = q0.copy(), w_after.copy()
-    while t < scene.until:
-        q, w = _flight(scene, body, q, w, FLIGHT_STEP)
+    turning = [q0.copy(), w_after.copy()]  # the flight so far: asked once a step, in order
+
+    def lands(t: float) -> bool:
+        turning[:] = _flight(scene, body, turning[0], turning[1], yardstick.FLIGHT_STEP)
         tau = t - t_hit
         centre = x_hit + v_after * tau + 0.5 * scene.gravity * tau**2
-        _, low_now = _lowest(scene, body, q, up)
-        if float(centre @ up) + low_now <= top:
-            t_next = t
-            break
-        t += FLIGHT_STEP
-    first = math.ceil((t_hit + 2.0 * step) / step) * step
-    if first > t_next - step:
+        _, low_now = _lowest(scene, body, turning[0], up)
+        return float(centre @ up) + low_now <= top
+
+    t_next = yardstick.next_contact(t_hit, scene.until, yardstick.FLIGHT_STEP, lands)
+    first = yardstick.check_time(t_hit, t_next, step)
+    if first is None:
         return None
     _, w_check = _flight(scene, body, q0, w_after, first - t_hit)
     velocity = v_after + scene.gravity * (first - t_hit)
     reach = float(scene.model.reach[body])
     speed = float(np.max(np.abs(u @ up)))
-    return ImpactCheck3D(
-        body=body,
-        impact_time=t_hit,
-        time=first,
-        velocity=velocity,
-        omega=w_check,
-        points=count,
-        speed=max(speed, 1e-300),
-        reach=reach,
-        source=(
-            f"free fall onto level ground, then Newton's restitution e = {e:g} with the "
-            f"full inertia tensor ({law}, mu = {mu:g}), then torque-free flight"
-        ),
+    source = (
+        f"free fall onto level ground, then Newton's restitution e = {e:g} with the full "
+        f"inertia tensor ({law}, mu = {mu:g}), then torque-free flight"
     )
+    return ImpactCheck3D(body, t_hit, first, velocity, w_check, max(speed, 1e-300), reach,
+                         source, points=count)  # fmt: skip
 
 
 class RigidMonitor3D(Yardstick):
@@ -526,16 +449,11 @@ class RigidMonitor3D(Yardstick):
     """
 
     scene: RigidScene3D
+    expected: ImpactCheck3D | None
 
-    def __init__(self, scene: RigidScene3D, expected: ImpactCheck3D | None, dt: float) -> None:
-        self.scene = scene
-        self.expected = expected
-        dyn = np.nonzero(scene.kind[: scene.n] == KIND_DYNAMIC)[0]
+    def _setup(self, dyn: IntArray) -> int:
+        scene = self.scene
         self._q0 = scene.orientation[dyn].copy()
-        up = -scene.gravity / max(float(np.linalg.norm(scene.gravity)), 1e-300)
-        heights = scene.position[dyn] @ up if np.any(up) else scene.position[dyn, 2]
-        top = int(dyn[np.argmax(heights)]) if dyn.shape[0] else -1
-        self._begin(dt, dyn, top, extent(scene.pieces[top]) if top >= 0 else 1.0)
         # the static pieces' faces in the world (they never move): (normals, offsets)
         self._walls: list[tuple[FloatArray, FloatArray]] = []
         for body in np.nonzero(scene.kind == KIND_STATIC)[0]:
@@ -557,6 +475,9 @@ class RigidMonitor3D(Yardstick):
             new_state(m, scene.position, scene.velocity, scene.orientation, scene.omega),
             settings,
         )
+        up = -scene.gravity / max(float(np.linalg.norm(scene.gravity)), 1e-300)
+        heights = scene.position[dyn] @ up if np.any(up) else scene.position[dyn, 2]
+        return int(dyn[np.argmax(heights)]) if dyn.shape[0] else -1
 
     def _energy(
         self, x: FloatArray, v: FloatArray, turn: FloatArray, spin: FloatArray

@@ -7,9 +7,12 @@ build on it; neither imports the other.
 
 from __future__ import annotations
 
+import copy
+import functools
 import math
 from collections.abc import Callable, Sequence
-from typing import Any, Protocol
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol, Self
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,13 +22,31 @@ from carom.engines.stepped.settings import RigidSettings
 from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC
 
-__all__ = ["Expectation", "RigidSceneBase", "Yardstick", "extent", "shape_coefficients"]
+if TYPE_CHECKING:
+    from carom.world import World
+
+__all__ = [
+    "FLIGHT_STEP",
+    "LEVEL",
+    "Expectation",
+    "ImpactBase",
+    "RigidSceneBase",
+    "Yardstick",
+    "check_time",
+    "extent",
+    "next_contact",
+    "shape_coefficients",
+]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: at most this many points of the series are kept per engine
 SERIES_POINTS = 1500
+#: the closed form's post-impact flight is searched for a second contact at this step [s]
+FLIGHT_STEP = 1e-4
+#: two corners within this height of each other [m] land together (an edge or face lands)
+LEVEL = 1e-12
 
 
 class Expectation(Protocol):
@@ -62,20 +83,76 @@ class Piece(Protocol):
     def radius(self) -> float: ...
 
 
+@dataclass(frozen=True)
 class RigidSceneBase:
-    """What a 2D and a 3D rigid scene read alike off carom's engine: its constants
-    (``model``) and its state at the start (``start``), the run's ``until`` [s] and the
-    engine's ``settings``. Properties: ``kind`` (B,), ``mass`` [kg] and ``inertia``,
-    ``material`` (B,), ``restitution`` and ``friction`` (M, M) [-], ``gravity`` [m/s^2],
-    ``position`` and ``velocity`` [m], [m/s] (centres of mass)."""
+    """What a 2D and a 3D rigid scene are alike: plain data read off carom's engine as it
+    would start, each body as the engine sees it.
+
+    Attributes
+    ----------
+    name, title : str
+        The scene's name and title.
+    n : int
+        The caller's bodies: the first ``n`` rows. The rows after them are the box's walls
+        (static slabs) and the planes.
+    settings : RigidSettings
+        carom's engine settings (rate, substeps, sleep); the peers take the same rate.
+    until : float
+        Simulated time [s].
+    model, start
+        carom's engine's constants and its state at the start; the properties read them:
+        ``kind`` (B,), ``mass`` [kg] and ``inertia`` (inf for static and kinematic bodies),
+        ``material`` (B,), ``restitution`` and ``friction`` (M, M) [-], ``gravity``
+        [m/s^2], ``position`` and ``velocity`` [m], [m/s] (centres of mass).
+    world : callable
+        A fresh copy of the scene's :class:`World`, not yet run.
+
+    A dimension's scene adds its bodies' ``pieces`` (each body's convex pieces in its frame,
+    centre of mass at the origin [m]) and says how its engine's parts are read
+    (:meth:`_parts`, :meth:`_pieces`).
+    """
 
     name: str
-    #: 2 or 3
-    dim: int
-    until: float
+    title: str
+    n: int
     settings: RigidSettings
-    model: Any
-    start: Any
+    until: float
+    model: Any = field(compare=False, repr=False)
+    start: Any = field(compare=False, repr=False)
+    world: Callable[[], World] = field(compare=False, repr=False)
+
+    #: 2 or 3
+    dim: ClassVar[int]
+
+    @classmethod
+    def from_world(
+        cls, build: Callable[[], World], name: str, until: float, title: str = ""
+    ) -> Self:
+        """Read the world ``build()`` makes, as its rigid engine would start."""
+        world = build()
+        model, state = cls._parts(world)
+        return cls(
+            name=name,
+            title=title or name,
+            n=world.n_bodies,
+            settings=world.rigid_settings,
+            until=float(until),
+            model=model,
+            start=state,
+            world=functools.partial(copy.deepcopy, world),
+            pieces=cls._pieces(model),  # type: ignore[call-arg]
+        )
+
+    @classmethod
+    def _parts(cls, world: World) -> tuple[Any, Any]:
+        """The engine's constants and starting state for ``world``; a world of another
+        dimension is refused with a :class:`CaromError`."""
+        raise NotImplementedError
+
+    @staticmethod
+    def _pieces(model: Any) -> tuple[tuple[Any, ...], ...]:
+        """Each body's pieces in its frame, read off the engine's constants."""
+        raise NotImplementedError
 
     kind = property(lambda self: self.model.kind)
     mass = property(lambda self: self.model.mass)
@@ -108,6 +185,61 @@ class RigidSceneBase:
         dynamic = sorted(set(self.material[self.kind == KIND_DYNAMIC].tolist()))
         every = sorted(set(self.material.tolist()))
         return [(a, b) for a in dynamic for b in every if a != b or count[a] >= 2]
+
+
+@dataclass(frozen=True)
+class ImpactBase:
+    """The closed form of one body landing on flat ground, as both dimensions give it.
+
+    Attributes
+    ----------
+    body : int
+        The falling body.
+    impact_time : float
+        When its lowest point reaches the ground [s] (free fall).
+    time : float
+        When the engines are checked [s]: after the impact, before any second contact.
+    velocity : (d,) float64
+        Centre-of-mass velocity at ``time`` [m/s].
+    omega : float or (3,) float64
+        Angular velocity at ``time`` [rad/s] (about z in 2D; the world frame in 3D).
+    speed : float
+        Approach speed of the contact point at the impact [m/s] (the error scale).
+    reach : float
+        Farthest point of the body from its centre [m] (turns omega errors into speeds).
+    source : str
+        What the closed form is.
+    """
+
+    body: int
+    impact_time: float
+    time: float
+    velocity: FloatArray
+    omega: Any
+    speed: float
+    reach: float
+    source: str
+
+
+def next_contact(
+    t_hit: float, until: float, step: float, touches: Callable[[float], bool]
+) -> float:
+    """The first time after an impact at ``t_hit`` [s], in steps of ``step`` [s], at which
+    ``touches(t)`` (asked in order, once a time), or ``until`` [s] if none comes before."""
+    t = t_hit + step
+    while t < until:
+        if touches(t):
+            return t
+        t += step
+    return until
+
+
+def check_time(t_hit: float, t_next: float, step: float) -> float | None:
+    """When the engines are checked after an impact at ``t_hit`` [s]: the first multiple of
+    ``step`` [s] two steps after it, if it comes a step before the body's next contact at
+    ``t_next`` [s]; else None (no step fits between them)."""
+    first = math.ceil((t_hit + 2.0 * step) / step) * step
+    return None if first > t_next - step else first
 
 
 def shape_coefficients(
@@ -187,7 +319,7 @@ class Yardstick:
     body's drift, bodies through static ones, the deepest overlap (ten times a simulated
     second), the state at the closed form's check, and the series to plot.
 
-    A monitor sets its own geometry up, calls :meth:`_begin`, and gives the five measures
+    A monitor sets its own geometry up (:meth:`_setup`), and gives the five measures
     that differ with the dimension: :meth:`_energy`, :meth:`_turns`, :meth:`_momentum`,
     :meth:`_overlap` and :meth:`_passed`. Orientations (``turn``) are angles in 2D and
     quaternions in 3D; angular velocities (``spin``) scalars in 2D and vectors in 3D.
@@ -195,6 +327,18 @@ class Yardstick:
 
     scene: RigidSceneBase
     expected: Expectation | None
+
+    def __init__(self, scene: Any, expected: Expectation | None, dt: float) -> None:
+        self.scene = scene
+        self.expected = expected
+        dyn = np.nonzero(scene.kind[: scene.n] == KIND_DYNAMIC)[0]
+        top = self._setup(dyn)
+        self._begin(dt, dyn, top, extent(scene.pieces[top]) if top >= 0 else 1.0)
+
+    def _setup(self, dynamic: IntArray) -> int:
+        """The monitor's own geometry, for the ``dynamic`` bodies (indices); return the top
+        one (-1: none), whose drift is watched."""
+        raise NotImplementedError
 
     def _begin(self, dt: float, dynamic: IntArray, top: int, size: float) -> None:
         """The counters and series, for observations ``dt`` [s] apart of the ``dynamic``

@@ -65,6 +65,16 @@ class SolidIntegrals:
             self.volume + other.volume, self.first + other.first, self.second + other.second
         )
 
+    @classmethod
+    def zero(cls) -> SolidIntegrals:
+        """The integrals of nothing."""
+        return cls(0.0, np.zeros(3), np.zeros((3, 3)))
+
+    @property
+    def measure(self) -> float:
+        """The volume [m^3] (a region's measure is its area)."""
+        return self.volume
+
     @property
     def centroid(self) -> FloatArray:
         """Centre of the volume [m], (3,)."""

@@ -154,6 +154,16 @@ class MassIntegrals:
             self.area + other.area, self.first + other.first, self.second + other.second
         )
 
+    @classmethod
+    def zero(cls) -> MassIntegrals:
+        """The integrals of nothing."""
+        return cls(0.0, np.zeros(2), 0.0)
+
+    @property
+    def measure(self) -> float:
+        """The area [m^2] (a solid's measure is its volume)."""
+        return self.area
+
     @property
     def centroid(self) -> FloatArray:
         """``S / A`` [m], (2,)."""

@@ -5,7 +5,7 @@ their ``shape`` keys."""
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any, Literal, Protocol, cast
 
@@ -18,6 +18,7 @@ from carom.materials import Material
 from carom.meshes import Mesh, decompose, load_mesh
 from carom.scene import layouts
 from carom.scene.schema import GENERATORS, Locator, SceneError
+from carom.shape_base import SHAPES
 from carom.world import World
 
 __all__ = ["build_world", "count_bodies"]
@@ -125,52 +126,106 @@ def build_world(scene: Scene) -> World:
     return world
 
 
-def shape_of(entry: Mapping[str, Any]) -> shapes.Shape2D:
-    """The 2D shape a ``[[bodies]]`` entry (or a compound's piece) describes, from its
-    ``shape`` and ``size``, ``radius``, ``vertices``, ``loop`` and ``pieces`` keys."""
-    kind = entry["shape"]
-    size = entry.get("size")
-    radius = entry.get("radius")
-    vertices = entry.get("vertices")
-    sizes = [] if size is None else size if isinstance(size, list) else [size]
+class _Entry:
+    """A ``[[bodies]]`` entry (or a compound's piece) read for its shape: each key it needs,
+    with an example in the message when it is missing."""
 
-    def need(key: str, value: Any, example: str) -> Any:
+    def __init__(self, entry: Mapping[str, Any]) -> None:
+        self.entry = entry
+        self.kind = entry["shape"]
+        size = entry.get("size")
+        self.sizes = [] if size is None else size if isinstance(size, list) else [size]
+
+    def need(self, key: str, example: str) -> Any:
+        value = self.entry.get(key)
         if value is None:
-            raise CaromError(f"a {kind} needs {key} = {example}")
+            raise CaromError(f"a {self.kind} needs {key} = {example}")
         return value
 
-    rounding = 0.0 if radius is None else _one("radius", radius)
-    if kind == "circle":
-        return shapes.Circle(_one("radius", need("radius", radius, "... [m]")))
-    if kind == "capsule":
-        length = need("size", size, "the length between the caps' centres [m]")
-        if len(sizes) != 1:
-            raise CaromError(f"a capsule's size is one length [m]; got {length!r}")
-        return shapes.Capsule(sizes[0], _one("radius", need("radius", radius, "... [m]")))
-    if kind == "box":
-        need("size", size, "[width, height] [m]")
-        if len(sizes) != 2:
-            raise CaromError(f"a box's size is [width, height] [m]; got {size!r}")
-        return shapes.Box(sizes[0], sizes[1], rounding)
-    if kind == "polygon":
-        return shapes.Polygon(need("vertices", vertices, "[[x, y], ...] [m]"), rounding)
-    if kind == "segment":
-        ends = need("vertices", vertices, "[[x1, y1], [x2, y2]] [m]")
-        if len(ends) != 2:
-            raise CaromError(f"a segment has vertices = [[x1, y1], [x2, y2]]; got {ends!r}")
-        return shapes.Segment(ends[0], ends[1], rounding)
-    if kind == "chain":
-        points = need("vertices", vertices, "[[x, y], ...] [m]")
-        return shapes.Chain(points, loop=bool(entry.get("loop", False)), radius=rounding)
-    assert kind == "compound"
+    def radius(self) -> float:
+        return _one("radius", self.need("radius", "... [m]"))
+
+    def rounding(self) -> float:
+        radius = self.entry.get("radius")
+        return 0.0 if radius is None else _one("radius", radius)
+
+    def size(self, count: int, example: str, what: str) -> list[Any]:
+        """The ``size``: ``count`` numbers (``what`` says which, for the message)."""
+        size = self.need("size", example)
+        if len(self.sizes) != count:
+            raise CaromError(f"a {self.kind}'s size {what}; got {size!r}")
+        return self.sizes
+
+    def mesh(self) -> shapes3d.Shape3D | Mesh:
+        file = self.need("file", '"bowl.obj" (beside the scene file)')
+        entry = self.entry
+        kind = entry.get("kind") or ("static" if entry.get("static") else "dynamic")
+        return decompose(file) if kind == "dynamic" else load_mesh(file)
+
+
+#: how each shape is read, in each world: (shape name, dimension) -> the shape
+_READERS: dict[tuple[str, int], Callable[[_Entry], Any]] = {
+    ("circle", 2): lambda e: shapes.Circle(e.radius()),
+    ("capsule", 2): lambda e: shapes.Capsule(
+        e.size(1, "the length between the caps' centres [m]", "is one length [m]")[0], e.radius()
+    ),
+    ("box", 2): lambda e: _box(e, e.size(2, "[width, height] [m]", "is [width, height] [m]")),
+    ("polygon", 2): lambda e: shapes.Polygon(e.need("vertices", "[[x, y], ...] [m]"), e.rounding()),
+    ("segment", 2): lambda e: shapes.Segment(*_ends(e), radius=e.rounding()),
+    ("chain", 2): lambda e: shapes.Chain(
+        e.need("vertices", "[[x, y], ...] [m]"), loop=bool(e.entry.get("loop", False)),
+        radius=e.rounding(),
+    ),
+    ("ball", 3): lambda e: shapes3d.Sphere(e.radius()),
+    ("box", 3): lambda e: shapes3d.Box(e.size(3, "[x, y, z] [m]", "in 3D is [x, y, z] [m]")),
+    ("capsule", 3): lambda e: shapes3d.Capsule(
+        e.size(1, "the length between the caps' centres [m]", "is one length [m]")[0], e.radius()
+    ),
+    ("hull", 3): lambda e: shapes3d.Hull(e.need("vertices", "[[x, y, z], ...] [m]")),
+    ("mesh", 3): _Entry.mesh,
+}  # fmt: skip
+#: a compound's piece placed: each dimension's keys and defaults for its offset and turn
+_PLACING = {2: (("offset", [0.0, 0.0]), ("angle", 0.0)),
+            3: (("offset", [0.0, 0.0, 0.0]), ("orientation", [1.0, 0, 0, 0]))}  # fmt: skip
+
+
+def _box(e: _Entry, size: list[Any]) -> shapes.Box:
+    return shapes.Box(size[0], size[1], e.rounding())
+
+
+def _ends(e: _Entry) -> tuple[Any, Any]:
+    ends = e.need("vertices", "[[x1, y1], [x2, y2]] [m]")
+    if len(ends) != 2:
+        raise CaromError(f"a segment has vertices = [[x1, y1], [x2, y2]]; got {ends!r}")
+    return ends[0], ends[1]
+
+
+def shape_of(entry: Mapping[str, Any], dim: int = 2) -> Any:
+    """The shape a ``[[bodies]]`` entry (or a compound's piece) describes in a ``dim``-D
+    world, from its ``shape`` and ``size``, ``radius``, ``vertices``, ``loop``, ``file`` and
+    ``pieces`` keys (docs/scenes.md): a :class:`carom.shapes.Shape2D`, a
+    :class:`carom.shapes3d.Shape3D` or a :class:`carom.meshes.Mesh` (a static body's surface
+    as it is; a dynamic body's closed mesh cut into convex pieces,
+    :func:`carom.meshes.decompose`, kept beside the file)."""
+    read = _Entry(entry)
+    kind = read.kind
+    if dim not in SHAPES[kind].dims:
+        *some, last = (n for n, shape in SHAPES.items() if dim in shape.dims and n != "sphere")
+        raise CaromError(
+            f"a {kind} is a {SHAPES[kind].dims[0]}D shape; in {dim}D use {', '.join(some)} or "
+            f"{last} (or sphere for the event-driven engine's spheres)"
+        )
+    if kind != "compound":
+        return _READERS[kind, dim](read)
+    (at, origin), (turn, unturned) = _PLACING[dim]
     parts: list[Any] = []
-    for k, piece in enumerate(need("pieces", entry.get("pieces"), "[{shape = ...}, ...]")):
+    for k, piece in enumerate(read.need("pieces", "[{shape = ...}, ...]")):
         try:
-            part = shape_of(piece)
+            part = shape_of(piece, dim)
         except CaromError as exc:
             raise CaromError(f"piece {k + 1}: {exc}") from None
-        parts.append((part, piece.get("offset", [0.0, 0.0]), piece.get("angle", 0.0)))
-    return shapes.Compound(parts)
+        parts.append((part, piece.get(at, origin), piece.get(turn, unturned)))
+    return shapes.Compound(parts) if dim == 2 else shapes3d.Compound(parts)
 
 
 def _with_file(entry: dict[str, Any], source: str) -> dict[str, Any]:
@@ -181,60 +236,6 @@ def _with_file(entry: dict[str, Any], source: str) -> dict[str, Any]:
     return entry | {"file": str(Path(source).parent / file)}
 
 
-def shape3d_of(entry: Mapping[str, Any]) -> shapes3d.Shape3D | Mesh:
-    """The 3D shape a ``[[bodies]]`` entry (or a compound's piece) describes: ``ball``
-    (radius), ``box`` (size = [x, y, z]), ``capsule`` (size = the length between the caps'
-    centres, along z; radius), ``hull`` (vertices = its points), ``compound`` (pieces, each
-    with an offset = [x, y, z] and an orientation = [w, x, y, z]) or ``mesh`` (a ``file``:
-    a static body's surface as it is; a dynamic body's closed mesh cut into convex pieces,
-    :func:`carom.meshes.decompose`, kept beside the file)."""
-    kind = entry["shape"]
-    size = entry.get("size")
-    radius = entry.get("radius")
-    sizes = [] if size is None else size if isinstance(size, list) else [size]
-
-    def need(key: str, value: Any, example: str) -> Any:
-        if value is None:
-            raise CaromError(f"a {kind} needs {key} = {example}")
-        return value
-
-    if kind == "ball":
-        return shapes3d.Sphere(_one("radius", need("radius", radius, "... [m]")))
-    if kind == "box":
-        need("size", size, "[x, y, z] [m]")
-        if len(sizes) != 3:
-            raise CaromError(f"a box's size in 3D is [x, y, z] [m]; got {size!r}")
-        return shapes3d.Box(sizes)
-    if kind == "capsule":
-        need("size", size, "the length between the caps' centres [m]")
-        if len(sizes) != 1:
-            raise CaromError(f"a capsule's size is one length [m]; got {size!r}")
-        return shapes3d.Capsule(sizes[0], _one("radius", need("radius", radius, "... [m]")))
-    if kind == "hull":
-        return shapes3d.Hull(need("vertices", entry.get("vertices"), "[[x, y, z], ...] [m]"))
-    if kind == "mesh":
-        file = need("file", entry.get("file"), '"bowl.obj" (beside the scene file)')
-        dynamic = (entry.get("kind") or ("static" if entry.get("static") else "dynamic")) == (
-            "dynamic"
-        )
-        return decompose(file) if dynamic else load_mesh(file)
-    if kind != "compound":
-        raise CaromError(
-            f"a {kind} is a 2D shape; in 3D use ball, box, capsule, hull or compound "
-            f"(or sphere for the event-driven engine's spheres)"
-        )
-    parts: list[Any] = []
-    for k, piece in enumerate(need("pieces", entry.get("pieces"), "[{shape = ...}, ...]")):
-        try:
-            part = shape3d_of(piece)
-        except CaromError as exc:
-            raise CaromError(f"piece {k + 1}: {exc}") from None
-        parts.append(
-            (part, piece.get("offset", [0.0, 0.0, 0.0]), piece.get("orientation", [1.0, 0, 0, 0]))
-        )
-    return shapes3d.Compound(parts)
-
-
 def _one(key: str, value: Any) -> float:
     if isinstance(value, list):
         raise CaromError(f"{key} must be one number for a body of this shape; got {value!r}")
@@ -242,88 +243,61 @@ def _one(key: str, value: Any) -> float:
 
 
 def _add_shaped(world: World, b: Mapping[str, Any], material: Material | None) -> None:
-    """Add the rigid bodies of a ``[[bodies]]`` entry of a shape other than a sphere."""
-    if world.dim == 3:
-        _add_shaped_3d(world, b, material)
-        return
-    if b.get("orientations") is not None:
-        raise CaromError("orientations are for 3D bodies; a 2D body takes angles = ... [rad]")
-    shape = shape_of(b)
-    kind = b.get("kind") or ("static" if b["static"] else "dynamic")
+    """Add the rigid bodies of a ``[[bodies]]`` entry of a shape other than a sphere: one
+    shape, one material, per-body positions, velocities, turns and spins (one for all, or
+    one each), and a mass for all or one each."""
+    shape = shape_of(b, world.dim)
+    kind = cast("Literal['dynamic', 'static', 'kinematic']",
+                b.get("kind") or ("static" if b["static"] else "dynamic"))  # fmt: skip
     positions = b["positions"]
     n = len(positions)
-    velocities = [[0.0, 0.0]] * n if b["velocities"] is None else b["velocities"]
-    angles = _per_body("angles", b.get("angles", 0.0), n)
-    spins = _per_body("angular_velocities", b.get("angular_velocities", 0.0), n)
-    masses = _per_body("mass", b["mass"], n) if b["mass"] is not None else [None] * n
+    turning, each = (_turning_2d if world.dim == 2 else _turning_3d)(b, n)
     density = b.get("density")
     if kind == "dynamic" and density is None and b["mass"] is None:
         density = 1.0
-    if b["mass"] is None or not isinstance(b["mass"], list):
-        world.add_bodies(
-            shape,
-            positions,
-            None if kind == "static" else velocities,
-            angles=angles,
-            angular_velocities=spins,
-            density=density,
-            mass=b["mass"],
-            material=material,
-            kind=cast("Literal['dynamic', 'static', 'kinematic']", kind),
-        )
-        return
-    for i in range(n):  # a mass per body
-        world.add_body(
-            shape,
-            positions[i],
-            velocity=velocities[i],
-            angle=angles[i],
-            angular_velocity=spins[i],
-            mass=masses[i],
-            material=material,
-            kind=cast("Literal['dynamic', 'static', 'kinematic']", kind),
-        )
-
-
-def _add_shaped_3d(world: World, b: Mapping[str, Any], material: Material | None) -> None:
-    """Add the 3D rigid bodies of a ``[[bodies]]`` entry: one shape, one material, per-body
-    positions, velocities, orientations and angular velocities (one for all, or one each)."""
-    shape = shape3d_of(b)
-    kind = b.get("kind") or ("static" if b["static"] else "dynamic")
-    if np.any(np.asarray(b.get("angles", 0.0)) != 0.0):
-        raise CaromError("angles are for 2D bodies; a 3D body takes orientations = [w, x, y, z]")
-    positions = b["positions"]
-    n = len(positions)
-    spins = b.get("angular_velocities", 0.0)
-    spins = [0.0, 0.0, 0.0] if isinstance(spins, int | float) and spins == 0 else spins
-    masses = _per_body("mass", b["mass"], n) if isinstance(b["mass"], list) else [b["mass"]] * n
-    density = b.get("density")
-    if kind == "dynamic" and density is None and b["mass"] is None:
-        density = 1.0
-    common = {"material": material, "kind": cast("Literal['dynamic', 'static', 'kinematic']", kind)}
+    velocities = b["velocities"]
     if not isinstance(b["mass"], list):
         world.add_bodies(
-            shape,
-            positions,
-            None if kind == "static" else b["velocities"],
-            orientations=b.get("orientations"),
-            angular_velocities=spins,
-            density=density,
-            mass=b["mass"],
-            **common,  # type: ignore[arg-type]
-        )
+            shape, positions, None if kind == "static" else velocities, density=density,
+            mass=b["mass"], material=material, kind=kind, **turning,
+        )  # fmt: skip
         return
-    turns = b.get("orientations")
+    masses = _per_body("mass", b["mass"], n)
     for i in range(n):  # a mass per body
         world.add_body(
-            shape,
-            positions[i],
-            velocity=None if b["velocities"] is None else b["velocities"][i],
-            orientation=turns[i] if turns and isinstance(turns[0], list) else turns,
-            angular_velocity=spins[i] if spins and isinstance(spins[0], list) else spins,
-            mass=masses[i],
-            **common,  # type: ignore[arg-type]
-        )
+            shape, positions[i], velocity=None if velocities is None else velocities[i],
+            mass=masses[i], material=material, kind=kind, **each(i),
+        )  # fmt: skip
+
+
+def _turning_2d(b: Mapping[str, Any], n: int) -> tuple[dict[str, Any], Callable[[int], Any]]:
+    """A 2D entry's angles and angular velocities: for all the bodies, and for body ``i``."""
+    if b.get("orientations") is not None:
+        raise CaromError("orientations are for 3D bodies; a 2D body takes angles = ... [rad]")
+    angles = _per_body("angles", b.get("angles", 0.0), n)
+    spins = _per_body("angular_velocities", b.get("angular_velocities", 0.0), n)
+    return (
+        {"angles": angles, "angular_velocities": spins},
+        lambda i: {"angle": angles[i], "angular_velocity": spins[i]},
+    )
+
+
+def _turning_3d(b: Mapping[str, Any], n: int) -> tuple[dict[str, Any], Callable[[int], Any]]:
+    """A 3D entry's orientations and angular velocities: for all the bodies (one for all or
+    one each), and for body ``i``."""
+    if np.any(np.asarray(b.get("angles", 0.0)) != 0.0):
+        raise CaromError("angles are for 2D bodies; a 3D body takes orientations = [w, x, y, z]")
+    spins = b.get("angular_velocities", 0.0)
+    spins = [0.0, 0.0, 0.0] if isinstance(spins, int | float) and spins == 0 else spins
+    turns = b.get("orientations")
+
+    def one(values: Any, i: int) -> Any:
+        return values[i] if values and isinstance(values[0], list) else values
+
+    return (
+        {"orientations": turns, "angular_velocities": spins},
+        lambda i: {"orientation": one(turns, i), "angular_velocity": one(spins, i)},
+    )
 
 
 def _per_body(key: str, value: Any, n: int) -> list[Any]:

@@ -21,6 +21,7 @@ from carom.scene.schema import (
     SceneError,
     all_tables,
 )
+from carom.shape_base import SHAPES
 
 if TYPE_CHECKING:
     from carom.world import World
@@ -203,20 +204,14 @@ class Scene:
                     "",
                     index,
                 )
-        flat = ("circle", "polygon", "segment", "chain")
         for index, entry in enumerate(self.bodies):
-            if entry["shape"] in flat and dim != 2:
+            other = SHAPES[entry["shape"]].dims
+            if dim not in other:
+                *some, last = (n for n, shape in SHAPES.items() if dim in shape.dims)
                 raise where.error(
                     ["bodies", "shape"],
-                    f"{entry['shape']!r} is a 2D shape",
-                    "in 3D use ball, box, capsule, hull or compound (or sphere), or a 2D world",
-                    index,
-                )
-            if entry["shape"] in ("ball", "hull", "mesh") and dim != 3:
-                raise where.error(
-                    ["bodies", "shape"],
-                    f"{entry['shape']!r} is a 3D shape",
-                    "in 2D use circle or polygon, or a 3D world",
+                    f"{entry['shape']!r} is a {other[0]}D shape",
+                    f"in {dim}D use {', '.join(some)} or {last}, or a {other[0]}D world",
                     index,
                 )
             for key in ("positions", "velocities"):

@@ -14,6 +14,7 @@ from carom.engines import registry
 from carom.errors import CaromError
 from carom.limits import LARGEST, MAX_BODIES, SMALLEST
 from carom.materials import COMBINE_RULES
+from carom.shape_base import SHAPES as SHAPE_TABLE
 
 __all__ = [
     "ARRAYS",
@@ -259,14 +260,10 @@ def _region(value: Any) -> str | None:
     return None
 
 
-#: shapes of [[bodies]] (docs/scenes.md): spheres for either engine, the rest rigid bodies
-#: (circle, polygon, segment and chain are 2D; ball and hull 3D; the others either)
-SHAPES = (
-    "sphere", "circle", "capsule", "box", "polygon", "compound", "segment", "chain", "ball",
-    "hull", "mesh",
-)  # fmt: skip
+#: shapes of [[bodies]] (docs/scenes.md), from carom's one table of shape names
+SHAPES = tuple(SHAPE_TABLE)
 #: shapes a compound's pieces may have, and their keys
-PIECE_SHAPES = ("circle", "capsule", "box", "polygon", "ball", "hull")
+PIECE_SHAPES = tuple(name for name, shape in SHAPE_TABLE.items() if shape.piece)
 PIECE_KEYS: dict[str, Check] = {
     "shape": _choice(*PIECE_SHAPES),
     "size": _size,

@@ -1,5 +1,5 @@
-"""The broad phase (:func:`carom.engines.rigid.broadphase.find_pairs`, and its 3D twin):
-every pair of pieces whose boxes overlap, of two bodies, one active and one dynamic, reported
+"""The broad phase (:func:`carom.engines.stepped.broadphase.find_pairs`, one grid for 2D and
+3D): every pair of pieces whose boxes overlap, of two bodies, one active and one dynamic, reported
 once and sorted by ``(a, b)``; checked against the brute-force O(P^2) answer. Kept fat boxes
 (:func:`refit`, :func:`select_pairs`, :class:`KeptPairs` of :mod:`carom.engines.stepped`,
 which both engines use) give the same pairs while rebuilding only when a piece leaves its fat
@@ -10,9 +10,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from carom.engines.rigid.broadphase import MAX_CELLS, find_pairs
-from carom.engines.rigid3d.broadphase import find_pairs as find_pairs_3d
-from carom.engines.stepped.broadphase import FAT, KeptPairs, refit, select_pairs
+from carom.engines.stepped.broadphase import (
+    FAT,
+    KeptPairs,
+    find_pairs,
+    max_cells_of,
+    refit,
+    select_pairs,
+)
 
 
 def _brute(
@@ -42,15 +47,16 @@ def _pairs(
     return [(int(a), int(b)) for a, b in pairs[:count]]
 
 
-def test_random_boxes_give_the_brute_force_pairs_in_order() -> None:
+@pytest.mark.parametrize("dims", [2, 3])
+def test_random_boxes_give_the_brute_force_pairs_in_order(dims: int) -> None:
     rng = np.random.default_rng(11)
     for trial in range(60):
         pieces = int(rng.integers(0, 120))
         bodies = max(1, pieces // 2)
         body = np.sort(rng.integers(0, bodies, pieces))  # a body's pieces are consecutive
-        corner = rng.uniform(-5.0, 5.0, (pieces, 2))
-        size = rng.exponential(0.4, (pieces, 2))
-        size[rng.random(pieces) < 0.05] *= 30.0  # a few span more than MAX_CELLS cells
+        corner = rng.uniform(-5.0, 5.0, (pieces, dims))
+        size = rng.exponential(0.4, (pieces, dims))
+        size[rng.random(pieces) < 0.05] *= 30.0  # a few span more than max_cells_of(dims) cells
         boxes = np.hstack([corner, corner + size])
         active = rng.random(bodies) < 0.7
         dynamic = rng.random(bodies) < 0.8
@@ -70,11 +76,29 @@ def test_a_pair_sharing_many_cells_is_reported_once_and_big_pieces_meet_each_oth
             [20.0, 20.0, 20.5, 20.5],
         ]
     )
-    assert MAX_CELLS < 10.0 / 0.5  # bar 0 covers 20 x 2 cells of 0.5 m
+    assert max_cells_of(2) < 10.0 / 0.5  # bar 0 covers 20 x 2 cells of 0.5 m
     body = np.arange(4)
     yes = np.ones(4, np.bool_)
     assert _pairs(boxes, body, yes, yes, 0.5) == [(0, 1), (0, 2), (1, 2)]
     assert _pairs(boxes, body, yes, yes, 4.0) == [(0, 1), (0, 2), (1, 2)]  # no big piece
+
+
+def test_an_unbounded_box_meets_every_box_it_overlaps() -> None:
+    # a 3D floor's box: unbounded but below z = 0 (rigid3d.broadphase.piece_boxes); a box
+    # resting on it, one above it, and a whole-space box (a tilted plane) meeting both
+    inf = np.inf
+    boxes = np.array(
+        [
+            [-inf, -inf, -inf, inf, inf, 0.0],
+            [0.0, 0.0, -0.1, 1.0, 1.0, 0.9],
+            [0.0, 0.0, 2.0, 1.0, 1.0, 3.0],
+            [-inf, -inf, -inf, inf, inf, inf],
+        ]
+    )
+    body = np.arange(4)
+    dynamic = np.array([False, True, True, False])
+    yes = np.ones(4, np.bool_)
+    assert _pairs(boxes, body, yes, dynamic, 0.5) == [(0, 1), (1, 3), (2, 3)]
 
 
 @pytest.mark.parametrize("dims", [2, 3])
@@ -82,7 +106,6 @@ def test_fat_boxes_give_the_same_pairs_and_rebuild_only_when_a_piece_leaves_its_
     dims: int,
 ) -> None:
     # Both engines keep their pairs through fat boxes (KeptPairs, refit, select_pairs).
-    find = find_pairs if dims == 2 else find_pairs_3d
     rng = np.random.default_rng(5)
     pieces = 60
     body = np.arange(pieces)
@@ -97,7 +120,7 @@ def test_fat_boxes_give_the_same_pairs_and_rebuild_only_when_a_piece_leaves_its_
     candidates = np.zeros((pieces * pieces, 2), np.int64)
     n_candidates = 0
     rebuilds = 0
-    kept = KeptPairs(pieces, dims, pieces, lambda boxes, active, out: find(
+    kept = KeptPairs(pieces, dims, pieces, lambda boxes, active, out: find_pairs(
         boxes, body, active, dynamic, 0.5, out))  # fmt: skip
     for step in range(200):
         # pieces drift at random, some steps not at all; some sleep now and then
@@ -114,7 +137,7 @@ def test_fat_boxes_give_the_same_pairs_and_rebuild_only_when_a_piece_leaves_its_
         np.testing.assert_allclose(fat[left, :dims], boxes[left, :dims] - FAT * reach[left, None])
         if moved:
             rebuilds += 1
-            n_candidates = find(fat, body, everyone, dynamic, 0.5, candidates)
+            n_candidates = find_pairs(fat, body, everyone, dynamic, 0.5, candidates)
         pairs = np.zeros((max(n_candidates, 1), 2), np.int64)
         count = select_pairs(candidates, n_candidates, boxes, body, active, dynamic, pairs)
         found = [(int(a), int(b)) for a, b in pairs[:count]]

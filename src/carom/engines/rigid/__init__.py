@@ -11,10 +11,4 @@ World's bodies, walls and planes as its arrays; its plug).
 from carom.jit import kernel_cache
 
 with kernel_cache():
-    from carom.engines.rigid import (  # noqa: F401
-        broadphase,
-        contacts,
-        impacts,
-        motion,
-        solver,
-    )
+    from carom.engines.rigid import broadphase, contacts, impacts, motion, solver  # noqa: F401

@@ -13,30 +13,28 @@ body meets what is in front of it and not what it merely passes by.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
 from carom.engines.rigid.motion import relative_velocity
-from carom.engines.stepped.contacts import find_cached
-from carom.engines.stepped.rows import (
-    I_BODY_A,
-    I_BODY_B,
-    I_COUNT,
-    I_ID0,
-    I_PIECE_A,
-    I_PIECE_B,
-    flags_column,
+from carom.engines.stepped.contacts import (
+    find_cached,
+    keeps_point,
+    open_point,
+    pair_of,
+    relative_speed,
+    write_pair,
 )
+from carom.engines.stepped.rows import I_COUNT, I_ID0, flags_column
 from carom.geometry.manifold2d import collide
 
 __all__ = [
     "CONTACT_FLOATS",
     "CONTACT_INTS",
-    "extremes",
+    "MAX_POINTS",
     "narrow_phase",
     "point_offset",
+    "store_tangents",
 ]
 
 # float columns of a contact row
@@ -60,13 +58,15 @@ P_VREL = 9  # normal relative speed at the step's start [m/s] (negative: approac
 P_SEP = 10  # separation at the step's start [m]
 P_X = 11  # the point [m]
 P_Y = 12
-CONTACT_FLOATS = POINT0 + 2 * POINT_FLOATS
+#: points in a manifold, at the most
+MAX_POINTS = 2
+CONTACT_FLOATS = POINT0 + MAX_POINTS * POINT_FLOATS
 
 # int columns of a contact row
 # the declared integer columns (carom.engines.stepped.rows): bodies, pieces, points (1 or 2),
 # their feature ids, then the flags
 I_ID1 = I_ID0 + 1
-I_FLAGS = flags_column(2)
+I_FLAGS = flags_column(MAX_POINTS)
 CONTACT_INTS = I_FLAGS + 1
 
 
@@ -110,7 +110,7 @@ def narrow_phase(
     Returns the number of contacts, or minus the number of pairs when the rows may not
     suffice (the caller grows them to at least that and calls again). Impulses found in the
     cache (``cache_keys`` sorted, ``cache_ids`` (K, 2), ``cache_impulses`` (K, 4): normal and
-    tangent of each point) warm-start the matching points.
+    tangent of each point, or (K, 2, 2)) warm-start the matching points.
     """
     if ci.shape[0] < n_pairs:
         return -n_pairs
@@ -120,14 +120,10 @@ def narrow_phase(
     m = 0
     cursor = 0  # where the next warm-start cache search starts
     for k in range(n_pairs):
-        pa = pairs[k, 0]
-        pb = pairs[k, 1]
-        ba = piece_body[pa]
-        bb = piece_body[pb]
+        pair = pair_of(pairs, k, piece_body)
+        pa, pb, ba, bb = pair
         # how far the pair can close during the step: relative speed, spins, gravity
-        dvx = v[ba, 0] - v[bb, 0]
-        dvy = v[ba, 1] - v[bb, 1]
-        closing = math.sqrt(dvx * dvx + dvy * dvy)
+        closing = relative_speed(v, ba, bb)
         closing += abs(omega[ba]) * piece_reach[pa] + abs(omega[bb]) * piece_reach[pb]
         if gravity_on[ba] != gravity_on[bb]:
             closing += g * dt
@@ -162,10 +158,7 @@ def narrow_phase(
             # relative velocity of the contact points, A's less B's
             ux, uy = relative_velocity(ba, bb, rax, ray, rbx, rby, v, omega)
             un = ux * nx + uy * ny
-            approach = max(0.0, -un)
-            if gravity_on[ba] != gravity_on[bb]:
-                approach += g * dt
-            if sep > speculative + approach * dt:
+            if not keeps_point(un, sep, gravity_on[ba] != gravity_on[bb], g, dt, speculative):
                 continue
             o = point_offset(kept)
             cf[m, o + P_RAX] = rax
@@ -173,29 +166,15 @@ def narrow_phase(
             cf[m, o + P_RBX] = rbx
             cf[m, o + P_RBY] = rby
             cf[m, o + P_BASE] = sep - ((rax - rbx) * nx + (ray - rby) * ny)
-            cf[m, o + P_JN] = 0.0
-            cf[m, o + P_JT] = 0.0
-            cf[m, o + P_TOTAL] = 0.0
-            cf[m, o + P_VREL] = un
-            cf[m, o + P_SEP] = sep
             cf[m, o + P_X] = px
             cf[m, o + P_Y] = py
-            ci[m, I_ID0 + kept] = ids[j]
+            open_point(cf, ci, m, kept, o, un, sep, ids[j], (P_VREL, P_SEP), (P_JN, P_JT, P_TOTAL))
             kept += 1
         if kept == 0:
             continue
         cf[m, F_NX] = nx
         cf[m, F_NY] = ny
-        ma = material[ba]
-        mb = material[bb]
-        cf[m, F_MU] = mu_table[ma, mb]
-        cf[m, F_E] = e_table[ma, mb]
-        ci[m, I_BODY_A] = ba
-        ci[m, I_BODY_B] = bb
-        ci[m, I_PIECE_A] = pa
-        ci[m, I_PIECE_B] = pb
-        ci[m, I_COUNT] = kept
-        ci[m, I_FLAGS] = 0
+        write_pair(cf, ci, m, pair, kept, I_FLAGS, material, (mu_table, e_table), (F_MU, F_E))
         row, cursor = find_cached(cache_keys, n_cache, pa * n_pieces + pb, cursor)
         if row >= 0:
             for j in range(kept):
@@ -209,42 +188,9 @@ def narrow_phase(
 
 
 @njit(cache=True)
-def extremes(cf: np.ndarray, ci: np.ndarray, nc: int) -> tuple[np.ndarray, np.ndarray]:
-    """Each contact's least separation [m] and least normal relative speed [m/s] over its
-    points, (nc,) each (:func:`carom.engines.stepped.islands.plan`)."""
-    closest = np.full(nc, np.inf)
-    closing = np.full(nc, np.inf)
-    for m in range(nc):
-        for j in range(ci[m, I_COUNT]):
-            closest[m] = min(closest[m], cf[m, point_offset(j) + P_SEP])
-            closing[m] = min(closing[m], cf[m, point_offset(j) + P_VREL])
-    return closest, closing
-
-
-@njit(cache=True)
-def store_impulses(
-    cf: np.ndarray,
-    ci: np.ndarray,
-    n_contacts: int,
-    n_pieces: int,
-    cache_keys: np.ndarray,
-    cache_ids: np.ndarray,
-    cache_impulses: np.ndarray,
-) -> int:
-    """Keep each contact's impulses for the next step's warm start; return the count.
-
-    Contacts come in key order (their pairs were sorted), so the cache stays sorted.
-    """
+def store_tangents(cf: np.ndarray, ci: np.ndarray, n_contacts: int, cache: np.ndarray) -> None:
+    """Each point's tangent impulse into the warm-start cache (K, 2, 2) beside the normal one
+    (:func:`carom.engines.stepped.contacts.store_points`)."""
     for m in range(n_contacts):
-        cache_keys[m] = ci[m, I_PIECE_A] * n_pieces + ci[m, I_PIECE_B]
-        for q in range(2):
-            if q < ci[m, I_COUNT]:
-                o = point_offset(q)
-                cache_ids[m, q] = ci[m, I_ID0 + q]
-                cache_impulses[m, 2 * q] = cf[m, o + P_JN]
-                cache_impulses[m, 2 * q + 1] = cf[m, o + P_JT]
-            else:
-                cache_ids[m, q] = -1
-                cache_impulses[m, 2 * q] = 0.0
-                cache_impulses[m, 2 * q + 1] = 0.0
-    return n_contacts
+        for q in range(ci[m, I_COUNT]):
+            cache[m, q, 1] = cf[m, point_offset(q) + P_JT]

@@ -1,19 +1,9 @@
-"""RigidEngine: the time-stepped rigid-body engine behind a World (2D).
+"""RigidEngine: the time-stepped rigid-body engine behind a World, in 2D.
 
-One step (``dt = 1/rate``) runs these stages, in this order (docs/rigid.md):
-
-1. **place**: the awake bodies' pieces in the world;
-2. **broad phase**: pairs of pieces whose swept boxes overlap (:mod:`.broadphase`);
-3. **narrow phase**: their manifolds, warm-started from the last step (:mod:`.contacts`);
-   an awake body touching a sleeping island wakes it, and the two phases run again;
-4. **islands**: each body's role: free flight, an isolated impact, or the solver
-   (:mod:`.islands`);
-5. **exact impacts**: isolated pairs advanced through the step with their impacts solved at
-   the time of impact (:mod:`.impacts`);
-6. **free flight**: bodies with no contact, exactly (:mod:`.motion`);
-7. **solve**: the soft step over the remaining contacts (:mod:`.solver`);
-8. **store** the impulses for the next step, and **sleep** the islands at rest (their bodies
-   stop, as in Box2D; the kinetic energy they kept goes to the ledger as lost).
+The stages of a step are the shared driver's (:mod:`carom.engines.stepped.driver`); this
+module names the 2D kernels: the pieces placed (:mod:`.motion`), their swept boxes
+(:mod:`.broadphase`), the manifolds (:mod:`.contacts`), the exact impacts (:mod:`.impacts`),
+free flight (:mod:`.motion`) and the soft step (:mod:`.solver`).
 """
 
 from __future__ import annotations
@@ -25,16 +15,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.base import (
-    COLLISION_DTYPE,
-    Partners,
-    Sink,
-)
 from carom.engines.rigid import broadphase, contacts, impacts, motion, solver
-from carom.engines.rigid.model import RigidModel, RigidState, grid_cell
-from carom.engines.stepped import islands
+from carom.engines.rigid.model import RigidModel, RigidState
 from carom.engines.stepped.driver import SteppedEngine
-from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
 from carom.engines.stepped.settings import RigidSettings
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 
@@ -44,66 +27,34 @@ FloatArray = NDArray[np.float64]
 
 
 class RigidEngine(SteppedEngine):
-    """The time-stepped engine for 2D rigid bodies with rotation.
+    """The time-stepped engine for 2D rigid bodies with rotation: the shared driver
+    (:class:`carom.engines.stepped.driver.SteppedEngine`, its parameters and energy ledger)
+    with the 2D kernels."""
 
-    Parameters
-    ----------
-    model : RigidModel
-        The constants.
-    state : RigidState
-        The state at ``time``; the engine advances it in place.
-    settings : RigidSettings
-    time : float
-        The clock at ``state`` [s].
-    partners : Partners, optional
-        What each body is to a collision record; the caller's bodies are those of kind
-        ``KIND_PAIR`` (the first ones), walls and planes follow. Default: all bodies are the
-        caller's.
+    DIMS = 2
+    ROWS = contacts
+    IMPACTS = impacts
+    SPIN = "omega"
 
-    Notes
-    -----
-    The counters keep the energy ledger: ``work_done`` is what kinematic bodies put in (each
-    impulse on a body times the kinematic body's velocity at the contact point, summed as the
-    solver and the exact impacts apply them), ``energy_lost`` what the impacts solved exactly
-    and the solver took out of the bodies' kinetic and potential energy beyond that work,
-    ``energy_given`` what the solver put in (pushing overlaps apart), step by step, so that
-    ``E0 + work_done = E + energy_lost - energy_given``.
-    """
-
-    name = "rigid"
+    model: RigidModel
+    state: RigidState
 
     @staticmethod
     def _warm_kernels() -> None:
         warm_up()
 
-    def __init__(
-        self,
-        model: RigidModel,
-        state: RigidState,
-        settings: RigidSettings,
-        time: float = 0.0,
-        partners: Partners | None = None,
-    ) -> None:
-        shape = (2, contacts.CONTACT_FLOATS, contacts.CONTACT_INTS)
-        self._begin(model, state, settings, time, partners, shape, grid_cell(model),
-                    broadphase.find_pairs)  # fmt: skip
-        n = model.kind.shape[0]
-        self._g = float(np.hypot(*model.gravity))
+    def _setup(self) -> None:
+        m, s = self.model, self.state
+        self._g = float(np.hypot(*m.gravity))
         # place everything once: static pieces never move again
         motion.place_pieces(
-            state.x,
-            state.angle,
-            np.ones(n, np.bool_),
-            model.body_pieces,
-            model.piece_start,
-            model.piece_count,
-            model.local_vertices,
-            model.local_normals,
-            state.vertices,
-            state.normals,
-        )
+            s.x, s.angle, np.ones(m.kind.shape[0], np.bool_), m.body_pieces, m.piece_start,
+            m.piece_count, m.local_vertices, m.local_normals, s.vertices, s.normals,
+        )  # fmt: skip
 
-    # -- the Engine protocol --------------------------------------------------------------
+    @staticmethod
+    def _state_from(arrays: Mapping[str, NDArray[Any]]) -> RigidState:
+        return RigidState(*(np.array(arrays[name]) for name in RigidState._fields))
 
     def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         s, n = self.state, self.n_bodies
@@ -111,277 +62,92 @@ class RigidEngine(SteppedEngine):
         w[:, 2] = s.omega[:n]
         return s.x[:n].copy(), s.v[:n].copy(), s.angle[:n].reshape(-1, 1).copy(), w
 
-    @classmethod
-    def restore(
-        cls,
-        model: RigidModel,
-        settings: RigidSettings,
-        partners: Partners,
-        arrays: Mapping[str, NDArray[Any]],
-    ) -> RigidEngine:
-        """The engine that wrote ``arrays`` (:meth:`arrays`), to continue bit for bit."""
-        state = RigidState(*(np.array(arrays[name]) for name in RigidState._fields))
-        start = float(arrays["start"][0])
-        engine = cls(model, state, settings, start, partners)
-        engine._restore_totals(arrays)
-        return engine
+    # -- the stages of a step that are the dimension's own --------------------------------
 
-    def deepest_overlap(self) -> tuple[int, int, float]:
-        """The two bodies that overlap most now, with at least one of them dynamic, and
-        the depth [m] (positive; ``(-1, -1, 0.0)`` when nothing overlaps)."""
-        nc = self._contacts()
-        ci, cf = self._ci[:nc], self._cf[:nc]
-        a, b = ci[:, I_BODY_A], ci[:, I_BODY_B]
-        columns = [contacts.point_offset(j) + contacts.P_SEP for j in range(2)]
-        depth = -cf[:, columns]  # (nc, 2); a contact's second point counts if it has one
-        depth[ci[:, I_COUNT] < 2, 1] = -np.inf
-        depth[~(self._dynamic[a] | self._dynamic[b])] = -np.inf
-        if nc == 0 or float(depth.max()) <= 0.0:
-            return (-1, -1, 0.0)
-        row = int(np.argmax(depth.max(axis=1)))
-        return (int(a[row]), int(b[row]), float(depth[row].max()))
-
-    # -- one step -------------------------------------------------------------------------
-
-    def _contacts(self) -> int:
-        """Stages 1 to 3: the contacts at the start of the step (waking what they touch)."""
+    def _pairs(self) -> int:
         m, s, st = self.model, self.state, self.settings
         moving = (self._dynamic & s.awake) | self._kinematic
         motion.place_pieces(
-            s.x,
-            s.angle,
-            moving,
-            m.body_pieces,
-            m.piece_start,
-            m.piece_count,
-            m.local_vertices,
-            m.local_normals,
-            s.vertices,
-            s.normals,
-        )
-        speculative = 4.0 * st.linear_slop
-        broadphase.piece_boxes(
-            s.vertices,
-            m.piece_start,
-            m.piece_count,
-            m.piece_radius,
-            m.piece_reach,
-            m.piece_body,
-            s.v,
-            s.omega,
-            moving,
-            self._dynamic,
-            float(m.gravity[0]),
-            float(m.gravity[1]),
-            self.dt,
-            speculative,
-            self._boxes,
-        )
-        # stage 2: the pairs of swept boxes that overlap (kept through fat boxes)
-        n_pairs = self._kept.update(self._boxes, m.piece_reach, m.piece_body, moving, self._dynamic)
-        while True:
-            nc = contacts.narrow_phase(
-                self._kept.pairs,
-                n_pairs,
-                s.vertices,
-                s.normals,
-                m.piece_start,
-                m.piece_count,
-                m.piece_radius,
-                m.piece_reach,
-                m.piece_body,
-                m.material,
-                m.e_table,
-                m.mu_table,
-                s.x,
-                s.v,
-                s.omega,
-                self._dynamic,
-                self._g,
-                self.dt,
-                speculative,
-                st.linear_slop,
-                s.cache_keys,
-                s.cache_ids,
-                s.cache_impulses,
-                int(s.cache_count[0]),
-                self._cf,
-                self._ci,
-            )
-            if nc >= 0:
-                break
-            size = 2 * -nc
-            self._cf = np.zeros((size, contacts.CONTACT_FLOATS))
-            self._ci = np.zeros((size, contacts.CONTACT_INTS), np.int64)
-        return nc
-
-    def step(self, sink: Sink | None = None) -> None:
-        """Advance one step of ``dt`` [s]."""
-        m, s, st = self.model, self.state, self.settings
-        dt = self.dt
-        nc = self._contacts()
-        if st.sleep and islands.wake(
-            self._ci, nc, m.kind, s.awake, self._moving(), s.clock, s.island
-        ):
-            nc = self._contacts()
-        isolated = np.zeros(max(nc, 1), np.int64)
-        closest, closing = contacts.extremes(self._cf, self._ci, nc)
-        n_iso = islands.plan(
-            self._ci,
-            nc,
-            closest,
-            closing,
-            m.kind,
-            s.awake,
-            st.exact_impacts,
-            0.1 * st.linear_slop,
-            st.restitution_threshold,
-            np.inf,
-            self._parent,
-            self._role,
-            isolated,
-        )
-        if n_iso:
-            rows = isolated[:n_iso]
-            ba = self._ci[rows, I_BODY_A]
-            bb = self._ci[rows, I_BODY_B]
-            log = np.zeros((n_iso * impacts.MAX_IMPACTS, impacts.IMPACT_FIELDS))
-            logged = impacts.exact_impacts(
-                isolated,
-                n_iso,
-                self._ci,
-                s.x,
-                s.angle,
-                s.v,
-                s.omega,
-                self._accel,
-                self._dynamic,
-                m.inv_mass,
-                m.inv_inertia,
-                m.mass,
-                m.inertia,
-                m.e_table[m.material[ba], m.material[bb]],
-                m.mu_table[m.material[ba], m.material[bb]],
-                m.piece_start,
-                m.piece_count,
-                m.piece_radius,
-                m.piece_reach,
-                m.local_vertices,
-                m.local_normals,
-                s.vertices,
-                s.normals,
-                dt,
-                1e-3 * st.linear_slop,
-                log,
-            )
-            if logged:
-                self._book(log[:logged], sink)
-        free = np.flatnonzero(self._role == islands.ROLE_FREE)
-        for i in free.tolist():
-            motion.fly(i, dt, s.x, s.angle, s.v, s.omega, self._accel[i, 0], self._accel[i, 1])
-        bodies = np.flatnonzero(self._role == islands.ROLE_SOLVER)
-        before = self._energy(bodies)
-        work = np.zeros(1)  # by kinematic bodies on the others, this step [J]
-        solver.solve_step(
-            self._cf,
-            self._ci,
-            nc,
-            bodies,
-            m.inv_mass,
-            m.inv_inertia,
-            self._dynamic,
-            s.x,
-            s.angle,
-            s.v,
-            s.omega,
-            float(m.gravity[0]),
-            float(m.gravity[1]),
-            dt,
-            st.substeps,
-            st.contact_hertz,
-            st.damping_ratio,
-            st.push_speed,
-            st.restitution_threshold,
-            work,
-        )
-        self._work_done += work[0]
-        change = self._energy(bodies) - before - work[0]  # the solver's own part
-        if change < 0.0:
-            self._energy_lost -= change
-        else:
-            self._energy_given += change
-        if s.cache_keys.shape[0] < nc:
-            size = max(nc, 2 * s.cache_keys.shape[0])
-            self.state = s = s._replace(
-                cache_keys=np.zeros(size, np.int64),
-                cache_ids=np.zeros((size, 2), np.int64),
-                cache_impulses=np.zeros((size, 4)),
-            )
-        s.cache_count[0] = contacts.store_impulses(
-            self._cf,
-            self._ci,
-            nc,
-            m.piece_start.shape[0],
-            s.cache_keys,
-            s.cache_ids,
-            s.cache_impulses,
-        )
-        if st.sleep:
-            self._settle(nc)
-        self.n_contacts = nc
-        self.steps += 1
-
-    def _moving(self) -> NDArray[np.bool_]:
-        """Kinematic bodies in motion (N,)."""
-        s = self.state
-        moving: NDArray[np.bool_] = self._kinematic & (
-            (s.v[:, 0] != 0.0) | (s.v[:, 1] != 0.0) | (s.omega != 0.0)
-        )
-        return moving
-
-    def _settle(self, nc: int) -> None:
-        """Stage 8: sleep the islands at rest (:func:`.islands.settle`); their bodies stop and
-        the kinetic energy they kept goes to the ledger as lost."""
-        m, s, st = self.model, self.state, self.settings
-        before = s.awake.copy()
-        fastest = np.sqrt(s.v[:, 0] ** 2 + s.v[:, 1] ** 2) + np.abs(s.omega) * m.reach
-        islands.settle(
-            self._ci, nc, m.kind, self._parent, s.awake, fastest, self._moving(), s.clock,
-            s.island, self.dt, st.sleep_speed, st.sleep_time,
+            s.x, s.angle, moving, m.body_pieces, m.piece_start, m.piece_count,
+            m.local_vertices, m.local_normals, s.vertices, s.normals,
         )  # fmt: skip
+        broadphase.piece_boxes(
+            s.vertices, m.piece_start, m.piece_count, m.piece_radius, m.piece_reach,
+            m.piece_body, s.v, s.omega, moving, self._dynamic, float(m.gravity[0]),
+            float(m.gravity[1]), self.dt, 4.0 * st.linear_slop, self._boxes,
+        )  # fmt: skip
+        return self._kept.update(self._boxes, m.piece_reach, m.piece_body, moving, self._dynamic)
+
+    def _narrow(self, n_pairs: int) -> int:
+        m, s, st = self.model, self.state, self.settings
+        return int(
+            contacts.narrow_phase(
+                self._kept.pairs, n_pairs, s.vertices, s.normals, m.piece_start,
+                m.piece_count, m.piece_radius, m.piece_reach, m.piece_body, m.material,
+                m.e_table, m.mu_table, s.x, s.v, s.omega, self._dynamic, self._g, self.dt,
+                4.0 * st.linear_slop, st.linear_slop, s.cache_keys, s.cache_ids,
+                s.cache_impulses, int(s.cache_count[0]), self._cf, self._ci,
+            )
+        )  # fmt: skip
+
+    def _impact_kernel(
+        self,
+        isolated: NDArray[np.int64],
+        n_iso: int,
+        closing: FloatArray,
+        restitution: FloatArray,
+        friction: FloatArray,
+        log: FloatArray,
+    ) -> int:
+        m, s, st = self.model, self.state, self.settings
+        return int(
+            impacts.exact_impacts(
+                isolated, n_iso, self._ci, s.x, s.angle, s.v, s.omega, self._accel,
+                self._dynamic, m.inv_mass, m.inv_inertia, m.mass, m.inertia, restitution,
+                friction, m.piece_start, m.piece_count, m.piece_radius, m.piece_reach,
+                m.local_vertices, m.local_normals, s.vertices, s.normals, self.dt,
+                1e-3 * st.linear_slop, log,
+            )
+        )  # fmt: skip
+
+    def _fly(self, free: NDArray[np.int64]) -> None:
+        s, a = self.state, self._accel
+        for i in free.tolist():
+            motion.fly(i, self.dt, s.x, s.angle, s.v, s.omega, a[i, 0], a[i, 1])
+
+    def _solve(self, nc: int, bodies: NDArray[np.int64], work: FloatArray) -> None:
+        m, s = self.model, self.state
+        solver.solve_step(
+            self._cf, self._ci, nc, bodies, m.inv_mass, m.inv_inertia, self._dynamic, s.x,
+            s.angle, s.v, s.omega, float(m.gravity[0]), float(m.gravity[1]), self._knobs(),
+            work,
+        )  # fmt: skip
+
+    def _fastest(self) -> FloatArray:
+        s = self.state
+        fastest: FloatArray = np.sqrt(s.v[:, 0] ** 2 + s.v[:, 1] ** 2) + np.abs(s.omega) * (
+            self.model.reach
+        )
+        return fastest
+
+    def _stop(self, asleep: NDArray[np.int64]) -> float:
+        m, s = self.model, self.state
         taken = 0.0
-        for i in np.flatnonzero(before & ~s.awake).tolist():
+        for i in asleep.tolist():
             vx, vy, w = float(s.v[i, 0]), float(s.v[i, 1]), float(s.omega[i])
             taken += 0.5 * (m.mass[i] * (vx * vx + vy * vy) + m.inertia[i] * (w * w))
             s.v[i] = 0.0
             s.omega[i] = 0.0
-        self._energy_lost += taken
+        return taken
 
     def _energy(self, rows: NDArray[np.int64]) -> float:
-        """Kinetic and gravitational potential energy of the dynamic bodies among ``rows``
-        [J]."""
         m, s = self.model, self.state
         gx, gy = float(m.gravity[0]), float(m.gravity[1])
-        return motion.mechanical_energy(
-            rows, self._dynamic, m.mass, m.inertia, s.x, s.v, s.omega, gx, gy
+        return float(
+            motion.mechanical_energy(
+                rows, self._dynamic, m.mass, m.inertia, s.x, s.v, s.omega, gx, gy
+            )
         )
-
-    def _book(self, log: FloatArray, sink: Sink | None) -> None:
-        """Count the exact impacts and hand them to ``sink`` as collision records."""
-        partner = log[:, 2].astype(np.int64)
-        against = self._count(partner, float(np.sum(log[:, 9])), float(np.sum(log[:, 10])))
-        if sink is None:
-            return
-        records = np.zeros(log.shape[0], COLLISION_DTYPE)
-        records["time"] = self.time + log[:, 0]
-        records["body"] = log[:, 1].astype(np.int64)
-        records["kind"] = against
-        records["partner"] = self.partners.number[partner]
-        records["impulse"][:, :2] = log[:, 3:5]
-        records["un_before"] = log[:, 5]
-        records["un_after"] = log[:, 6]
-        records["point"][:, :2] = log[:, 7:9]
-        sink(records)
 
 
 _WARM = False

@@ -38,16 +38,17 @@ from carom.engines.rigid.motion import (
     place_piece,
     relative_velocity,
 )
-from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
+from carom.engines.stepped.impacts import (
+    MAX_IMPACTS,
+    advance,
+    approaching,
+    search,
+    take_isolated,
+)
 from carom.geometry.manifold2d import collide, core_witness
 
 __all__ = ["IMPACT_FIELDS", "exact_impacts"]
 
-#: conservative-advancement iterations before giving up on a time of impact (then the pair
-#: flies on and the solver meets it at the next step)
-MAX_ITERATIONS = 200
-#: impacts of one pair within one step
-MAX_IMPACTS = 8
 #: columns of a logged impact: time into the step, body A, body B, impulse on A (x, y),
 #: normal speeds before and after (the deepest point), the point (x, y), energy lost, work
 #: done by a kinematic partner
@@ -155,79 +156,20 @@ def time_of_impact(
     gx = accel[a, 0] - accel[b, 0]
     gy = accel[a, 1] - accel[b, 1]
     g_rel = math.sqrt(gx * gx + gy * gy)
+    state = search(parting)
     t = 0.0
-    safe = 0.0
-    for _ in range(MAX_ITERATIONS):
+    while True:
         d, wx, wy = _gap(
-            pa,
-            pb,
-            a,
-            b,
-            t,
-            x,
-            angle,
-            v,
-            omega,
-            accel,
-            piece_start,
-            piece_count,
-            piece_radius,
-            local_vertices,
-            local_normals,
-            vertices,
-            normals,
-            out,
-            ids,
-        )
-        if d < -tol:
-            # overshot (the bound missed a turn): bisect back between safe and t
-            lo = safe
-            hi = t
-            for _ in range(60):
-                mid = 0.5 * (lo + hi)
-                d, wx, wy = _gap(
-                    pa,
-                    pb,
-                    a,
-                    b,
-                    mid,
-                    x,
-                    angle,
-                    v,
-                    omega,
-                    accel,
-                    piece_start,
-                    piece_count,
-                    piece_radius,
-                    local_vertices,
-                    local_normals,
-                    vertices,
-                    normals,
-                    out,
-                    ids,
-                )
-                if d < -tol:
-                    hi = mid
-                elif d > tol:
-                    lo = mid
-                else:
-                    return mid
-            return lo
-        if d <= tol and not parting:
-            return t
-        if d > tol:
-            parting = False
+            pa, pb, a, b, t, x, angle, v, omega, accel, piece_start, piece_count, piece_radius,
+            local_vertices, local_normals, vertices, normals, out, ids,
+        )  # fmt: skip
         # how fast the gap can close from now to the horizon
         ux = (v[a, 0] + accel[a, 0] * t) - (v[b, 0] + accel[b, 0] * t)
         uy = (v[a, 1] + accel[a, 1] * t) - (v[b, 1] + accel[b, 1] * t)
         closing = -(ux * wx + uy * wy) + spin + g_rel * (horizon - t)
-        if closing <= 0.0:
-            return -1.0
-        safe = t
-        t += max(d, tol) / closing
-        if t > horizon:
-            return -1.0
-    return -1.0
+        done, t, state = advance(state, t, d, closing, tol, horizon)
+        if done:
+            return t
 
 
 @njit(cache=True)
@@ -359,11 +301,7 @@ def _impact(
         un[used] = ux * nx + uy * ny
         ut[used] = ux * tx + uy * ty
         used += 1
-    approaching = False
-    for j in range(used):
-        if un[j] < 0.0:
-            approaching = True
-    if not approaching:
+    if not approaching(un, used):
         return False
     ma = inv_mass[a]
     mb = inv_mass[b]
@@ -481,11 +419,7 @@ def exact_impacts(
     logged = 0
     for k in range(n_isolated):
         m = isolated[k]
-        a = ci[m, I_BODY_A]
-        b = ci[m, I_BODY_B]
-        pa = ci[m, I_PIECE_A]
-        pb = ci[m, I_PIECE_B]
-        ci[m, I_FLAGS] |= FLAG_EXACT
+        a, b, pa, pb = take_isolated(ci, m, I_FLAGS)
         tol = 1e-9 * (piece_reach[pa] + piece_reach[pb])
         now = 0.0
         for impact in range(MAX_IMPACTS):

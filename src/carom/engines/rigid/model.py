@@ -8,7 +8,6 @@ its centre of mass; the pieces' corners and edge normals sit in two flat (V, 2) 
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import NamedTuple
 
@@ -18,7 +17,7 @@ from numpy.typing import NDArray
 from carom.bodies import KIND_DYNAMIC
 from carom.shapes import ConvexPiece
 
-__all__ = ["RigidModel", "RigidState", "build_model", "grid_cell", "new_state"]
+__all__ = ["RigidModel", "RigidState", "build_model", "new_state"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -194,14 +193,3 @@ def new_state(
         cache_impulses=np.zeros((0, 4)),
         cache_count=np.zeros(1, np.int64),
     )
-
-
-def grid_cell(model: RigidModel) -> float:
-    """The broad phase's cell side [m]: twice the median diameter of the dynamic pieces (a
-    typical piece then sits in one to four cells)."""
-    dynamic = model.kind[model.piece_body] == KIND_DYNAMIC
-    reach = model.piece_reach[dynamic] if dynamic.any() else model.piece_reach
-    if reach.size == 0:
-        return 1.0
-    cell = 4.0 * float(np.median(reach))
-    return cell if cell > 0.0 and math.isfinite(cell) else 1.0

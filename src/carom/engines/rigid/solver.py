@@ -60,11 +60,14 @@ from carom.engines.rigid.contacts import (
     P_RBY,
     P_TOTAL,
     P_VREL,
+    POINT0,
+    POINT_FLOATS,
     point_offset,
 )
 from carom.engines.rigid.motion import apply_impulse, fixed_work, relative_velocity
-from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_COUNT
-from carom.engines.stepped.solver import LANE_MATH, LANES, color_groups, soft_bias, softness
+from carom.engines.stepped import solver as shared
+from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
+from carom.engines.stepped.solver import LANE_MATH, LANES, soft_bias
 
 __all__ = ["solve_step"]
 
@@ -115,8 +118,6 @@ S_DY = 4
 S_COS = 5  # cos and sin of the turn since the step began
 S_SIN = 6
 STATE_COLS = 8
-#: a point that is not there: never touching, never pushed
-ABSENT_BASE = 1e30
 
 
 # Taylor coefficients of cos and sin: (-1)^k / (2k)! and (-1)^k / (2k+1)!
@@ -162,30 +163,19 @@ def _pack(
         for lane in range(LANES):
             m = lanes[g, lane]
             if m < 0:
-                pair[g, lane] = dummy
-                pair[g, LANES + lane] = dummy
-                for r in range(GROUP_ROWS):
-                    group[g, r * LANES + lane] = 0.0
-                for p in range(2):
-                    group[g, (R_POINT + p * POINT_ROWS + Q_BASE) * LANES + lane] = ABSENT_BASE
+                shared.pad_lane(
+                    group, pair, g, lane, dummy, GROUP_ROWS, R_POINT, POINT_ROWS, 2, Q_BASE
+                )
                 continue
-            a = ci[m, I_BODY_A]
-            b = ci[m, I_BODY_B]
-            pair[g, lane] = a
-            pair[g, LANES + lane] = b
-            fixed = inv_mass[a] == 0.0 or inv_mass[b] == 0.0
-            rate, mass_scale, impulse_scale = soft_fixed if fixed else soft_moving
+            a, b = shared.pack_pair(
+                ci, m, group, pair, g, lane, inv_mass, soft_moving, soft_fixed, cf[m, F_MU],
+                (R_MU, R_RATE, R_MSCALE, R_ISCALE, R_IMA, R_IMB),
+            )  # fmt: skip
             nx = cf[m, F_NX]
             ny = cf[m, F_NY]
             group[g, R_NX * LANES + lane] = nx
             group[g, R_NY * LANES + lane] = ny
-            group[g, R_MU * LANES + lane] = cf[m, F_MU]
-            group[g, R_RATE * LANES + lane] = rate
-            group[g, R_MSCALE * LANES + lane] = mass_scale
-            group[g, R_ISCALE * LANES + lane] = impulse_scale
-            group[g, R_IMA * LANES + lane] = inv_mass[a]
             group[g, R_IIA * LANES + lane] = inv_inertia[a]
-            group[g, R_IMB * LANES + lane] = inv_mass[b]
             group[g, R_IIB * LANES + lane] = inv_inertia[b]
             mass = inv_mass[a] + inv_mass[b]
             ia = inv_inertia[a]
@@ -193,9 +183,7 @@ def _pack(
             for p in range(2):
                 q = R_POINT + p * POINT_ROWS
                 if p >= ci[m, I_COUNT]:
-                    for r in range(POINT_ROWS):
-                        group[g, (q + r) * LANES + lane] = 0.0
-                    group[g, (q + Q_BASE) * LANES + lane] = ABSENT_BASE
+                    shared.absent_point(group, g, lane, q, POINT_ROWS, Q_BASE)
                     continue
                 o = point_offset(p)
                 rax = cf[m, o + P_RAX]
@@ -224,23 +212,6 @@ def _pack(
                     state[body, S_VX] != 0.0 or state[body, S_VY] != 0.0 or state[body, S_W] != 0.0
                 ):
                     kinematic[g] = True
-
-
-@njit(cache=True)
-def _unpack(group: np.ndarray, lanes: np.ndarray, cf: np.ndarray) -> None:
-    """Copy each point's impulses, its total and its normal mass back to its contact row."""
-    for g in range(lanes.shape[0]):
-        for lane in range(LANES):
-            m = lanes[g, lane]
-            if m < 0:
-                continue
-            for p in range(2):
-                q = R_POINT + p * POINT_ROWS
-                o = point_offset(p)
-                cf[m, o + P_JN] = group[g, (q + Q_JN) * LANES + lane]
-                cf[m, o + P_JT] = group[g, (q + Q_JT) * LANES + lane]
-                cf[m, o + P_TOTAL] = group[g, (q + Q_TOTAL) * LANES + lane]
-                cf[m, o + P_NMASS] = group[g, (q + Q_NMASS) * LANES + lane]
 
 
 @njit(cache=True, inline="always")
@@ -433,16 +404,10 @@ def _solve(
                     buf[R_MSCALE * LANES + lane], buf[R_ISCALE * LANES + lane],
                 )  # fmt: skip
                 ux, uy = _slip(buf, lane, q)
-                un = ux * nx + uy * ny
-                jn = buf[(q + Q_JN) * LANES + lane]
-                dj = (
-                    -buf[(q + Q_NMASS) * LANES + lane] * (mass_scale * un + bias)
-                    - impulse_scale * jn
-                )
-                new = max(jn + dj, 0.0)
-                dj = new - jn
-                buf[(q + Q_JN) * LANES + lane] = new
-                buf[(q + Q_TOTAL) * LANES + lane] += dj
+                _, dj = shared.normal_impulse(
+                    buf, lane, q + Q_JN, q + Q_NMASS, q + Q_TOTAL, ux * nx + uy * ny, mass_scale,
+                    impulse_scale, bias,
+                )  # fmt: skip
                 _push(buf, lane, q, dj * nx, dj * ny)
         for p in range(2):
             q = R_POINT + p * POINT_ROWS
@@ -476,36 +441,20 @@ def _restitution(
 ) -> None:
     """Points that approached faster than ``threshold`` and were pushed leave at ``-e`` times
     their approach speed (Newton's restitution, per point, in order)."""
-    for m in range(nc):
-        if ci[m, I_FLAGS] & FLAG_EXACT:
-            continue
-        e = cf[m, F_E]
-        if e == 0.0:
-            continue
-        a = ci[m, I_BODY_A]
-        b = ci[m, I_BODY_B]
-        nx = cf[m, F_NX]
-        ny = cf[m, F_NY]
-        for j in range(ci[m, I_COUNT]):
-            o = point_offset(j)
-            if cf[m, o + P_VREL] > -threshold or cf[m, o + P_TOTAL] == 0.0:
-                continue
-            rax = cf[m, o + P_RAX]
-            ray = cf[m, o + P_RAY]
-            rbx = cf[m, o + P_RBX]
-            rby = cf[m, o + P_RBY]
-            ux, uy = relative_velocity(a, b, rax, ray, rbx, rby, v, omega)
-            un = ux * nx + uy * ny
-            jn = cf[m, o + P_JN]
-            dj = -cf[m, o + P_NMASS] * (un + e * cf[m, o + P_VREL])
-            new = max(jn + dj, 0.0)
-            dj = new - jn
-            cf[m, o + P_JN] = new
-            cf[m, o + P_TOTAL] += dj
-            work[0] += fixed_work(a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, v, omega)
-            apply_impulse(
-                a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega
-            )
+    todo = shared.bouncing(
+        cf, ci, nc, threshold, I_FLAGS, F_E, (POINT0, POINT_FLOATS, P_VREL, P_TOTAL)
+    )
+    for k in range(todo.shape[0]):
+        m, o = todo[k, 0], todo[k, 1]
+        a, b = ci[m, I_BODY_A], ci[m, I_BODY_B]
+        nx, ny = cf[m, F_NX], cf[m, F_NY]
+        rax, ray, rbx, rby = cf[m, o + P_RAX], cf[m, o + P_RAY], cf[m, o + P_RBX], cf[m, o + P_RBY]
+        ux, uy = relative_velocity(a, b, rax, ray, rbx, rby, v, omega)
+        dj = shared.restitution_impulse(
+            cf, m, o, ux * nx + uy * ny, cf[m, F_E], P_JN, P_NMASS, P_VREL, P_TOTAL
+        )
+        work[0] += fixed_work(a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, v, omega)
+        apply_impulse(a, b, dj * nx, dj * ny, rax, ray, rbx, rby, inv_mass, inv_inertia, v, omega)
 
 
 @njit(cache=True)
@@ -523,24 +472,21 @@ def solve_step(
     omega: np.ndarray,
     gx: float,
     gy: float,
-    dt: float,
-    substeps: int,
-    contact_hertz: float,
-    damping_ratio: float,
-    push_speed: float,
-    restitution_threshold: float,
+    knobs: tuple[float, int, float, float, float, float],
     work: np.ndarray,
 ) -> None:
-    """Advance the ``bodies`` (indices) and their contacts by one step ``dt`` [s].
+    """Advance the ``bodies`` (indices) and their contacts by one step.
+
+    ``knobs``: the step ``dt`` [s], the substeps, the contact stiffness [Hz] and damping
+    ratio [-], the most a pass pushes overlapping bodies apart [m/s], and the restitution
+    threshold [m/s] (:meth:`carom.engines.stepped.driver.SteppedEngine._knobs`).
 
     Contacts flagged exact are skipped; every other contact must join bodies of ``bodies``
     or a body that does not move under impulses (static, kinematic: infinite mass).
     ``work[0]`` gains the work kinematic bodies did on the others [J].
     """
-    h = dt / substeps
-    hertz = min(contact_hertz, 0.25 / h)
-    soft_moving = softness(hertz, damping_ratio, h)
-    soft_fixed = softness(2.0 * hertz, damping_ratio, h)
+    dt, substeps, contact_hertz, damping_ratio, push_speed, restitution_threshold = knobs
+    h, soft_moving, soft_fixed = shared.substep_softness(dt, substeps, contact_hertz, damping_ratio)
     n = x.shape[0]
     # every body's row, and a last one for the padding lanes' dummy (at rest, infinite mass)
     state = np.zeros((n + 1, STATE_COLS))
@@ -548,11 +494,7 @@ def solve_step(
     state[:n, S_VY] = v[:, 1]
     state[:n, S_W] = omega
     state[:, S_COS] = 1.0
-    lanes = color_groups(ci, nc, inv_mass, I_FLAGS)
-    groups = lanes.shape[0]
-    group = np.empty((groups, GROUP_ROWS * LANES))
-    pair = np.empty((groups, 2 * LANES), np.int64)
-    kinematic = np.empty(groups, np.bool_)
+    lanes, group, pair, kinematic = shared.groups_of(ci, nc, inv_mass, I_FLAGS, GROUP_ROWS)
     _pack(
         cf, ci, lanes, inv_mass, inv_inertia, state, soft_moving, soft_fixed, group, pair, kinematic
     )
@@ -581,5 +523,8 @@ def solve_step(
         v[i, 0] = state[i, S_VX]
         v[i, 1] = state[i, S_VY]
         omega[i] = state[i, S_W]
-    _unpack(group, lanes, cf)
+    shared.unpack(
+        group, lanes, ci, cf, (R_POINT, POINT_ROWS, POINT0, POINT_FLOATS, 2),
+        (P_JN, P_JT, P_TOTAL, P_NMASS), (Q_JN, Q_JT, Q_TOTAL, Q_NMASS), True,
+    )  # fmt: skip
     _restitution(cf, ci, nc, restitution_threshold, inv_mass, inv_inertia, v, omega, work)

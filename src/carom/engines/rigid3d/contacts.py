@@ -52,16 +52,15 @@ from carom.engines.rigid3d.model import (
     PIECE_POLYTOPE,
 )
 from carom.engines.rigid3d.motion import matrix, relative_velocity
-from carom.engines.stepped.contacts import find_cached
-from carom.engines.stepped.rows import (
-    I_BODY_A,
-    I_BODY_B,
-    I_COUNT,
-    I_ID0,
-    I_PIECE_A,
-    I_PIECE_B,
-    flags_column,
+from carom.engines.stepped.contacts import (
+    find_cached,
+    keeps_point,
+    open_point,
+    pair_of,
+    relative_speed,
+    write_pair,
 )
+from carom.engines.stepped.rows import I_COUNT, I_ID0, flags_column
 from carom.geometry.manifold3d import (
     MAX_POINTS,
     OUT_SIZE,
@@ -79,10 +78,9 @@ __all__ = [
     "CONTACT_FLOATS",
     "CONTACT_INTS",
     "collide_pieces",
-    "extremes",
     "narrow_phase",
     "point_offset",
-    "store_impulses",
+    "store_tangents",
     "tangents",
 ]
 
@@ -432,15 +430,10 @@ def narrow_phase(
     cursor = 0
     kept_cursor = 0
     for k in range(n_pairs):
-        pa = pairs[k, 0]
-        pb = pairs[k, 1]
-        ba = piece_body[pa]
-        bb = piece_body[pb]
+        pair = pair_of(pairs, k, piece_body)
+        pa, pb, ba, bb = pair
         # how far the pair can close during the step: relative speed, spins, gravity
-        dvx = v[ba, 0] - v[bb, 0]
-        dvy = v[ba, 1] - v[bb, 1]
-        dvz = v[ba, 2] - v[bb, 2]
-        closing = math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz)
+        closing = relative_speed(v, ba, bb)
         if piece_kind[pa] != PIECE_PLANE:
             closing += math.sqrt(w[ba, 0] ** 2 + w[ba, 1] ** 2 + w[ba, 2] ** 2) * piece_reach[pa]
         if piece_kind[pb] != PIECE_PLANE:
@@ -498,10 +491,7 @@ def narrow_phase(
             rb[2] = pz - x[bb, 2]
             ux, uy, uz = relative_velocity(ba, bb, ra, rb, v, w)
             un = ux * nx + uy * ny + uz * nz
-            approach = max(0.0, -un)
-            if gravity_on[ba] != gravity_on[bb]:
-                approach += g * dt
-            if sep > speculative + approach * dt:
+            if not keeps_point(un, sep, gravity_on[ba] != gravity_on[bb], g, dt, speculative):
                 continue
             o = point_offset(kept)
             cf[m, o + P_RAX] = ra[0]
@@ -518,17 +508,13 @@ def narrow_phase(
             cf[m, o + P_BASE] = sep - (
                 (ra[0] - rb[0]) * nx + (ra[1] - rb[1]) * ny + (ra[2] - rb[2]) * nz + ka + kb
             )
-            cf[m, o + P_NMASS] = 0.0
-            cf[m, o + P_JN] = 0.0
-            cf[m, o + P_JT1] = 0.0
-            cf[m, o + P_JT2] = 0.0
-            cf[m, o + P_TOTAL] = 0.0
-            cf[m, o + P_VREL] = un
-            cf[m, o + P_SEP] = sep
             cf[m, o + P_X] = px
             cf[m, o + P_Y] = py
             cf[m, o + P_Z] = pz
-            ci[m, I_ID0 + kept] = ids[j]
+            open_point(
+                cf, ci, m, kept, o, un, sep, ids[j], (P_VREL, P_SEP),
+                (P_NMASS, P_JN, P_JT1, P_JT2, P_TOTAL),
+            )  # fmt: skip
             kept += 1
         if kept == 0:
             continue
@@ -542,19 +528,12 @@ def narrow_phase(
         cf[m, F_T2X] = t2x
         cf[m, F_T2Y] = t2y
         cf[m, F_T2Z] = t2z
-        ma = material[ba]
-        mb = material[bb]
-        cf[m, F_MU] = mu_table[ma, mb]
-        cf[m, F_E] = e_table[ma, mb]
+        ma, mb = write_pair(
+            cf, ci, m, pair, kept, I_FLAGS, material, (mu_table, e_table), (F_MU, F_E)
+        )
         cf[m, F_ROLL] = rolling_table[ma, mb]
         cf[m, F_JR1] = 0.0
         cf[m, F_JR2] = 0.0
-        ci[m, I_BODY_A] = ba
-        ci[m, I_BODY_B] = bb
-        ci[m, I_PIECE_A] = pa
-        ci[m, I_PIECE_B] = pb
-        ci[m, I_COUNT] = kept
-        ci[m, I_FLAGS] = 0
         row, cursor = find_cached(cache_keys, n_cache, pa * n_pieces + pb, cursor)
         if row >= 0:
             for j in range(kept):
@@ -571,44 +550,14 @@ def narrow_phase(
 
 
 @njit(cache=True)
-def extremes(cf: np.ndarray, ci: np.ndarray, nc: int) -> tuple[np.ndarray, np.ndarray]:
-    """Each contact's least separation [m] and least normal relative speed [m/s] over its
-    points, (nc,) each (:func:`carom.engines.stepped.islands.plan`)."""
-    closest = np.full(nc, np.inf)
-    closing = np.full(nc, np.inf)
-    for m in range(nc):
-        for j in range(ci[m, I_COUNT]):
-            closest[m] = min(closest[m], cf[m, point_offset(j) + P_SEP])
-            closing[m] = min(closing[m], cf[m, point_offset(j) + P_VREL])
-    return closest, closing
-
-
-@njit(cache=True)
-def store_impulses(
-    cf: np.ndarray,
-    ci: np.ndarray,
-    n_contacts: int,
-    n_pieces: int,
-    cache_keys: np.ndarray,
-    cache_ids: np.ndarray,
-    cache_impulses: np.ndarray,
-) -> int:
-    """Keep each contact's impulses for the next step's warm start (the normal impulse and the
-    tangent impulse as a world vector); return the count. Contacts come in key order."""
+def store_tangents(cf: np.ndarray, ci: np.ndarray, n_contacts: int, cache: np.ndarray) -> None:
+    """Each point's tangent impulse as a world vector into the warm-start cache (K, 4, 4),
+    beside the normal one (:func:`carom.engines.stepped.contacts.store_points`): a turning
+    normal carries it over."""
     for m in range(n_contacts):
-        cache_keys[m] = ci[m, I_PIECE_A] * n_pieces + ci[m, I_PIECE_B]
-        for q in range(MAX_POINTS):
-            if q < ci[m, I_COUNT]:
-                o = point_offset(q)
-                j1 = cf[m, o + P_JT1]
-                j2 = cf[m, o + P_JT2]
-                cache_ids[m, q] = ci[m, I_ID0 + q]
-                cache_impulses[m, q, 0] = cf[m, o + P_JN]
-                cache_impulses[m, q, 1] = j1 * cf[m, F_T1X] + j2 * cf[m, F_T2X]
-                cache_impulses[m, q, 2] = j1 * cf[m, F_T1Y] + j2 * cf[m, F_T2Y]
-                cache_impulses[m, q, 3] = j1 * cf[m, F_T1Z] + j2 * cf[m, F_T2Z]
-            else:
-                cache_ids[m, q] = -1
-                for c in range(4):
-                    cache_impulses[m, q, c] = 0.0
-    return n_contacts
+        for q in range(ci[m, I_COUNT]):
+            o = point_offset(q)
+            j1 = cf[m, o + P_JT1]
+            j2 = cf[m, o + P_JT2]
+            for k in range(3):
+                cache[m, q, 1 + k] = j1 * cf[m, F_T1X + k] + j2 * cf[m, F_T2X + k]

@@ -43,17 +43,18 @@ from carom.engines.rigid3d.motion import (
     spin_energy,
     world_inverse_row,
 )
-from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
+from carom.engines.stepped.impacts import (
+    MAX_IMPACTS,
+    advance,
+    approaching,
+    search,
+    take_isolated,
+)
 from carom.geometry.manifold3d import MAX_POINTS, OUT_SIZE, closest_hulls
 from carom.laws.rigid_impact import collision_matrix, point_impulse
 
-__all__ = ["IMPACT_FIELDS", "MAX_IMPACTS", "exact_impacts", "normal_lcp"]
+__all__ = ["IMPACT_FIELDS", "exact_impacts", "normal_lcp"]
 
-#: conservative-advancement iterations before giving up on a time of impact (then the pair
-#: flies on and the solver meets it at the next step)
-MAX_ITERATIONS = 200
-#: impacts of one pair within one step
-MAX_IMPACTS = 8
 #: columns of a logged impact: time into the step, body A, body B, impulse on A (x, y, z),
 #: normal speeds before and after (the first touching point), the point (x, y, z), energy
 #: lost
@@ -188,11 +189,7 @@ def _impact(
         u[used, 0], u[used, 1], u[used, 2] = ux, uy, uz
         un[used] = ux * n[0] + uy * n[1] + uz * n[2]
         used += 1
-    approaching = False
-    for j in range(used):
-        if un[j] < 0.0:
-            approaching = True
-    if not approaching:
+    if not approaching(un, used):
         return False
     ia = iw[a].reshape(3, 3)
     ib = iw[b].reshape(3, 3)
@@ -442,11 +439,7 @@ def exact_impacts(
     logged = 0
     for k in range(n_isolated):
         m = isolated[k]
-        a = ci[m, I_BODY_A]
-        b = ci[m, I_BODY_B]
-        pa = ci[m, I_PIECE_A]
-        pb = ci[m, I_PIECE_B]
-        ci[m, I_FLAGS] |= FLAG_EXACT
+        a, b, pa, pb = take_isolated(ci, m, I_FLAGS)
         # a plane reaches everywhere (inf) and never turns: it counts for nothing here
         reach_a = piece_reach[pa] if math.isfinite(piece_reach[pa]) else 0.0
         reach_b = piece_reach[pb] if math.isfinite(piece_reach[pb]) else 0.0
@@ -525,46 +518,19 @@ def _time_of_impact(
     gy = accel[a, 1] - accel[b, 1]
     gz = accel[a, 2] - accel[b, 2]
     g_rel = math.sqrt(gx * gx + gy * gy + gz * gz)
+    state = search(parting)
     t = 0.0
-    safe = 0.0
-    for _ in range(MAX_ITERATIONS):
+    while True:
         d, wx, wy, wz = _gap(
             pa, pb, a, b, t, h, x, q, v, w, accel, inertia, inv_inertia, model_ints,
             piece_radius, local_vertices, local_normals, face_first, face_size, corners,
             edges, vertices, normals, out, ids,
         )  # fmt: skip
-        if d < -tol:
-            # overshot (a turn the bound missed, or a start already overlapping): bisect
-            # back between the last safe time and t
-            lo = safe
-            hi = t
-            for _ in range(60):
-                mid = 0.5 * (lo + hi)
-                d, wx, wy, wz = _gap(
-                    pa, pb, a, b, mid, h, x, q, v, w, accel, inertia, inv_inertia,
-                    model_ints, piece_radius, local_vertices, local_normals, face_first,
-                    face_size, corners, edges, vertices, normals, out, ids,
-                )  # fmt: skip
-                if d < -tol:
-                    hi = mid
-                elif d > tol:
-                    lo = mid
-                else:
-                    return mid
-            return lo
-        if d <= tol and not parting:
-            return t
-        if d > tol:
-            parting = False
         # how fast the gap can close from now to the horizon
         ux = (v[a, 0] + accel[a, 0] * t) - (v[b, 0] + accel[b, 0] * t)
         uy = (v[a, 1] + accel[a, 1] * t) - (v[b, 1] + accel[b, 1] * t)
         uz = (v[a, 2] + accel[a, 2] * t) - (v[b, 2] + accel[b, 2] * t)
         closing = -(ux * wx + uy * wy + uz * wz) + spin + g_rel * (horizon - t)
-        if closing <= 0.0:
-            return -1.0
-        safe = t
-        t += max(d, tol) / closing
-        if t > horizon:
-            return -1.0
-    return -1.0
+        done, t, state = advance(state, t, d, closing, tol, horizon)
+        if done:
+            return t

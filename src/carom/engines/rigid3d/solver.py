@@ -78,6 +78,8 @@ from carom.engines.rigid3d.contacts import (
     P_T2MASS,
     P_TOTAL,
     P_VREL,
+    POINT0,
+    POINT_FLOATS,
     point_offset,
 )
 from carom.engines.rigid3d.motion import (
@@ -87,8 +89,9 @@ from carom.engines.rigid3d.motion import (
     relative_velocity,
     world_inverse_inertia,
 )
+from carom.engines.stepped import solver as shared
 from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_COUNT
-from carom.engines.stepped.solver import LANE_MATH, LANES, color_groups, soft_bias, softness
+from carom.engines.stepped.solver import LANE_MATH, LANES, soft_bias
 from carom.geometry.manifold3d import MAX_POINTS
 
 __all__ = ["FLAG_EXACT", "solve_step"]
@@ -141,8 +144,6 @@ S_W = 3  # angular velocity (3)
 S_D = 6  # move since the step began (3)
 S_T = 9  # turn since the step began, row-major (9)
 STATE_COLS = 18
-#: a point that is not there: never touching, never pushed
-ABSENT_BASE = 1e30
 
 
 @njit(cache=True, inline="always")
@@ -214,33 +215,23 @@ def _restitution(
 ) -> None:  # fmt: skip
     """Points that approached faster than ``threshold`` and were pushed leave at ``-e`` times
     their approach speed (Newton's restitution, per point, in order)."""
-    for m in range(nc):
-        if ci[m, I_FLAGS] & FLAG_EXACT:
-            continue
-        e = cf[m, F_E]
-        if e == 0.0:
-            continue
+    layout = (POINT0, POINT_FLOATS, P_VREL, P_TOTAL)
+    todo = shared.bouncing(cf, ci, nc, threshold, I_FLAGS, F_E, layout)
+    for k in range(todo.shape[0]):
+        m = todo[k, 0]
+        o = todo[k, 1]
         a = ci[m, I_BODY_A]
         b = ci[m, I_BODY_B]
         nx = cf[m, F_NX]
         ny = cf[m, F_NY]
         nz = cf[m, F_NZ]
-        for j in range(ci[m, I_COUNT]):
-            o = point_offset(j)
-            if cf[m, o + P_VREL] > -threshold or cf[m, o + P_TOTAL] == 0.0:
-                continue
-            r_a = cf[m, o + P_RAX : o + P_RAX + 3]
-            r_b = cf[m, o + P_RAX + 3 : o + P_RAX + 6]
-            ux, uy, uz = relative_velocity(a, b, r_a, r_b, v, w)
-            un = ux * nx + uy * ny + uz * nz
-            jn = cf[m, o + P_JN]
-            dj = -cf[m, o + P_NMASS] * (un + e * cf[m, o + P_VREL])
-            new = max(jn + dj, 0.0)
-            dj = new - jn
-            cf[m, o + P_JN] = new
-            cf[m, o + P_TOTAL] += dj
-            work[0] += _fixed_work(a, b, dj * nx, dj * ny, dj * nz, r_a, r_b, inv_mass, v, w)
-            apply_impulse(a, b, dj * nx, dj * ny, dj * nz, r_a, r_b, inv_mass, iw, v, w)
+        r_a = cf[m, o + P_RAX : o + P_RAX + 3]
+        r_b = cf[m, o + P_RAX + 3 : o + P_RAX + 6]
+        ux, uy, uz = relative_velocity(a, b, r_a, r_b, v, w)
+        un = ux * nx + uy * ny + uz * nz
+        dj = shared.restitution_impulse(cf, m, o, un, cf[m, F_E], P_JN, P_NMASS, P_VREL, P_TOTAL)
+        work[0] += _fixed_work(a, b, dj * nx, dj * ny, dj * nz, r_a, r_b, inv_mass, v, w)
+        apply_impulse(a, b, dj * nx, dj * ny, dj * nz, r_a, r_b, inv_mass, iw, v, w)
 
 
 @njit(cache=True, inline="always")
@@ -286,30 +277,18 @@ def _pack(
         for lane in range(LANES):
             m = lanes[g, lane]
             if m < 0:
-                pair[g, lane] = dummy
-                pair[g, LANES + lane] = dummy
-                for r in range(GROUP_ROWS):
-                    group[g, r * LANES + lane] = 0.0
-                for p in range(MAX_POINTS):
-                    q = R_POINT + p * POINT_ROWS
-                    group[g, (q + Q_BASE) * LANES + lane] = ABSENT_BASE
+                shared.pad_lane(
+                    group, pair, g, lane, dummy, GROUP_ROWS, R_POINT, POINT_ROWS, MAX_POINTS, Q_BASE
+                )
                 continue
-            a = ci[m, I_BODY_A]
-            b = ci[m, I_BODY_B]
-            pair[g, lane] = a
-            pair[g, LANES + lane] = b
-            fixed = inv_mass[a] == 0.0 or inv_mass[b] == 0.0
-            rate, mass_scale, impulse_scale = soft_fixed if fixed else soft_moving
+            a, b = shared.pack_pair(
+                ci, m, group, pair, g, lane, inv_mass, soft_moving, soft_fixed, cf[m, F_MU],
+                (R_MU, R_RATE, R_MSCALE, R_ISCALE, R_IMA, R_IMB),
+            )  # fmt: skip
             for k in range(3):
                 group[g, (R_N + k) * LANES + lane] = cf[m, F_NX + k]
                 group[g, (R_T1 + k) * LANES + lane] = cf[m, F_T1X + k]
                 group[g, (R_T2 + k) * LANES + lane] = cf[m, F_T2X + k]
-            group[g, R_MU * LANES + lane] = cf[m, F_MU]
-            group[g, R_RATE * LANES + lane] = rate
-            group[g, R_MSCALE * LANES + lane] = mass_scale
-            group[g, R_ISCALE * LANES + lane] = impulse_scale
-            group[g, R_IMA * LANES + lane] = inv_mass[a]
-            group[g, R_IMB * LANES + lane] = inv_mass[b]
             for k in range(9):
                 group[g, (R_IWA + k) * LANES + lane] = iw[a, k]
                 group[g, (R_IWB + k) * LANES + lane] = iw[b, k]
@@ -327,9 +306,7 @@ def _pack(
             for p in range(MAX_POINTS):
                 q = R_POINT + p * POINT_ROWS
                 if p >= count:
-                    for r in range(POINT_ROWS):
-                        group[g, (q + r) * LANES + lane] = 0.0
-                    group[g, (q + Q_BASE) * LANES + lane] = ABSENT_BASE
+                    shared.absent_point(group, g, lane, q, POINT_ROWS, Q_BASE)
                     continue
                 o = point_offset(p)
                 r_a = cf[m, o + P_RAX : o + P_RAX + 3]
@@ -362,25 +339,19 @@ def _pack(
 
 @njit(cache=True)
 def _unpack(group: np.ndarray, lanes: np.ndarray, ci: np.ndarray, cf: np.ndarray) -> None:
-    """Copy each point's impulses, its total and its normal mass, and the rolling impulses,
-    back to its contact row."""
+    """Copy each point's impulses, its total and its masses (:func:`.shared.unpack`), and
+    the rolling impulses, back to its contact row."""
+    shared.unpack(
+        group, lanes, ci, cf, (R_POINT, POINT_ROWS, POINT0, POINT_FLOATS, MAX_POINTS),
+        (P_JN, P_JT1, P_JT2, P_TOTAL, P_NMASS, P_T1MASS, P_T2MASS),
+        (Q_JN, Q_JT1, Q_JT2, Q_TOTAL, Q_NMASS, Q_T1MASS, Q_T2MASS), False,
+    )  # fmt: skip
     for g in range(lanes.shape[0]):
         for lane in range(LANES):
             m = lanes[g, lane]
-            if m < 0:
-                continue
-            cf[m, F_JR1] = group[g, R_JR1 * LANES + lane]
-            cf[m, F_JR2] = group[g, R_JR2 * LANES + lane]
-            for p in range(ci[m, I_COUNT]):
-                q = R_POINT + p * POINT_ROWS
-                o = point_offset(p)
-                cf[m, o + P_JN] = group[g, (q + Q_JN) * LANES + lane]
-                cf[m, o + P_JT1] = group[g, (q + Q_JT1) * LANES + lane]
-                cf[m, o + P_JT2] = group[g, (q + Q_JT2) * LANES + lane]
-                cf[m, o + P_TOTAL] = group[g, (q + Q_TOTAL) * LANES + lane]
-                cf[m, o + P_NMASS] = group[g, (q + Q_NMASS) * LANES + lane]
-                cf[m, o + P_T1MASS] = group[g, (q + Q_T1MASS) * LANES + lane]
-                cf[m, o + P_T2MASS] = group[g, (q + Q_T2MASS) * LANES + lane]
+            if m >= 0:
+                cf[m, F_JR1] = group[g, R_JR1 * LANES + lane]
+                cf[m, F_JR2] = group[g, R_JR2 * LANES + lane]
 
 
 @njit(cache=True, inline="always")
@@ -641,16 +612,10 @@ def _solve(
                     buf[R_MSCALE * LANES + lane], buf[R_ISCALE * LANES + lane],
                 )  # fmt: skip
                 ux, uy, uz = _slip(buf, lane, q)
-                un = ux * nx + uy * ny + uz * nz
-                jn = buf[(q + Q_JN) * LANES + lane]
-                dj = (
-                    -buf[(q + Q_NMASS) * LANES + lane] * (mass_scale * un + bias)
-                    - impulse_scale * jn
-                )
-                new = max(jn + dj, 0.0)
-                dj = new - jn
-                buf[(q + Q_JN) * LANES + lane] = new
-                buf[(q + Q_TOTAL) * LANES + lane] += dj
+                new, dj = shared.normal_impulse(
+                    buf, lane, q + Q_JN, q + Q_NMASS, q + Q_TOTAL, ux * nx + uy * ny + uz * nz,
+                    mass_scale, impulse_scale, bias,
+                )  # fmt: skip
                 load[lane] += new
                 _push(buf, lane, q, dj * nx, dj * ny, dj * nz)
         for p in range(MAX_POINTS):
@@ -711,29 +676,13 @@ def _solve(
 
 @njit(cache=True)
 def solve_step(
-    cf: np.ndarray,
-    ci: np.ndarray,
-    nc: int,
-    bodies: np.ndarray,
-    inv_mass: np.ndarray,
-    inertia: np.ndarray,
-    inv_inertia: np.ndarray,
-    gravity_on: np.ndarray,
-    movers: np.ndarray,
-    x: np.ndarray,
-    q: np.ndarray,
-    v: np.ndarray,
-    w: np.ndarray,
-    g: np.ndarray,
-    dt: float,
-    substeps: int,
-    contact_hertz: float,
-    damping_ratio: float,
-    push_speed: float,
-    restitution_threshold: float,
-    work: np.ndarray,
-) -> None:
-    """Advance the ``bodies`` (indices) and their contacts by one step ``dt`` [s].
+    cf: np.ndarray, ci: np.ndarray, nc: int, bodies: np.ndarray, inv_mass: np.ndarray,
+    inertia: np.ndarray, inv_inertia: np.ndarray, gravity_on: np.ndarray, movers: np.ndarray,
+    x: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray, g: np.ndarray,
+    knobs: tuple[float, int, float, float, float, float], work: np.ndarray,
+) -> None:  # fmt: skip
+    """Advance the ``bodies`` (indices) and their contacts by one step, with ``knobs`` as in
+    2D (:func:`carom.engines.rigid.solver.solve_step`).
 
     Contacts flagged exact are skipped; every other contact must join bodies of ``bodies`` or
     a body that impulses do not move (static, kinematic: infinite mass); the kinematic ones
@@ -742,10 +691,8 @@ def solve_step(
     ``inv_inertia`` (N, 3, 3) are body-frame tensors; ``g`` (3,) [m/s^2] acts on the bodies
     with ``gravity_on``; ``work[0]`` gains the work kinematic bodies did on the others [J].
     """
-    h = dt / substeps
-    hertz = min(contact_hertz, 0.25 / h)
-    soft_moving = softness(hertz, damping_ratio, h)
-    soft_fixed = softness(2.0 * hertz, damping_ratio, h)
+    dt, substeps, contact_hertz, damping_ratio, push_speed, restitution_threshold = knobs
+    h, soft_moving, soft_fixed = shared.substep_softness(dt, substeps, contact_hertz, damping_ratio)
     n = x.shape[0]
     iw = np.zeros((n, 9))
     world_inverse_inertia(q, inv_inertia, iw)
@@ -762,12 +709,8 @@ def solve_step(
     for i in bodies:
         matrix(q, i, r)
         start[i] = r
-    lanes = color_groups(ci, nc, inv_mass, I_FLAGS)
-    groups = lanes.shape[0]
-    group = np.empty((groups, BUFFER_ROWS * LANES))
-    pair = np.empty((groups, 2 * LANES), np.int64)
-    kinematic = np.empty(groups, np.bool_)
-    rolling = np.empty(groups, np.bool_)
+    lanes, group, pair, kinematic = shared.groups_of(ci, nc, inv_mass, I_FLAGS, BUFFER_ROWS)
+    rolling = np.empty(lanes.shape[0], np.bool_)
     _pack(
         cf, ci, lanes, inv_mass, iw, state, soft_moving, soft_fixed, group, pair, kinematic,
         rolling,

@@ -1,22 +1,43 @@
-"""What both dimensions' broad phase shares: which pairs of pieces are wanted, and the pairs
-kept from step to step through fat boxes.
+"""Broad phase, one source for 2D and 3D: the pairs of pieces whose boxes overlap, in O(P)
+on average, and the pairs kept from step to step through fat boxes.
 
-The grid of a dimension (:func:`carom.engines.rigid.broadphase.find_pairs`,
-:func:`carom.engines.rigid3d.broadphase.find_pairs`) is rebuilt only when a piece leaves its
-*fat box* (its swept box grown by :data:`FAT` of its reach, as Box2D's enlarged boxes): the
-pairs of overlapping fat boxes are kept, and each step takes from them the pairs whose swept
-boxes overlap (:func:`select_pairs`). Every swept box lies in its fat box, so that is every
-pair ``find_pairs`` would give, in the same order; a resting stack never rebuilds.
+Each dimension makes its pieces' swept boxes (:func:`carom.engines.rigid.broadphase.piece_boxes`,
+:func:`carom.engines.rigid3d.broadphase.piece_boxes`): lower corner then upper, (P, 2 d).
+:func:`find_pairs` puts them in a uniform grid of square or cubic cells hashed into a table
+(Teschner et al. 2003); two pieces are a candidate pair when they share a cell and their boxes
+overlap. A pair sharing several cells is reported from one of them only: the cell holding the
+lowest corner of the boxes' overlap. A box covering more than :func:`max_cells_of` cells (the
+ground, a plane, a long static slab, a very fast body) is kept apart and tested against every
+box (a handful of such pieces, each O(P)). Pairs come out sorted by ``(a, b)``, ``a < b``, so the
+contact list has the same order every step and every run.
+
+The grid is rebuilt only when a piece leaves its *fat box* (its swept box grown by :data:`FAT`
+of its reach, as Box2D's enlarged boxes): the pairs of overlapping fat boxes are kept, and each
+step takes from them the pairs whose swept boxes overlap (:func:`select_pairs`). Every swept box
+lies in its fat box, so that is every pair :func:`find_pairs` would give, in the same order; a
+resting stack never rebuilds.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 from numba import njit
 
-__all__ = ["FAT", "KeptPairs", "refit", "select_pairs", "wanted_pair"]
+from carom.laws.kinds import KIND_DYNAMIC
+
+__all__ = [
+    "FAT",
+    "KeptPairs",
+    "find_pairs",
+    "grid_cell",
+    "max_cells_of",
+    "refit",
+    "select_pairs",
+    "wanted_pair",
+]
 
 #: a fat box is a piece's swept box grown by this fraction of the piece's reach on each side
 FAT = 0.1
@@ -31,6 +52,222 @@ def wanted_pair(
     bb = piece_body[b]
     wanted: bool = ba != bb and (active[ba] or active[bb]) and (dynamic[ba] or dynamic[bb])
     return wanted
+
+
+def grid_cell(kind: np.ndarray, piece_body: np.ndarray, piece_reach: np.ndarray) -> float:
+    """The grid's cell side [m]: four times the median reach of the dynamic pieces (a typical
+    piece then sits in one to four square cells or one to eight cubic ones).
+
+    Parameters
+    ----------
+    kind : (N,) int8
+        Each body's kind.
+    piece_body : (P,) int64
+        Each piece's body.
+    piece_reach : (P,) float64
+        Each piece's reach from its body's centre [m]; a plane's is infinite and not counted.
+    """
+    finite = np.isfinite(piece_reach)
+    dynamic = (kind[piece_body] == KIND_DYNAMIC) & finite
+    reach = piece_reach[dynamic] if dynamic.any() else piece_reach[finite]
+    if reach.size == 0:
+        return 1.0
+    cell = 4.0 * float(np.median(reach))
+    return cell if cell > 0.0 and math.isfinite(cell) else 1.0
+
+
+@njit(cache=True, inline="always")
+def max_cells_of(d: int) -> int:
+    """How many cells a box may cover in ``d`` dimensions and still go in the grid: four per
+    axis (16 squares, 64 cubes); a bigger box is tested against every box instead."""
+    cells: int = 4**d
+    return cells
+
+
+#: Teschner's spatial hash: one large prime per axis, xored, masked to the table
+_PRIMES = (73856093, 19349663, 83492791)
+
+
+@njit(cache=True, inline="always")
+def _bucket(cell: np.ndarray, d: int, mask: int) -> int:
+    h = 0
+    for k in range(d):
+        h ^= cell[k] * _PRIMES[k]
+    return h & mask
+
+
+@njit(cache=True)
+def _buckets(
+    boxes: np.ndarray,
+    p: int,
+    inv: float,
+    mask: int,
+    max_cells: int,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    cell: np.ndarray,
+    mine: np.ndarray,
+) -> int:
+    """The distinct buckets of the cells piece ``p``'s box covers, into ``mine``; return how
+    many, or -1 when the box covers more than ``max_cells`` cells (a big piece). ``lo``,
+    ``hi``, ``cell``: (d,) int64 scratch."""
+    d = boxes.shape[1] // 2
+    covered = 1
+    for k in range(d):
+        a = boxes[p, k] * inv
+        b = boxes[p, d + k] * inv
+        # an unbounded box (a plane's) or a very long one covers too many cells
+        if not (math.isfinite(a) and math.isfinite(b)) or b - a > max_cells:
+            return -1
+        lo[k] = math.floor(a)
+        hi[k] = math.floor(b)
+        covered *= hi[k] - lo[k] + 1
+    if covered > max_cells:
+        return -1
+    used = 0
+    cell[:d] = lo[:d]
+    while True:
+        h = _bucket(cell, d, mask)
+        seen = False
+        for k in range(used):
+            if mine[k] == h:
+                seen = True
+        if not seen:
+            mine[used] = h
+            used += 1
+        # the next cell of the box, the last axis fastest
+        k = d - 1
+        while k >= 0 and cell[k] == hi[k]:
+            cell[k] = lo[k]
+            k -= 1
+        if k < 0:
+            return used
+        cell[k] += 1
+
+
+@njit(cache=True)
+def find_pairs(
+    boxes: np.ndarray,
+    piece_body: np.ndarray,
+    active: np.ndarray,
+    dynamic: np.ndarray,
+    cell: float,
+    pairs: np.ndarray,
+) -> int:
+    """Candidate pairs of pieces, sorted, into ``pairs`` (capacity, 2); return their number.
+
+    Parameters
+    ----------
+    boxes : (P, 2 d) float64
+        Swept boxes [m], lower corner then upper, d = 2 or 3; a plane's may be unbounded.
+    piece_body : (P,) int64
+        Each piece's body.
+    active : (N,) bool
+        Bodies that move this step (awake dynamic or kinematic); a pair needs one.
+    dynamic : (N,) bool
+        Dynamic bodies (awake or asleep); a pair needs one (two static or kinematic bodies
+        never collide).
+    cell : float
+        Grid cell side [m].
+    pairs : (capacity, 2) int64
+        Written. When more pairs are found than fit, the return value is minus the number
+        needed and the caller grows ``pairs`` and calls again.
+    """
+    n = boxes.shape[0]
+    d = boxes.shape[1] // 2
+    max_cells = max_cells_of(d)
+    size = 64
+    while size < 2 * n:
+        size *= 2
+    mask = size - 1
+    inv = 1.0 / cell
+    big = np.zeros(n, np.bool_)
+    start = np.zeros(size + 1, np.int64)
+    mine = np.empty(max_cells, np.int64)
+    lo = np.zeros(d, np.int64)
+    hi = np.zeros(d, np.int64)
+    at = np.zeros(d, np.int64)
+    # every piece goes in the grid, even one of a body that does not move (static, asleep,
+    # kinematic at rest): an active body may run into it
+    for p in range(n):
+        used = _buckets(boxes, p, inv, mask, max_cells, lo, hi, at, mine)
+        if used < 0:
+            big[p] = True
+        for k in range(used):
+            start[mine[k] + 1] += 1
+    for h in range(size):
+        start[h + 1] += start[h]
+    fill = start[:-1].copy()
+    entries = np.empty(start[size], np.int64)
+    for p in range(n):
+        for k in range(_buckets(boxes, p, inv, mask, max_cells, lo, hi, at, mine)):
+            h = mine[k]
+            entries[fill[h]] = p
+            fill[h] += 1
+    count = 0
+    capacity = pairs.shape[0]
+    for h in range(size):
+        for i in range(start[h], start[h + 1]):
+            a = entries[i]
+            for j in range(i + 1, start[h + 1]):
+                b = entries[j]
+                if not wanted_pair(piece_body, active, dynamic, a, b):
+                    continue
+                if not _overlap_any(boxes, a, b):
+                    continue
+                # report from the bucket of the overlap's lowest cell only
+                for k in range(d):
+                    at[k] = math.floor(max(boxes[a, k], boxes[b, k]) * inv)
+                if _bucket(at, d, mask) != h:
+                    continue
+                if count < capacity:
+                    pairs[count, 0] = min(a, b)
+                    pairs[count, 1] = max(a, b)
+                count += 1
+    for a in range(n):
+        if not big[a]:
+            continue
+        for b in range(n):
+            if b == a or (big[b] and b < a):
+                continue  # two big pieces: once
+            if not wanted_pair(piece_body, active, dynamic, a, b) or not _overlap_any(boxes, a, b):
+                continue
+            if count < capacity:
+                pairs[count, 0] = min(a, b)
+                pairs[count, 1] = max(a, b)
+            count += 1
+    if count > capacity:
+        return -count
+    _sort_pairs(pairs, count, n)
+    return count
+
+
+@njit(cache=True)
+def _sort_pairs(pairs: np.ndarray, count: int, n: int) -> None:
+    """Sort ``pairs[:count]`` (each ``a < b``, distinct) by ``(a, b)`` in O(count + n): a
+    counting sort on ``a``, then each piece's few partners by insertion."""
+    start = np.zeros(n + 1, np.int64)
+    for k in range(count):
+        start[pairs[k, 0] + 1] += 1
+    for a in range(n):
+        start[a + 1] += start[a]
+    fill = start[:-1].copy()
+    partner = np.empty(count, np.int64)
+    for k in range(count):
+        a = pairs[k, 0]
+        partner[fill[a]] = pairs[k, 1]
+        fill[a] += 1
+    for a in range(n):
+        for i in range(start[a] + 1, start[a + 1]):
+            b = partner[i]
+            j = i - 1
+            while j >= start[a] and partner[j] > b:
+                partner[j + 1] = partner[j]
+                j -= 1
+            partner[j + 1] = b
+        for i in range(start[a], start[a + 1]):
+            pairs[i, 0] = a
+            pairs[i, 1] = partner[i]
 
 
 @njit(cache=True)

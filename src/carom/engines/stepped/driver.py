@@ -1,19 +1,42 @@
-"""What the 2D and 3D rigid engines share of a step's driver: the clock in whole steps,
-advancing to a time or through frames, warming up, and the running totals (collisions with
-bodies and with walls or planes, the energy ledger) that ``counters`` reports and a
-checkpoint keeps."""
+"""SteppedEngine: the time-stepped rigid engine's driver, one for 2D and 3D.
+
+One step (``dt = 1/rate``) runs these stages, in this order (docs/rigid.md); each dimension
+names its kernels for the stages that differ (:class:`carom.engines.rigid.driver.RigidEngine`,
+:class:`carom.engines.rigid3d.driver.RigidEngine3D`):
+
+1. **place**: the moving bodies' pieces in the world;
+2. **broad phase**: pairs of pieces whose swept boxes overlap
+   (:mod:`carom.engines.stepped.broadphase`);
+3. **narrow phase**: their manifolds, warm-started from the last step; an awake body touching
+   a sleeping island wakes it, and the phases run again;
+4. **islands**: each body's role: free flight, an isolated impact, or the solver
+   (:mod:`carom.engines.stepped.islands`);
+5. **exact impacts**: isolated pairs advanced through the step with their impacts solved at
+   the time of impact;
+6. **free flight**: bodies with no contact;
+7. **solve**: the soft step over the remaining contacts;
+8. **store** the impulses for the next step, and **sleep** the islands at rest (their bodies
+   stop, as in Box2D; the kinetic energy they kept goes to the ledger as lost).
+
+Beside the step: the clock in whole steps, advancing to a time or through frames, warming up,
+and the running totals that ``counters`` reports and a checkpoint keeps.
+"""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.base import KIND_PAIR, Counters, FrameArrays, Partners, Sink
-from carom.engines.stepped.broadphase import KeptPairs
+from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, Counters, FrameArrays, Partners, Sink
+from carom.engines.stepped import islands
+from carom.engines.stepped.broadphase import KeptPairs, find_pairs, grid_cell
+from carom.engines.stepped.contacts import extremes, store_points
+from carom.engines.stepped.impacts import MAX_IMPACTS
+from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
 from carom.engines.stepped.settings import RigidSettings
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
 
@@ -26,10 +49,52 @@ STOP_CHECK_STEPS = 64
 
 
 class SteppedEngine:
-    """What the 2D and 3D rigid engines share: the clock in whole steps, advancing to a time,
-    and the running totals (collisions with bodies and with walls or planes, the energy
-    ledger) that :meth:`counters` reports and a checkpoint keeps. A subclass sets itself up
-    with :meth:`_begin` and defines ``step``, ``sample`` and ``_warm_kernels``."""
+    """A time-stepped rigid engine, the same for 2D and 3D: the stages of a step (module
+    docstring), the clock in whole steps, advancing to a time or through frames, and the
+    running totals (collisions with bodies and with walls or planes, the energy ledger) that
+    :meth:`counters` reports and a checkpoint keeps.
+
+    Parameters
+    ----------
+    model : RigidModel or Model3D
+        The constants.
+    state : RigidState or State3D
+        The state at ``time``; the engine advances it in place.
+    settings : RigidSettings
+    time : float
+        The clock at ``state`` [s].
+    partners : Partners, optional
+        What each body is to a collision record; the caller's bodies are those of kind
+        ``KIND_PAIR`` (the first ones), walls and planes follow. Default: all bodies are the
+        caller's.
+
+    Notes
+    -----
+    A dimension's engine is a subclass naming its kernels: ``DIMS``; its contact rows' module
+    ``ROWS`` (the float columns ``CONTACT_FLOATS``, ``POINT0``, ``POINT_FLOATS``, ``P_SEP``,
+    ``P_VREL``, ``P_JN``; ``CONTACT_INTS``, ``MAX_POINTS``, ``point_offset`` and
+    ``store_tangents``); its impacts' module ``IMPACTS`` (``IMPACT_FIELDS``);
+    the state's ``SPIN`` field; and the stages that differ by dimension:
+    :meth:`_setup`, :meth:`_pairs`, :meth:`_narrow`, :meth:`_impact_kernel`, :meth:`_fly`,
+    :meth:`_solve`, :meth:`_fastest`, :meth:`_stop`, :meth:`_energy`, :meth:`sample`,
+    :meth:`_state_from` and :meth:`_warm_kernels`.
+
+    The counters keep the energy ledger: ``work_done`` is what kinematic bodies put in (each
+    impulse on a body times the kinematic body's velocity at the contact point, summed as the
+    solver and the exact impacts apply them), ``energy_lost`` what the impacts solved exactly
+    and the solver took out of the bodies' kinetic and potential energy beyond that work,
+    ``energy_given`` what the solver put in (pushing overlaps apart), step by step, so that
+    ``E0 + work_done = E + energy_lost - energy_given``.
+    """
+
+    name = "rigid"
+    DIMS: int
+    ROWS: Any
+    IMPACTS: Any
+    SPIN: str
+    #: a touching pair whose every point separates faster than this fraction of the
+    #: restitution threshold flies apart on the exact path (inf: never)
+    LEAVING: float = math.inf
 
     start: float
     steps: int
@@ -37,22 +102,14 @@ class SteppedEngine:
     n_bodies: int
     partners: Partners
 
-    def _begin(
+    def __init__(
         self,
         model: Any,
         state: Any,
         settings: RigidSettings,
-        time: float,
-        partners: Partners | None,
-        shape: tuple[int, int, int],
-        cell: float,
-        find_pairs: Callable[..., int],
+        time: float = 0.0,
+        partners: Partners | None = None,
     ) -> None:
-        """What both dimensions' engines set up alike: the constants, the state advanced in
-        place, the settings, the clock and totals from ``time`` [s], what each body is to a
-        collision record (default: every body the caller's), room for contact rows of
-        ``shape`` = (dimensions, floats, ints), the kept pairs that the dimension's
-        ``find_pairs`` finds in a grid of ``cell`` [m], and the bodies' roles."""
         self.model = model
         self.state = state
         self.settings = settings
@@ -64,10 +121,10 @@ class SteppedEngine:
         self.partners = partners
         #: the caller's bodies: the first ``n_bodies``
         self.n_bodies = int(np.count_nonzero(partners.kind == KIND_PAIR))
-        self.cell = cell
-        dims, floats, ints = shape
-        self._cf = np.zeros((max(64, 2 * n), floats))
-        self._ci = np.zeros((max(64, 2 * n), ints), np.int64)
+        self.cell = grid_cell(model.kind, model.piece_body, model.piece_reach)
+        rows, dims = self.ROWS, self.DIMS
+        self._cf = np.zeros((max(64, 2 * n), rows.CONTACT_FLOATS))
+        self._ci = np.zeros((max(64, 2 * n), rows.CONTACT_INTS), np.int64)
         pieces = model.piece_body.shape[0]
         self._boxes = np.zeros((pieces, 2 * dims))
         self._kept = KeptPairs(
@@ -84,7 +141,30 @@ class SteppedEngine:
         self._kinematic = model.kind == KIND_KINEMATIC
         self._accel = np.zeros((n, dims))
         self._accel[self._dynamic] = model.gravity
+        self._g = float(np.linalg.norm(model.gravity))
         self.n_contacts = 0
+        self._setup()
+
+    def _setup(self) -> None:
+        """The dimension's own set-up, after the shared one."""
+
+    @classmethod
+    def restore(
+        cls,
+        model: Any,
+        settings: RigidSettings,
+        partners: Partners,
+        arrays: Mapping[str, NDArray[Any]],
+    ) -> Self:
+        """The engine that wrote ``arrays`` (:meth:`arrays`), to continue bit for bit."""
+        engine = cls(model, cls._state_from(arrays), settings, float(arrays["start"][0]), partners)
+        engine._restore_totals(arrays)
+        return engine
+
+    @staticmethod
+    def _state_from(arrays: Mapping[str, NDArray[Any]]) -> Any:
+        """The state kept in a checkpoint's ``arrays``."""
+        raise NotImplementedError
 
     def arrays(self) -> dict[str, NDArray[Any]]:
         """The state's arrays and the clock and totals, for a checkpoint."""
@@ -100,8 +180,220 @@ class SteppedEngine:
         self._energy_given = 0.0
         self._work_done = 0.0
 
+    # -- one step -------------------------------------------------------------------------
+
     def step(self, sink: Sink | None = None) -> None:
+        """Advance one step of ``dt`` [s]: stages 1 to 8 (module docstring)."""
+        m, s, st = self.model, self.state, self.settings
+        rows = self.ROWS
+        nc = self._contacts()
+        if st.sleep and islands.wake(
+            self._ci, nc, m.kind, s.awake, self._moving(), s.clock, s.island
+        ):
+            nc = self._contacts()
+        isolated = np.zeros(max(nc, 1), np.int64)
+        closest, closing = extremes(
+            self._cf, self._ci, nc, rows.POINT0, rows.POINT_FLOATS, rows.P_SEP, rows.P_VREL
+        )
+        leaving = math.inf if math.isinf(self.LEAVING) else self.LEAVING * st.restitution_threshold
+        n_iso = islands.plan(
+            self._ci, nc, closest, closing, m.kind, s.awake, st.exact_impacts,
+            0.1 * st.linear_slop, st.restitution_threshold, leaving, self._parent, self._role,
+            isolated,
+        )  # fmt: skip
+        if n_iso:
+            log = self._exact_impacts(isolated, n_iso, closing)
+            if log.shape[0]:
+                self._book(log, sink)
+        self._fly(np.flatnonzero(self._role == islands.ROLE_FREE))
+        bodies = self._solver_bodies()
+        before = self._energy(bodies)
+        work = np.zeros(1)  # by kinematic bodies on the others, this step [J]
+        self._solve(nc, bodies, work)
+        self._work_done += work[0]
+        change = self._energy(bodies) - before - work[0]  # the solver's own part
+        if change < 0.0:
+            self._energy_lost -= change
+        else:
+            self._energy_given += change
+        if s.cache_keys.shape[0] < nc:
+            size = max(nc, 2 * s.cache_keys.shape[0])
+            self.state = s = s._replace(
+                cache_keys=np.zeros(size, np.int64),
+                cache_ids=np.zeros((size, *s.cache_ids.shape[1:]), np.int64),
+                cache_impulses=np.zeros((size, *s.cache_impulses.shape[1:])),
+            )
+        # the cache as (K, points, values): a view (2D keeps (K, 4), 3D (K, 4, 4))
+        per_point = math.prod(s.cache_impulses.shape[1:]) // rows.MAX_POINTS
+        cache = s.cache_impulses.reshape(s.cache_impulses.shape[0], rows.MAX_POINTS, per_point)
+        s.cache_count[0] = store_points(
+            self._cf, self._ci, nc, m.piece_body.shape[0], rows.POINT0, rows.POINT_FLOATS,
+            rows.P_JN, s.cache_keys, s.cache_ids, cache,
+        )  # fmt: skip
+        rows.store_tangents(self._cf, self._ci, nc, cache)
+        self._keep_manifolds()
+        if st.sleep:
+            self._settle(nc)
+        self.n_contacts = nc
+        self.steps += 1
+
+    def _contacts(self) -> int:
+        """Stages 1 to 3: the contacts at the start of the step, into rows ``_cf``, ``_ci``;
+        return how many."""
+        n_pairs = self._pairs()
+        while True:
+            nc = self._narrow(n_pairs)
+            if nc >= 0:
+                return nc
+            self._grow(2 * -nc)
+
+    def _pairs(self) -> int:
+        """Stages 1 and 2: place the moving bodies' pieces and find the pairs of swept boxes
+        that overlap, into ``_kept.pairs``; return how many."""
         raise NotImplementedError
+
+    def _narrow(self, n_pairs: int) -> int:
+        """Stage 3: the manifolds of the pairs into the contact rows; return how many, or
+        minus the rows needed when they do not fit."""
+        raise NotImplementedError
+
+    def _grow(self, size: int) -> None:
+        """Room for ``size`` contact rows."""
+        self._cf = np.zeros((size, self.ROWS.CONTACT_FLOATS))
+        self._ci = np.zeros((size, self.ROWS.CONTACT_INTS), np.int64)
+
+    def _exact_impacts(
+        self, isolated: NDArray[np.int64], n_iso: int, closing: FloatArray
+    ) -> FloatArray:
+        """Stage 5: advance the isolated contacts' pairs (rows ``isolated[:n_iso]``) through
+        the step, their impacts solved exactly; return the impacts' log, a row each."""
+        m = self.model
+        rows = isolated[:n_iso]
+        ma = m.material[self._ci[rows, I_BODY_A]]
+        mb = m.material[self._ci[rows, I_BODY_B]]
+        log = np.zeros((n_iso * MAX_IMPACTS, self.IMPACTS.IMPACT_FIELDS))
+        logged = self._impact_kernel(
+            isolated, n_iso, closing, m.e_table[ma, mb], m.mu_table[ma, mb], log
+        )
+        return log[:logged]
+
+    def _impact_kernel(
+        self,
+        isolated: NDArray[np.int64],
+        n_iso: int,
+        closing: FloatArray,
+        restitution: FloatArray,
+        friction: FloatArray,
+        log: FloatArray,
+    ) -> int:
+        """The dimension's exact impacts (:meth:`_exact_impacts`) with each isolated
+        contact's ``restitution`` and ``friction`` (n_iso,), logged into ``log``; return the
+        rows logged."""
+        raise NotImplementedError
+
+    def _fly(self, free: NDArray[np.int64]) -> None:
+        """Stage 6: the bodies ``free`` in free flight through the step."""
+        raise NotImplementedError
+
+    def _solver_bodies(self) -> NDArray[np.int64]:
+        """The bodies stage 7 solves."""
+        return np.flatnonzero(self._role == islands.ROLE_SOLVER)
+
+    def _solve(self, nc: int, bodies: NDArray[np.int64], work: FloatArray) -> None:
+        """Stage 7: the soft step over the contacts left to the solver; the work of kinematic
+        bodies [J] is added to ``work[0]``."""
+        raise NotImplementedError
+
+    def _knobs(self) -> tuple[float, int, float, float, float, float]:
+        """The solver's settings for a step: ``dt`` [s], substeps, contact stiffness [Hz],
+        damping ratio, push speed [m/s] and restitution threshold [m/s]."""
+        st = self.settings
+        return (
+            self.dt, st.substeps, st.contact_hertz, st.damping_ratio, st.push_speed,
+            st.restitution_threshold,
+        )  # fmt: skip
+
+    def _keep_manifolds(self) -> None:
+        """Keep this step's manifolds for the next (an engine that reuses them)."""
+
+    def _energy(self, rows: NDArray[np.int64]) -> float:
+        """Kinetic and gravitational potential energy of the dynamic bodies among ``rows``
+        [J]."""
+        raise NotImplementedError
+
+    def energy(self) -> float:
+        """Kinetic and gravitational potential energy of the dynamic bodies [J]."""
+        return self._energy(np.arange(self.model.kind.shape[0]))
+
+    def _moving(self) -> NDArray[np.bool_]:
+        """Kinematic bodies in motion (N,)."""
+        s = self.state
+        spin: FloatArray = getattr(s, self.SPIN)  # (N,) in 2D, (N, 3) in 3D
+        turning = np.any(spin.reshape(spin.shape[0], -1) != 0.0, axis=1)
+        moving: NDArray[np.bool_] = self._kinematic & (np.any(s.v != 0.0, axis=1) | turning)
+        return moving
+
+    def _fastest(self) -> FloatArray:
+        """Each body's fastest point [m/s], (N,), for sleep."""
+        raise NotImplementedError
+
+    def _stop(self, asleep: NDArray[np.int64]) -> float:
+        """Stop the bodies ``asleep``; return the kinetic energy they had [J]."""
+        raise NotImplementedError
+
+    def _settle(self, nc: int) -> None:
+        """Stage 8: sleep the islands at rest (:func:`.islands.settle`); their bodies stop and
+        the kinetic energy they kept goes to the ledger as lost."""
+        m, s, st = self.model, self.state, self.settings
+        before = s.awake.copy()
+        islands.settle(
+            self._ci, nc, m.kind, self._parent, s.awake, self._fastest(), self._moving(),
+            s.clock, s.island, self.dt, st.sleep_speed, st.sleep_time,
+        )  # fmt: skip
+        asleep = np.flatnonzero(before & ~s.awake)
+        if asleep.size:
+            self._energy_lost += self._stop(asleep)
+
+    def deepest_overlap(self) -> tuple[int, int, float]:
+        """The two bodies that overlap most now, with at least one of them dynamic, and
+        the depth [m] (positive; ``(-1, -1, 0.0)`` when nothing overlaps)."""
+        rows = self.ROWS
+        nc = self._contacts()
+        ci, cf = self._ci[:nc], self._cf[:nc]
+        a, b = ci[:, I_BODY_A], ci[:, I_BODY_B]
+        points = rows.MAX_POINTS
+        columns = [rows.point_offset(j) + rows.P_SEP for j in range(points)]
+        depth = -cf[:, columns]  # (nc, points); the points a contact has count
+        depth[np.arange(points)[None, :] >= ci[:, I_COUNT][:, None]] = -np.inf
+        depth[~(self._dynamic[a] | self._dynamic[b])] = -np.inf
+        if nc == 0 or float(depth.max()) <= 0.0:
+            return (-1, -1, 0.0)
+        row = int(np.argmax(depth.max(axis=1)))
+        return (int(a[row]), int(b[row]), float(depth[row].max()))
+
+    def _book(self, log: FloatArray, sink: Sink | None) -> None:
+        """Count the exact impacts and hand them to ``sink`` as collision records.
+
+        A row of ``log``: time into the step, body A, body B, the impulse on A (d), normal
+        speeds before and after, the point (d), the energy lost and, if there is a column
+        more, the work done by a kinematic partner."""
+        d = self.DIMS
+        partner = log[:, 2].astype(np.int64)
+        lost = float(np.sum(log[:, 5 + 2 * d]))
+        work = float(np.sum(log[:, 6 + 2 * d])) if log.shape[1] > 6 + 2 * d else 0.0
+        against = self._count(partner, lost, work)
+        if sink is None:
+            return
+        records = np.zeros(log.shape[0], COLLISION_DTYPE)
+        records["time"] = self.time + log[:, 0]
+        records["body"] = log[:, 1].astype(np.int64)
+        records["kind"] = against
+        records["partner"] = self.partners.number[partner]
+        records["impulse"][:, :d] = log[:, 3 : 3 + d]
+        records["un_before"] = log[:, 3 + d]
+        records["un_after"] = log[:, 4 + d]
+        records["point"][:, :d] = log[:, 5 + d : 5 + 2 * d]
+        sink(records)
 
     @staticmethod
     def _warm_kernels() -> None:
