@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from carom.bodies import Bodies, all_still, all_unrotated, identity_orientations
-from carom.shapes import SHAPE_CODES, Box
+from carom.shape_base import SHAPE_CODES
+from carom.shapes import Box
 
 
 def _spheres(dim: int, n: int, spins: np.ndarray | None = None) -> Bodies:

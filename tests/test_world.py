@@ -10,7 +10,7 @@ import pytest
 
 import carom
 from carom import CaromError
-from carom.engines.base import KIND_PAIR, KIND_WALL
+from carom.engines.base import PARTNER_BODY, PARTNER_WALL
 from carom.scene import layouts
 
 EPS = float(np.finfo(np.float64).eps)
@@ -147,7 +147,7 @@ def test_rough_laws_in_the_engine_match_collide(dim: int, material: carom.Materi
     while len(world.collisions) == 0:  # shell rebuilds may come first; then their collision
         world.run_events(log=True)
     event = world.collisions[0]
-    assert event["kind"] == KIND_PAIR
+    assert event["kind"] == PARTNER_BODY
     assert (event["body"], event["partner"]) in ((0, 1), (1, 0))
     t = event["time"]
     y1 = x1 + np.array([1.0, 0.1, -0.1][:dim]) * t
@@ -218,14 +218,14 @@ def test_log_can_be_filtered_and_switched_off() -> None:
     silent = world()
     silent.run(until=1.0, log=False)
     log = everything.collisions
-    involves_two = (log["body"] == 2) | ((log["kind"] == KIND_PAIR) & (log["partner"] == 2))
+    involves_two = (log["body"] == 2) | ((log["kind"] == PARTNER_BODY) & (log["partner"] == 2))
     assert involves_two.any()  # the filter has work to do
     assert not involves_two.all()
     assert only_two.collisions.tobytes() == log[involves_two].tobytes()
     assert len(silent.collisions) == 0
     assert silent.stats.collisions == everything.stats.collisions  # it still ran
-    assert everything.describe_partner(KIND_WALL, 0) == "wall x-"
-    assert everything.describe_partner(KIND_WALL, 3) == "wall y+"
+    assert everything.describe_partner(PARTNER_WALL, 0) == "wall x-"
+    assert everything.describe_partner(PARTNER_WALL, 3) == "wall y+"
 
 
 def test_step_moves_to_the_next_event() -> None:
@@ -237,7 +237,7 @@ def test_step_moves_to_the_next_event() -> None:
         world.run_events(log=True)
     # the wall x+ at 1 - 0.1: reached after 0.4 s
     assert world.time == pytest.approx(0.4, abs=1e-15)
-    assert (world.collisions[0]["kind"], world.collisions[0]["partner"]) == (KIND_WALL, 1)
+    assert (world.collisions[0]["kind"], world.collisions[0]["partner"]) == (PARTNER_WALL, 1)
 
 
 def _gas_2d() -> carom.World:

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import carom
-from carom.engines.base import KIND_PLANE, KIND_WALL
+from carom.engines.base import PARTNER_PLANE, PARTNER_WALL
 from carom.errors import CaromError
 from carom.observables import kinetic_energy, potential_energy
 from carom.shapes import Box, Capsule, Circle, Compound, Polygon, Segment
@@ -86,7 +86,7 @@ def test_a_thrown_disk_meets_a_wall_at_the_right_time_with_e_v() -> None:
     world.add_body(Circle(0.1), [0.5, 0.5], velocity=[2.0, 0.0], restitution=0.5)
     world.run(0.5, log=True)
     (impact,) = world.collisions
-    assert impact["kind"] == KIND_WALL
+    assert impact["kind"] == PARTNER_WALL
     assert impact["partner"] == 1  # wall x+
     assert world.describe_partner(int(impact["kind"]), int(impact["partner"])) == "wall x+"
     # the time of impact: it falls on a step's end here, and is found to 1e-3 of the slop
@@ -104,7 +104,7 @@ def test_a_plane_is_a_partner_of_its_own_kind() -> None:
     world.add_body(Box(0.2, 0.2), [2.0, 2.0], restitution=0.5)
     world.run(1.0, log=True)
     first = world.collisions[0]
-    assert first["kind"] == KIND_PLANE
+    assert first["kind"] == PARTNER_PLANE
     assert first["partner"] == 0
     # dropped from 0.9 m above the plane (1.1 - 0.2/2 - 1.0): it meets it at sqrt(2 h / g)
     # at sqrt(2 g h) and leaves flat at half that (a face landing square: no spin)

@@ -16,8 +16,9 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
-from carom.shapes import SHAPE_CODES, ConvexPiece
+from carom.laws.kinds import BODY_KINDS, KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
+from carom.shape_base import SHAPE_CODES
+from carom.shapes import ConvexPiece
 from carom.shapes3d import ConvexPiece3D
 
 __all__ = [
@@ -35,9 +36,6 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
-
-#: body kinds by name (``World.add_body(kind=...)``)
-BODY_KINDS = {"dynamic": KIND_DYNAMIC, "static": KIND_STATIC, "kinematic": KIND_KINEMATIC}
 
 
 #: the flat arrays that hold every body's pieces (checkpoints, trajectories)
@@ -177,7 +175,7 @@ class Bodies:
         but made on each read (:attr:`still`). Together with the orientations, 56 bytes a
         sphere in 3D that a gas of smooth spheres does not keep.
     shape : (N,) int8
-        Shape code (:data:`carom.shapes.SHAPE_CODES`).
+        Shape code (:data:`carom.shape_base.SHAPE_CODES`).
     radius : (N,) float64
         Sphere radius; for other shapes the farthest reach of the body from its centre of
         mass [m].

@@ -18,17 +18,12 @@ from numpy.typing import ArrayLike, NDArray
 from carom._inputs import as_float_array
 from carom.bodies import BODY_KINDS, KIND_DYNAMIC, Pieces
 from carom.errors import CaromError
+from carom.geometry.rotation import matrix_quaternion, rotation_matrices
 from carom.limits import MAX_BODIES, RESOLUTION, check_magnitude, check_size
 from carom.meshes import Mesh
-from carom.shapes import SHAPE_CODES, Shape2D
-from carom.shapes3d import (
-    ConvexPiece3D,
-    Plane,
-    Shape3D,
-    matrix_quaternion,
-    rotation_matrices,
-    rotation_matrix,
-)
+from carom.shape_base import SHAPE_CODES
+from carom.shapes import Shape2D
+from carom.shapes3d import ConvexPiece3D, Plane, Shape3D, rotation_matrix
 
 __all__ = [
     "ShapedBodies",
@@ -202,7 +197,7 @@ class ShapedBodies(NamedTuple):
     pieces : tuple
         The shape's convex pieces about its centre of mass.
     shape : int
-        Its code (:data:`carom.shapes.SHAPE_CODES`).
+        Its code (:data:`carom.shape_base.SHAPE_CODES`).
     mass : float
         [kg] (inf: static or kinematic).
     inertia : float or (3, 3) float64

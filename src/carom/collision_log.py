@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from carom.engines.base import COLLISION_DTYPE, KIND_PAIR
+from carom.engines.base import COLLISION_DTYPE, PARTNER_BODY
 from carom.errors import CaromError, CaromWarning
 
 __all__ = ["LOG_LIMIT", "CollisionLog"]
@@ -74,7 +74,7 @@ class CollisionLog:
                 return
             if bodies is not None:
                 mine = np.isin(block["body"], bodies)
-                mine |= (block["kind"] == KIND_PAIR) & np.isin(block["partner"], bodies)
+                mine |= (block["kind"] == PARTNER_BODY) & np.isin(block["partner"], bodies)
                 block = block[mine]
             self._keep(block)
 

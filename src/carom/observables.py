@@ -16,8 +16,8 @@ from numpy.typing import NDArray
 
 from carom.bodies import Bodies
 from carom.engines.base import Counters
+from carom.geometry.rotation import rotation_matrices
 from carom.recording import Frame
-from carom.shapes3d import rotation_matrices
 
 __all__ = [
     "RunHistory",

@@ -37,8 +37,6 @@ from carom.geometry.outline import (
 )
 from carom.laws.spheres import default_inertia_factor
 from carom.shape_base import (
-    SHAPE_CODES,
-    SHAPE_NAMES,
     CapsuleSize,
     RoundSize,
     ShapeBase,
@@ -47,8 +45,6 @@ from carom.shape_base import (
 )
 
 __all__ = [
-    "SHAPE_CODES",
-    "SHAPE_NAMES",
     "Box",
     "Capsule",
     "Chain",

@@ -37,6 +37,7 @@ from carom.geometry.mass3d import (
     polyhedron_integrals,
     sphere_integrals,
 )
+from carom.geometry.rotation import rotation_matrices, turn_z_onto
 from carom.shape_base import CapsuleSize, RoundSize, ShapeBase, compound_part, compound_pieces
 
 __all__ = [
@@ -49,8 +50,6 @@ __all__ = [
     "Plane",
     "Shape3D",
     "Sphere",
-    "matrix_quaternion",
-    "rotation_matrices",
     "rotation_matrix",
 ]
 
@@ -88,60 +87,13 @@ def rotation_matrix(rotation: ArrayLike, name: str = "rotation") -> FloatArray:
             raise CaromError(
                 f"{name}: the quaternion (0, 0, 0, 0) is no rotation; use (1, 0, 0, 0)"
             )
-        w, x, y, z = r / norm
-        return np.array(
-            [
-                [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-            ]
-        )
+        turned: FloatArray = rotation_matrices(r / norm)[0]
+        return turned
     if r.shape == (3, 3):
         if np.max(np.abs(r @ r.T - np.eye(3))) > 1e-9 or abs(np.linalg.det(r) - 1.0) > 1e-9:
             raise CaromError(f"{name}: a 3x3 matrix must be a rotation (orthonormal, det +1)")
         return r.copy()
     raise CaromError(f"{name} must be a quaternion (w, x, y, z) or a 3x3 matrix; got {rotation!r}")
-
-
-def rotation_matrices(quaternions: ArrayLike) -> FloatArray:
-    """Rotation matrices (n, 3, 3) of unit quaternions ``(w, x, y, z)`` (n, 4), as they are
-    (not normalised: for orientations an engine keeps unit)."""
-    q = np.asarray(quaternions, float).reshape(-1, 4)
-    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    out = np.empty((len(q), 3, 3))
-    out[:, 0, 0] = 1 - 2 * (y * y + z * z)
-    out[:, 0, 1] = 2 * (x * y - w * z)
-    out[:, 0, 2] = 2 * (x * z + w * y)
-    out[:, 1, 0] = 2 * (x * y + w * z)
-    out[:, 1, 1] = 1 - 2 * (x * x + z * z)
-    out[:, 1, 2] = 2 * (y * z - w * x)
-    out[:, 2, 0] = 2 * (x * z - w * y)
-    out[:, 2, 1] = 2 * (y * z + w * x)
-    out[:, 2, 2] = 1 - 2 * (x * x + y * y)
-    return out
-
-
-def matrix_quaternion(r: FloatArray) -> FloatArray:
-    """The unit quaternion ``(w, x, y, z)``, ``w >= 0``, of a rotation matrix (Shepperd's
-    method: the largest of the four squared components decides, for accuracy)."""
-    t = float(np.trace(r))
-    cases = [t, r[0, 0], r[1, 1], r[2, 2]]
-    k = int(np.argmax(cases))
-    if k == 0:
-        s = 2.0 * math.sqrt(1.0 + t)
-        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
-    elif k == 1:
-        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
-        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
-    elif k == 2:
-        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
-        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
-    else:
-        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
-        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
-    out = np.array(q)
-    out /= np.linalg.norm(out)
-    return out if out[0] >= 0.0 else -out
 
 
 @dataclass(frozen=True)
@@ -204,20 +156,8 @@ class ConvexPiece3D:
         axis = b - a
         length = float(np.linalg.norm(axis))
         return capsule_integrals(self.radius, length).moved(
-            _turn_z_onto(axis / length), 0.5 * (a + b)
+            turn_z_onto(axis / length), 0.5 * (a + b)
         )
-
-
-def _turn_z_onto(u: FloatArray) -> FloatArray:
-    """A rotation taking the z axis onto the unit vector ``u`` (Rodrigues)."""
-    z = np.array([0.0, 0.0, 1.0])
-    c = float(u @ z)
-    if c < -1.0 + 1e-12:
-        return np.diag([1.0, -1.0, -1.0])  # half a turn about x
-    k = np.cross(z, u)
-    skew = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    turn: FloatArray = np.eye(3) + skew + skew @ skew / (1.0 + c)
-    return turn
 
 
 class Shape3D(ShapeBase[ConvexPiece3D, SolidIntegrals, MassProperties3D]):

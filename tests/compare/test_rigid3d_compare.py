@@ -22,11 +22,10 @@ from carom.compare.rigid3d import (
     path_enters,
     primitives,
     principal_frame,
-    quaternion_product,
 )
 from carom.errors import CaromError
+from carom.geometry.rotation import matrix_quaternion, quaternion_product, rotation_matrices
 from carom.scene import Scene
-from carom.shapes3d import matrix_quaternion, rotation_matrices
 
 PEERS = ["pybullet", "mujoco", "rapier3d"]
 IMPACTS = ["box-edge-3d", "box-corner-3d", "rod-drop-3d", "spin-ball-3d"]

@@ -271,7 +271,7 @@ class RigidMonitor(Yardstick):
         n = self.scene.n
         state.x[:n] = x
         state.angle[:n] = turn
-        state.awake[:] = True
+        self._probe.memory.awake[:] = True
         return self._probe.deepest_overlap()[2]
 
     def _passed(self, before: FloatArray, after: FloatArray, rows: IntArray) -> None:

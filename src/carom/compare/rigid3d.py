@@ -42,10 +42,9 @@ from carom.engines.rigid3d.model import (
 from carom.engines.rigid3d.motion import free_turn
 from carom.engines.stepped.settings import RigidSettings
 from carom.errors import CaromError
-from carom.geometry.rotation import turn
+from carom.geometry.rotation import matrix_quaternion, rotation_matrices, turn, turned_angle
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.laws.rigid_impact import collision_matrix, point_impulse
-from carom.shapes3d import matrix_quaternion, rotation_matrices
 from carom.world import World
 
 __all__ = [
@@ -57,7 +56,6 @@ __all__ = [
     "path_enters",
     "primitives",
     "principal_frame",
-    "quaternion_product",
     "world_momentum",
 ]
 
@@ -246,27 +244,6 @@ def principal_frame(inertia: FloatArray) -> tuple[FloatArray, FloatArray]:
     if np.linalg.det(axes) < 0.0:
         axes[:, 2] = -axes[:, 2]
     return moments, matrix_quaternion(axes)
-
-
-def quaternion_product(a: FloatArray, b: FloatArray) -> FloatArray:
-    """Hamilton products ``a b`` of quaternions (..., 4) ``(w, x, y, z)``."""
-    aw, ax, ay, az = np.moveaxis(np.asarray(a, float), -1, 0)
-    bw, bx, by, bz = np.moveaxis(np.asarray(b, float), -1, 0)
-    return np.stack(
-        [
-            aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-        ],
-        axis=-1,
-    )
-
-
-def turned_angle(q: FloatArray, q0: FloatArray) -> FloatArray:
-    """The angle [rad] (n,) of the rotation from orientations ``q0`` to ``q`` (n, 4)."""
-    dot = np.abs(np.sum(np.asarray(q) * np.asarray(q0), axis=1))
-    return np.asarray(2.0 * np.arccos(np.clip(dot, 0.0, 1.0)), float)
 
 
 @dataclass(frozen=True)
@@ -499,7 +476,7 @@ class RigidMonitor3D(Yardstick):
         n = self.scene.n
         state.x[:n] = x
         state.q[:n] = turn / np.linalg.norm(turn, axis=1, keepdims=True)
-        state.awake[:] = True
+        self._probe.memory.awake[:] = True
         return self._probe.deepest_overlap()[2]
 
     def _passed(self, before: FloatArray, after: FloatArray, rows: IntArray) -> None:

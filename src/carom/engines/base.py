@@ -17,9 +17,9 @@ from numpy.typing import NDArray
 
 __all__ = [
     "COLLISION_DTYPE",
-    "KIND_PAIR",
-    "KIND_PLANE",
-    "KIND_WALL",
+    "PARTNER_BODY",
+    "PARTNER_PLANE",
+    "PARTNER_WALL",
     "STOP_CHECK_EVENTS",
     "Counters",
     "Engine",
@@ -36,16 +36,18 @@ if TYPE_CHECKING:
 
 FloatArray = NDArray[np.float64]
 
-KIND_PAIR = 0  # partner is a body
-KIND_WALL = 1  # partner is a wall face: 2k lower, 2k + 1 upper wall of axis k
-KIND_PLANE = 2  # partner is a static plane, by index
+#: what a collision's partner is (a collision record's ``kind``), not to be confused with a
+#: body's kind (:data:`carom.laws.kinds.BODY_KINDS`: dynamic, static, kinematic)
+PARTNER_BODY = 0  # partner is a body
+PARTNER_WALL = 1  # partner is a wall face: 2k lower, 2k + 1 upper wall of axis k
+PARTNER_PLANE = 2  # partner is a static plane, by index
 
 
 def describe_partner(kind: int, partner: int) -> str:
     """A readable name for a collision's partner: ``body 3``, ``wall x-``, ``plane 0``."""
-    if kind == KIND_PAIR:
+    if kind == PARTNER_BODY:
         return f"body {partner}"
-    if kind == KIND_WALL:
+    if kind == PARTNER_WALL:
         return f"wall {'xyz'[partner // 2]}{'-' if partner % 2 == 0 else '+'}"
     return f"plane {partner}"
 
@@ -53,15 +55,15 @@ def describe_partner(kind: int, partner: int) -> str:
 class Partners(NamedTuple):
     """What each of an engine's bodies is to a collision record, when the engine holds more
     bodies than the caller's (walls and planes as static bodies): ``kind`` (N_engine,) int8
-    (``KIND_PAIR``, ``KIND_WALL``, ``KIND_PLANE``) and ``number`` (N_engine,) int64 (the
+    (``PARTNER_BODY``, ``PARTNER_WALL``, ``PARTNER_PLANE``) and ``number`` (N_engine,) int64 (the
     body, wall face or plane)."""
 
     kind: NDArray[np.int8]
     number: NDArray[np.int64]
 
 
-#: One logged collision: ``time`` [s]; ``body``; the ``kind`` of partner (``KIND_PAIR``,
-#: ``KIND_WALL``, ``KIND_PLANE``) and its index ``partner`` (a body, a wall face, a plane);
+#: One logged collision: ``time`` [s]; ``body``; the ``kind`` of partner (``PARTNER_BODY``,
+#: ``PARTNER_WALL``, ``PARTNER_PLANE``) and its index ``partner`` (a body, a wall face, a plane);
 #: the ``impulse`` on ``body`` [N s] (3 components, z = 0 in 2D); the normal relative speeds
 #: ``un_before`` and ``un_after`` [m/s] (negative: approaching); the contact ``point`` [m] (3
 #: components; with the impulse it gives each body's angular impulse, ``(point - x) x J``).

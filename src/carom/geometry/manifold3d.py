@@ -864,7 +864,41 @@ def contact_hull_hull(
         # apart and beside each other (a corner passing a face's edge): the clipped faces do
         # not overlap; the exact closest points decide
         return closest_hulls(va, na, sa, ca, cora, ea, vb, nb, sb, cb, corb, eb, margin, out, ids)
+    if count == 0:
+        # overlapping deeply, the incident face outside the reference face's sides: the
+        # other body's corner deepest below the reference face still says how far to push
+        if sep_a + tie >= sep_b:
+            return _deepest_corner(va, na, sa, cora, face_a, vb, False, out, ids)
+        return _deepest_corner(vb, nb, sb, corb, face_b, va, True, out, ids)
     return count
+
+
+@njit(cache=True)
+def _deepest_corner(
+    vr: np.ndarray, nr: np.ndarray, sr: np.ndarray, cor_r: np.ndarray, fr: int, vi: np.ndarray,
+    flip: bool, out: np.ndarray, ids: np.ndarray,
+) -> int:  # fmt: skip
+    """One point: the corner of the incident body (``vi``) deepest below reference face
+    ``fr``, midway to the face's plane, with its separation (the face's separation, <= 0);
+    the normal along the face's (``flip``: the reference body is B)."""
+    n = nr[fr]
+    d = _dot(n, vr[cor_r[sr[fr]]])
+    best = np.inf
+    k = 0
+    for j in range(vi.shape[0]):
+        s = _dot(n, vi[j]) - d
+        if s < best:
+            best = s
+            k = j
+    sign = -1.0 if flip else 1.0
+    out[0], out[1], out[2] = sign * n[0], sign * n[1], sign * n[2]
+    x, y, z = (
+        vi[k, 0] - 0.5 * best * n[0],
+        vi[k, 1] - 0.5 * best * n[1],
+        vi[k, 2] - 0.5 * best * n[2],
+    )
+    _point(out, ids, 0, x, y, z, best, (4 << 50) | (fr << 30) | ((1 << 29) if flip else 0) | k)
+    return 1
 
 
 @njit(cache=True)

@@ -49,7 +49,7 @@ import numpy as np
 from carom import __version__
 from carom.bodies import pieces_to_arrays
 from carom.errors import CaromError
-from carom.shapes import SHAPE_NAMES
+from carom.shape_base import SHAPE_NAMES
 from carom.world import Frame, World
 
 __all__ = [

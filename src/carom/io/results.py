@@ -10,7 +10,7 @@ from typing import Any
 
 from numpy.typing import NDArray
 
-from carom.engines.base import KIND_PAIR, KIND_PLANE, KIND_WALL
+from carom.engines.base import PARTNER_BODY, PARTNER_PLANE, PARTNER_WALL
 from carom.observables import (
     angular_momentum,
     kinetic_energy,
@@ -21,7 +21,7 @@ from carom.observables import (
 from carom.world import World
 
 #: the ``partner_kind`` column of events.csv, by kind code
-PARTNER_KINDS = {KIND_PAIR: "body", KIND_WALL: "wall", KIND_PLANE: "plane"}
+PARTNER_KINDS = {PARTNER_BODY: "body", PARTNER_WALL: "wall", PARTNER_PLANE: "plane"}
 
 __all__ = [
     "PARTNER_KINDS",

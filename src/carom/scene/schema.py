@@ -12,6 +12,7 @@ from typing import Any
 from carom._text import printable
 from carom.engines import registry
 from carom.errors import CaromError
+from carom.laws.kinds import BODY_KINDS
 from carom.limits import LARGEST, MAX_BODIES, SMALLEST
 from carom.materials import COMBINE_RULES
 from carom.shape_base import SHAPES as SHAPE_TABLE
@@ -305,7 +306,7 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "mass": (_positive_or_list, False, None),
         "material": (_text, False, None),
         "static": (_boolean, False, False),
-        "kind": (_choice("dynamic", "static", "kinematic"), False, None),
+        "kind": (_choice(*BODY_KINDS), False, None),
         "size": (_size, False, None),
         "vertices": (_rows, False, None),
         "pieces": (_pieces, False, None),

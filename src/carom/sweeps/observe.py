@@ -346,11 +346,11 @@ class _FirstBounce:
         self.found: tuple[float, float] | None = None
 
     def __call__(self, block: NDArray[Any]) -> None:
-        from carom.engines.base import KIND_WALL
+        from carom.engines.base import PARTNER_WALL
 
         if self.found is not None:
             return
-        hit = block[(block["body"] == 0) & (block["kind"] == KIND_WALL)]
+        hit = block[(block["body"] == 0) & (block["kind"] == PARTNER_WALL)]
         hit = hit[hit["partner"] == self.floor]
         if len(hit):
             self.found = (float(hit["un_before"][0]), float(hit["un_after"][0]))

@@ -28,8 +28,9 @@ from numpy.typing import NDArray
 
 from carom.bodies import PIECE_ARRAYS, Pieces, pieces_from_arrays
 from carom.errors import CaromError
+from carom.geometry.rotation import rotation_matrices
 from carom.shapes import ConvexPiece
-from carom.shapes3d import ConvexPiece3D, rotation_matrices
+from carom.shapes3d import ConvexPiece3D
 from carom.viz import require_matplotlib
 
 __all__ = ["need_encoder", "write_animation"]

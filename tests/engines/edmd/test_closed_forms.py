@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import carom
-from carom.engines.base import KIND_PAIR, KIND_PLANE, KIND_WALL
+from carom.engines.base import PARTNER_BODY, PARTNER_PLANE, PARTNER_WALL
 from tests.worlds import gas
 
 EPS = float(np.finfo(np.float64).eps)
@@ -25,7 +25,7 @@ def test_dropped_ball_rebounds_to_e_squared_k_h0() -> None:
     world.add_spheres([0.5, 0.5, a + h0], radius=a)
     world.run(until=10.0, log=True)  # Zeno: infinitely many bounces in 2 sqrt(2 h0/g)(1+e)/(1-e) s
     floor = world.collisions[
-        (world.collisions["kind"] == KIND_WALL) & (world.collisions["partner"] == 4)
+        (world.collisions["kind"] == PARTNER_WALL) & (world.collisions["partner"] == 4)
     ]  # face 4: the lower wall of z
     assert world.stats.wall_collisions == len(floor)
     u_after = floor["un_after"]
@@ -67,7 +67,7 @@ def test_newtons_cradle_passes_momentum_to_the_last_ball() -> None:
     velocities = world.velocities
     np.testing.assert_allclose(velocities[:4], 0.0, atol=8 * EPS * v)
     np.testing.assert_allclose(velocities[4], [v, 0.0, 0.0], atol=8 * EPS * v)
-    pair_events = world.collisions[world.collisions["kind"] == KIND_PAIR]
+    pair_events = world.collisions[world.collisions["kind"] == PARTNER_BODY]
     assert len(pair_events) == 4
     # the strike at 0.35 s (the gap and speed above, to round-off: a few 1e-16 s), and the
     # three hand-overs at the same instant, between touching balls; 1e-12 s is generous
@@ -137,7 +137,7 @@ def test_ball_lands_on_an_inclined_plane() -> None:
     t_hit = math.sqrt(2 * gap / (G * 0.8))
     # a quadratic root under constant acceleration: exact to round-off (measured 0 eps)
     assert world.collisions[0]["time"] == pytest.approx(t_hit, rel=16 * EPS, abs=0)
-    assert (world.collisions[0]["kind"], world.collisions[0]["partner"]) == (KIND_PLANE, 0)
+    assert (world.collisions[0]["kind"], world.collisions[0]["partner"]) == (PARTNER_PLANE, 0)
     # e = 0.5: the normal speed is halved
     assert world.collisions[0]["un_after"] == pytest.approx(
         -0.5 * world.collisions[0]["un_before"], rel=1e-14

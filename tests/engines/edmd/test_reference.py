@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import carom
-from carom.engines.base import KIND_PAIR, KIND_WALL
+from carom.engines.base import PARTNER_BODY, PARTNER_WALL
 from carom.reference.edmd import reference_events
 
 CASES = [
@@ -58,9 +58,9 @@ def face_code(record: np.void, dim: int) -> int:
     """A collision's partner as the reference numbers it: a body, or ``-1 - face`` with the
     walls' faces 0 .. 2 dim - 1 and the planes after them."""
     kind, partner = int(record["kind"]), int(record["partner"])
-    if kind == KIND_PAIR:
+    if kind == PARTNER_BODY:
         return partner
-    return -1 - (partner if kind == KIND_WALL else 2 * dim + partner)
+    return -1 - (partner if kind == PARTNER_WALL else 2 * dim + partner)
 
 
 @pytest.mark.parametrize(("dim", "periodic", "gravity", "e"), CASES)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import carom
-from carom.engines.base import KIND_PAIR
+from carom.engines.base import PARTNER_BODY
 from carom.engines.edmd import driver
 from carom.engines.edmd.calendar import I_SIZE, IN_HEAP, NOWHERE
 from carom.engines.edmd.codes import EV_PAIR
@@ -108,7 +108,7 @@ def _pairs_ordered(log: np.ndarray) -> np.ndarray:
     """The collision log with each pair's bodies in increasing order, the impulse on the
     first (carom.engines.base.COLLISION_DTYPE)."""
     log = log.copy()
-    swap = (log["kind"] == KIND_PAIR) & (log["body"] > log["partner"])
+    swap = (log["kind"] == PARTNER_BODY) & (log["body"] > log["partner"])
     log["body"][swap], log["partner"][swap] = log["partner"][swap], log["body"][swap]
     log["impulse"][swap] = -log["impulse"][swap]
     return log

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import carom
@@ -39,6 +39,22 @@ def _first_impact(world: carom.World, until: float = 1.0) -> np.void:
         if len(world.collisions):
             return world.collisions[0]
         assert t < until, "no impact"
+
+
+def _first_exact_impact(world: carom.World, until: float) -> bool:
+    """Run until the step of the pair's first contact is over; whether it was an impact
+    solved exactly (logged), not a contact the solver took (the velocities changed with no
+    record: free flight without gravity keeps them) nor a miss (no contact by ``until``)."""
+    t = world.time
+    v0 = world.velocities.copy()
+    while t < until:
+        t += world.rigid_settings.dt
+        world.run(until=t, log=True)
+        if len(world.collisions):
+            return True
+        if not np.array_equal(world.velocities, v0):
+            return False
+    return False
 
 
 def _world_inertia(world: carom.World, i: int = 0) -> np.ndarray:
@@ -242,7 +258,11 @@ def test_free_flight_impacts_keep_momentum_and_never_gain_energy(seed, e, mu) ->
     # step: it keeps linear momentum only.)
     world = _pair(seed, e, mu)
     p0, l0, e0 = _momenta(world)
-    _first_impact(world, until=2.0)
+    # A pair that first meets grazing (touching, closing slower than the restitution
+    # threshold) is a resting contact by design (islands.plan): the solver takes it and logs
+    # no impact, and this law is not the solver's; a pair that misses says nothing. Such
+    # examples are left out (Hypothesis fails the test if it finds too few others).
+    assume(_first_exact_impact(world, until=2.0))
     p1, l1, e1 = _momenta(world)
     scale = float(np.sum(world.masses)) * 3.0
     assert np.abs(p1 - p0).max() <= 1e-12 * scale

@@ -24,8 +24,8 @@ import numpy as np
 
 from carom.compare.spec import PeerScene
 from carom.errors import CaromError
+from carom.geometry.rotation import rotation_matrices
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
-from carom.shapes3d import rotation_matrices
 
 __all__ = ["damping_ratio", "start", "start_rigid"]
 

@@ -197,8 +197,9 @@ class PybulletRigidSimulation:
     """
 
     def __init__(self, scene: Any) -> None:
-        from carom.compare.rigid3d import primitives, principal_frame, quaternion_product
+        from carom.compare.rigid3d import primitives, principal_frame
         from carom.compare.yardstick import shape_coefficients
+        from carom.geometry.rotation import quaternion_product
 
         e, notes = shape_coefficients(
             scene, scene.restitution, "product", "pybullet", "restitution"

@@ -19,7 +19,7 @@ from carom.engines.edmd.model import Environment
 from carom.engines.edmd.settings import EdmdSettings
 from carom.errors import CaromError
 from carom.materials import pair_table
-from carom.shapes import SHAPE_CODES
+from carom.shape_base import SHAPE_CODES
 
 __all__ = ["NAME", "build", "environment", "refuses", "restore"]
 

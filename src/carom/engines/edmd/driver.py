@@ -18,9 +18,9 @@ from carom._memory import release_free_memory
 from carom.bodies import Bodies, identity_orientations
 from carom.engines.base import (
     COLLISION_DTYPE,
-    KIND_PAIR,
-    KIND_PLANE,
-    KIND_WALL,
+    PARTNER_BODY,
+    PARTNER_PLANE,
+    PARTNER_WALL,
     STOP_CHECK_EVENTS,
     Counters,
     FrameArrays,
@@ -419,7 +419,7 @@ class EdmdEngine:
         face = -1 - b
         n_walls = 2 * self.env.dim
         record["kind"] = np.where(
-            b >= 0, KIND_PAIR, np.where(face < n_walls, KIND_WALL, KIND_PLANE)
+            b >= 0, PARTNER_BODY, np.where(face < n_walls, PARTNER_WALL, PARTNER_PLANE)
         )
         record["partner"] = np.where(
             b >= 0, self.order[np.maximum(b, 0)], np.where(face < n_walls, face, face - n_walls)

@@ -5,7 +5,7 @@ The engine sees one kind of thing, bodies made of rounded convex pieces. A spher
 the body table becomes a circle piece; each wall of a walled box becomes a static slab as
 thick as the box is wide, just outside it; each plane a static slab below it, wider than the
 box many times over. The caller's bodies keep their numbers, ``0`` to ``N - 1``; walls and
-planes follow, and :class:`Partners` maps them back to ``KIND_WALL`` faces and ``KIND_PLANE``
+planes follow, and :class:`Partners` maps them back to ``PARTNER_WALL`` faces and ``PARTNER_PLANE``
 indices for the collision records.
 
 A wall's or plane's restitution and friction are its own, not combined with the body's (as

@@ -25,7 +25,7 @@ from carom.engines.stepped.contacts import (
     relative_speed,
     write_pair,
 )
-from carom.engines.stepped.rows import I_COUNT, I_ID0, flags_column
+from carom.engines.stepped.rows import I_COUNT, I_ID0, flags_column, point_layout
 from carom.geometry.manifold2d import collide
 
 __all__ = [
@@ -43,23 +43,16 @@ F_NY = 1
 F_MU = 2  # friction coefficient [-]
 F_E = 3  # restitution [-]
 POINT0 = 4  # first point's columns; a point has POINT_FLOATS of them
-POINT_FLOATS = 13
-# a point's columns, from its offset
-P_RAX = 0  # anchor on A [m]
-P_RAY = 1
-P_RBX = 2  # anchor on B [m]
-P_RBY = 3
-P_BASE = 4  # separation less (r_A - r_B) . n at the step's start [m]
-P_NMASS = 5  # effective mass along n [kg] (the solver's, for the restitution pass)
-P_JN = 6  # accumulated normal impulse [N s]
-P_JT = 7  # accumulated tangent impulse [N s]
-P_TOTAL = 8  # normal impulse applied over the step [N s]
-P_VREL = 9  # normal relative speed at the step's start [m/s] (negative: approaching)
-P_SEP = 10  # separation at the step's start [m]
-P_X = 11  # the point [m]
-P_Y = 12
+# a point's columns, from its offset (carom.engines.stepped.rows.point_layout)
+_POINT = point_layout(2)
+P_RAX, P_RAY, P_RBX, P_RBY = _POINT.ra, _POINT.ra + 1, _POINT.rb, _POINT.rb + 1  # anchors [m]
+P_BASE, P_NMASS, P_JN, P_JT = _POINT.base, _POINT.nmass, _POINT.jn, _POINT.jt
+P_TOTAL, P_VREL, P_SEP, P_X, P_Y = _POINT.total, _POINT.vrel, _POINT.sep, _POINT.at, _POINT.at + 1
+POINT_FLOATS = _POINT.size
 #: points in a manifold, at the most
 MAX_POINTS = 2
+#: a cached contact's impulses: the normal and tangent one of each of its points
+CACHE_IMPULSES = (2 * MAX_POINTS,)
 CONTACT_FLOATS = POINT0 + MAX_POINTS * POINT_FLOATS
 
 # int columns of a contact row

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from carom.engines.rigid import broadphase, contacts, impacts, motion, solver
 from carom.engines.rigid.model import RigidModel, RigidState
-from carom.engines.stepped.driver import SteppedEngine
+from carom.engines.stepped.driver import Isolated, SteppedEngine
 from carom.engines.stepped.settings import RigidSettings
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 
@@ -39,9 +39,7 @@ class RigidEngine(SteppedEngine):
     model: RigidModel
     state: RigidState
 
-    @staticmethod
-    def _warm_kernels() -> None:
-        warm_up()
+    _warm_kernels = staticmethod(lambda: warm_up())
 
     def _setup(self) -> None:
         m, s = self.model, self.state
@@ -66,7 +64,7 @@ class RigidEngine(SteppedEngine):
 
     def _pairs(self) -> int:
         m, s, st = self.model, self.state, self.settings
-        moving = (self._dynamic & s.awake) | self._kinematic
+        moving = (self._dynamic & self.memory.awake) | self._kinematic
         motion.place_pieces(
             s.x, s.angle, moving, m.body_pieces, m.piece_start, m.piece_count,
             m.local_vertices, m.local_normals, s.vertices, s.normals,
@@ -79,32 +77,24 @@ class RigidEngine(SteppedEngine):
         return self._kept.update(self._boxes, m.piece_reach, m.piece_body, moving, self._dynamic)
 
     def _narrow(self, n_pairs: int) -> int:
-        m, s, st = self.model, self.state, self.settings
+        m, s, st, mem = self.model, self.state, self.settings, self.memory
         return int(
             contacts.narrow_phase(
                 self._kept.pairs, n_pairs, s.vertices, s.normals, m.piece_start,
                 m.piece_count, m.piece_radius, m.piece_reach, m.piece_body, m.material,
                 m.e_table, m.mu_table, s.x, s.v, s.omega, self._dynamic, self._g, self.dt,
-                4.0 * st.linear_slop, st.linear_slop, s.cache_keys, s.cache_ids,
-                s.cache_impulses, int(s.cache_count[0]), self._cf, self._ci,
+                4.0 * st.linear_slop, st.linear_slop, mem.cache_keys, mem.cache_ids,
+                mem.cache_impulses, int(mem.cache_count[0]), self._cf, self._ci,
             )
         )  # fmt: skip
 
-    def _impact_kernel(
-        self,
-        isolated: NDArray[np.int64],
-        n_iso: int,
-        closing: FloatArray,
-        restitution: FloatArray,
-        friction: FloatArray,
-        log: FloatArray,
-    ) -> int:
+    def _impact_kernel(self, todo: Isolated, log: FloatArray) -> int:
         m, s, st = self.model, self.state, self.settings
         return int(
             impacts.exact_impacts(
-                isolated, n_iso, self._ci, s.x, s.angle, s.v, s.omega, self._accel,
-                self._dynamic, m.inv_mass, m.inv_inertia, m.mass, m.inertia, restitution,
-                friction, m.piece_start, m.piece_count, m.piece_radius, m.piece_reach,
+                todo.rows, todo.n, self._ci, s.x, s.angle, s.v, s.omega, self._accel,
+                self._dynamic, m.inv_mass, m.inv_inertia, m.mass, m.inertia, todo.restitution,
+                todo.friction, m.piece_start, m.piece_count, m.piece_radius, m.piece_reach,
                 m.local_vertices, m.local_normals, s.vertices, s.normals, self.dt,
                 1e-3 * st.linear_slop, log,
             )

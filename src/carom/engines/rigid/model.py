@@ -14,7 +14,6 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.bodies import KIND_DYNAMIC
 from carom.shapes import ConvexPiece
 
 __all__ = ["RigidModel", "RigidState", "build_model", "new_state"]
@@ -73,7 +72,8 @@ class RigidModel(NamedTuple):
 
 
 class RigidState(NamedTuple):
-    """What changes: pose and motion, sleep, placed pieces and the warm-start cache.
+    """What changes: pose and motion, and the pieces placed (sleep and the warm-start cache are
+    the engine's :class:`carom.engines.stepped.memory.StepMemory`).
 
     Attributes
     ----------
@@ -81,33 +81,16 @@ class RigidState(NamedTuple):
         Centre of mass [m], velocity [m/s].
     angle, omega : (N,) float64
         [rad], [rad/s].
-    awake : (N,) bool
-        Dynamic bodies being simulated (false: asleep).
-    clock : (N,) float64
-        How long each body has been slow enough to sleep [s].
-    island : (N,) int64
-        The island a sleeping body sleeps in (its root body).
     vertices, normals : (V, 2) float64
         Pieces placed in the world at the start of the next step.
-    cache_keys : (K,) int64
-        Contacts of the last step (``a * P + b``), sorted; ``cache_ids`` (K, 2) int64 their
-        points' feature ids, ``cache_impulses`` (K, 4) their normal and tangent impulses
-        [N s]; ``cache_count`` (1,) int64 how many rows are used.
     """
 
     x: FloatArray
     v: FloatArray
     angle: FloatArray
     omega: FloatArray
-    awake: NDArray[np.bool_]
-    clock: FloatArray
-    island: IntArray
     vertices: FloatArray
     normals: FloatArray
-    cache_keys: IntArray
-    cache_ids: IntArray
-    cache_impulses: FloatArray
-    cache_count: IntArray
 
 
 def build_model(
@@ -175,7 +158,7 @@ def build_model(
 def new_state(
     model: RigidModel, x: FloatArray, v: FloatArray, angle: FloatArray, omega: FloatArray
 ) -> RigidState:
-    """The State at the start: every dynamic body awake, no contact cached."""
+    """The State at the start."""
     n = model.kind.shape[0]
     rows = model.local_vertices.shape[0]
     return RigidState(
@@ -183,13 +166,6 @@ def new_state(
         v=np.array(v, float).reshape(n, 2),
         angle=np.array(angle, float).reshape(n),
         omega=np.array(omega, float).reshape(n),
-        awake=model.kind == KIND_DYNAMIC,
-        clock=np.zeros(n),
-        island=np.arange(n, dtype=np.int64),
         vertices=np.zeros((rows, 2)),
         normals=np.zeros((rows, 2)),
-        cache_keys=np.zeros(0, np.int64),
-        cache_ids=np.zeros((0, 2), np.int64),
-        cache_impulses=np.zeros((0, 4)),
-        cache_count=np.zeros(1, np.int64),
     )

@@ -39,8 +39,6 @@ lane.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
@@ -68,6 +66,7 @@ from carom.engines.rigid.motion import apply_impulse, fixed_work, relative_veloc
 from carom.engines.stepped import solver as shared
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
 from carom.engines.stepped.solver import LANE_MATH, LANES, soft_bias
+from carom.geometry.rotation import cos_sin
 
 __all__ = ["solve_step"]
 
@@ -118,25 +117,6 @@ S_DY = 4
 S_COS = 5  # cos and sin of the turn since the step began
 S_SIN = 6
 STATE_COLS = 8
-
-
-# Taylor coefficients of cos and sin: (-1)^k / (2k)! and (-1)^k / (2k+1)!
-_C2, _C4, _C6, _C8, _C10, _C12 = ((-1.0) ** k / math.factorial(2 * k) for k in range(1, 7))
-_S3, _S5, _S7, _S9, _S11, _S13 = ((-1.0) ** k / math.factorial(2 * k + 1) for k in range(1, 7))
-
-
-@njit(cache=True, inline="always")
-def turn(phi: float) -> tuple[float, float]:
-    """cos and sin of a turn ``phi`` [rad]. A substep's turn is small: below 1/4 rad the
-    Taylor series to phi^12 and phi^13 (each next term below 1e-19 of the result, under half
-    an ulp), which costs a dozen multiplications where the library calls cost tens of ns;
-    beyond, the library."""
-    if abs(phi) >= 0.25:
-        return math.cos(phi), math.sin(phi)
-    p2 = phi * phi
-    c = 1.0 + p2 * (_C2 + p2 * (_C4 + p2 * (_C6 + p2 * (_C8 + p2 * (_C10 + p2 * _C12)))))
-    s = phi * (1.0 + p2 * (_S3 + p2 * (_S5 + p2 * (_S7 + p2 * (_S9 + p2 * (_S11 + p2 * _S13))))))
-    return c, s
 
 
 @njit(cache=True)
@@ -513,7 +493,7 @@ def solve_step(
             state[i, S_DY] += h * state[i, S_VY]
             # each body's turn since the step began, once per substep (not per contact):
             # the last turn composed with this substep's
-            c, s = turn(h * state[i, S_W])
+            c, s = cos_sin(h * state[i, S_W])
             cos0 = state[i, S_COS]
             sin0 = state[i, S_SIN]
             state[i, S_COS] = cos0 * c - sin0 * s

@@ -22,24 +22,12 @@ __all__ = ["piece_boxes"]
 
 @njit(cache=True)
 def piece_boxes(
-    vertices: np.ndarray,
-    normals: np.ndarray,
-    piece_kind: np.ndarray,
-    piece_vstart: np.ndarray,
-    piece_vcount: np.ndarray,
-    piece_fstart: np.ndarray,
-    piece_radius: np.ndarray,
-    piece_reach: np.ndarray,
-    piece_body: np.ndarray,
-    v: np.ndarray,
-    w: np.ndarray,
-    which: np.ndarray,
-    gravity_on: np.ndarray,
-    g: np.ndarray,
-    dt: float,
-    margin: float,
+    vertices: np.ndarray, normals: np.ndarray, piece_kind: np.ndarray, piece_vstart: np.ndarray,
+    piece_vcount: np.ndarray, piece_fstart: np.ndarray, piece_radius: np.ndarray,
+    piece_reach: np.ndarray, piece_body: np.ndarray, v: np.ndarray, w: np.ndarray,
+    which: np.ndarray, gravity_on: np.ndarray, g: np.ndarray, dt: float, margin: float,
     boxes: np.ndarray,
-) -> None:
+) -> None:  # fmt: skip
     """Swept boxes ``(lo x, lo y, lo z, hi x, hi y, hi z)`` [m] of the pieces of the bodies with
     ``which[b]`` true, into ``boxes`` (P, 6); ``gravity_on[b]``: gravity ``g`` (3,) acts."""
     for p in range(piece_vstart.shape[0]):

@@ -51,16 +51,9 @@ from carom.engines.rigid3d.model import (
     PIECE_PLANE,
     PIECE_POLYTOPE,
 )
-from carom.engines.rigid3d.motion import matrix, relative_velocity
-from carom.engines.stepped.contacts import (
-    find_cached,
-    keeps_point,
-    open_point,
-    pair_of,
-    relative_speed,
-    write_pair,
-)
-from carom.engines.stepped.rows import I_COUNT, I_ID0, flags_column
+from carom.engines.rigid3d.motion import relative_velocity
+from carom.engines.stepped import contacts as shared
+from carom.engines.stepped.rows import I_COUNT, I_ID0, flags_column, point_layout
 from carom.geometry.manifold3d import (
     MAX_POINTS,
     OUT_SIZE,
@@ -73,6 +66,7 @@ from carom.geometry.manifold3d import (
     contact_segments_plane,
     contact_sphere_sphere,
 )
+from carom.geometry.rotation import matrix
 
 __all__ = [
     "CONTACT_FLOATS",
@@ -100,30 +94,24 @@ F_ROLL = 11  # rolling resistance [m]
 F_JR1 = 12  # rolling-resistance angular impulse about t1 and t2 [N m s]
 F_JR2 = 13
 POINT0 = 14  # first point's columns; a point has POINT_FLOATS of them
-# a point's columns, from its offset
-P_RAX = 0  # anchor on A [m]
-P_RAY = 1
-P_RAZ = 2
-P_RBX = 3  # anchor on B [m]
-P_RBY = 4
-P_RBZ = 5
-P_BASE = 6  # separation less (c_A - c_B) . n at the step's start [m] (c: core anchors)
-P_NMASS = 7  # effective mass along n [kg]
-P_JN = 8  # accumulated normal impulse [N s]
-P_JT1 = 9  # accumulated tangent impulses along t1, t2 [N s]
-P_JT2 = 10
-P_TOTAL = 11  # normal impulse applied over the step [N s]
-P_VREL = 12  # normal relative speed at the step's start [m/s] (negative: approaching)
-P_SEP = 13  # separation at the step's start [m]
-P_X = 14  # the point [m]
-P_Y = 15
-P_Z = 16
-P_T1MASS = 17  # effective masses along t1, t2 [kg]
-P_T2MASS = 18
-P_KA = 19  # A's core anchor is c_A = r_A + k_A n [m], B's c_B = r_B - k_B n
-P_KB = 20
-POINT_FLOATS = 21
+# a point's columns, from its offset: the shared ones (carom.engines.stepped.rows.point_layout;
+# its base here is the separation less (c_A - c_B) . n, c the core anchors), then 3D's own
+_POINT = point_layout(3)
+P_RAX, P_RAY, P_RAZ = _POINT.ra, _POINT.ra + 1, _POINT.ra + 2
+P_RBX, P_RBY, P_RBZ = _POINT.rb, _POINT.rb + 1, _POINT.rb + 2
+P_BASE, P_NMASS, P_JN, P_JT1, P_JT2 = (
+    _POINT.base, _POINT.nmass, _POINT.jn, _POINT.jt, _POINT.jt + 1
+)  # fmt: skip
+P_TOTAL, P_VREL, P_SEP = _POINT.total, _POINT.vrel, _POINT.sep
+P_X, P_Y, P_Z = _POINT.at, _POINT.at + 1, _POINT.at + 2
+P_T1MASS = _POINT.size  # effective masses along t1, t2 [kg]
+P_T2MASS = _POINT.size + 1
+P_KA = _POINT.size + 2  # A's core anchor is c_A = r_A + k_A n [m], B's c_B = r_B - k_B n
+P_KB = _POINT.size + 3
+POINT_FLOATS = _POINT.size + 4
 CONTACT_FLOATS = POINT0 + MAX_POINTS * POINT_FLOATS
+#: a cached contact's impulses: per point the normal one and the tangent one as a world vector
+CACHE_IMPULSES = (MAX_POINTS, 4)
 
 # int columns of a contact row
 # the declared integer columns (carom.engines.stepped.rows): bodies, pieces, points (1 to
@@ -430,10 +418,10 @@ def narrow_phase(
     cursor = 0
     kept_cursor = 0
     for k in range(n_pairs):
-        pair = pair_of(pairs, k, piece_body)
+        pair = shared.pair_of(pairs, k, piece_body)
         pa, pb, ba, bb = pair
         # how far the pair can close during the step: relative speed, spins, gravity
-        closing = relative_speed(v, ba, bb)
+        closing = shared.relative_speed(v, ba, bb)
         if piece_kind[pa] != PIECE_PLANE:
             closing += math.sqrt(w[ba, 0] ** 2 + w[ba, 1] ** 2 + w[ba, 2] ** 2) * piece_reach[pa]
         if piece_kind[pb] != PIECE_PLANE:
@@ -448,7 +436,7 @@ def narrow_phase(
         else:
             frame, other, reach = bb, ba, piece_reach[pa]
         _relative_pose(frame, other, x, rot, pose)
-        row, kept_cursor = find_cached(kept_keys, n_kept, key, kept_cursor)
+        row, kept_cursor = shared.find_cached(kept_keys, n_kept, key, kept_cursor)
         count = -1
         if row >= 0:
             moved = _moved(pose, kept_floats[row], reach)
@@ -491,7 +479,9 @@ def narrow_phase(
             rb[2] = pz - x[bb, 2]
             ux, uy, uz = relative_velocity(ba, bb, ra, rb, v, w)
             un = ux * nx + uy * ny + uz * nz
-            if not keeps_point(un, sep, gravity_on[ba] != gravity_on[bb], g, dt, speculative):
+            if not shared.keeps_point(
+                un, sep, gravity_on[ba] != gravity_on[bb], g, dt, speculative
+            ):
                 continue
             o = point_offset(kept)
             cf[m, o + P_RAX] = ra[0]
@@ -511,7 +501,7 @@ def narrow_phase(
             cf[m, o + P_X] = px
             cf[m, o + P_Y] = py
             cf[m, o + P_Z] = pz
-            open_point(
+            shared.open_point(
                 cf, ci, m, kept, o, un, sep, ids[j], (P_VREL, P_SEP),
                 (P_NMASS, P_JN, P_JT1, P_JT2, P_TOTAL),
             )  # fmt: skip
@@ -528,13 +518,13 @@ def narrow_phase(
         cf[m, F_T2X] = t2x
         cf[m, F_T2Y] = t2y
         cf[m, F_T2Z] = t2z
-        ma, mb = write_pair(
+        ma, mb = shared.write_pair(
             cf, ci, m, pair, kept, I_FLAGS, material, (mu_table, e_table), (F_MU, F_E)
         )
         cf[m, F_ROLL] = rolling_table[ma, mb]
         cf[m, F_JR1] = 0.0
         cf[m, F_JR2] = 0.0
-        row, cursor = find_cached(cache_keys, n_cache, pa * n_pieces + pb, cursor)
+        row, cursor = shared.find_cached(cache_keys, n_cache, pa * n_pieces + pb, cursor)
         if row >= 0:
             for j in range(kept):
                 o = point_offset(j)

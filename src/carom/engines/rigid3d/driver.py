@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from carom.engines.rigid3d import broadphase, contacts, impacts, motion, solver
 from carom.engines.rigid3d.model import Model3D, State3D, empty_manifolds
 from carom.engines.stepped import islands
-from carom.engines.stepped.driver import SteppedEngine
+from carom.engines.stepped.driver import Isolated, SteppedEngine
 from carom.engines.stepped.settings import RigidSettings
 from carom.geometry.rotation import turn
 from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
@@ -50,9 +50,7 @@ class RigidEngine3D(SteppedEngine):
     model: Model3D
     state: State3D
 
-    @staticmethod
-    def _warm_kernels() -> None:
-        warm_up()
+    _warm_kernels = staticmethod(lambda: warm_up())
 
     def _setup(self) -> None:
         m, n = self.model, self.model.kind.shape[0]
@@ -100,13 +98,13 @@ class RigidEngine3D(SteppedEngine):
 
     def _pairs(self) -> int:
         m, s = self.model, self.state
-        moving = (self._dynamic & s.awake) | self._kinematic
+        moving = (self._dynamic & self.memory.awake) | self._kinematic
         self._place(moving)
         self._box(moving, s.v, s.w, self.dt)
         return self._kept.update(self._boxes, m.piece_reach, m.piece_body, moving, self._dynamic)
 
     def _narrow(self, n_pairs: int) -> int:
-        m, s, st = self.model, self.state, self.settings
+        m, s, st, mem = self.model, self.state, self.settings, self.memory
         kept = (s.manifold_keys, s.manifold_ints, s.manifold_floats, int(s.manifold_count[0]))
         nc = int(
             contacts.narrow_phase(
@@ -114,8 +112,8 @@ class RigidEngine3D(SteppedEngine):
                 s.vertices, s.normals, m.face_first, m.face_size, m.corners, m.edges,
                 m.material, m.e_table, m.mu_table, m.rolling_table, s.x, s.q, s.v, s.w,
                 self._dynamic, self._g, self.dt, 4.0 * st.linear_slop, st.linear_slop,
-                st.manifold_reuse * st.linear_slop, s.cache_keys, s.cache_ids,
-                s.cache_impulses, int(s.cache_count[0]), kept, self._made, self._cf, self._ci,
+                st.manifold_reuse * st.linear_slop, mem.cache_keys, mem.cache_ids,
+                mem.cache_impulses, int(mem.cache_count[0]), kept, self._made, self._cf, self._ci,
             )
         )  # fmt: skip
         if nc >= 0:
@@ -126,21 +124,13 @@ class RigidEngine3D(SteppedEngine):
         super()._grow(size)
         self._made = _room(size)
 
-    def _impact_kernel(
-        self,
-        isolated: NDArray[np.int64],
-        n_iso: int,
-        closing: FloatArray,
-        restitution: FloatArray,
-        friction: FloatArray,
-        log: FloatArray,
-    ) -> int:
+    def _impact_kernel(self, todo: Isolated, log: FloatArray) -> int:
         m, s, st = self.model, self.state, self.settings
         return int(
             impacts.exact_impacts(
-                isolated, n_iso, closing, self._ci, s.x, s.q, s.v, s.w, self._accel,
+                todo.rows, todo.n, todo.closing, self._ci, s.x, s.q, s.v, s.w, self._accel,
                 self._dynamic, m.inv_mass, m.inertia, m.inv_inertia, m.min_moment,
-                restitution, friction, self._ints, m.piece_radius, m.piece_reach,
+                todo.restitution, todo.friction, self._ints, m.piece_radius, m.piece_reach,
                 m.local_vertices, m.local_normals, m.face_first, m.face_size, m.corners,
                 m.edges, s.vertices, s.normals, self.dt, st.substeps, 1e-3 * st.linear_slop,
                 log,

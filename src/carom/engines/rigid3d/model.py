@@ -215,7 +215,8 @@ MANIFOLD_INTS = M_ID0 + MAX_POINTS
 
 
 class State3D(NamedTuple):
-    """What changes: pose and motion, sleep, placed pieces and the warm-start cache.
+    """What changes: pose and motion, the pieces placed and the manifolds kept (sleep and the
+    warm-start cache are the engine\'s :class:`carom.engines.stepped.memory.StepMemory`).
 
     Attributes
     ----------
@@ -225,20 +226,10 @@ class State3D(NamedTuple):
         Orientation, unit quaternion ``(w, x, y, z)`` body to world.
     w : (N, 3) float64
         Angular velocity, world frame [rad/s].
-    awake : (N,) bool
-        Dynamic bodies being simulated (false: asleep).
-    clock : (N,) float64
-        How long each body has been slow enough to sleep [s].
-    island : (N,) int64
-        The island a sleeping body sleeps in (its root body).
     vertices : (V, 3) float64
         Corners placed in the world at the start of the next step [m].
     normals : (F, 3) float64
         Face normals placed in the world.
-    cache_keys : (K,) int64
-        Contacts of the last step (``a * P + b``), sorted; ``cache_ids`` (K, 4) int64 their
-        points' feature ids, ``cache_impulses`` (K, 4, 4) each point's normal impulse and its
-        tangent impulse as a world vector [N s]; ``cache_count`` (1,) int64 rows used.
     manifold_keys : (M,) int64
         The candidate pairs of the last step (``a * P + b``), sorted, with their manifolds as
         made (:mod:`.contacts`: ``manifold_ints`` (M, MANIFOLD_INTS) int64 the point count and
@@ -250,15 +241,8 @@ class State3D(NamedTuple):
     v: FloatArray
     q: FloatArray
     w: FloatArray
-    awake: NDArray[np.bool_]
-    clock: FloatArray
-    island: IntArray
     vertices: FloatArray
     normals: FloatArray
-    cache_keys: IntArray
-    cache_ids: IntArray
-    cache_impulses: FloatArray
-    cache_count: IntArray
     manifold_keys: IntArray
     manifold_ints: IntArray
     manifold_floats: FloatArray
@@ -266,16 +250,10 @@ class State3D(NamedTuple):
 
 
 def build_model(
-    pieces: Sequence[Sequence[Piece3D]],
-    kind: IntArray,
-    mass: FloatArray,
-    inertia: FloatArray,
-    material: IntArray,
-    e_table: FloatArray,
-    mu_table: FloatArray,
-    rolling_table: FloatArray,
+    pieces: Sequence[Sequence[Piece3D]], kind: IntArray, mass: FloatArray, inertia: FloatArray,
+    material: IntArray, e_table: FloatArray, mu_table: FloatArray, rolling_table: FloatArray,
     gravity: FloatArray,
-) -> Model3D:
+) -> Model3D:  # fmt: skip
     """The Model of N bodies whose ``pieces`` are given in each body's frame (centred on its
     centre of mass). Static and kinematic bodies must have infinite mass; ``inertia``
     (N, 3, 3) [kg m^2] is ignored for them."""
@@ -375,7 +353,7 @@ def build_model(
 def new_state(
     model: Model3D, x: FloatArray, v: FloatArray, q: FloatArray, w: FloatArray
 ) -> State3D:
-    """The State at the start: every dynamic body awake, no contact cached; quaternions are
+    """The State at the start, no manifold kept; quaternions are
     normalised."""
     n = model.kind.shape[0]
     q = np.array(q, float).reshape(n, 4)
@@ -385,15 +363,8 @@ def new_state(
         v=np.array(v, float).reshape(n, 3),
         q=q,
         w=np.array(w, float).reshape(n, 3),
-        awake=model.kind == KIND_DYNAMIC,
-        clock=np.zeros(n),
-        island=np.arange(n, dtype=np.int64),
         vertices=np.zeros_like(model.local_vertices),
         normals=np.zeros_like(model.local_normals),
-        cache_keys=np.zeros(0, np.int64),
-        cache_ids=np.zeros((0, 4), np.int64),
-        cache_impulses=np.zeros((0, 4, 4)),
-        cache_count=np.zeros(1, np.int64),
         **empty_manifolds(0),
     )
 

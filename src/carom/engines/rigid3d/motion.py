@@ -24,13 +24,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from carom.geometry.rotation import turn
+from carom.geometry.rotation import matrix, turn
 
 __all__ = [
     "apply_impulse",
     "fly",
     "free_turn",
-    "matrix",
     "mechanical_energy",
     "place_piece",
     "place_pieces",
@@ -39,22 +38,6 @@ __all__ = [
     "world_inverse_inertia",
     "world_inverse_row",
 ]
-
-
-@njit(cache=True, inline="always")
-def matrix(q: np.ndarray, i: int, r: np.ndarray) -> None:
-    """Body ``i``'s rotation matrix from its quaternion (row ``i`` of ``q``) into ``r`` (9,),
-    row-major."""
-    w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
-    r[0] = 1.0 - 2.0 * (y * y + z * z)
-    r[1] = 2.0 * (x * y - w * z)
-    r[2] = 2.0 * (x * z + w * y)
-    r[3] = 2.0 * (x * y + w * z)
-    r[4] = 1.0 - 2.0 * (x * x + z * z)
-    r[5] = 2.0 * (y * z - w * x)
-    r[6] = 2.0 * (x * z - w * y)
-    r[7] = 2.0 * (y * z + w * x)
-    r[8] = 1.0 - 2.0 * (x * x + y * y)
 
 
 @njit(cache=True)
@@ -83,19 +66,11 @@ def place_piece(
 
 @njit(cache=True)
 def place_pieces(
-    x: np.ndarray,
-    q: np.ndarray,
-    which: np.ndarray,
-    body_pieces: np.ndarray,
-    piece_vstart: np.ndarray,
-    piece_vcount: np.ndarray,
-    piece_fstart: np.ndarray,
-    piece_fcount: np.ndarray,
-    local_vertices: np.ndarray,
-    local_normals: np.ndarray,
-    vertices: np.ndarray,
-    normals: np.ndarray,
-) -> None:
+    x: np.ndarray, q: np.ndarray, which: np.ndarray, body_pieces: np.ndarray,
+    piece_vstart: np.ndarray, piece_vcount: np.ndarray, piece_fstart: np.ndarray,
+    piece_fcount: np.ndarray, local_vertices: np.ndarray, local_normals: np.ndarray,
+    vertices: np.ndarray, normals: np.ndarray,
+) -> None:  # fmt: skip
     """Place the pieces of every body with ``which[b]`` true at its pose (:func:`place_piece`)."""
     for b in range(x.shape[0]):
         if not which[b]:
@@ -350,18 +325,9 @@ def fly(
 
 @njit(cache=True)
 def mechanical_energy(
-    rows: np.ndarray,
-    dynamic: np.ndarray,
-    mass: np.ndarray,
-    inertia: np.ndarray,
-    x: np.ndarray,
-    v: np.ndarray,
-    q: np.ndarray,
-    w: np.ndarray,
-    gx: float,
-    gy: float,
-    gz: float,
-) -> float:
+    rows: np.ndarray, dynamic: np.ndarray, mass: np.ndarray, inertia: np.ndarray, x: np.ndarray,
+    v: np.ndarray, q: np.ndarray, w: np.ndarray, gx: float, gy: float, gz: float,
+) -> float:  # fmt: skip
     """Kinetic (``m v^2/2 + w.I w/2``) and gravitational (``-m g.x``) energy of the dynamic
     bodies among ``rows`` [J]."""
     r = np.empty(9)

@@ -85,7 +85,6 @@ from carom.engines.rigid3d.contacts import (
 from carom.engines.rigid3d.motion import (
     apply_impulse,
     free_turn,
-    matrix,
     relative_velocity,
     world_inverse_inertia,
 )
@@ -93,6 +92,7 @@ from carom.engines.stepped import solver as shared
 from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_COUNT
 from carom.engines.stepped.solver import LANE_MATH, LANES, soft_bias
 from carom.geometry.manifold3d import MAX_POINTS
+from carom.geometry.rotation import axis_angle_matrix, matrix
 
 __all__ = ["FLAG_EXACT", "solve_step"]
 
@@ -232,30 +232,6 @@ def _restitution(
         dj = shared.restitution_impulse(cf, m, o, un, cf[m, F_E], P_JN, P_NMASS, P_VREL, P_TOTAL)
         work[0] += _fixed_work(a, b, dj * nx, dj * ny, dj * nz, r_a, r_b, inv_mass, v, w)
         apply_impulse(a, b, dj * nx, dj * ny, dj * nz, r_a, r_b, inv_mass, iw, v, w)
-
-
-@njit(cache=True, inline="always")
-def _axis_angle(ax: float, ay: float, az: float, out: np.ndarray) -> None:
-    """The rotation by the angle ``|a|`` about ``a`` [rad] into ``out`` (9,), row-major
-    (Rodrigues)."""
-    angle = math.sqrt(ax * ax + ay * ay + az * az)
-    out[:] = 0.0
-    out[0] = out[4] = out[8] = 1.0
-    if angle == 0.0:
-        return
-    kx, ky, kz = ax / angle, ay / angle, az / angle
-    c = math.cos(angle)
-    s = math.sin(angle)
-    t = 1.0 - c
-    out[0] = c + t * kx * kx
-    out[1] = t * kx * ky - s * kz
-    out[2] = t * kx * kz + s * ky
-    out[3] = t * kx * ky + s * kz
-    out[4] = c + t * ky * ky
-    out[5] = t * ky * kz - s * kx
-    out[6] = t * kx * kz - s * ky
-    out[7] = t * ky * kz + s * kx
-    out[8] = c + t * kz * kz
 
 
 @njit(cache=True)
@@ -746,7 +722,7 @@ def solve_step(
         for i in movers:  # kinematic bodies: their own steady motion (the driver moves them)
             for k in range(3):
                 state[i, S_D + k] = elapsed * v[i, k]
-            _axis_angle(w[i, 0] * elapsed, w[i, 1] * elapsed, w[i, 2] * elapsed, turned)
+            axis_angle_matrix(w[i, 0] * elapsed, w[i, 1] * elapsed, w[i, 2] * elapsed, turned)
             for k in range(9):
                 state[i, S_T + k] = turned[k]
         _solve(group, pair, kinematic, rolling, state, 1.0 / h, False, push_speed, work)

@@ -13,9 +13,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from carom.engines.base import (
-    KIND_PAIR,
-    KIND_PLANE,
-    KIND_WALL,
+    PARTNER_BODY,
+    PARTNER_PLANE,
+    PARTNER_WALL,
     Partners,
     WorldView,
     describe_partner,
@@ -116,7 +116,7 @@ def statics(
     for k, each in enumerate(world.materials):
         check_material(f"material {k}", each)
     n = world.bodies.n
-    kind, number = [KIND_PAIR] * n, list(range(n))
+    kind, number = [PARTNER_BODY] * n, list(range(n))
     pieces: list[Any] = []
     materials: list[Material] = []
     if world.boundary == "walls":
@@ -124,13 +124,13 @@ def statics(
             check_material(f"wall {face}", world.walls[face])
             pieces.append(wall)
             materials.append(world.walls[face])
-            kind.append(KIND_WALL)
+            kind.append(PARTNER_WALL)
             number.append(face)
     for k, (point, normal, mat) in enumerate(world.planes):
         check_material(f"plane {k}", mat)
         pieces.append(plane(point, normal))
         materials.append(mat)
-        kind.append(KIND_PLANE)
+        kind.append(PARTNER_PLANE)
         number.append(k)
     partners = Partners(np.array(kind, np.int8), np.array(number, np.int64))
     return Statics(pieces, materials, partners)

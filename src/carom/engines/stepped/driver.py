@@ -26,26 +26,39 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from typing import Any, Self
+from typing import Any, NamedTuple, Self
 
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.base import COLLISION_DTYPE, KIND_PAIR, Counters, FrameArrays, Partners, Sink
+from carom.engines.base import COLLISION_DTYPE, PARTNER_BODY, Counters, FrameArrays, Partners, Sink
 from carom.engines.stepped import islands
 from carom.engines.stepped.broadphase import KeptPairs, find_pairs, grid_cell
 from carom.engines.stepped.contacts import extremes, store_points
 from carom.engines.stepped.impacts import MAX_IMPACTS
+from carom.engines.stepped.memory import StepMemory, new_memory
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
 from carom.engines.stepped.settings import RigidSettings
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
 
-__all__ = ["STOP_CHECK_STEPS", "SteppedEngine"]
+__all__ = ["STOP_CHECK_STEPS", "Isolated", "SteppedEngine"]
 
 FloatArray = NDArray[np.float64]
 
 #: steps between looks at a run's stop request
 STOP_CHECK_STEPS = 64
+
+
+class Isolated(NamedTuple):
+    """The contacts a step solves exactly: contact ``rows`` (the first ``n``), each
+    contact's least normal relative speed ``closing`` [m/s] (nc,), and each isolated
+    contact's ``restitution`` and ``friction`` (n,) [-]."""
+
+    rows: NDArray[np.int64]
+    n: int
+    closing: FloatArray
+    restitution: FloatArray
+    friction: FloatArray
 
 
 class SteppedEngine:
@@ -65,16 +78,20 @@ class SteppedEngine:
         The clock at ``state`` [s].
     partners : Partners, optional
         What each body is to a collision record; the caller's bodies are those of kind
-        ``KIND_PAIR`` (the first ones), walls and planes follow. Default: all bodies are the
+        ``PARTNER_BODY`` (the first ones), walls and planes follow. Default: all bodies are the
         caller's.
+    memory : StepMemory, optional
+        Sleep and the warm-start cache at ``time``; default every dynamic body awake, no
+        contact cached.
 
     Notes
     -----
     A dimension's engine is a subclass naming its kernels: ``DIMS``; its contact rows' module
     ``ROWS`` (the float columns ``CONTACT_FLOATS``, ``POINT0``, ``POINT_FLOATS``, ``P_SEP``,
-    ``P_VREL``, ``P_JN``; ``CONTACT_INTS``, ``MAX_POINTS``, ``point_offset`` and
-    ``store_tangents``); its impacts' module ``IMPACTS`` (``IMPACT_FIELDS``);
-    the state's ``SPIN`` field; and the stages that differ by dimension:
+    ``P_VREL``, ``P_JN``; ``CONTACT_INTS``, ``MAX_POINTS``, ``point_offset``, the shape of a
+    cached contact's impulses ``CACHE_IMPULSES`` and ``store_tangents``); its impacts' module
+    ``IMPACTS`` (``IMPACT_FIELDS``); the state's ``SPIN`` field; and the stages that differ by
+    dimension:
     :meth:`_setup`, :meth:`_pairs`, :meth:`_narrow`, :meth:`_impact_kernel`, :meth:`_fly`,
     :meth:`_solve`, :meth:`_fastest`, :meth:`_stop`, :meth:`_energy`, :meth:`sample`,
     :meth:`_state_from` and :meth:`_warm_kernels`.
@@ -109,6 +126,7 @@ class SteppedEngine:
         settings: RigidSettings,
         time: float = 0.0,
         partners: Partners | None = None,
+        memory: StepMemory | None = None,
     ) -> None:
         self.model = model
         self.state = state
@@ -120,7 +138,7 @@ class SteppedEngine:
             partners = Partners(np.zeros(n, np.int8), np.arange(n, dtype=np.int64))
         self.partners = partners
         #: the caller's bodies: the first ``n_bodies``
-        self.n_bodies = int(np.count_nonzero(partners.kind == KIND_PAIR))
+        self.n_bodies = int(np.count_nonzero(partners.kind == PARTNER_BODY))
         self.cell = grid_cell(model.kind, model.piece_body, model.piece_reach)
         rows, dims = self.ROWS, self.DIMS
         self._cf = np.zeros((max(64, 2 * n), rows.CONTACT_FLOATS))
@@ -143,6 +161,10 @@ class SteppedEngine:
         self._accel[self._dynamic] = model.gravity
         self._g = float(np.linalg.norm(model.gravity))
         self.n_contacts = 0
+        if memory is None:
+            memory = new_memory(model.kind, rows.MAX_POINTS, rows.CACHE_IMPULSES)
+        #: sleep and the warm-start cache
+        self.memory = memory
         self._setup()
 
     def _setup(self) -> None:
@@ -157,7 +179,10 @@ class SteppedEngine:
         arrays: Mapping[str, NDArray[Any]],
     ) -> Self:
         """The engine that wrote ``arrays`` (:meth:`arrays`), to continue bit for bit."""
-        engine = cls(model, cls._state_from(arrays), settings, float(arrays["start"][0]), partners)
+        memory = StepMemory(*(np.array(arrays[name]) for name in StepMemory._fields))
+        engine = cls(
+            model, cls._state_from(arrays), settings, float(arrays["start"][0]), partners, memory
+        )
         engine._restore_totals(arrays)
         return engine
 
@@ -168,8 +193,8 @@ class SteppedEngine:
 
     def arrays(self) -> dict[str, NDArray[Any]]:
         """The state's arrays and the clock and totals, for a checkpoint."""
-        s = self.state
-        return {name: np.array(value) for name, value in s._asdict().items()} | self._totals()
+        kept = self.state._asdict() | self.memory._asdict()
+        return {name: np.array(value) for name, value in kept.items()} | self._totals()
 
     def _start_totals(self, time: float) -> None:
         self.start = float(time)
@@ -184,11 +209,11 @@ class SteppedEngine:
 
     def step(self, sink: Sink | None = None) -> None:
         """Advance one step of ``dt`` [s]: stages 1 to 8 (module docstring)."""
-        m, s, st = self.model, self.state, self.settings
+        m, mem, st = self.model, self.memory, self.settings
         rows = self.ROWS
         nc = self._contacts()
         if st.sleep and islands.wake(
-            self._ci, nc, m.kind, s.awake, self._moving(), s.clock, s.island
+            self._ci, nc, m.kind, mem.awake, self._moving(), mem.clock, mem.island
         ):
             nc = self._contacts()
         isolated = np.zeros(max(nc, 1), np.int64)
@@ -197,7 +222,7 @@ class SteppedEngine:
         )
         leaving = math.inf if math.isinf(self.LEAVING) else self.LEAVING * st.restitution_threshold
         n_iso = islands.plan(
-            self._ci, nc, closest, closing, m.kind, s.awake, st.exact_impacts,
+            self._ci, nc, closest, closing, m.kind, mem.awake, st.exact_impacts,
             0.1 * st.linear_slop, st.restitution_threshold, leaving, self._parent, self._role,
             isolated,
         )  # fmt: skip
@@ -216,19 +241,19 @@ class SteppedEngine:
             self._energy_lost -= change
         else:
             self._energy_given += change
-        if s.cache_keys.shape[0] < nc:
-            size = max(nc, 2 * s.cache_keys.shape[0])
-            self.state = s = s._replace(
+        if mem.cache_keys.shape[0] < nc:
+            size = max(nc, 2 * mem.cache_keys.shape[0])
+            self.memory = mem = mem._replace(
                 cache_keys=np.zeros(size, np.int64),
-                cache_ids=np.zeros((size, *s.cache_ids.shape[1:]), np.int64),
-                cache_impulses=np.zeros((size, *s.cache_impulses.shape[1:])),
+                cache_ids=np.zeros((size, *mem.cache_ids.shape[1:]), np.int64),
+                cache_impulses=np.zeros((size, *mem.cache_impulses.shape[1:])),
             )
         # the cache as (K, points, values): a view (2D keeps (K, 4), 3D (K, 4, 4))
-        per_point = math.prod(s.cache_impulses.shape[1:]) // rows.MAX_POINTS
-        cache = s.cache_impulses.reshape(s.cache_impulses.shape[0], rows.MAX_POINTS, per_point)
-        s.cache_count[0] = store_points(
+        per_point = math.prod(mem.cache_impulses.shape[1:]) // rows.MAX_POINTS
+        cache = mem.cache_impulses.reshape(mem.cache_keys.shape[0], rows.MAX_POINTS, per_point)
+        mem.cache_count[0] = store_points(
             self._cf, self._ci, nc, m.piece_body.shape[0], rows.POINT0, rows.POINT_FLOATS,
-            rows.P_JN, s.cache_keys, s.cache_ids, cache,
+            rows.P_JN, mem.cache_keys, mem.cache_ids, cache,
         )  # fmt: skip
         rows.store_tangents(self._cf, self._ci, nc, cache)
         self._keep_manifolds()
@@ -272,23 +297,13 @@ class SteppedEngine:
         ma = m.material[self._ci[rows, I_BODY_A]]
         mb = m.material[self._ci[rows, I_BODY_B]]
         log = np.zeros((n_iso * MAX_IMPACTS, self.IMPACTS.IMPACT_FIELDS))
-        logged = self._impact_kernel(
-            isolated, n_iso, closing, m.e_table[ma, mb], m.mu_table[ma, mb], log
-        )
+        todo = Isolated(isolated, n_iso, closing, m.e_table[ma, mb], m.mu_table[ma, mb])
+        logged = self._impact_kernel(todo, log)
         return log[:logged]
 
-    def _impact_kernel(
-        self,
-        isolated: NDArray[np.int64],
-        n_iso: int,
-        closing: FloatArray,
-        restitution: FloatArray,
-        friction: FloatArray,
-        log: FloatArray,
-    ) -> int:
-        """The dimension's exact impacts (:meth:`_exact_impacts`) with each isolated
-        contact's ``restitution`` and ``friction`` (n_iso,), logged into ``log``; return the
-        rows logged."""
+    def _impact_kernel(self, todo: Isolated, log: FloatArray) -> int:
+        """The dimension's exact impacts (:meth:`_exact_impacts`) of the isolated contacts
+        ``todo``, logged into ``log``; return the rows logged."""
         raise NotImplementedError
 
     def _fly(self, free: NDArray[np.int64]) -> None:
@@ -344,13 +359,13 @@ class SteppedEngine:
     def _settle(self, nc: int) -> None:
         """Stage 8: sleep the islands at rest (:func:`.islands.settle`); their bodies stop and
         the kinetic energy they kept goes to the ledger as lost."""
-        m, s, st = self.model, self.state, self.settings
-        before = s.awake.copy()
+        m, mem, st = self.model, self.memory, self.settings
+        before = mem.awake.copy()
         islands.settle(
-            self._ci, nc, m.kind, self._parent, s.awake, self._fastest(), self._moving(),
-            s.clock, s.island, self.dt, st.sleep_speed, st.sleep_time,
+            self._ci, nc, m.kind, self._parent, mem.awake, self._fastest(), self._moving(),
+            mem.clock, mem.island, self.dt, st.sleep_speed, st.sleep_time,
         )  # fmt: skip
-        asleep = np.flatnonzero(before & ~s.awake)
+        asleep = np.flatnonzero(before & ~mem.awake)
         if asleep.size:
             self._energy_lost += self._stop(asleep)
 
@@ -500,10 +515,10 @@ class SteppedEngine:
 
     def _count(self, partner: NDArray[np.int64], lost: float, work: float) -> NDArray[np.int8]:
         """Count exact impacts against ``partner`` rows and add their ledger; return what
-        each partner is (KIND_PAIR, KIND_WALL, KIND_PLANE)."""
+        each partner is (PARTNER_BODY, PARTNER_WALL, PARTNER_PLANE)."""
         against = self.partners.kind[partner]
-        self._wall_collisions += int(np.count_nonzero(against != KIND_PAIR))
-        self._collisions += int(np.count_nonzero(against == KIND_PAIR))
+        self._wall_collisions += int(np.count_nonzero(against != PARTNER_BODY))
+        self._collisions += int(np.count_nonzero(against == PARTNER_BODY))
         self._energy_lost += lost
         self._work_done += work
         return against

@@ -1,4 +1,4 @@
-"""The solver's cos and sin of a substep's turn (:func:`carom.engines.rigid.solver.turn`):
+"""The solver's cos and sin of a substep's turn (:func:`carom.geometry.rotation.cos_sin`):
 a Taylor series below 1/4 rad, the library beyond."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from carom.engines.rigid.solver import turn
+from carom.geometry.rotation import cos_sin
 
 ULP = 2.0**-52  # relative spacing of float64 at 1
 
@@ -20,12 +20,12 @@ def test_the_series_agrees_with_the_library_to_an_ulp() -> None:
         [np.linspace(-0.2499, 0.2499, 20001), np.geomspace(1e-12, 0.2499, 400), [0.0]]
     )
     for phi in phis.tolist():
-        c, s = turn(phi)
+        c, s = cos_sin(phi)
         assert abs(c - math.cos(phi)) <= ULP
         assert abs(s - math.sin(phi)) <= ULP * abs(math.sin(phi))
-        assert turn(-phi) == (c, -s)  # even and odd, as the series is
+        assert cos_sin(-phi) == (c, -s)  # even and odd, as the series is
 
 
 def test_large_turns_take_the_library() -> None:
     for phi in (0.25, -0.25, 1.0, -3.0, 100.0):
-        assert turn(phi) == (math.cos(phi), math.sin(phi))
+        assert cos_sin(phi) == (math.cos(phi), math.sin(phi))
