@@ -1,4 +1,4 @@
-"""Interleaved A/B of the event-driven engine: this tree against another carom source tree.
+"""Interleaved A/B of an engine: this tree against another carom source tree.
 
 Each round measures both trees in fresh processes, one after the other (the order alternates
 from round to round), so that the machine's drift over minutes falls on both alike; with
@@ -9,8 +9,13 @@ workload is benchmarks/edmd.py's: a periodic lattice gas (3D packing 0.3, 2D 0.5
 then timed for about 3e5 collisions, best of ``--repeats``. Only API that every carom since
 the first engine has is used, so any two commits can be compared.
 
+``--workload rigid`` measures the time-stepped rigid engines instead: the built-in scenes
+``pyramid`` (2D) and ``pyramid-3d``, built, their kernels loaded, then stepped for a simulated
+second (60 steps), best of ``--repeats``, in steps per second; ``--dims`` picks the scenes.
+
 Run:  git worktree add /tmp/base REV     (or: git archive REV | tar -x -C /tmp/base)
       python benchmarks/ab.py /tmp/base/src --rounds 3 --sizes 1000 10000
+      python benchmarks/ab.py /tmp/base/src --workload rigid --rounds 5 --concurrent
 """
 
 from __future__ import annotations
@@ -52,10 +57,30 @@ print(json.dumps({"collisions_per_s": best, "n": world.n_bodies}))
 """
 
 
+RIGID = """
+import json, sys, time
+from carom.scene import find_scene, load_scene
+dim, repeats = int(sys.argv[1]), int(sys.argv[3])
+name = "pyramid" if dim == 2 else "pyramid-3d"
+best = 0.0
+for _ in range(repeats):
+    world = load_scene(find_scene(name)).build()
+    world.prepare()
+    start = time.perf_counter()
+    world.run(until=1.0)
+    best = max(best, world.counters()[0] / (time.perf_counter() - start))
+print(json.dumps({"collisions_per_s": best, "n": world.n_bodies}))
+"""
+#: what is timed: the event-driven gas (collisions/s) or the rigid pyramids (steps/s)
+WORKLOADS = {"edmd": SNIPPET, "rigid": RIGID}
+WORKLOAD = ["edmd"]
+
+
 def _start(src: Path, dim: int, n: int, repeats: int, cpu: int | None) -> subprocess.Popen[str]:
     pin = ["taskset", "-c", str(cpu)] if cpu is not None else []
+    snippet = WORKLOADS[WORKLOAD[0]]
     return subprocess.Popen(
-        [*pin, sys.executable, "-c", SNIPPET, str(dim), str(n), str(repeats)],
+        [*pin, sys.executable, "-c", snippet, str(dim), str(n), str(repeats)],
         stdout=subprocess.PIPE,
         text=True,
         env={**os.environ, "PYTHONPATH": str(src)},
@@ -93,7 +118,11 @@ def main() -> None:
         "--concurrent", action="store_true", help="both trees at once, one per core (pinned)"
     )
     parser.add_argument("--record", action="store_true", help="append to benchmarks/RESULTS.md")
+    parser.add_argument("--workload", choices=sorted(WORKLOADS), default="edmd")
     args = parser.parse_args()
+    WORKLOAD[0] = args.workload
+    if args.workload == "rigid":
+        args.sizes = [1]  # the scene is the size
     for src in (SRC, args.other):  # compile (or load) each tree's kernels before timing
         measure(src, 3, 1000, 1)
         measure(src, 2, 1000, 1)
@@ -112,7 +141,8 @@ def main() -> None:
                 rows.append((r + 1, dim, n, got["this"], got["other"], ratio))
                 print(
                     f"round {r + 1}, {dim}D, N = {n}: this {got['this']:.3g}, other "
-                    f"{got['other']:.3g} collisions/s, ratio {ratio:.3f}",
+                    f"{got['other']:.3g} {'collisions' if args.workload == 'edmd' else 'steps'}/s, "
+                    f"ratio {ratio:.3f}",
                     flush=True,
                 )
     summary = []
@@ -126,15 +156,17 @@ def main() -> None:
                 f"(from {ratios[0]:.3f} to {ratios[-1]:.3f} over {len(ratios)} rounds)"
             )
     if args.record:
+        unit = "coll/s" if args.workload == "edmd" else "steps/s"
         stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
         lines = [
-            f"\n## edmd interleaved A/B, {stamp}\n",
-            f"- command: `python benchmarks/ab.py {args.other} --rounds {args.rounds} "
+            f"\n## {args.workload} interleaved A/B, {stamp}\n",
+            f"- command: `python benchmarks/ab.py {args.other} --workload {args.workload} "
+            f"--rounds {args.rounds} "
             f"{'--concurrent ' if args.concurrent else ''}"
             f"--sizes {' '.join(map(str, args.sizes))} --dims {' '.join(map(str, args.dims))}`",
             f"- machine: {machine()}",
             f"- this: {SRC} at {commit()} (and any uncommitted change); other: {args.other}\n",
-            "| round | dim | N | this [coll/s] | other [coll/s] | this / other |",
+            f"| round | dim | N | this [{unit}] | other [{unit}] | this / other |",
             "|---|---|---|---|---|---|",
         ]
         lines += [

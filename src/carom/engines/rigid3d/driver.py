@@ -56,7 +56,6 @@ class RigidEngine3D(SteppedEngine):
         m, n = self.model, self.model.kind.shape[0]
         self._made = _room(self._ci.shape[0])  # this step's manifolds, kept once it is taken
         self._made_count = 0
-        self._movers = np.flatnonzero(self._kinematic)
         self._ints = (
             m.piece_body, m.piece_kind, m.piece_vstart, m.piece_vcount, m.piece_fstart,
             m.piece_fcount, m.piece_cstart, m.piece_ccount, m.piece_estart, m.piece_ecount,

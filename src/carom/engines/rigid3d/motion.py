@@ -155,18 +155,9 @@ def relative_velocity(
 
 @njit(cache=True, inline="always")
 def apply_impulse(
-    a: int,
-    b: int,
-    px: float,
-    py: float,
-    pz: float,
-    ra: np.ndarray,
-    rb: np.ndarray,
-    inv_mass: np.ndarray,
-    inv_inertia_world: np.ndarray,
-    v: np.ndarray,
-    w: np.ndarray,
-) -> None:
+    a: int, b: int, px: float, py: float, pz: float, ra: np.ndarray, rb: np.ndarray,
+    inv_mass: np.ndarray, inv_inertia_world: np.ndarray, v: np.ndarray, w: np.ndarray,
+) -> None:  # fmt: skip
     """Impulse ``P`` [N s] on A at ``ra`` and ``-P`` on B at ``rb``."""
     v[a, 0] += inv_mass[a] * px
     v[a, 1] += inv_mass[a] * py

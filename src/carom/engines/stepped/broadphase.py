@@ -84,65 +84,53 @@ def max_cells_of(d: int) -> int:
     return cells
 
 
-#: Teschner's spatial hash: one large prime per axis, xored, masked to the table
-_PRIMES = (73856093, 19349663, 83492791)
+@njit(cache=True, inline="always")
+def _bucket(cx: int, cy: int, cz: int, mask: int) -> int:
+    # Teschner's spatial hash: a large prime per axis, xored, masked to the table; a 2D cell
+    # has cz = 0, which leaves the hash of (cx, cy) as it is
+    return ((cx * 73856093) ^ (cy * 19349663) ^ (cz * 83492791)) & mask
 
 
 @njit(cache=True, inline="always")
-def _bucket(cell: np.ndarray, d: int, mask: int) -> int:
-    h = 0
-    for k in range(d):
-        h ^= cell[k] * _PRIMES[k]
-    return h & mask
+def _cells(boxes: np.ndarray, p: int, k: int, d: int, inv: float) -> tuple[float, float]:
+    """Piece ``p``'s box along axis ``k`` in cells; (0, 0) for the third axis of a 2D box."""
+    if k >= d:
+        return 0.0, 0.0
+    return boxes[p, k] * inv, boxes[p, d + k] * inv
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _buckets(
-    boxes: np.ndarray,
-    p: int,
-    inv: float,
-    mask: int,
-    max_cells: int,
-    lo: np.ndarray,
-    hi: np.ndarray,
-    cell: np.ndarray,
-    mine: np.ndarray,
+    boxes: np.ndarray, p: int, inv: float, mask: int, max_cells: int, mine: np.ndarray
 ) -> int:
     """The distinct buckets of the cells piece ``p``'s box covers, into ``mine``; return how
-    many, or -1 when the box covers more than ``max_cells`` cells (a big piece). ``lo``,
-    ``hi``, ``cell``: (d,) int64 scratch."""
+    many, or -1 when the box covers more than ``max_cells`` cells (a big piece)."""
     d = boxes.shape[1] // 2
-    covered = 1
-    for k in range(d):
-        a = boxes[p, k] * inv
-        b = boxes[p, d + k] * inv
+    x0, x1 = _cells(boxes, p, 0, d, inv)
+    y0, y1 = _cells(boxes, p, 1, d, inv)
+    z0, z1 = _cells(boxes, p, 2, d, inv)
+    for a, b in ((x0, x1), (y0, y1), (z0, z1)):
         # an unbounded box (a plane's) or a very long one covers too many cells
         if not (math.isfinite(a) and math.isfinite(b)) or b - a > max_cells:
             return -1
-        lo[k] = math.floor(a)
-        hi[k] = math.floor(b)
-        covered *= hi[k] - lo[k] + 1
-    if covered > max_cells:
+    lx, hx = math.floor(x0), math.floor(x1)
+    ly, hy = math.floor(y0), math.floor(y1)
+    lz, hz = math.floor(z0), math.floor(z1)
+    if (hx - lx + 1) * (hy - ly + 1) * (hz - lz + 1) > max_cells:
         return -1
     used = 0
-    cell[:d] = lo[:d]
-    while True:
-        h = _bucket(cell, d, mask)
-        seen = False
-        for k in range(used):
-            if mine[k] == h:
-                seen = True
-        if not seen:
-            mine[used] = h
-            used += 1
-        # the next cell of the box, the last axis fastest
-        k = d - 1
-        while k >= 0 and cell[k] == hi[k]:
-            cell[k] = lo[k]
-            k -= 1
-        if k < 0:
-            return used
-        cell[k] += 1
+    for cx in range(lx, hx + 1):
+        for cy in range(ly, hy + 1):
+            for cz in range(lz, hz + 1):
+                h = _bucket(cx, cy, cz, mask)
+                seen = False
+                for k in range(used):
+                    if mine[k] == h:
+                        seen = True
+                if not seen:
+                    mine[used] = h
+                    used += 1
+    return used
 
 
 @njit(cache=True)
@@ -184,13 +172,10 @@ def find_pairs(
     big = np.zeros(n, np.bool_)
     start = np.zeros(size + 1, np.int64)
     mine = np.empty(max_cells, np.int64)
-    lo = np.zeros(d, np.int64)
-    hi = np.zeros(d, np.int64)
-    at = np.zeros(d, np.int64)
     # every piece goes in the grid, even one of a body that does not move (static, asleep,
     # kinematic at rest): an active body may run into it
     for p in range(n):
-        used = _buckets(boxes, p, inv, mask, max_cells, lo, hi, at, mine)
+        used = _buckets(boxes, p, inv, mask, max_cells, mine)
         if used < 0:
             big[p] = True
         for k in range(used):
@@ -200,7 +185,7 @@ def find_pairs(
     fill = start[:-1].copy()
     entries = np.empty(start[size], np.int64)
     for p in range(n):
-        for k in range(_buckets(boxes, p, inv, mask, max_cells, lo, hi, at, mine)):
+        for k in range(_buckets(boxes, p, inv, mask, max_cells, mine)):
             h = mine[k]
             entries[fill[h]] = p
             fill[h] += 1
@@ -216,9 +201,10 @@ def find_pairs(
                 if not _overlap_any(boxes, a, b):
                     continue
                 # report from the bucket of the overlap's lowest cell only
-                for k in range(d):
-                    at[k] = math.floor(max(boxes[a, k], boxes[b, k]) * inv)
-                if _bucket(at, d, mask) != h:
+                cx = math.floor(max(boxes[a, 0], boxes[b, 0]) * inv)
+                cy = math.floor(max(boxes[a, 1], boxes[b, 1]) * inv)
+                cz = math.floor(max(boxes[a, 2], boxes[b, 2]) * inv) if d == 3 else 0
+                if _bucket(cx, cy, cz, mask) != h:
                     continue
                 if count < capacity:
                     pairs[count, 0] = min(a, b)

@@ -2,9 +2,9 @@
 half of a contact row, each contact's extremes for the islands, and the warm-start cache
 (Box2D's and Rapier's warm start), read and written alike in 2D and 3D.
 
-A dimension's float row layout is told to these kernels by its columns: ``point0`` (the
-first point's first column), ``point_floats`` (columns per point) and, from a point's offset,
-the columns of its separation, normal relative speed and accumulated normal impulse.
+A dimension's float row layout is told to these kernels as a ``layout`` tuple of its columns:
+the first point's first column, the columns per point and, from a point's offset, the columns
+of the values a kernel reads.
 """
 
 from __future__ import annotations
@@ -74,12 +74,13 @@ def pair_of(pairs: np.ndarray, k: int, piece_body: np.ndarray) -> tuple[int, int
 
 @njit(cache=True, inline="always")
 def relative_speed(v: np.ndarray, a: int, b: int) -> float:
-    """``|v_a - v_b|`` [m/s] of two bodies' velocities ``v`` (N, d)."""
-    total = 0.0
-    for k in range(v.shape[1]):
-        dv = v[a, k] - v[b, k]
-        total += dv * dv
-    speed: float = math.sqrt(total)
+    """``|v_a - v_b|`` [m/s] of two bodies' velocities ``v`` (N, d), d = 2 or 3."""
+    dx = v[a, 0] - v[b, 0]
+    dy = v[a, 1] - v[b, 1]
+    if v.shape[1] == 2:
+        return math.sqrt(dx * dx + dy * dy)
+    dz = v[a, 2] - v[b, 2]
+    speed: float = math.sqrt(dx * dx + dy * dy + dz * dz)
     return speed
 
 
@@ -124,17 +125,13 @@ def write_pair(
 
 @njit(cache=True)
 def extremes(
-    cf: np.ndarray,
-    ci: np.ndarray,
-    nc: int,
-    point0: int,
-    point_floats: int,
-    sep: int,
-    vrel: int,
+    cf: np.ndarray, ci: np.ndarray, nc: int, layout: tuple[int, int, int, int]
 ) -> tuple[np.ndarray, np.ndarray]:
     """Each contact's least separation [m] and least normal relative speed [m/s] over its
-    points, (nc,) each (:func:`carom.engines.stepped.islands.plan`); ``sep`` and ``vrel`` are
-    their columns from a point's offset."""
+    points, (nc,) each (:func:`carom.engines.stepped.islands.plan`). ``layout``: a row's first
+    point column, the columns per point, and the separation's and speed's columns from a
+    point's offset."""
+    point0, point_floats, sep, vrel = layout
     closest = np.full(nc, np.inf)
     closing = np.full(nc, np.inf)
     for m in range(nc):
@@ -147,25 +144,20 @@ def extremes(
 
 @njit(cache=True)
 def store_points(
-    cf: np.ndarray,
-    ci: np.ndarray,
-    n_contacts: int,
-    n_pieces: int,
-    point0: int,
-    point_floats: int,
-    jn: int,
-    cache_keys: np.ndarray,
-    cache_ids: np.ndarray,
+    cf: np.ndarray, ci: np.ndarray, n_contacts: int, n_pieces: int,
+    layout: tuple[int, int, int], cache_keys: np.ndarray, cache_ids: np.ndarray,
     cache_impulses: np.ndarray,
-) -> int:
-    """Keep each contact's key, its points' feature ids and normal impulses (column ``jn``
-    from a point's offset) for the next step's warm start; return the count.
+) -> int:  # fmt: skip
+    """Keep each contact's key, its points' feature ids and normal impulses for the next
+    step's warm start; return the count. ``layout``: a row's first point column, the columns
+    per point, and the normal impulse's column from a point's offset.
 
     ``cache_impulses`` (K, points, C): per point the normal impulse, then C - 1 tangent
     components, zeroed here; the dimension writes the tangents of the points a contact has.
     A point the contact lacks gets id -1. Contacts come in key order (their pairs were
     sorted), so the cache stays sorted.
     """
+    point0, point_floats, jn = layout
     for m in range(n_contacts):
         cache_keys[m] = ci[m, I_PIECE_A] * n_pieces + ci[m, I_PIECE_B]
         for q in range(cache_ids.shape[1]):

@@ -157,6 +157,8 @@ class SteppedEngine:
         self._role = np.zeros(n, np.int64)
         self._dynamic = model.kind == KIND_DYNAMIC
         self._kinematic = model.kind == KIND_KINEMATIC
+        #: the kinematic bodies (indices)
+        self._movers = np.flatnonzero(self._kinematic)
         self._accel = np.zeros((n, dims))
         self._accel[self._dynamic] = model.gravity
         self._g = float(np.linalg.norm(model.gravity))
@@ -218,7 +220,7 @@ class SteppedEngine:
             nc = self._contacts()
         isolated = np.zeros(max(nc, 1), np.int64)
         closest, closing = extremes(
-            self._cf, self._ci, nc, rows.POINT0, rows.POINT_FLOATS, rows.P_SEP, rows.P_VREL
+            self._cf, self._ci, nc, (rows.POINT0, rows.POINT_FLOATS, rows.P_SEP, rows.P_VREL)
         )
         leaving = math.inf if math.isinf(self.LEAVING) else self.LEAVING * st.restitution_threshold
         n_iso = islands.plan(
@@ -251,9 +253,10 @@ class SteppedEngine:
         # the cache as (K, points, values): a view (2D keeps (K, 4), 3D (K, 4, 4))
         per_point = math.prod(mem.cache_impulses.shape[1:]) // rows.MAX_POINTS
         cache = mem.cache_impulses.reshape(mem.cache_keys.shape[0], rows.MAX_POINTS, per_point)
+        stored = (rows.POINT0, rows.POINT_FLOATS, rows.P_JN)
         mem.cache_count[0] = store_points(
-            self._cf, self._ci, nc, m.piece_body.shape[0], rows.POINT0, rows.POINT_FLOATS,
-            rows.P_JN, mem.cache_keys, mem.cache_ids, cache,
+            self._cf, self._ci, nc, m.piece_body.shape[0], stored, mem.cache_keys,
+            mem.cache_ids, cache,
         )  # fmt: skip
         rows.store_tangents(self._cf, self._ci, nc, cache)
         self._keep_manifolds()
@@ -342,10 +345,13 @@ class SteppedEngine:
 
     def _moving(self) -> NDArray[np.bool_]:
         """Kinematic bodies in motion (N,)."""
-        s = self.state
-        spin: FloatArray = getattr(s, self.SPIN)  # (N,) in 2D, (N, 3) in 3D
-        turning = np.any(spin.reshape(spin.shape[0], -1) != 0.0, axis=1)
-        moving: NDArray[np.bool_] = self._kinematic & (np.any(s.v != 0.0, axis=1) | turning)
+        moving = np.zeros(self._kinematic.shape[0], np.bool_)
+        movers = self._movers
+        if movers.size:
+            s = self.state
+            spin = getattr(s, self.SPIN)[movers]  # (K,) in 2D, (K, 3) in 3D
+            turning = np.any(spin.reshape(movers.size, -1) != 0.0, axis=1)
+            moving[movers] = np.any(s.v[movers] != 0.0, axis=1) | turning
         return moving
 
     def _fastest(self) -> FloatArray:
