@@ -393,17 +393,7 @@ def _pyramid(entry: Mapping[str, Any], dim: int = 2) -> dict[str, Any]:
     positions = (np.asarray(entry["base"], float) + copies[:, None, :] + one[None, :, :]).reshape(
         -1, 2
     )
-    return {
-        "shape": "box",
-        "size": [w, h],
-        "radius": entry["radius"],
-        "positions": positions.tolist(),
-        "velocities": None,
-        "mass": None,
-        "density": entry["density"],
-        "material": entry["material"],
-        "static": False,
-    }
+    return _stacked_boxes(entry, [w, h], entry["radius"], positions)
 
 
 def _pyramid_3d(entry: Mapping[str, Any]) -> dict[str, Any]:
@@ -428,10 +418,18 @@ def _pyramid_3d(entry: Mapping[str, Any]) -> dict[str, Any]:
         for i in range(n)
     ]
     positions = base + np.array(offsets)
+    return _stacked_boxes(entry, [a, b, c], None, positions)
+
+
+def _stacked_boxes(
+    entry: Mapping[str, Any], size: list[float], radius: float | None, positions: np.ndarray
+) -> dict[str, Any]:
+    """The ``[[bodies]]`` entry of a pyramid's boxes (2D or 3D): dynamic, at rest, the
+    pyramid's density and material."""
     return {
         "shape": "box",
-        "size": [a, b, c],
-        "radius": None,
+        "size": size,
+        "radius": radius,
         "positions": positions.tolist(),
         "velocities": None,
         "mass": None,
