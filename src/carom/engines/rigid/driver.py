@@ -26,6 +26,57 @@ __all__ = ["RigidEngine"]
 FloatArray = NDArray[np.float64]
 
 
+_WARM = False
+
+
+def warm_up() -> None:
+    """Load (or compile) every kernel a step can call, once per process: a small scene that
+    exercises them all runs 40 steps (an exact impact, resting contacts that fall asleep, a
+    kinematic paddle, circle, capsule and polygon pairs). Numba loads a kernel from the
+    cache at its first call, so without this a scene's first impact or first sleep would
+    pay for it inside a timed run."""
+    global _WARM
+    if _WARM:
+        return
+    from carom.engines.rigid.model import build_model, new_state
+    from carom.shapes import Box, Capsule, Circle, Polygon
+
+    inf = math.inf
+    shapes = [
+        (Box(4.0, 0.5), KIND_STATIC, inf, (0.0, -0.25), (0.0, 0.0)),
+        (Box(0.2, 0.2), KIND_DYNAMIC, 1.0, (-1.0, 0.3), (0.0, 0.0)),  # falls: exact impact
+        (Box(0.3, 0.3), KIND_DYNAMIC, 1.0, (0.0, 0.15), (0.0, 0.0)),  # resting stack
+        (Polygon.regular(5, 0.15), KIND_DYNAMIC, 1.0, (0.0, 0.45), (0.0, 0.0)),
+        (Circle(0.1), KIND_DYNAMIC, 1.0, (1.0, 0.1), (0.0, 0.0)),
+        (Capsule(0.3, 0.05), KIND_DYNAMIC, 1.0, (1.5, 0.05), (0.0, 0.0)),
+        (Box(0.05, 0.4), KIND_KINEMATIC, inf, (0.6, 0.2), (0.5, 0.0)),  # paddle
+    ]
+    props = [
+        shape.mass_properties(mass=mass) if kind == KIND_DYNAMIC else None
+        for shape, kind, mass, _, _ in shapes
+    ]
+    model = build_model(
+        [shape.pieces() for shape, *_ in shapes],
+        np.array([kind for _, kind, *_ in shapes]),
+        np.array([p.mass if p else inf for p in props]),
+        np.array([p.inertia if p else inf for p in props]),
+        np.zeros(len(shapes), np.int64),
+        np.array([[0.5]]),
+        np.array([[0.5]]),
+        np.array([0.0, -10.0]),
+    )
+    n = len(shapes)
+    x = np.array([pos for *_, pos, _ in shapes], float)
+    v = np.array([vel for *_, vel in shapes], float)
+    state = new_state(model, x, v, np.zeros(n), np.zeros(n))
+    settings = RigidSettings(sleep_time=0.1)
+    engine = RigidEngine(model, state, settings)
+    for _ in range(40):
+        engine.step()
+    engine.deepest_overlap()
+    _WARM = True
+
+
 class RigidEngine(SteppedEngine):
     """The time-stepped engine for 2D rigid bodies with rotation: the shared driver
     (:class:`carom.engines.stepped.driver.SteppedEngine`, its parameters and energy ledger)
@@ -39,7 +90,7 @@ class RigidEngine(SteppedEngine):
     model: RigidModel
     state: RigidState
 
-    _warm_kernels = staticmethod(lambda: warm_up())
+    _warm_kernels = staticmethod(warm_up)
 
     def _setup(self) -> None:
         m, s = self.model, self.state
@@ -138,54 +189,3 @@ class RigidEngine(SteppedEngine):
                 rows, self._dynamic, m.mass, m.inertia, s.x, s.v, s.omega, gx, gy
             )
         )
-
-
-_WARM = False
-
-
-def warm_up() -> None:
-    """Load (or compile) every kernel a step can call, once per process: a small scene that
-    exercises them all runs 40 steps (an exact impact, resting contacts that fall asleep, a
-    kinematic paddle, circle, capsule and polygon pairs). Numba loads a kernel from the
-    cache at its first call, so without this a scene's first impact or first sleep would
-    pay for it inside a timed run."""
-    global _WARM
-    if _WARM:
-        return
-    from carom.engines.rigid.model import build_model, new_state
-    from carom.shapes import Box, Capsule, Circle, Polygon
-
-    inf = math.inf
-    shapes = [
-        (Box(4.0, 0.5), KIND_STATIC, inf, (0.0, -0.25), (0.0, 0.0)),
-        (Box(0.2, 0.2), KIND_DYNAMIC, 1.0, (-1.0, 0.3), (0.0, 0.0)),  # falls: exact impact
-        (Box(0.3, 0.3), KIND_DYNAMIC, 1.0, (0.0, 0.15), (0.0, 0.0)),  # resting stack
-        (Polygon.regular(5, 0.15), KIND_DYNAMIC, 1.0, (0.0, 0.45), (0.0, 0.0)),
-        (Circle(0.1), KIND_DYNAMIC, 1.0, (1.0, 0.1), (0.0, 0.0)),
-        (Capsule(0.3, 0.05), KIND_DYNAMIC, 1.0, (1.5, 0.05), (0.0, 0.0)),
-        (Box(0.05, 0.4), KIND_KINEMATIC, inf, (0.6, 0.2), (0.5, 0.0)),  # paddle
-    ]
-    props = [
-        shape.mass_properties(mass=mass) if kind == KIND_DYNAMIC else None
-        for shape, kind, mass, _, _ in shapes
-    ]
-    model = build_model(
-        [shape.pieces() for shape, *_ in shapes],
-        np.array([kind for _, kind, *_ in shapes]),
-        np.array([p.mass if p else inf for p in props]),
-        np.array([p.inertia if p else inf for p in props]),
-        np.zeros(len(shapes), np.int64),
-        np.array([[0.5]]),
-        np.array([[0.5]]),
-        np.array([0.0, -10.0]),
-    )
-    n = len(shapes)
-    x = np.array([pos for *_, pos, _ in shapes], float)
-    v = np.array([vel for *_, vel in shapes], float)
-    state = new_state(model, x, v, np.zeros(n), np.zeros(n))
-    settings = RigidSettings(sleep_time=0.1)
-    engine = RigidEngine(model, state, settings)
-    for _ in range(40):
-        engine.step()
-    engine.deepest_overlap()
-    _WARM = True

@@ -35,6 +35,58 @@ FloatArray = NDArray[np.float64]
 LEAVING = 0.1
 
 
+_WARM = False
+
+
+def warm_up() -> None:
+    """Load (or compile) every kernel a step can call, once per process: a small scene with
+    every pair of piece kinds (ball, capsule, box, a mesh triangle, a plane) runs 30 steps,
+    so a scene's first contact of a new kind is not paid for inside a timed run."""
+    global _WARM
+    if _WARM:
+        return
+    from carom.engines.rigid3d.model import (
+        build_model,
+        engine_pieces,
+        new_state,
+        plane_piece,
+        triangle_piece,
+    )
+    from carom.shapes3d import Box, Capsule, Sphere
+
+    inf = math.inf
+    shapes = [Sphere(0.1), Capsule(0.2, 0.05), Box([0.2, 0.2, 0.2]), Box([0.1, 0.3, 0.1])]
+    pieces = [engine_pieces(shape.pieces(), 0.0) for shape in shapes]
+    pieces.append([plane_piece(np.array([0.0, 0.0, 1.0]), 0.0)])
+    pieces.append([triangle_piece(np.array([[0.5, -1.0, 0.0], [2.0, -1.0, 0.0], [0.5, 1.0, 0.0]]))])
+    props = [shape.mass_properties(mass=1.0) for shape in shapes]
+    n = len(pieces)
+    kind = np.array([KIND_DYNAMIC] * 4 + [KIND_STATIC] * 2)
+    model = build_model(
+        pieces,
+        kind,
+        np.array([1.0] * 4 + [inf, inf]),
+        np.array([p.inertia for p in props] + [np.eye(3)] * 2),
+        np.zeros(n, np.int64),
+        np.array([[0.5]]),
+        np.array([[0.5]]),
+        np.array([[1e-3]]),
+        np.array([0.0, 0.0, -10.0]),
+    )
+    x = np.array([[0.0, 0.0, 0.1], [0.0, 0.3, 0.3], [0.0, 0.0, 0.35], [0.9, 0.0, 0.1],
+                  [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # fmt: skip
+    q = np.zeros((n, 4))
+    q[:, 0] = 1.0
+    w = np.zeros((n, 3))
+    w[1] = (1.0, 2.0, 3.0)
+    state = new_state(model, x, np.zeros((n, 3)), q, w)
+    engine = RigidEngine3D(model, state, RigidSettings())
+    for _ in range(30):
+        engine.step()
+    engine.deepest_overlap()
+    _WARM = True
+
+
 class RigidEngine3D(SteppedEngine):
     """The time-stepped engine for 3D rigid bodies with rotation: the shared driver
     (:class:`carom.engines.stepped.driver.SteppedEngine`, its parameters and energy ledger)
@@ -50,7 +102,7 @@ class RigidEngine3D(SteppedEngine):
     model: Model3D
     state: State3D
 
-    _warm_kernels = staticmethod(lambda: warm_up())
+    _warm_kernels = staticmethod(warm_up)
 
     def _setup(self) -> None:
         m, n = self.model, self.model.kind.shape[0]
@@ -200,55 +252,3 @@ def _room(rows: int) -> tuple[NDArray[np.int64], NDArray[np.int64], FloatArray]:
     (:func:`.model.empty_manifolds`)."""
     made = empty_manifolds(rows)
     return made["manifold_keys"], made["manifold_ints"], made["manifold_floats"]
-
-
-_WARM = False
-
-
-def warm_up() -> None:
-    """Load (or compile) every kernel a step can call, once per process: a small scene with
-    every pair of piece kinds (ball, capsule, box, a mesh triangle, a plane) runs 30 steps,
-    so a scene's first contact of a new kind is not paid for inside a timed run."""
-    global _WARM
-    if _WARM:
-        return
-    from carom.engines.rigid3d.model import (
-        build_model,
-        engine_pieces,
-        new_state,
-        plane_piece,
-        triangle_piece,
-    )
-    from carom.shapes3d import Box, Capsule, Sphere
-
-    inf = math.inf
-    shapes = [Sphere(0.1), Capsule(0.2, 0.05), Box([0.2, 0.2, 0.2]), Box([0.1, 0.3, 0.1])]
-    pieces = [engine_pieces(shape.pieces(), 0.0) for shape in shapes]
-    pieces.append([plane_piece(np.array([0.0, 0.0, 1.0]), 0.0)])
-    pieces.append([triangle_piece(np.array([[0.5, -1.0, 0.0], [2.0, -1.0, 0.0], [0.5, 1.0, 0.0]]))])
-    props = [shape.mass_properties(mass=1.0) for shape in shapes]
-    n = len(pieces)
-    kind = np.array([KIND_DYNAMIC] * 4 + [KIND_STATIC] * 2)
-    model = build_model(
-        pieces,
-        kind,
-        np.array([1.0] * 4 + [inf, inf]),
-        np.array([p.inertia for p in props] + [np.eye(3)] * 2),
-        np.zeros(n, np.int64),
-        np.array([[0.5]]),
-        np.array([[0.5]]),
-        np.array([[1e-3]]),
-        np.array([0.0, 0.0, -10.0]),
-    )
-    x = np.array([[0.0, 0.0, 0.1], [0.0, 0.3, 0.3], [0.0, 0.0, 0.35], [0.9, 0.0, 0.1],
-                  [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # fmt: skip
-    q = np.zeros((n, 4))
-    q[:, 0] = 1.0
-    w = np.zeros((n, 3))
-    w[1] = (1.0, 2.0, 3.0)
-    state = new_state(model, x, np.zeros((n, 3)), q, w)
-    engine = RigidEngine3D(model, state, RigidSettings())
-    for _ in range(30):
-        engine.step()
-    engine.deepest_overlap()
-    _WARM = True

@@ -89,12 +89,12 @@ from carom.engines.rigid3d.motion import (
     world_inverse_inertia,
 )
 from carom.engines.stepped import solver as shared
-from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_COUNT
+from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
 from carom.engines.stepped.solver import LANE_MATH, LANES, soft_bias
 from carom.geometry.manifold3d import MAX_POINTS
 from carom.geometry.rotation import axis_angle_matrix, matrix
 
-__all__ = ["FLAG_EXACT", "solve_step"]
+__all__ = ["solve_step"]
 
 
 # rows of a group (each LANES wide, row r from r * LANES on): the contact's ...
