@@ -163,6 +163,13 @@ class SteppedEngine:
         self._accel[self._dynamic] = model.gravity
         self._g = float(np.linalg.norm(model.gravity))
         self.n_contacts = 0
+        # what every step reads the same way: the rows' columns the shared kernels take, a
+        # cached contact's values per point, the leaving speed (inf: never)
+        self._extremes_layout = (rows.POINT0, rows.POINT_FLOATS, rows.P_SEP, rows.P_VREL)
+        self._store_layout = (rows.POINT0, rows.POINT_FLOATS, rows.P_JN)
+        self._per_point = math.prod(rows.CACHE_IMPULSES) // rows.MAX_POINTS
+        threshold = settings.restitution_threshold
+        self._leaving = math.inf if math.isinf(self.LEAVING) else self.LEAVING * threshold
         if memory is None:
             memory = new_memory(model.kind, rows.MAX_POINTS, rows.CACHE_IMPULSES)
         #: sleep and the warm-start cache
@@ -219,14 +226,11 @@ class SteppedEngine:
         ):
             nc = self._contacts()
         isolated = np.zeros(max(nc, 1), np.int64)
-        closest, closing = extremes(
-            self._cf, self._ci, nc, (rows.POINT0, rows.POINT_FLOATS, rows.P_SEP, rows.P_VREL)
-        )
-        leaving = math.inf if math.isinf(self.LEAVING) else self.LEAVING * st.restitution_threshold
+        closest, closing = extremes(self._cf, self._ci, nc, self._extremes_layout)
         n_iso = islands.plan(
             self._ci, nc, closest, closing, m.kind, mem.awake, st.exact_impacts,
-            0.1 * st.linear_slop, st.restitution_threshold, leaving, self._parent, self._role,
-            isolated,
+            0.1 * st.linear_slop, st.restitution_threshold, self._leaving, self._parent,
+            self._role, isolated,
         )  # fmt: skip
         if n_iso:
             log = self._exact_impacts(isolated, n_iso, closing)
@@ -251,11 +255,10 @@ class SteppedEngine:
                 cache_impulses=np.zeros((size, *mem.cache_impulses.shape[1:])),
             )
         # the cache as (K, points, values): a view (2D keeps (K, 4), 3D (K, 4, 4))
-        per_point = math.prod(mem.cache_impulses.shape[1:]) // rows.MAX_POINTS
-        cache = mem.cache_impulses.reshape(mem.cache_keys.shape[0], rows.MAX_POINTS, per_point)
-        stored = (rows.POINT0, rows.POINT_FLOATS, rows.P_JN)
+        size = mem.cache_keys.shape[0]
+        cache = mem.cache_impulses.reshape(size, rows.MAX_POINTS, self._per_point)
         mem.cache_count[0] = store_points(
-            self._cf, self._ci, nc, m.piece_body.shape[0], stored, mem.cache_keys,
+            self._cf, self._ci, nc, m.piece_body.shape[0], self._store_layout, mem.cache_keys,
             mem.cache_ids, cache,
         )  # fmt: skip
         rows.store_tangents(self._cf, self._ci, nc, cache)
