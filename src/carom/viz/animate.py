@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Sequence
+from functools import cache
 from pathlib import Path
 from typing import Any, cast
 
@@ -272,12 +273,22 @@ class Outlines:
         self.owner = np.repeat(self.body, sizes)
         self.splits = np.cumsum(sizes, dtype=np.int64)[:-1]
 
-    def placed(
-        self, local: FloatArray, positions: FloatArray, angles: FloatArray
-    ) -> list[FloatArray]:
-        """The polygons of ``local`` outline points (M, 2) in the world, bodies at
-        ``positions`` (N, 2) [m] turned by ``angles`` (N,) [rad]."""
-        return np.split(_place(local, self.owner, positions, angles), self.splits)
+    def polygons(self, local: FloatArray) -> list[FloatArray]:
+        """``local`` outline points (M, 2), one per point of :attr:`points`, split into their
+        polygons (in their bodies' frames) [m]."""
+        return np.split(local, self.splits)
+
+    def placements(self, positions: FloatArray, angles: FloatArray) -> FloatArray:
+        """Each polygon's map from its body's frame to the world (K, 3, 3), as an affine
+        matrix on (x, y, 1): bodies at ``positions`` (N, 2) [m] turned by ``angles`` (N,)
+        [rad]."""
+        theta = angles[self.body]
+        c, s = np.cos(theta), np.sin(theta)
+        placement = np.zeros((len(self.body), 3, 3))
+        placement[:, 0, 0], placement[:, 0, 1], placement[:, 0, 2] = c, -s, positions[self.body, 0]
+        placement[:, 1, 0], placement[:, 1, 1], placement[:, 1, 2] = s, c, positions[self.body, 1]
+        placement[:, 2, 2] = 1.0
+        return placement
 
     def strips(self) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.int64]]:
         """The outlines as closed line strips, a circle's ending in a spoke to its centre (so
@@ -427,6 +438,24 @@ def _outline(core: FloatArray, radius: float) -> FloatArray:
     return np.concatenate(ring)
 
 
+@cache
+def _placed_polygons() -> Any:
+    """A matplotlib ``PolyCollection`` whose polygons stay as given (in their bodies'
+    frames) and are drawn through the affine maps (K, 3, 3) in its ``placement``, one per
+    polygon, before the axes' own transform (``Collection.get_transforms``)."""
+    from matplotlib.collections import PolyCollection
+
+    class PlacedPolygons(PolyCollection):
+        def __init__(self, polygons: list[FloatArray], **style: Any) -> None:
+            super().__init__(polygons, **style)
+            self.placement = np.zeros((0, 3, 3))
+
+        def get_transforms(self) -> Any:  # (K, 3, 3) float64
+            return self.placement
+
+    return PlacedPolygons
+
+
 class _Camera:
     """Perspective view of a 3D box from above and in front (z up)."""
 
@@ -465,6 +494,7 @@ class _Painter:
         self.ax.set_aspect("equal")
         self.ax.set_axis_off()
         self.camera: _Camera | None = None
+        self.front: Any = None
         box = scene.box
         style = {"colors": "0.25", "linewidths": 1.2, "linestyles": "--" if scene.periodic else "-"}
         if scene.dim == 2:
@@ -490,7 +520,8 @@ class _Painter:
             front = [screen[[a, b]] for a, b in edges if far not in (a, b)]
             self.ax.add_collection(LineCollection(back, zorder=1, alpha=0.8, **style))
             front_style = {**style, "linewidths": 0.9}
-            self.ax.add_collection(LineCollection(front, zorder=3, alpha=0.45, **front_style))
+            self.front = LineCollection(front, zorder=3, alpha=0.45, **front_style)
+            self.ax.add_collection(self.front)
             low, high = screen.min(axis=0), screen.max(axis=0)
         pad = 0.04 * float(np.max(high - low))
         self.ax.set_xlim(low[0] - pad, high[0] + pad)
@@ -511,18 +542,35 @@ class _Painter:
 
         self.faces: Any = PolyCollection([], linewidths=0.3, zorder=2)
         self.ax.add_collection(self.faces)
-        self.shapes: Any = PolyCollection([], linewidths=0.4, zorder=2)
-        self.insets: Any = PolyCollection([], linewidths=0, zorder=2)
+        # a 2D body's outline and its lighter inset, shifted towards the light, are fixed in
+        # its frame: each frame moves them (as matplotlib's per-path transforms) rather than
+        # building them anew
+        outlines = scene.outlines
+        shift = 0.04 * float(np.median(scene.radius[outlines.body])) if len(outlines.body) else 0
+        placed = _placed_polygons()
+        self.shapes: Any = placed(outlines.polygons(outlines.points), linewidths=0.4, zorder=2)
+        self.insets: Any = placed(
+            outlines.polygons(outlines.inset + shift * _LIGHT), linewidths=0, zorder=2
+        )
         self.ax.add_collection(self.shapes)
         self.ax.add_collection(self.insets)
-        self.stamp = self.fig.text(0.04, 0.93, "", family="monospace", fontsize=13)
         self.fig.text(0.04, 0.965, title, fontsize=13, weight="bold")
+        self.stamp = self.fig.text(0.04, 0.93, "", family="monospace", fontsize=13)
         bar_ax = self.fig.add_axes((0.88, 0.15, 0.025, 0.6))
         mappable = matplotlib.cm.ScalarMappable(
             norm=Normalize(0.0, scene.speed_scale), cmap=matplotlib.colormaps["plasma"]
         )
         self.fig.colorbar(mappable, cax=bar_ax, label="speed [m/s]")
         self.plt = plt
+        # what moves is drawn every frame over a picture of what does not (blitting): the
+        # colour bar, the title, the box's back edges are drawn once; the box's front edges
+        # go over the bodies
+        self.moving_parts = [self.disks, self.faces, self.shapes, self.insets]
+        self.moving_parts += [self.front] if self.front is not None else []
+        for artist in [*self.moving_parts, self.stamp]:
+            artist.set_animated(True)
+        self.fig.canvas.draw()
+        self.still = cast(Any, self.fig.canvas).copy_from_bbox(self.fig.bbox)
 
     def draw(
         self,
@@ -538,11 +586,10 @@ class _Painter:
         if len(outlines.body):
             turn = np.zeros(len(positions)) if angles is None else np.asarray(angles, float)
             colour = every[outlines.body]
-            shift = 0.04 * float(np.median(scene.radius[outlines.body])) * _LIGHT
-            self.shapes.set_verts(outlines.placed(outlines.points, positions, turn))
+            placement = outlines.placements(positions, turn)
+            self.shapes.placement = self.insets.placement = placement
             self.shapes.set_facecolor(colour * 0.72)
             self.shapes.set_edgecolor(colour * 0.45)
-            self.insets.set_verts(outlines.placed(outlines.inset + shift, positions, turn))
             self.insets.set_facecolor(colour + (1.0 - colour) * 0.12)
         if self.camera is not None and len(scene.facets.body):
             turns = np.zeros((len(positions), 4)) if angles is None else np.asarray(angles)
@@ -578,7 +625,10 @@ class _Painter:
         self.disks.set_facecolor(np.clip(colours.reshape(-1, 3), 0.0, 1.0))
         self.stamp.set_text(f"t = {t:8.4f} s")
         canvas: Any = self.fig.canvas  # Agg: it has buffer_rgba
-        canvas.draw()
+        canvas.restore_region(self.still)
+        for artist in self.moving_parts:
+            self.ax.draw_artist(artist)
+        self.fig.draw_artist(self.stamp)
         rgba = np.asarray(canvas.buffer_rgba())
         return rgba[..., :3].copy()
 
@@ -611,7 +661,7 @@ class _Painter:
         face = face[order]
         edge = face.copy()
         edge[:, :3] *= 0.8
-        self.faces.set_verts(list(screen[order]))
+        self.faces.set_verts(screen[order])  # an array: matplotlib closes the triangles at once
         self.faces.set_facecolor(face)
         self.faces.set_edgecolor(edge)
 
