@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import carom
+from carom.errors import CaromError
 from carom.scene import Scene, SceneError, load_scene
 
 GOOD = """\
@@ -175,6 +176,19 @@ def test_each_bad_scene_gets_one_clear_message(
     path = _write(tmp_path, GOOD.replace(old, new, 1))
     with pytest.raises(SceneError, match=message):
         load_scene(path).build()
+
+
+def test_a_scene_built_without_its_engine_checks_the_start_on_its_first_run(
+    tmp_path: Path,
+) -> None:
+    # build(engine=False) places the bodies and builds nothing else (no kernel compiles:
+    # the showcase sorts its scenes by engine that way); the overlap is refused at the run
+    path = _write(tmp_path, GOOD.replace("[[0.5, 1.0], [3.5, 1.0]]", "[[0.5, 1.0], [0.6, 1.0]]"))
+    world = load_scene(path).build(engine=False)
+    assert world.engine is None
+    assert world.n_bodies == 22
+    with pytest.raises(CaromError, match=r"spheres 0 and 1 overlap"):
+        world.run(0.1)
 
 
 def test_walls_take_materials_by_name(tmp_path: Path) -> None:

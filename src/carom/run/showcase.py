@@ -149,7 +149,7 @@ def _start_scenes(
     folders = {scene: folder / Path(scene).stem for scene in scenes}
     groups: dict[str, list[str]] = {}
     for scene in scenes:
-        world = load_scene(find_scene(scene)).build()  # (no engine is built: nothing compiles)
+        world = load_scene(find_scene(scene)).build(engine=False)  # (nothing compiles)
         groups.setdefault(world.engine_entry.plugs[world.dim], []).append(scene)
     lanes: list[list[str]] = [[], []]
     work = [0.0, 0.0]

@@ -47,8 +47,9 @@ class Scene(Protocol):
     text: str
 
 
-def build_world(scene: Scene) -> World:
-    """The :class:`carom.World` ``scene`` describes (bodies placed, nothing run yet)."""
+def build_world(scene: Scene, *, engine: bool = True) -> World:
+    """The :class:`carom.World` ``scene`` describes (bodies placed, nothing run yet); with
+    ``engine``, its engine built too (:meth:`carom.World.build`: the bodies' start checked)."""
     where = Locator(scene.source, scene.text)
     try:
         check_body_count(count_bodies(scene))
@@ -119,6 +120,8 @@ def build_world(scene: Scene) -> World:
             "the scene has no bodies",
             "add [[bodies]], [[gas]] or generator ([[row]], [[rack]], ...) tables",
         )
+    if not engine:
+        return world
     try:
         world.build()  # refuses overlapping spheres and spheres outside the box
     except CaromError as exc:

@@ -233,11 +233,19 @@ class Scene:
                     index,
                 )
 
-    def build(self) -> World:
-        """The :class:`carom.World` this scene describes (bodies placed, nothing run yet)."""
+    def build(self, *, engine: bool = True) -> World:
+        """The :class:`carom.World` this scene describes (bodies placed, nothing run yet).
+
+        Parameters
+        ----------
+        engine : bool
+            Also build the world's engine, which refuses bodies outside the box or overlapping
+            (:meth:`carom.World.build`) and so compiles the kernels that find contacts, or
+            loads them from the cache. With False that check waits for the first run.
+        """
         from carom.scene.build import build_world
 
-        return build_world(self)
+        return build_world(self, engine=engine)
 
 
 def load_scene(path: str | Path) -> Scene:
