@@ -57,6 +57,36 @@ def test_every_frame_is_written_as_the_world_had_it(tmp_path: Path, dim: int) ->
         assert f["observables/angular_momentum/value"].shape == (len(frames), 3)
 
 
+def test_frames_held_in_batches_reach_the_file_in_order(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # frames go to the file three at a time; flush() writes the ones held (a checkpoint names
+    # them next), close() the rest: every frame once, in order, with its step and time
+    monkeypatch.setattr("carom.io.h5md.BATCH_FRAMES", 3)
+    world = _spinning_world(3)
+    path = tmp_path / "t.h5"
+    frames = [world.frame(), *world.frames(0.6, 0.1)]
+    with H5MDWriter(path, world) as writer:
+        for k, frame in enumerate(frames[:4]):
+            writer.write(frame, dict.fromkeys(OBSERVABLES, float(k)))
+        assert writer.frames == 4
+        assert writer.written == 3
+        writer.flush()
+        assert writer.written == 4
+        assert writer.file["particles/all/position/value"].shape[0] == 4  # in the file
+        for k, frame in enumerate(frames[4:], start=4):
+            writer.write(frame, dict.fromkeys(OBSERVABLES, float(k)))
+    count = len(frames)
+    check_trajectory(path, world, count)
+    with h5py.File(path, "r") as f:
+        for name in ELEMENTS:
+            assert list(f[f"particles/all/{name}/step"][()]) == list(range(count))
+        assert list(f["particles/all/velocity/time"][()]) == [frame.time for frame in frames]
+        assert list(f["observables/kinetic_energy/value"][()]) == [float(k) for k in range(count)]
+        for k, frame in enumerate(frames):
+            assert f["particles/all/orientation/value"][k].tobytes() == frame.orientations.tobytes()
+
+
 def test_reopen_keeps_the_frames_a_checkpoint_knows(tmp_path: Path) -> None:
     world = _spinning_world(2)
     path = tmp_path / "t.h5"

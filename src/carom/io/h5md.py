@@ -121,6 +121,14 @@ def _quiet_h5py_dealloc(writer: H5MDWriter) -> None:
     sys.unraisablehook, sys.excepthook = on_unraisable, on_exception
 
 
+#: frames held in memory before they go to the file together, as one resize and one write of
+#: each dataset for all of them (one frame at a time, HDF5's calls took 5 ms a frame whatever
+#: its size); the writer holds at most this many bytes, and at least one frame [bytes]
+BATCH_BYTES = 4 * 2**20
+#: and at most this many frames
+BATCH_FRAMES = 256
+
+
 def frame_bytes(n: int, dim: int) -> int:
     """Bytes one frame of ``n`` bodies adds to a trajectory: position and velocity (``dim``
     each), orientation (1 in 2D, 4 in 3D) and angular velocity (3) per body, and the
@@ -228,6 +236,7 @@ class H5MDWriter:
                 for name, (shape, unit) in OBSERVABLES.items()
             },
         }
+        self._hold_frames(0)
 
     @classmethod
     def reopen(cls, path: Path, world: World, frames: int) -> H5MDWriter:
@@ -260,10 +269,20 @@ class H5MDWriter:
                     )
                 group[dataset].resize(frames, axis=0)
         self.frames = frames
+        self._hold_frames(frames)
         return self
+
+    def _hold_frames(self, written: int) -> None:
+        """Start holding frames; ``written`` are in the file."""
+        self.written = written
+        self.batch = max(1, min(BATCH_FRAMES, BATCH_BYTES // frame_bytes(self.n, self.dim)))
+        self.held: list[tuple[float, list[Any]]] = []
+        #: each element's and observable's row (one frame's value), as in the file
+        self.rows = [self.groups[name]["value"].shape[1:] for name in (*ELEMENTS, *OBSERVABLES)]
 
     def flush(self) -> None:
         """Push everything written so far to the file (before a checkpoint names it)."""
+        self._write_held()
         try:
             self.file.flush()
         except OSError:
@@ -290,47 +309,69 @@ class H5MDWriter:
 
     def write(self, frame: Frame, observed: Mapping[str, Any]) -> None:
         """Append one frame and its observables, by name (every one of :data:`OBSERVABLES`).
+        The frame is held, with others, until :data:`BATCH_BYTES` or :data:`BATCH_FRAMES`
+        are, or :meth:`flush` or :meth:`close` is called; ``frames`` counts it at once.
 
         Raises
         ------
         OSError
-            The disk has less than the frame plus :data:`DISK_MARGIN` free (checked first, so
-            that the file can still be closed), or the write failed.
+            The disk has less than the frames held plus :data:`DISK_MARGIN` free (checked
+            first, so that the file can still be closed), or the write failed.
         """
+        values = [
+            frame.positions,
+            frame.velocities,
+            frame.orientations,
+            frame.angular_velocities,
+            *(observed[name] for name in OBSERVABLES),
+        ]
+        rows = [
+            np.broadcast_to(np.asarray(value, dtype=np.float64), row).copy()
+            for value, row in zip(values, self.rows, strict=True)
+        ]
+        self.held.append((frame.time, rows))
+        self.frames += 1
+        if len(self.held) >= self.batch:
+            self._write_held()
+
+    def _write_held(self) -> None:
+        """Write the frames held: one resize and one write of each dataset for all."""
+        if not self.held:
+            return
         free = shutil.disk_usage(self.path.parent).free
-        if free < frame_bytes(self.n, self.dim) + DISK_MARGIN:
+        if free < len(self.held) * frame_bytes(self.n, self.dim) + DISK_MARGIN:
             raise OSError(
                 errno.ENOSPC,
                 f"{os.strerror(errno.ENOSPC)} (less than {DISK_MARGIN // 2**20} MiB free, kept "
                 f"for closing the trajectory)",
                 str(self.path),
             )
+        k, count = self.written, len(self.held)
+        steps = np.arange(k, k + count, dtype=np.int64)
+        times = np.array([t for t, _ in self.held])
         try:
-            self._append(frame, observed)
+            for column, name in enumerate((*ELEMENTS, *OBSERVABLES)):
+                group = self.groups[name]
+                for dataset in ("step", "time", "value"):
+                    group[dataset].resize(k + count, axis=0)
+                group["step"][k:] = steps
+                group["time"][k:] = times
+                group["value"][k:] = np.stack([values[column] for _, values in self.held])
         except OSError:
             _mark_failed(self)
             raise
-
-    def _append(self, frame: Frame, observed: Mapping[str, Any]) -> None:
-        k = self.frames
-        values = [
-            ("position", frame.positions),
-            ("velocity", frame.velocities),
-            ("orientation", frame.orientations),
-            ("angular_velocity", frame.angular_velocities),
-        ]
-        for name, value in [*values, *((name, observed[name]) for name in OBSERVABLES)]:
-            group = self.groups[name]
-            for dataset in ("step", "time", "value"):
-                group[dataset].resize(k + 1, axis=0)
-            group["step"][k] = k
-            group["time"][k] = frame.time
-            group["value"][k] = value
-        self.frames = k + 1
+        self.written = k + count
+        self.held.clear()
 
     def close(self) -> None:
         """Close the file; after a failed write, as far as HDF5 can (the failure was
         reported where it happened)."""
+        unwritten: OSError | None = None
+        if self not in _FAILED:
+            try:
+                self._write_held()
+            except OSError as error:  # (the file is closed first all the same)
+                unwritten = error
         try:
             self.file.close()
         except OSError:
@@ -339,6 +380,8 @@ class H5MDWriter:
                 raise
         if self not in _FAILED and self in _WRITERS:
             _WRITERS.remove(self)
+        if unwritten is not None:
+            raise unwritten
 
     def __enter__(self) -> H5MDWriter:
         return self

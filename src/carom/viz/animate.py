@@ -162,7 +162,9 @@ def _encode_mp4(
         quality=7,
         macro_block_size=16,
         ffmpeg_log_level="error",
-        output_params=["-threads", "1"],  # the same bytes every time
+        # one thread: the same bytes every time; veryfast: half the time of the default
+        # preset (medium) for files of the same size, measured on the showcase's films
+        output_params=["-threads", "1", "-preset", "veryfast"],
     )
     writer.send(None)
     count = 0
