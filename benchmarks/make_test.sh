@@ -6,20 +6,22 @@
 # and schedulers start it (issue 42).
 #
 #   bash benchmarks/make_test.sh [WORKDIR]
+#   TARGET=demo bash benchmarks/make_test.sh [WORKDIR]    # the first command, `make demo`
 #
-# Prints the wall-clock seconds and make's exit code; the log is WORKDIR/make-test.log.
+# Prints the wall-clock seconds and make's exit code; the log is WORKDIR/make-TARGET.log.
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 work="${1:-$(mktemp -d)}"
+target="${TARGET:-test}"
 rm -rf "$work/clone" "$work/cache"
 mkdir -p "$work/cache"
 git clone -q "$here" "$work/clone"
 cd "$work/clone"
 start=$(date +%s.%N)
 set +e
-XDG_CACHE_HOME="$work/cache" setsid bash -c "trap '' INT; make test" </dev/null >"$work/make-test.log" 2>&1
+XDG_CACHE_HOME="$work/cache" setsid bash -c "trap '' INT; make $target" </dev/null >"$work/make-$target.log" 2>&1
 code=$?
 set -e
 end=$(date +%s.%N)
-echo "commit $(git rev-parse --short HEAD): make test exited $code after $(python3 -c "print(round($end - $start, 1))") s (log: $work/make-test.log)"
-grep -E "passed|failed" "$work/make-test.log" | grep -v "^WARNING" | tail -3
+echo "commit $(git rev-parse --short HEAD): make $target exited $code after $(python3 -c "print(round($end - $start, 1))") s (log: $work/make-$target.log)"
+grep -E "passed|failed|Dask workers" "$work/make-$target.log" | grep -v "^WARNING" | tail -3

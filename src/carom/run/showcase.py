@@ -123,13 +123,14 @@ def build_showcase(
 
 #: what a group of the showcase's scenes costs on a cold cache [s], by the plug that builds
 #: their engine: its kernels compiled (measured alone on 2 cores: the 3D rigid engine's 86 s,
-#: the 2D one's 49 s, the event-driven one's 11 s) and about 5 s a scene, its film included
+#: the 2D one's 49 s, the event-driven one's 11 s) and about 4 s a scene, its film included
+#: (17 scenes in 65 s, warm, one after the other)
 COLD_SECONDS = {
     "carom.engines.rigid3d.assemble": 86.0,
     "carom.engines.rigid.assemble": 49.0,
     "carom.engines.edmd.assemble": 11.0,
 }
-SCENE_SECONDS = 5.0
+SCENE_SECONDS = 4.0
 
 
 def _cold_seconds(group: str, scenes: int) -> float:
