@@ -22,17 +22,13 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
-# One stamp per set of extras: reinstall only when pyproject.toml changes. --no-compile: the
-# modules a run imports are byte-compiled then, once (pip compiling every module of every
-# package took 13 of the demo installation's 22 s).
-PIP_INSTALL := $(BIN)/python -m pip install --quiet --no-compile
-
+# One stamp per set of extras: reinstall only when pyproject.toml changes.
 $(VENV)/.stamp-demo: pyproject.toml | $(BIN)/python
-	$(PIP_INSTALL) -e '.[viz,io,sweep,rigid3d]'
+	$(BIN)/python -m pip install --quiet -e '.[viz,io,sweep,rigid3d]'
 	@touch $@
 
 $(VENV)/.stamp-dev: pyproject.toml | $(BIN)/python
-	$(PIP_INSTALL) -e '.[viz,io,view,compare,rigid3d,sweep,parquet,dev]'
+	$(BIN)/python -m pip install --quiet -e '.[viz,io,view,compare,rigid3d,sweep,parquet,dev]'
 	@touch $@ $(VENV)/.stamp-demo
 
 demo: $(VENV)/.stamp-demo
