@@ -52,3 +52,46 @@ def test_faces_of_random_hulls_are_planar_counterclockwise_and_close_a_sphere(
             ring = f.corners[f.face_start[face] : f.face_start[face] + f.face_count[face]]
             sides = {frozenset(pair) for pair in zip(ring, np.roll(ring, -1), strict=True)}
             assert frozenset((a, b)) in sides
+
+
+def test_a_face_ring_starts_at_its_lowest_corner_however_the_corners_are_numbered() -> None:
+    # the same box, its corners numbered in another order: each face's ring starts at its
+    # lowest-numbered corner and turns counter-clockwise, so the faces are the same polygons
+    # (no rounding of a zero angle, +0 or -0, may turn a ring)
+    piece = Box([1.0, 2.0, 3.0]).pieces()[0]
+    rng = np.random.default_rng(11)
+    for _ in range(5):
+        perm = rng.permutation(8)
+        renumber = np.argsort(perm)  # old corner index -> new
+        f = polyhedron_features(piece.vertices[perm], renumber[piece.triangles])
+        for face in range(6):
+            ring = f.corners[f.face_start[face] : f.face_start[face] + f.face_count[face]]
+            assert ring[0] == ring.min()
+            corners = piece.vertices[perm][ring]
+            turn = np.cross(corners[1] - corners[0], corners[2] - corners[1])
+            assert turn @ f.normals[face] > 0.0
+
+
+def test_faces_of_a_hull_of_thousands_of_points_close_a_sphere() -> None:
+    # 20,000 points on a sphere: about 40,000 triangles, each its own face (whole-array
+    # grouping, no loop per triangle); Euler's V - E + F = 2, every edge joins two faces
+    rng = np.random.default_rng(5)
+    points = rng.normal(size=(20_000, 3))
+    hull = Hull(points / np.linalg.norm(points, axis=1)[:, None])
+    f = polyhedron_features(hull.vertices, hull.triangles)
+    assert hull.vertices.shape[0] - f.edges.shape[0] + f.normals.shape[0] == 2
+    assert f.normals.shape[0] > 39_000
+    assert np.all(f.edges[:, 2] != f.edges[:, 3])
+    # every face's corners on its plane to round-off
+    ring_plane = np.repeat(f.offsets, f.face_count)
+    ring_normal = np.repeat(f.normals, f.face_count, axis=0)
+    along = np.einsum("ij,ij->i", hull.vertices[f.corners], ring_normal)
+    assert np.max(np.abs(along - ring_plane)) <= 1e-12
+
+
+def test_an_open_surface_is_refused() -> None:
+    # a box without its top: the top rim's edges have one face each
+    piece = Box([1.0, 1.0, 1.0]).pieces()[0]
+    top = piece.vertices[piece.triangles].mean(axis=1)[:, 2] > 0.49
+    with pytest.raises(ValueError, match="surface is open"):
+        polyhedron_features(piece.vertices, piece.triangles[~top])

@@ -188,16 +188,18 @@ def check_closed(triangles: NDArray[np.int64], count: int, name: str = "mesh") -
     if faces.min() < 0 or faces.max() >= count:
         raise CaromError(f"{name}: a triangle names a corner outside 0..{count - 1}")
     edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    keys = edges[:, 0] * count + edges[:, 1]
-    unique, seen = np.unique(keys, return_counts=True)
-    if np.any(seen > 1):
-        k = int(unique[np.argmax(seen > 1)])
+    # (sorted keys rather than np.unique and np.isin: 2e5 triangles in milliseconds)
+    keys = np.sort(edges[:, 0] * count + edges[:, 1])
+    twice = keys[1:] == keys[:-1]
+    if np.any(twice):
+        k = int(keys[np.argmax(twice)])
         raise CaromError(
             f"{name}: edge {k // count} -> {k % count} is used twice the same way: the faces "
             "are not consistently oriented (or the surface is not manifold)"
         )
     reverse = edges[:, 1] * count + edges[:, 0]
-    missing = ~np.isin(reverse, unique)
+    at = np.minimum(np.searchsorted(keys, reverse), keys.size - 1)
+    missing = keys[at] != reverse
     if np.any(missing):
         a, b = edges[np.argmax(missing)]
         raise CaromError(

@@ -50,7 +50,11 @@ class PolyhedronFeatures:
 
 
 def polyhedron_features(vertices: FloatArray, triangles: IntArray) -> PolyhedronFeatures:
-    """The faces (coplanar triangles merged) and edges of a convex polyhedron.
+    """The faces (coplanar triangles merged) and edges of a convex polyhedron, in time and
+    memory linear in its triangles (whole-array NumPy: 2e5 triangles in well under a second).
+
+    Neighbouring triangles whose normals agree within 1e-9 and whose planes agree within
+    1e-9 of the solid's size are one face; faces come in the order of their first triangle.
 
     Parameters
     ----------
@@ -58,68 +62,102 @@ def polyhedron_features(vertices: FloatArray, triangles: IntArray) -> Polyhedron
         Corners [m].
     triangles : (T, 3) int64
         Outward counter-clockwise triangles of its closed surface.
+
+    Raises
+    ------
+    ValueError
+        The surface is open: an edge of a face is not shared by exactly two faces.
     """
     v = np.asarray(vertices, float)
     tri = np.asarray(triangles, np.int64)
     cross = np.cross(v[tri[:, 1]] - v[tri[:, 0]], v[tri[:, 2]] - v[tri[:, 0]])
-    normals = cross / np.linalg.norm(cross, axis=1)[:, None]
+    area2 = np.sqrt(_dot(cross, cross))
+    normals = cross / area2[:, None]
+    plane = _dot(normals, v[tri[:, 0]])
     size = float(np.max(np.abs(v - v.mean(axis=0))))
     plane_tol = 1e-9 * max(size, 1e-300)
-    # group triangles by plane (greedy, in order: the same faces every run)
-    face_of = np.full(tri.shape[0], -1, np.int64)
-    planes: list[tuple[FloatArray, float]] = []
-    for t in range(tri.shape[0]):
-        n = normals[t]
-        d = float(n @ v[tri[t, 0]])
-        for f, (m, e) in enumerate(planes):
-            if float(n @ m) > 1.0 - 1e-9 and abs(d - e) <= plane_tol:
-                face_of[t] = f
-                break
-        else:
-            face_of[t] = len(planes)
-            planes.append((n, d))
-    face_normals = np.zeros((len(planes), 3))
-    offsets = np.zeros(len(planes))
-    starts: list[int] = []
-    counts: list[int] = []
-    corners: list[int] = []
-    for f in range(len(planes)):
-        members = tri[face_of == f]
-        # the face's normal and plane, averaged over its triangles (weighted by area)
-        weights = np.linalg.norm(cross[face_of == f], axis=1)
-        n = (normals[face_of == f] * weights[:, None]).sum(axis=0)
-        n /= np.linalg.norm(n)
-        ids = np.unique(members)
-        centre = v[ids].mean(axis=0)
-        # corners counter-clockwise about n: angle in the face's plane
-        u = v[ids[0]] - centre
-        u -= (u @ n) * n
-        u /= np.linalg.norm(u)
-        w = np.cross(n, u)
-        rel = v[ids] - centre
-        order = np.argsort(np.arctan2(rel @ w, rel @ u), kind="stable")
-        face_normals[f] = n
-        offsets[f] = float(np.mean(v[ids] @ n))
-        starts.append(len(corners))
-        counts.append(ids.size)
-        corners.extend(int(i) for i in ids[order])
-    faces_at: dict[tuple[int, int], list[int]] = {}
-    for f in range(len(planes)):
-        ring = corners[starts[f] : starts[f] + counts[f]]
-        for k in range(len(ring)):
-            a, b = ring[k], ring[(k + 1) % len(ring)]
-            faces_at.setdefault((min(a, b), max(a, b)), []).append(f)
-    if any(len(meeting) != 2 for meeting in faces_at.values()):
-        raise ValueError("a convex polyhedron's every edge joins two faces; this surface is open")
-    edges = [(a, b, *faces_at[a, b]) for a, b in sorted(faces_at)]
-    return PolyhedronFeatures(
-        face_normals,
-        offsets,
-        np.array(starts, np.int64),
-        np.array(counts, np.int64),
-        np.array(corners, np.int64),
-        np.array(edges, np.int64).reshape(-1, 4),
+    face_of = _coplanar_groups(tri, normals, plane, plane_tol)
+    count = int(face_of.max()) + 1 if tri.shape[0] else 0
+    # each face's normal and plane, averaged over its triangles (weighted by area)
+    n = np.zeros((count, 3))
+    np.add.at(n, face_of, normals * area2[:, None])
+    n /= np.sqrt(_dot(n, n))[:, None]
+    # each face's corners: the distinct vertices of its triangles, face by face
+    nv = max(int(v.shape[0]), 1)
+    key = np.sort(np.repeat(face_of, 3) * nv + tri.ravel())
+    key = key[np.concatenate([[True], key[1:] != key[:-1]])]
+    face, ids = key // nv, key % nv
+    corner_count = np.bincount(face, minlength=count).astype(np.int64)
+    start = np.concatenate([[0], np.cumsum(corner_count)[:-1]]).astype(np.int64)
+    centre = np.add.reduceat(v[ids], start, axis=0) / corner_count[:, None]
+    offsets = np.add.reduceat(_dot(v[ids], n[face]), start) / corner_count
+    # corners counter-clockwise about the normal, from its lowest-numbered corner: by angle in
+    # the face's plane, in [0, 2 pi) from that corner (its own angle 0 exactly, so that no
+    # rounding of a zero, +0 or -0, turns the ring)
+    u = v[ids[start]] - centre
+    u -= _dot(u, n)[:, None] * n
+    u /= np.sqrt(_dot(u, u))[:, None]
+    w = np.cross(n, u)
+    rel = v[ids] - centre[face]
+    angle = np.mod(np.arctan2(_dot(rel, w[face]), _dot(rel, u[face])), 2.0 * np.pi)
+    angle[start] = 0.0
+    corners = ids[np.lexsort((angle, face))]
+    # the edges: each side of a face's ring, which must be shared by exactly two faces
+    following = np.arange(corners.size) + 1
+    last = start + corner_count - 1
+    following[last] = start
+    a, b = corners, corners[following]
+    low, high = np.minimum(a, b), np.maximum(a, b)
+    order = np.lexsort((face, high, low))
+    low, high, side_face = low[order], high[order], face[order]
+    first = np.flatnonzero(
+        np.concatenate([[True], (low[1:] != low[:-1]) | (high[1:] != high[:-1])])
     )
+    sides = np.diff(np.concatenate([first, [low.size]]))
+    if np.any(sides != 2):
+        raise ValueError("a convex polyhedron's every edge joins two faces; this surface is open")
+    edges = np.stack([low[first], high[first], side_face[first], side_face[first + 1]], axis=1)
+    return PolyhedronFeatures(
+        n, offsets, start, corner_count, corners.astype(np.int64), edges.astype(np.int64)
+    )
+
+
+def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Row by row dot products of (n, 3) arrays, summed in one fixed order (no BLAS: its
+    kernels sum in an order of their own, which differs between machines)."""
+    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
+def _coplanar_groups(
+    tri: IntArray, normals: FloatArray, plane: FloatArray, plane_tol: float
+) -> IntArray:
+    """Each triangle's face (T,): neighbouring triangles (sharing an edge) on one plane, their
+    normals within 1e-9 and their planes within ``plane_tol``, are one face; the faces are
+    numbered in the order of their first triangle."""
+    t = tri.shape[0]
+    a = tri.ravel()
+    b = tri[:, [1, 2, 0]].ravel()
+    owner = np.repeat(np.arange(t), 3)
+    low, high = np.minimum(a, b), np.maximum(a, b)
+    order = np.lexsort((owner, high, low))
+    low, high, owner = low[order], high[order], owner[order]
+    same = (low[1:] == low[:-1]) & (high[1:] == high[:-1])
+    i, j = owner[:-1][same], owner[1:][same]
+    flat = (_dot(normals[i], normals[j]) > 1.0 - 1e-9) & (np.abs(plane[i] - plane[j]) <= plane_tol)
+    i, j = i[flat], j[flat]
+    # connected components by pointer jumping: each triangle ends labelled with the lowest
+    # triangle of its face
+    label = np.arange(t)
+    while True:
+        joined = np.minimum(label[i], label[j])
+        before = label.copy()
+        np.minimum.at(label, i, joined)
+        np.minimum.at(label, j, joined)
+        label = label[label]
+        if np.array_equal(label, before):
+            break
+    first = label == np.arange(t)  # the lowest triangle of each face, in order
+    return (np.cumsum(first) - 1)[label].astype(np.int64)
 
 
 def triangle_features(
