@@ -145,6 +145,13 @@ def angular_velocities(value: ArrayLike | None, n: int, dim: int) -> FloatArray:
     if value is None:
         return w
     s = as_float_array("angular_velocities", value)
+    if dim == 3 and s.ndim == 0:
+        if s == 0.0:  # (the default: no spin)
+            return w
+        raise CaromError(
+            f"angular_velocities is a vector [wx, wy, wz] [rad/s] in 3D, about the world's "
+            f"axes; got the number {float(s)!r}: for a spin about z write [0, 0, {float(s)!r}]"
+        )
     try:
         if dim == 2:
             w[:, 2] = np.broadcast_to(s.reshape(-1) if s.ndim else s, (n,))

@@ -1,14 +1,18 @@
-"""A bounding volume tree over a static mesh's triangles: which triangles a box may touch.
+"""A bounding volume tree over boxes that do not move (a static mesh's triangles, the static
+pieces of a rigid world): which of them a box may touch.
 
-Built once (NumPy) by splitting the triangles at the median of their boxes' centres along the
-longest axis of the node's box, down to leaves of at most :data:`LEAF` triangles (a binary
-tree of axis-aligned boxes, as parry's and Bullet's static trees). Queried every step (Numba):
-a stack walk that descends only into nodes whose box overlaps the query box, so a body on a
-large terrain meets O(log T) nodes, not T triangles.
+Built once, in O(T log T): the boxes' centres are put in Morton order (their cells' bits
+interleaved, one sort), and the tree halves that order, range by range, down to leaves of at
+most :data:`LEAF` boxes; each node's box is then the union of its children's (a linear bounding
+volume hierarchy, as Karras 2012 and parry's static trees; binary, axis-aligned). Queried every
+step (Numba): a stack walk that descends only into nodes whose box overlaps the query box, so a
+body on a large terrain meets O(log T) nodes, not T triangles.
 
-Layout: node k has a box ``lo[k], hi[k]`` (3,); an inner node's children are ``left[k]`` and
+Boxes come in the broad phase's layout: lower corner then upper, ``(T, 2 d)`` with d = 2 or 3.
+Node k has a box ``box[k]`` (2 d,); an inner node's children are ``left[k]`` and
 ``left[k] + 1`` (``count[k] == 0``); a leaf holds ``order[first[k] : first[k] + count[k]]``
-(triangle indices). Node 0 is the root.
+(the boxes' indices). Node 0 is the root. Every box must be finite (a plane's is not: keep
+it out).
 """
 
 from __future__ import annotations
@@ -19,9 +23,9 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-__all__ = ["LEAF", "Bvh", "build_bvh", "query_bvh"]
+__all__ = ["LEAF", "Bvh", "build_bvh", "empty_bvh", "query_bvh"]
 
-#: triangles in a leaf at most
+#: boxes in a leaf at most
 LEAF = 4
 
 FloatArray = NDArray[np.float64]
@@ -30,60 +34,136 @@ IntArray = NDArray[np.int64]
 
 @dataclass(frozen=True)
 class Bvh:
-    """A tree over boxes (module docstring for the layout)."""
+    """A tree over boxes (module docstring for the layout).
 
-    lo: FloatArray
-    hi: FloatArray
+    Attributes
+    ----------
+    box : (K, 2 d) float64
+        Each node's box [m], lower corner then upper.
+    left, first, count : (K,) int64
+        An inner node's first child; a leaf's first entry in ``order`` and its size.
+    order : (T,) int64
+        The boxes' indices, leaf by leaf.
+    """
+
+    box: FloatArray
     left: IntArray
     first: IntArray
     count: IntArray
     order: IntArray
 
 
-def build_bvh(lo: FloatArray, hi: FloatArray) -> Bvh:
-    """The tree over the boxes ``lo``, ``hi`` (T, 3) [m] (e.g. each triangle's corners' min and
-    max). Deterministic: ties in the median split keep the input order."""
-    boxes_lo = np.asarray(lo, float)
-    boxes_hi = np.asarray(hi, float)
-    n = boxes_lo.shape[0]
-    centres = 0.5 * (boxes_lo + boxes_hi)
-    order = np.arange(n, dtype=np.int64)
-    capacity = max(1, 2 * n)
-    node_lo = np.zeros((capacity, 3))
-    node_hi = np.zeros((capacity, 3))
+def empty_bvh(dims: int) -> Bvh:
+    """A tree over no box, in ``dims`` dimensions."""
+    return Bvh(
+        np.zeros((1, 2 * dims)),
+        np.zeros(1, np.int64),
+        np.zeros(1, np.int64),
+        np.zeros(1, np.int64),
+        np.zeros(0, np.int64),
+    )
+
+
+def build_bvh(boxes: FloatArray, which: IntArray | None = None) -> Bvh:
+    """The tree over ``boxes[which]`` (all of them by default); its ``order`` holds indices
+    into ``boxes``. Deterministic: boxes whose centres share a Morton cell keep the order of
+    ``which``.
+
+    Parameters
+    ----------
+    boxes : (T, 2 d) float64
+        Lower corner then upper [m], d = 2 or 3; the chosen ones finite.
+    which : (M,) int64, optional
+        The boxes to put in the tree.
+    """
+    b = np.ascontiguousarray(boxes, dtype=np.float64)
+    d = b.shape[1] // 2
+    items = np.arange(b.shape[0], dtype=np.int64) if which is None else np.asarray(which, np.int64)
+    if items.size == 0:
+        return empty_bvh(d)
+    if not np.all(np.isfinite(b[items])):
+        raise ValueError("a tree's boxes must be finite (an unbounded plane is kept out)")
+    centre = 0.5 * (b[items, :d] + b[items, d:])
+    low, high = centre.min(axis=0), centre.max(axis=0)
+    span = np.where(high > low, high - low, 1.0)
+    bits = 21 if d == 3 else 31
+    cell = np.minimum(((centre - low) / span * (2**bits - 1)).astype(np.int64), 2**bits - 1)
+    code = _morton(cell, bits)
+    order = items[np.argsort(code, kind="stable")]
+    capacity = max(1, 2 * items.size)
+    node_box = np.zeros((capacity, 2 * d))
     left = np.zeros(capacity, np.int64)
     first = np.zeros(capacity, np.int64)
     count = np.zeros(capacity, np.int64)
+    used = _build(b, order, node_box, left, first, count)
+    return Bvh(node_box[:used], left[:used], first[:used], count[:used], order)
+
+
+def _morton(cell: IntArray, bits: int) -> IntArray:
+    """Each row's cell (M, d) coordinates of ``bits`` bits, interleaved into one code."""
+    d = cell.shape[1]
+    code = np.zeros(cell.shape[0], np.int64)
+    for bit in range(bits):
+        for axis in range(d):
+            code |= ((cell[:, axis] >> bit) & 1) << (bit * d + axis)
+    return code
+
+
+@njit(cache=True)
+def _build(
+    boxes: np.ndarray,
+    order: np.ndarray,
+    node_box: np.ndarray,
+    left: np.ndarray,
+    first: np.ndarray,
+    count: np.ndarray,
+) -> int:
+    """Halve ``order``'s range node by node down to leaves of at most LEAF, then give each
+    node the union of its boxes (children come after their parent: a backward sweep);
+    return how many nodes."""
+    d = boxes.shape[1] // 2
+    stack = np.empty((128, 3), np.int64)  # node, first, count; depth log2(T / LEAF) + 1
+    stack[0, 0], stack[0, 1], stack[0, 2] = 0, 0, order.shape[0]
+    top = 1
     used = 1
-    stack = [(0, 0, n)]  # node, first, count
-    while stack:
-        node, start, size = stack.pop()
-        members = order[start : start + size]
-        node_lo[node] = boxes_lo[members].min(axis=0) if size else 0.0
-        node_hi[node] = boxes_hi[members].max(axis=0) if size else 0.0
+    while top > 0:
+        top -= 1
+        node, start, size = stack[top, 0], stack[top, 1], stack[top, 2]
         if size <= LEAF:
             first[node] = start
             count[node] = size
             continue
-        axis = int(np.argmax(node_hi[node] - node_lo[node]))
-        ranked = members[np.argsort(centres[members, axis], kind="stable")]
-        order[start : start + size] = ranked
         half = size // 2
         left[node] = used
         used += 2
-        stack.append((left[node] + 1, start + half, size - half))
-        stack.append((left[node], start, half))
-    return Bvh(node_lo[:used], node_hi[:used], left[:used], first[:used], count[:used], order)
+        stack[top, 0], stack[top, 1], stack[top, 2] = left[node] + 1, start + half, size - half
+        stack[top + 1, 0], stack[top + 1, 1], stack[top + 1, 2] = left[node], start, half
+        top += 2
+    for node in range(used - 1, -1, -1):
+        for k in range(d):
+            node_box[node, k] = np.inf
+            node_box[node, d + k] = -np.inf
+        if count[node] > 0:
+            for i in range(first[node], first[node] + count[node]):
+                item = order[i]
+                for k in range(d):
+                    node_box[node, k] = min(node_box[node, k], boxes[item, k])
+                    node_box[node, d + k] = max(node_box[node, d + k], boxes[item, d + k])
+        else:
+            for child in (left[node], left[node] + 1):
+                for k in range(d):
+                    node_box[node, k] = min(node_box[node, k], node_box[child, k])
+                    node_box[node, d + k] = max(node_box[node, d + k], node_box[child, d + k])
+    return used
 
 
 @njit(cache=True)
 def query_bvh(
-    lo: np.ndarray, hi: np.ndarray, left: np.ndarray, first: np.ndarray, count: np.ndarray,
-    order: np.ndarray, item_lo: np.ndarray, item_hi: np.ndarray, box_lo: np.ndarray,
-    box_hi: np.ndarray, out: np.ndarray,
+    node_box: np.ndarray, left: np.ndarray, first: np.ndarray, count: np.ndarray,
+    order: np.ndarray, boxes: np.ndarray, query: np.ndarray, out: np.ndarray,
 ) -> int:  # fmt: skip
-    """The items (triangles) whose own boxes ``item_lo``, ``item_hi`` (T, 3) overlap the box
-    ``box_lo``, ``box_hi`` (3,) [m], into ``out``, in the tree's order.
+    """The boxes of ``boxes`` (T, 2 d) in the tree that overlap the box ``query`` (2 d,)
+    [m] (touching counts), into ``out``, in the tree's order.
 
     Returns
     -------
@@ -91,19 +171,21 @@ def query_bvh(
         How many there are; when more than ``out`` holds, only the first ones are written
         (the caller grows ``out`` and asks again).
     """
-    stack = np.empty(64, np.int64)  # a median split's depth: log2(T/LEAF) + 1 < 64
+    stack = np.empty(128, np.int64)
     stack[0] = 0
     top = 1
     found = 0
     while top > 0:
         top -= 1
         node = stack[top]
-        if _apart(lo[node], hi[node], box_lo, box_hi):
+        if count[node] == 0 and left[node] == 0:
+            continue  # an empty tree's root
+        if not overlap(node_box, node, query):
             continue
-        if count[node] > 0 or left[node] == 0:
+        if count[node] > 0:
             for k in range(first[node], first[node] + count[node]):
                 item = order[k]
-                if _apart(item_lo[item], item_hi[item], box_lo, box_hi):
+                if not overlap(boxes, item, query):
                     continue
                 if found < out.shape[0]:
                     out[found] = item
@@ -116,10 +198,11 @@ def query_bvh(
 
 
 @njit(cache=True, inline="always")
-def _apart(a_lo: np.ndarray, a_hi: np.ndarray, b_lo: np.ndarray, b_hi: np.ndarray) -> bool:
-    """Whether two boxes are apart along some axis (touching counts as overlapping)."""
-    return bool(
-        a_lo[0] > b_hi[0] or a_hi[0] < b_lo[0]
-        or a_lo[1] > b_hi[1] or a_hi[1] < b_lo[1]
-        or a_lo[2] > b_hi[2] or a_hi[2] < b_lo[2]
-    )  # fmt: skip
+def overlap(boxes: np.ndarray, i: int, query: np.ndarray) -> bool:
+    """Whether box ``i`` of ``boxes`` (·, 2 d) and ``query`` (2 d,) overlap (touching
+    counts)."""
+    d = boxes.shape[1] // 2
+    meet = True
+    for k in range(d):
+        meet = meet and boxes[i, k] <= query[d + k] and query[k] <= boxes[i, d + k]
+    return meet

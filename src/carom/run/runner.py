@@ -298,7 +298,7 @@ def _write_failed(work: Path, exc: OSError) -> CaromError:
         if (work / CHECKPOINT).is_file()
         else "nothing was kept"
     )
-    where = f" writing {exc.filename}" if exc.filename else ""
+    where = f" to {exc.filename}" if exc.filename else ""
     return CaromError(f"the run could not be written{where}: {exc.strerror or exc}; {kept}")
 
 

@@ -101,6 +101,17 @@ class RigidEngine(SteppedEngine):
             m.piece_count, m.local_vertices, m.local_normals, s.vertices, s.normals,
         )  # fmt: skip
 
+    def _rest_boxes(self) -> None:
+        self._piece_boxes(np.zeros(self.model.kind.shape[0], np.bool_), 0.0)
+
+    def _piece_boxes(self, moving: NDArray[np.bool_], dt: float) -> None:
+        m, s = self.model, self.state
+        broadphase.piece_boxes(
+            s.vertices, m.piece_start, m.piece_count, m.piece_radius, m.piece_reach,
+            m.piece_body, s.v, s.omega, moving, self._dynamic, float(m.gravity[0]),
+            float(m.gravity[1]), dt, 4.0 * self.settings.linear_slop, self._boxes,
+        )  # fmt: skip
+
     @staticmethod
     def _state_from(arrays: Mapping[str, NDArray[Any]]) -> RigidState:
         return RigidState(*(np.array(arrays[name]) for name in RigidState._fields))
@@ -114,17 +125,13 @@ class RigidEngine(SteppedEngine):
     # -- the stages of a step that are the dimension's own --------------------------------
 
     def _pairs(self) -> int:
-        m, s, st = self.model, self.state, self.settings
+        m, s = self.model, self.state
         moving = (self._dynamic & self.memory.awake) | self._kinematic
         motion.place_pieces(
             s.x, s.angle, moving, m.body_pieces, m.piece_start, m.piece_count,
             m.local_vertices, m.local_normals, s.vertices, s.normals,
         )  # fmt: skip
-        broadphase.piece_boxes(
-            s.vertices, m.piece_start, m.piece_count, m.piece_radius, m.piece_reach,
-            m.piece_body, s.v, s.omega, moving, self._dynamic, float(m.gravity[0]),
-            float(m.gravity[1]), self.dt, 4.0 * st.linear_slop, self._boxes,
-        )  # fmt: skip
+        self._piece_boxes(moving, self.dt)
         return self._kept.update(self._boxes, m.piece_reach, m.piece_body, moving, self._dynamic)
 
     def _narrow(self, n_pairs: int) -> int:

@@ -26,40 +26,56 @@ def piece_boxes(
     piece_vcount: np.ndarray, piece_fstart: np.ndarray, piece_radius: np.ndarray,
     piece_reach: np.ndarray, piece_body: np.ndarray, v: np.ndarray, w: np.ndarray,
     which: np.ndarray, gravity_on: np.ndarray, g: np.ndarray, dt: float, margin: float,
-    boxes: np.ndarray,
+    body_pieces: np.ndarray, boxes: np.ndarray,
 ) -> None:  # fmt: skip
     """Swept boxes ``(lo x, lo y, lo z, hi x, hi y, hi z)`` [m] of the pieces of the bodies with
-    ``which[b]`` true, into ``boxes`` (P, 6); ``gravity_on[b]``: gravity ``g`` (3,) acts."""
-    for p in range(piece_vstart.shape[0]):
-        b = piece_body[p]
-        if not which[b]:
-            continue
-        if piece_kind[p] == PIECE_PLANE:
-            n = normals[piece_fstart[p]]
-            at = vertices[piece_vstart[p]]
-            for k in range(3):
-                boxes[p, k] = -np.inf
-                boxes[p, 3 + k] = np.inf
-            for k in range(3):
-                if abs(n[k]) == 1.0 and n[(k + 1) % 3] == 0.0 and n[(k + 2) % 3] == 0.0:
-                    if n[k] > 0.0:
-                        boxes[p, 3 + k] = at[k]  # the solid lies below
-                    else:
-                        boxes[p, k] = at[k]
-            continue
-        s = piece_vstart[p]
-        r = piece_radius[p] + margin
-        turn = min(math.sqrt(w[b, 0] ** 2 + w[b, 1] ** 2 + w[b, 2] ** 2) * dt, 2.0)
-        turn *= piece_reach[p]
+    ``which[b]`` true, into ``boxes`` (P, 6); ``gravity_on[b]``: gravity ``g`` (3,) acts.
+    Body b's pieces are ``body_pieces[b]`` to ``body_pieces[b + 1]``: the other bodies'
+    pieces (a static terrain's millions of triangles) are not looked at."""
+    for b in range(body_pieces.shape[0] - 1):
+        if which[b]:
+            for p in range(body_pieces[b], body_pieces[b + 1]):
+                _piece_box(
+                    p, b, vertices, normals, piece_kind, piece_vstart, piece_vcount,
+                    piece_fstart, piece_radius, piece_reach, v, w, gravity_on, g, dt, margin,
+                    boxes,
+                )  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def _piece_box(
+    p: int, b: int, vertices: np.ndarray, normals: np.ndarray, piece_kind: np.ndarray,
+    piece_vstart: np.ndarray, piece_vcount: np.ndarray, piece_fstart: np.ndarray,
+    piece_radius: np.ndarray, piece_reach: np.ndarray, v: np.ndarray, w: np.ndarray,
+    gravity_on: np.ndarray, g: np.ndarray, dt: float, margin: float, boxes: np.ndarray,
+) -> None:  # fmt: skip
+    """Piece ``p``'s (of body ``b``) swept box into ``boxes[p]``."""
+    if piece_kind[p] == PIECE_PLANE:
+        n = normals[piece_fstart[p]]
+        at = vertices[piece_vstart[p]]
         for k in range(3):
-            lo = vertices[s, k]
-            hi = lo
-            for j in range(1, piece_vcount[p]):
-                c = vertices[s + j, k]
-                lo = min(lo, c)
-                hi = max(hi, c)
-            d = v[b, k] * dt
-            if gravity_on[b]:
-                d += 0.5 * g[k] * dt * dt
-            boxes[p, k] = min(lo, lo + d) - turn - r
-            boxes[p, 3 + k] = max(hi, hi + d) + turn + r
+            boxes[p, k] = -np.inf
+            boxes[p, 3 + k] = np.inf
+        for k in range(3):
+            if abs(n[k]) == 1.0 and n[(k + 1) % 3] == 0.0 and n[(k + 2) % 3] == 0.0:
+                if n[k] > 0.0:
+                    boxes[p, 3 + k] = at[k]  # the solid lies below
+                else:
+                    boxes[p, k] = at[k]
+        return
+    s = piece_vstart[p]
+    r = piece_radius[p] + margin
+    turn = min(math.sqrt(w[b, 0] ** 2 + w[b, 1] ** 2 + w[b, 2] ** 2) * dt, 2.0)
+    turn *= piece_reach[p]
+    for k in range(3):
+        lo = vertices[s, k]
+        hi = lo
+        for j in range(1, piece_vcount[p]):
+            c = vertices[s + j, k]
+            lo = min(lo, c)
+            hi = max(hi, c)
+        d = v[b, k] * dt
+        if gravity_on[b]:
+            d += 0.5 * g[k] * dt * dt
+        boxes[p, k] = min(lo, lo + d) - turn - r
+        boxes[p, 3 + k] = max(hi, hi + d) + turn + r

@@ -112,10 +112,12 @@ class RigidEngine3D(SteppedEngine):
             m.piece_body, m.piece_kind, m.piece_vstart, m.piece_vcount, m.piece_fstart,
             m.piece_fcount, m.piece_cstart, m.piece_ccount, m.piece_estart, m.piece_ecount,
         )  # fmt: skip
-        everyone = np.ones(n, np.bool_)
-        self._place(everyone)
+        self._place(np.ones(n, np.bool_))
+
+    def _rest_boxes(self) -> None:
+        n = self.model.kind.shape[0]
         still = np.zeros((n, 3))
-        self._box(everyone, still, still, 0.0)
+        self._box(np.ones(n, np.bool_), still, still, 0.0)
 
     @staticmethod
     def _state_from(arrays: Mapping[str, NDArray[Any]]) -> State3D:
@@ -144,7 +146,8 @@ class RigidEngine3D(SteppedEngine):
         broadphase.piece_boxes(
             s.vertices, s.normals, m.piece_kind, m.piece_vstart, m.piece_vcount,
             m.piece_fstart, m.piece_radius, m.piece_reach, m.piece_body, v, w, which,
-            self._dynamic, m.gravity, dt, 4.0 * self.settings.linear_slop, self._boxes,
+            self._dynamic, m.gravity, dt, 4.0 * self.settings.linear_slop, m.body_pieces,
+            self._boxes,
         )  # fmt: skip
 
     def _pairs(self) -> int:

@@ -26,6 +26,7 @@ from collections.abc import Callable
 import numpy as np
 from numba import njit
 
+from carom.geometry.bvh import overlap
 from carom.laws.kinds import KIND_DYNAMIC
 
 __all__ = [
@@ -140,9 +141,22 @@ def find_pairs(
     active: np.ndarray,
     dynamic: np.ndarray,
     cell: float,
+    loose: np.ndarray,
+    tree_box: np.ndarray,
+    tree_left: np.ndarray,
+    tree_first: np.ndarray,
+    tree_count: np.ndarray,
+    tree_order: np.ndarray,
     pairs: np.ndarray,
 ) -> int:
     """Candidate pairs of pieces, sorted, into ``pairs`` (capacity, 2); return their number.
+
+    The pieces of static bodies with finite boxes are in a tree built once
+    (:mod:`carom.geometry.bvh`); every other piece (``loose``: dynamic, kinematic, a static
+    plane) goes in the grid. Pairs come from the grid's cells, from the loose pieces too big
+    for it against every loose piece, and from each loose piece of a dynamic body walking
+    the tree; two static pieces are never paired, nor even looked at. The cost grows
+    with the loose pieces and the static pieces they meet, not with the static ones.
 
     Parameters
     ----------
@@ -157,11 +171,16 @@ def find_pairs(
         never collide).
     cell : float
         Grid cell side [m].
+    loose : (L,) int64
+        The pieces not in the tree, ascending.
+    tree_box, tree_left, tree_first, tree_count, tree_order
+        The tree over the other pieces (:class:`carom.geometry.bvh.Bvh`); its node boxes hold
+        those pieces' ``boxes``.
     pairs : (capacity, 2) int64
         Written. When more pairs are found than fit, the return value is minus the number
         needed and the caller grows ``pairs`` and calls again.
     """
-    n = boxes.shape[0]
+    n = loose.shape[0]
     d = boxes.shape[1] // 2
     max_cells = max_cells_of(d)
     size = 64
@@ -172,22 +191,22 @@ def find_pairs(
     big = np.zeros(n, np.bool_)
     start = np.zeros(size + 1, np.int64)
     mine = np.empty(max_cells, np.int64)
-    # every piece goes in the grid, even one of a body that does not move (static, asleep,
+    # every loose piece goes in the grid, even one of a body that does not move (asleep,
     # kinematic at rest): an active body may run into it
-    for p in range(n):
-        used = _buckets(boxes, p, inv, mask, max_cells, mine)
+    for i in range(n):
+        used = _buckets(boxes, loose[i], inv, mask, max_cells, mine)
         if used < 0:
-            big[p] = True
+            big[i] = True
         for k in range(used):
             start[mine[k] + 1] += 1
     for h in range(size):
         start[h + 1] += start[h]
     fill = start[:-1].copy()
     entries = np.empty(start[size], np.int64)
-    for p in range(n):
-        for k in range(_buckets(boxes, p, inv, mask, max_cells, mine)):
+    for i in range(n):
+        for k in range(_buckets(boxes, loose[i], inv, mask, max_cells, mine)):
             h = mine[k]
-            entries[fill[h]] = p
+            entries[fill[h]] = loose[i]
             fill[h] += 1
     count = 0
     capacity = pairs.shape[0]
@@ -206,59 +225,73 @@ def find_pairs(
                 cz = math.floor(max(boxes[a, 2], boxes[b, 2]) * inv) if d == 3 else 0
                 if _bucket(cx, cy, cz, mask) != h:
                     continue
-                if count < capacity:
-                    pairs[count, 0] = min(a, b)
-                    pairs[count, 1] = max(a, b)
-                count += 1
-    for a in range(n):
-        if not big[a]:
+                count = _put(pairs, count, capacity, a, b)
+    for i in range(n):
+        if not big[i]:
             continue
-        for b in range(n):
-            if b == a or (big[b] and b < a):
+        a = loose[i]
+        for j in range(n):
+            if j == i or (big[j] and j < i):
                 continue  # two big pieces: once
+            b = loose[j]
             if not wanted_pair(piece_body, active, dynamic, a, b) or not _overlap_any(boxes, a, b):
                 continue
-            if count < capacity:
-                pairs[count, 0] = min(a, b)
-                pairs[count, 1] = max(a, b)
-            count += 1
+            count = _put(pairs, count, capacity, a, b)
+    # the pieces in the tree (none dynamic), met by the loose pieces of dynamic bodies
+    stack = np.empty(128, np.int64)
+    for i in range(n):
+        a = loose[i]
+        if not dynamic[piece_body[a]] or tree_order.shape[0] == 0:
+            continue
+        query = boxes[a]
+        stack[0] = 0
+        top = 1
+        while top > 0:
+            top -= 1
+            node = stack[top]
+            if not overlap(tree_box, node, query):
+                continue
+            if tree_count[node] == 0:
+                stack[top] = tree_left[node] + 1
+                stack[top + 1] = tree_left[node]
+                top += 2
+                continue
+            for k in range(tree_first[node], tree_first[node] + tree_count[node]):
+                b = tree_order[k]
+                if wanted_pair(piece_body, active, dynamic, a, b) and overlap(boxes, b, query):
+                    count = _put(pairs, count, capacity, a, b)
     if count > capacity:
         return -count
-    _sort_pairs(pairs, count, n)
+    _sort_pairs(pairs, count, boxes.shape[0])
     return count
+
+
+@njit(cache=True, inline="always")
+def _put(pairs: np.ndarray, count: int, capacity: int, a: int, b: int) -> int:
+    """Write the pair (a, b), lower piece first, if it fits; return the new count."""
+    if count < capacity:
+        pairs[count, 0] = min(a, b)
+        pairs[count, 1] = max(a, b)
+    return count + 1
 
 
 @njit(cache=True)
 def _sort_pairs(pairs: np.ndarray, count: int, n: int) -> None:
-    """Sort ``pairs[:count]`` (each ``a < b``, distinct) by ``(a, b)`` in O(count + n): a
-    counting sort on ``a``, then each piece's few partners by insertion."""
-    start = np.zeros(n + 1, np.int64)
+    """Sort ``pairs[:count]`` (each ``a < b``, distinct, pieces below ``n``) by ``(a, b)``,
+    in O(count log count) whatever ``n``."""
+    keys = np.empty(count, np.int64)
     for k in range(count):
-        start[pairs[k, 0] + 1] += 1
-    for a in range(n):
-        start[a + 1] += start[a]
-    fill = start[:-1].copy()
-    partner = np.empty(count, np.int64)
+        keys[k] = pairs[k, 0] * n + pairs[k, 1]
+    keys.sort()
     for k in range(count):
-        a = pairs[k, 0]
-        partner[fill[a]] = pairs[k, 1]
-        fill[a] += 1
-    for a in range(n):
-        for i in range(start[a] + 1, start[a + 1]):
-            b = partner[i]
-            j = i - 1
-            while j >= start[a] and partner[j] > b:
-                partner[j + 1] = partner[j]
-                j -= 1
-            partner[j + 1] = b
-        for i in range(start[a], start[a + 1]):
-            pairs[i, 0] = a
-            pairs[i, 1] = partner[i]
+        pairs[k, 0] = keys[k] // n
+        pairs[k, 1] = keys[k] % n
 
 
 @njit(cache=True)
-def refit(boxes: np.ndarray, fat: np.ndarray, piece_reach: np.ndarray) -> int:
-    """Give each piece whose swept box is not inside its fat box a new one; return how many.
+def refit(boxes: np.ndarray, fat: np.ndarray, piece_reach: np.ndarray, which: np.ndarray) -> int:
+    """Give each piece of ``which`` whose swept box is not inside its fat box a new one;
+    return how many.
 
     Parameters
     ----------
@@ -270,10 +303,12 @@ def refit(boxes: np.ndarray, fat: np.ndarray, piece_reach: np.ndarray) -> int:
     piece_reach : (P,) float64
         Each piece's reach from its body's centre [m]; the new fat box is the swept box
         grown by ``FAT`` times it on every side.
+    which : (M,) int64
+        The pieces to look at (those that may move).
     """
     d = boxes.shape[1] // 2
     moved = 0
-    for p in range(boxes.shape[0]):
+    for p in which:
         inside = True
         for k in range(d):
             if boxes[p, k] < fat[p, k] or boxes[p, d + k] > fat[p, d + k]:
@@ -332,8 +367,8 @@ class KeptPairs:
     pieces, dims, bodies : int
         How many pieces, in how many dimensions (2 or 3), of how many bodies.
     find : callable
-        ``find(boxes, active, out)``: the dimension's ``find_pairs`` for these pieces, into
-        ``out`` (K, 2) int64; the count, or minus the count needed when ``out`` is too small.
+        ``find(boxes, active, out)``: :func:`find_pairs` for these pieces, into ``out``
+        (K, 2) int64; the count, or minus the count needed when ``out`` is too small.
     """
 
     def __init__(
@@ -347,6 +382,8 @@ class KeptPairs:
         self.fat = np.zeros((pieces, 2 * dims))
         self.fat[:, :dims] = np.inf
         self.fat[:, dims:] = -np.inf
+        #: the pieces that may move (all of them unless :meth:`settle` says otherwise)
+        self.loose = np.arange(pieces, dtype=np.int64)
         #: the pairs of the last :meth:`update`, (K, 2) int64, in its first rows
         self.pairs = np.zeros((max(64, 4 * bodies), 2), np.int64)
         self._find = find
@@ -354,6 +391,18 @@ class KeptPairs:
         self._n_fat = -1  # how many fat pairs; -1: they are not those of the fat boxes now
         self._busy = True  # a piece left its fat box at the last step
         self._everyone = np.ones(bodies, np.bool_)
+
+    def settle(self, boxes: np.ndarray, piece_reach: np.ndarray, still: np.ndarray) -> None:
+        """The pieces ``still`` (indices) never move: their fat boxes are made now from
+        ``boxes`` (P, 2 d), as :func:`refit` would make them, and never looked at again; the
+        other pieces stay :attr:`loose`."""
+        grow = FAT * piece_reach[still][:, None]
+        d = boxes.shape[1] // 2
+        self.fat[still, :d] = boxes[still, :d] - grow
+        self.fat[still, d:] = boxes[still, d:] + grow
+        keep = np.ones(self.fat.shape[0], np.bool_)
+        keep[still] = False
+        self.loose = np.flatnonzero(keep).astype(np.int64)
 
     def update(
         self,
@@ -371,7 +420,7 @@ class KeptPairs:
         give the pairs ``find`` gives for ``boxes`` (two bodies, one ``moving``, one
         ``dynamic``), in the same order.
         """
-        moved = refit(boxes, self.fat, piece_reach)
+        moved = refit(boxes, self.fat, piece_reach, self.loose)
         busy, self._busy = self._busy, moved > 0
         if moved:
             self._n_fat = -1

@@ -39,6 +39,7 @@ from carom.engines.stepped.impacts import MAX_IMPACTS
 from carom.engines.stepped.memory import StepMemory, new_memory
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
 from carom.engines.stepped.settings import RigidSettings
+from carom.geometry.bvh import build_bvh
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
 
 __all__ = ["STOP_CHECK_STEPS", "Isolated", "SteppedEngine"]
@@ -145,14 +146,6 @@ class SteppedEngine:
         self._ci = np.zeros((max(64, 2 * n), rows.CONTACT_INTS), np.int64)
         pieces = model.piece_body.shape[0]
         self._boxes = np.zeros((pieces, 2 * dims))
-        self._kept = KeptPairs(
-            pieces,
-            dims,
-            n,
-            lambda boxes, active, out: find_pairs(
-                boxes, self.model.piece_body, active, self._dynamic, self.cell, out
-            ),
-        )
         self._parent = np.zeros(n, np.int64)
         self._role = np.zeros(n, np.int64)
         self._dynamic = model.kind == KIND_DYNAMIC
@@ -175,9 +168,37 @@ class SteppedEngine:
         #: sleep and the warm-start cache
         self.memory = memory
         self._setup()
+        self._settle_statics()
+
+    def _settle_statics(self) -> None:
+        """The broad phase's pairs kept from step to step, the static bodies' pieces (their
+        boxes finite: a plane's is not) in a tree built once (:func:`find_pairs`)."""
+        model = self.model
+        pieces = model.piece_body.shape[0]
+        self._kept = KeptPairs(pieces, self.DIMS, model.kind.shape[0], self._find)
+        static = ~(self._dynamic | self._kinematic)
+        self._rest_boxes()
+        bounded = np.all(np.isfinite(self._boxes), axis=1)
+        still = np.flatnonzero(static[model.piece_body] & bounded)
+        self._kept.settle(self._boxes, model.piece_reach, still)
+        self._tree = build_bvh(self._kept.fat, still)
+
+    def _find(self, boxes: NDArray[np.float64], active: NDArray[np.bool_], out: Any) -> int:
+        tree = self._tree
+        return int(
+            find_pairs(
+                boxes, self.model.piece_body, active, self._dynamic, self.cell, self._kept.loose,
+                tree.box, tree.left, tree.first, tree.count, tree.order, out,
+            )
+        )  # fmt: skip
 
     def _setup(self) -> None:
         """The dimension's own set-up, after the shared one."""
+
+    def _rest_boxes(self) -> None:
+        """Every piece's box as it stands, not swept, into ``_boxes`` (after :meth:`_setup`:
+        the pieces placed)."""
+        raise NotImplementedError
 
     @classmethod
     def restore(
