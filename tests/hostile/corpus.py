@@ -99,8 +99,49 @@ SCENES: list[tuple[str, str, str]] = [
     ),
 ]
 
+#: a minimal good scene of the 3D rigid engine (issue 45); its hostile scenes change one thing
+RIGID_3D = """\
+[world]
+dimension = 3
+box = [2.0, 2.0, 2.0]
+gravity = [0.0, 0.0, -9.81]
+
+[[bodies]]
+shape = "box"
+size = [0.2, 0.2, 0.2]
+positions = [[1.0, 1.0, 0.5]]
+
+[run]
+until = 0.1
+"""
+
+
+def _rigid_3d(old: str, new: str) -> str:
+    assert old in RIGID_3D
+    return RIGID_3D.replace(old, new)
+
+
+SCENES += [
+    # issue 45: a scalar angular velocity on a 3D body was read as [3, 3, 3] rad/s
+    (
+        "spin-number-3d",
+        _rigid_3d(
+            "positions = [[1.0, 1.0, 0.5]]",
+            "positions = [[1.0, 1.0, 0.5]]\nangular_velocities = 3.0",
+        ),
+        r"angular_velocities is a vector \[wx, wy, wz\] \[rad/s\] in 3D.*\[0, 0, 3\.0\]",
+    ),
+]
+
 #: (id, call, a regular expression the CaromError's message must match)
 API: list[tuple[str, Callable[[], Any], str]] = [
+    (
+        "spin-number-3d",
+        lambda: carom.World(3, [1, 1, 1]).add_body(
+            carom.shapes3d.Box([0.1, 0.1, 0.1]), [0.5, 0.5, 0.5], angular_velocity=3.0
+        ),
+        r"angular_velocities is a vector \[wx, wy, wz\]",
+    ),
     ("dim-float", lambda: carom.World(3.0, [1, 1, 1]), r"dim must be the whole number 2 or 3"),  # type: ignore[arg-type]
     ("box-text", lambda: carom.World(3, "abc"), r"box must be 3 numbers"),
     ("box-1e300", lambda: carom.World(3, [1e300] * 3), r"box\[0\] = 1e\+300 exceeds 1e\+100"),
