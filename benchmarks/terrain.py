@@ -3,8 +3,10 @@ terrain's size (issue 45, item 2: a ball on 2e6 triangles steps in about the tim
 2e3; static pieces never paired with each other, the terrain's triangles found through the
 tree of :mod:`carom.geometry.bvh`).
 
-The terrain is a square heightfield of gentle waves, 2 k^2 triangles over 20 m x 20 m, a static
-:class:`carom.meshes.Mesh`; a 0.2 m ball is dropped on it and rolls. For each size, in this
+The terrain is a square heightfield of gentle waves, 2 k^2 triangles of the same size (0.63 m
+on a side: 2,000 of them cover 20 m x 20 m, 2e6 of them 632 m x 632 m), a static
+:class:`carom.meshes.Mesh`; a 0.2 m ball is dropped on it near the middle and rolls, meeting
+the same few triangles whatever the terrain's size. For each size, in this
 process (kernels warm after a first small run): seconds to build the engine
 (``World.prepare``: the model, every piece placed, the tree), then the median seconds of a step
 over ``--steps`` steps, and the peak resident memory so far.
@@ -27,11 +29,15 @@ import carom
 from carom.meshes import Mesh
 from carom.shapes3d import Sphere
 
+#: the side of a terrain square (two triangles) [m]
+SQUARE = 20.0 / 32.0
 
-def terrain(triangles: int, side: float = 20.0) -> Mesh:
-    """A heightfield of about ``triangles`` triangles over ``side`` x ``side`` [m]."""
+
+def terrain(triangles: int) -> Mesh:
+    """A heightfield of about ``triangles`` triangles, each square :data:`SQUARE` [m]."""
     k = max(1, round(math.sqrt(triangles / 2)))
-    x, y = np.meshgrid(np.linspace(0.0, side, k + 1), np.linspace(0.0, side, k + 1), indexing="ij")
+    edge = np.arange(k + 1) * SQUARE
+    x, y = np.meshgrid(edge, edge, indexing="ij")
     z = 1.0 + 0.2 * np.sin(x / 3.0) * np.cos(y / 4.0)
     vertices = np.column_stack([x.ravel(), y.ravel(), z.ravel()])
     i, j = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
@@ -42,9 +48,11 @@ def terrain(triangles: int, side: float = 20.0) -> Mesh:
 
 
 def world_on(mesh: Mesh) -> carom.World:
-    world = carom.World(3, [20.0, 20.0, 4.0], gravity=[0.0, 0.0, -9.81])
+    side = float(np.max(np.asarray(mesh.vertices)[:, 0]))
+    world = carom.World(3, [side, side, 4.0], gravity=[0.0, 0.0, -9.81])
     world.add_body(mesh, [0.0, 0.0, 0.0], kind="static")
-    world.add_body(Sphere(0.2), [10.0, 10.0, 2.0], velocity=[1.0, 0.5, 0.0], density=1000.0)
+    middle = 0.5 * side + 0.1
+    world.add_body(Sphere(0.2), [middle, middle, 2.0], velocity=[1.0, 0.5, 0.0], density=1000.0)
     return world
 
 

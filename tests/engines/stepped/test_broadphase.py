@@ -152,10 +152,9 @@ def test_fat_boxes_give_the_same_pairs_and_rebuild_only_when_a_piece_leaves_its_
     rebuilds = 0
     kept = KeptPairs(pieces, dims, pieces, lambda boxes, active, out: _find(
         boxes, body, active, dynamic, 0.5, out, tree))  # fmt: skip
-    # the static pieces never move: settled once, in a tree over their fat boxes, out of the
-    # grid and never refitted (as the engines do)
-    kept.settle(np.hstack([centre - reach[:, None], centre + reach[:, None]]), reach,
-                np.arange(5))  # fmt: skip
+    # the static pieces never move: settled once (their fat boxes their boxes), in a tree,
+    # out of the grid and never refitted (as the engines do)
+    kept.settle(np.hstack([centre - reach[:, None], centre + reach[:, None]]), np.arange(5))
     tree = build_bvh(kept.fat, np.arange(5))
     assert kept.loose.tolist() == list(range(5, pieces))
     loose = np.arange(pieces)

@@ -392,14 +392,12 @@ class KeptPairs:
         self._busy = True  # a piece left its fat box at the last step
         self._everyone = np.ones(bodies, np.bool_)
 
-    def settle(self, boxes: np.ndarray, piece_reach: np.ndarray, still: np.ndarray) -> None:
-        """The pieces ``still`` (indices) never move: their fat boxes are made now from
-        ``boxes`` (P, 2 d), as :func:`refit` would make them, and never looked at again; the
-        other pieces stay :attr:`loose`."""
-        grow = FAT * piece_reach[still][:, None]
-        d = boxes.shape[1] // 2
-        self.fat[still, :d] = boxes[still, :d] - grow
-        self.fat[still, d:] = boxes[still, d:] + grow
+    def settle(self, boxes: np.ndarray, still: np.ndarray) -> None:
+        """The pieces ``still`` (indices) never move: their fat boxes are their ``boxes``
+        (P, 2 d) themselves, never refitted (grown by a reach measured from their body's
+        centre, a terrain's far triangles would get boxes tens of metres wide); the other
+        pieces stay :attr:`loose`."""
+        self.fat[still] = boxes[still]
         keep = np.ones(self.fat.shape[0], np.bool_)
         keep[still] = False
         self.loose = np.flatnonzero(keep).astype(np.int64)

@@ -180,7 +180,7 @@ class SteppedEngine:
         self._rest_boxes()
         bounded = np.all(np.isfinite(self._boxes), axis=1)
         still = np.flatnonzero(static[model.piece_body] & bounded)
-        self._kept.settle(self._boxes, model.piece_reach, still)
+        self._kept.settle(self._boxes, still)
         self._tree = build_bvh(self._kept.fat, still)
 
     def _find(self, boxes: NDArray[np.float64], active: NDArray[np.bool_], out: Any) -> int:
