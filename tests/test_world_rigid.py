@@ -258,3 +258,26 @@ def test_rigid_bodies_match_the_worlds_dimension_and_are_walled_or_open() -> Non
     assert open_spheres.engine_name == "rigid"  # no walls: the event-driven engine has none
     open_spheres.run(1.0)
     assert open_spheres.positions[0, 0] == pytest.approx(3.5, rel=1e-12)  # out, unwalled
+
+
+def test_settings_assigned_after_the_engine_is_built_take_effect() -> None:
+    # issue 45: they were kept in the world and ignored by the engine already built. A box
+    # falls freely: after the new settings its step is 1 ms, and the fall goes on from where
+    # it was (free fall is exact at any step: y = y0 - g t^2 / 2 to round-off)
+    from carom.engines.stepped.settings import RigidSettings
+
+    world = carom.World(2, [4.0, 40.0], gravity=[0.0, -9.81])
+    world.add_body(Box(0.2, 0.2), [2.0, 30.0])
+    world.run(0.1)
+    assert world.engine is not None
+    assert world.engine.dt == pytest.approx(1.0 / 60.0)
+    world.engine_settings["rigid"] = RigidSettings(rate=1000.0)
+    world.run(0.5)
+    assert world.engine is not None
+    assert world.engine.dt == pytest.approx(1e-3)
+    t = world.time
+    assert world.positions[0, 1] == pytest.approx(30.0 - 0.5 * 9.81 * t * t, abs=1e-9)
+    with pytest.raises(CaromError, match=r"settings\['rigid'\]: the rigid engine takes"):
+        world.engine_settings["rigid"] = 1.0 / 60.0
+    with pytest.raises(CaromError, match=r"every engine keeps its settings"):
+        del world.engine_settings["rigid"]

@@ -19,7 +19,14 @@ from carom._inputs import as_float_array
 from carom.bodies import BODY_KINDS, KIND_DYNAMIC, Pieces
 from carom.errors import CaromError
 from carom.geometry.rotation import matrix_quaternion, rotation_matrices
-from carom.limits import MAX_BODIES, RESOLUTION, check_magnitude, check_size
+from carom.limits import (
+    LARGEST,
+    MAX_BODIES,
+    RESOLUTION,
+    SMALLEST,
+    check_magnitude,
+    check_size,
+)
 from carom.meshes import Mesh
 from carom.shape_base import SHAPE_CODES
 from carom.shapes import Shape2D
@@ -280,6 +287,8 @@ def shaped_bodies(
     code = BODY_KINDS[kind]
     origin, velocity = motion(positions, velocities, dim, singular=True)
     n = origin.shape[0]
+    if not isinstance(shape, Mesh):
+        _check_extent(shape, shape.pieces())
     if dim == 2:
         assert isinstance(shape, Shape2D)
         turn = per_value("angle", angles, n, "rad")
@@ -306,10 +315,7 @@ def shaped_bodies(
             pieces3d = shape.pieces()
             centroid = shape.centroid
     if code == KIND_DYNAMIC:
-        props = shape.mass_properties(
-            1.0 if density is None and mass is None else density, mass=mass
-        )
-        body_mass, inertia, centroid = props.mass, props.inertia, props.centroid
+        body_mass, inertia, centroid = _mass_of(shape, density, mass)
     else:
         _check_still(kind, density, mass, velocity, spin)
         body_mass = math.inf
@@ -329,6 +335,54 @@ def shaped_bodies(
     return ShapedBodies(
         centre, velocity, turn, spin, moved, SHAPE_CODES[name], body_mass, inertia, code
     )
+
+
+def _check_extent(shape: Shape2D | Shape3D, pieces: Pieces) -> None:
+    """Refuse a shape whose farthest point from its origin lies outside carom's sizes
+    (:data:`carom.limits.SMALLEST` to :data:`carom.limits.LARGEST` metres)."""
+    extent = 0.0
+    for piece in pieces:
+        corners = np.abs(np.asarray(piece.vertices, dtype=np.float64))
+        far = float(np.max(corners)) if corners.size else 0.0
+        extent = max(extent, far + float(piece.radius))
+    if not SMALLEST <= extent <= LARGEST:
+        raise CaromError(
+            f"the {shape.kind} reaches {extent:.3g} m from its origin; carom takes shapes from "
+            f"{SMALLEST:g} to {LARGEST:g} m across (docs/scenes.md, Limits): scale it"
+        )
+
+
+def _mass_of(
+    shape: Shape2D | Shape3D, density: float | None, mass: float | None
+) -> tuple[float, FloatArray | float, FloatArray]:
+    """A dynamic body's mass [kg], inertia about its centroid and centroid, refused when the
+    mass lies outside carom's range or the inertia is not finite and positive (a shape too
+    small or too large for its mass: its integrals underflow or overflow in float64)."""
+    given = 1.0 if density is None and mass is None else density
+    what = f"the {shape.kind}"
+    try:
+        with np.errstate(over="raise", under="ignore", invalid="raise", divide="raise"):
+            props = shape.mass_properties(given, mass=mass)
+    except (OverflowError, ZeroDivisionError, FloatingPointError, np.linalg.LinAlgError):
+        raise CaromError(
+            f"{what}'s mass and inertia overflow float64 at this size; scale the shape "
+            f"(carom takes magnitudes up to {LARGEST:g} in SI units, docs/scenes.md, Limits)"
+        ) from None
+    body_mass = float(props.mass)
+    if not SMALLEST <= body_mass <= LARGEST:
+        raise CaromError(
+            f"{what} weighs {body_mass:.3g} kg; carom takes masses from {SMALLEST:g} to "
+            f"{LARGEST:g} kg (docs/scenes.md, Limits): change its size, density or mass"
+        )
+    inertia = np.asarray(props.inertia, dtype=np.float64)
+    moments = inertia if inertia.ndim == 0 else np.linalg.eigvalsh(inertia)
+    if not (np.all(np.isfinite(moments)) and np.all(moments > 0.0)):
+        raise CaromError(
+            f"{what}'s moment of inertia ({np.min(moments):.3g} kg m^2) is not a finite, "
+            f"positive number in float64: its size and mass ({body_mass:.3g} kg) are too far "
+            f"apart; scale the shape or its mass"
+        )
+    return body_mass, props.inertia, props.centroid
 
 
 def _check_still(

@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from carom.errors import CaromError
 from carom.geometry.mass3d import SolidIntegrals, check_closed, polyhedron_integrals
+from carom.limits import check_magnitude
 from carom.shapes3d import Compound, ConvexPiece3D, Hull, Shape3D
 
 __all__ = ["CACHE_SUFFIX", "Mesh", "bowl_mesh", "decompose", "load_mesh", "save_obj", "torus_mesh"]
@@ -65,6 +66,7 @@ class Mesh(Shape3D):
         if not np.all(np.isfinite(v)):
             i = int(np.flatnonzero(~np.all(np.isfinite(v), axis=1))[0])
             raise CaromError(f"Mesh vertex {i} = {v[i].tolist()} is not finite")
+        v = check_magnitude("Mesh vertices", v, "m")
         if f.ndim != 2 or f.shape[1] != 3 or f.shape[0] < 1 or f.dtype.kind not in "iu":
             raise CaromError(f"Mesh triangles must be (F, 3) corner indices; got {f.shape}")
         if f.min() < 0 or f.max() >= v.shape[0]:
@@ -232,6 +234,10 @@ def decompose(
         raise CaromError(f"{name}: its faces turn inward (negative volume); flip them")
     if not (np.isfinite(threshold) and 0.0 < threshold < 1.0):
         raise CaromError(f"threshold must be in (0, 1); got {threshold!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or not 0 <= seed < 2**31:
+        raise CaromError(
+            f"seed must be a whole number from 0 to {2**31 - 1} (CoACD's seed); got {seed!r}"
+        )
     key = _key(mesh, threshold, seed)
     places = [] if not cache else [_user_cache(key)]
     if cache and file is not None:

@@ -6,7 +6,7 @@ and each engine's settings. :class:`carom.World` is a Scenery with bodies and an
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -24,6 +24,43 @@ from carom.materials import COMBINE_RULES, CombineRule, Material
 __all__ = ["Scenery", "as_material"]
 
 FloatArray = NDArray[np.float64]
+
+
+class EngineSettings(dict[str, Any]):
+    """A world's settings of each engine, by the engine's name: assigning one checks that it
+    is that engine's settings dataclass, then calls ``on_change`` (the world drops its
+    engine, rebuilt with them at the next run); none can be removed."""
+
+    def __init__(self, values: dict[str, Any]) -> None:
+        super().__init__(values)
+        self.on_change: Callable[[], None] | None = None
+
+    def __setitem__(self, name: str, value: Any) -> None:
+        entry = registry.find(name)
+        if entry.settings is None or not isinstance(value, entry.settings):
+            want = "no settings" if entry.settings is None else entry.settings.__name__
+            raise CaromError(f"settings[{name!r}]: the {name} engine takes {want}")
+        super().__setitem__(entry.name, value)
+        if self.on_change is not None:
+            self.on_change()
+
+    def __delitem__(self, name: str) -> None:
+        raise CaromError(
+            f"every engine keeps its settings; assign new ones instead of removing {name!r}"
+        )
+
+    def update(self, *args: Any, **kwargs: Any) -> None:
+        for name, value in dict(*args, **kwargs).items():
+            self[name] = value
+
+    def pop(self, name: str, *default: Any) -> Any:
+        del self[name]
+
+    def popitem(self) -> tuple[str, Any]:
+        raise CaromError("every engine keeps its settings; assign new ones instead")
+
+    def clear(self) -> None:
+        self.popitem()
 
 
 class Scenery:
@@ -64,10 +101,13 @@ class Scenery:
             else check_magnitude("gravity", vector("gravity", gravity, dim, "m/s^2"), "m/s^2")
         )
         self.walls = self._wall_materials(walls)
-        #: each engine's settings, by its name (:meth:`settings_of`)
-        self.engine_settings: dict[str, Any] = {
-            e.name: e.settings() for e in registry.engines() if e.settings is not None
-        }
+        #: each engine's settings, by its name (:meth:`settings_of`); assigning an engine's
+        #: settings (``world.engine_settings["rigid"] = RigidSettings(...)``) checks them and
+        #: rebuilds the engine at the next run, from the world as it stands
+        kept = EngineSettings(
+            {e.name: e.settings() for e in registry.engines() if e.settings is not None}
+        )
+        self.engine_settings: dict[str, Any] = kept
         if t_c is not None or shell_thickness is not None:
             given = {"t_c": t_c, "shell_thickness": shell_thickness}
             self.engine_settings["edmd"] = EdmdSettings(
@@ -76,11 +116,8 @@ class Scenery:
         if rigid is not None:
             self.engine_settings["rigid"] = rigid
         for name, value in (settings or {}).items():
-            entry = registry.find(name)
-            if entry.settings is None or not isinstance(value, entry.settings):
-                want = "no settings" if entry.settings is None else entry.settings.__name__
-                raise CaromError(f"settings[{name!r}]: the {name} engine takes {want}")
-            self.engine_settings[entry.name] = value
+            self.engine_settings[name] = value
+        kept.on_change = self._invalidate
         if combine not in COMBINE_RULES:
             raise CaromError(f"combine must be one of {COMBINE_RULES}; got {combine!r}")
         self.combine: CombineRule = combine

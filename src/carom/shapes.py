@@ -36,6 +36,7 @@ from carom.geometry.outline import (
     rounded_polygon_integrals,
 )
 from carom.laws.spheres import default_inertia_factor
+from carom.limits import check_magnitude
 from carom.shape_base import (
     CapsuleSize,
     RoundSize,
@@ -119,7 +120,7 @@ def _points(name: str, value: ArrayLike, count: int | None = None) -> FloatArray
     if bad.size:
         i = int(bad[0])
         raise CaromError(f"{name}[{i}] = {points[i].tolist()} is not finite; give numbers [m]")
-    return points
+    return check_magnitude(name, points, "m")
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,7 @@ from carom.geometry.mass3d import (
     sphere_integrals,
 )
 from carom.geometry.rotation import rotation_matrices, turn_z_onto
+from carom.limits import check_magnitude
 from carom.shape_base import CapsuleSize, RoundSize, ShapeBase, compound_part, compound_pieces
 
 __all__ = [
@@ -290,6 +291,7 @@ def convex_hull(points: ArrayLike, name: str = "Hull") -> tuple[FloatArray, NDAr
     if bad.size:
         i = int(bad[0])
         raise CaromError(f"{name} point {i} = {p[i].tolist()} is not finite; give numbers [m]")
+    p = check_magnitude(f"{name} points", p, "m")
     try:
         from scipy.spatial import ConvexHull, QhullError
     except ImportError:

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 import carom
+import carom.meshes
 
 #: a minimal good scene; each hostile scene is this with one thing changed
 BASE = """\
@@ -122,6 +123,36 @@ def _rigid_3d(old: str, new: str) -> str:
 
 
 SCENES += [
+    # issue 45: a 3D piece in a 2D compound, a 3D body in a 2D lattice (once AssertionErrors)
+    (
+        "ball-in-2d-compound",
+        _with(
+            "radius = 0.1",
+            'shape = "compound"\npieces = [{shape = "ball", radius = 0.1, offset = [0.0, 0.0]}]',
+        ),
+        r"piece 1: a ball is a 3D shape; in 2D use circle",
+    ),
+    (
+        "hull-in-2d-lattice",
+        BASE
+        + "\n[[lattice]]\nshape = [2, 2]\norigin = [2.0, 1.0]\nspacing = 0.5\n"
+        + 'body = {shape = "hull", vertices = [[0,0,0],[0.1,0,0],[0,0.1,0],[0,0,0.1]]}\n',
+        r"\[\[lattice\]\] #1: a hull is a 3D shape",
+    ),
+    # issue 45: a static body's velocities were dropped without a word
+    (
+        "static-sphere-moving",
+        _with("radius = 0.1", 'radius = 0.1\nkind = "static"'),
+        r"a static body never moves, but velocities is given; remove velocities",
+    ),
+    (
+        "static-box-moving-3d",
+        _rigid_3d(
+            "positions = [[1.0, 1.0, 0.5]]",
+            'positions = [[1.0, 1.0, 0.5]]\nvelocities = [[1.0, 0.0, 0.0]]\nkind = "static"',
+        ),
+        r"a static body never moves, but velocities is given",
+    ),
     # issue 45: a scalar angular velocity on a 3D body was read as [3, 3, 3] rad/s
     (
         "spin-number-3d",
@@ -133,8 +164,57 @@ SCENES += [
     ),
 ]
 
+
+def _add_2d(shape: Any, **kw: Any) -> int:
+    return carom.World(2, [10.0, 10.0]).add_body(shape, [5.0, 5.0], **kw)
+
+
+def _add_3d(shape: Any, **kw: Any) -> int:
+    return carom.World(3, [10.0, 10.0, 10.0]).add_body(shape, [5.0, 5.0, 5.0], **kw)
+
+
 #: (id, call, a regular expression the CaromError's message must match)
 API: list[tuple[str, Callable[[], Any], str]] = [
+    # issue 45: shapes outside carom.limits (once a ZeroDivisionError, an OverflowError, a
+    # RuntimeWarning, or accepted with masses down to 1e-300 kg)
+    ("box-1e-99", lambda: _add_2d(carom.shapes.Box(1e-99, 1e-99)), r"the box weighs 1e-198 kg"),
+    (
+        "polygon-1e-150",
+        lambda: _add_2d(carom.shapes.Polygon([[0, 0], [1e-150, 0], [0, 1e-150]])),
+        r"the polygon reaches 1e-150 m from its origin; carom takes shapes from 1e-100",
+    ),
+    (
+        "polygon-1e300",
+        lambda: _add_2d(carom.shapes.Polygon([[0, 0], [1e300, 0], [0, 1e300]])),
+        r"Polygon vertices\[1, 0\] = 1e\+300 exceeds 1e\+100 m",
+    ),
+    ("box-3d-1e300", lambda: _add_3d(carom.shapes3d.Box([1e300] * 3)), r"reaches 5e\+299 m"),
+    ("box-3d-1e-99", lambda: _add_3d(carom.shapes3d.Box([1e-99] * 3)), r"weighs 1e-297 kg"),
+    (
+        "mass-1e-300",
+        lambda: _add_2d(carom.shapes.Box(1.0, 1.0), mass=1e-300),
+        r"the box weighs 1e-300 kg; carom takes masses from 1e-100 to 1e\+100 kg",
+    ),
+    (
+        "static-box-1e-200",
+        lambda: _add_2d(carom.shapes.Box(1e-200, 1e-200), kind="static"),
+        r"the box reaches 5e-201 m from its origin",
+    ),
+    (
+        "hull-1e300",
+        lambda: carom.shapes3d.Hull(np.eye(4, 3) * 1e300),
+        r"Hull points\[0, 0\] = 1e\+300 exceeds 1e\+100 m",
+    ),
+    (
+        "decompose-seed-negative",
+        lambda: carom.meshes.decompose(carom.meshes.torus_mesh(0.3, 0.1), seed=-1, cache=False),
+        r"seed must be a whole number from 0 to 2147483647 \(CoACD's seed\); got -1",
+    ),
+    (
+        "mesh-1e300",
+        lambda: carom.meshes.Mesh([[0, 0, 0], [1e300, 0, 0], [0, 1, 0]], [[0, 1, 2]]),
+        r"Mesh vertices\[1, 0\] = 1e\+300 exceeds 1e\+100 m",
+    ),
     (
         "spin-number-3d",
         lambda: carom.World(3, [1, 1, 1]).add_body(

@@ -98,6 +98,7 @@ def build_world(scene: Scene, *, engine: bool = True) -> World:
             elif b["radius"] is None:
                 raise CaromError("radius is required for spheres: add radius = ... [m]")
             elif b["static"] or b.get("kind") == "static":
+                _refuse_motion(b)
                 world.add_static_spheres(b["positions"], radius=b["radius"], material=material)
             else:
                 world.add_spheres(
@@ -245,6 +246,18 @@ def _one(key: str, value: Any) -> float:
     return float(value)
 
 
+def _refuse_motion(b: Mapping[str, Any]) -> None:
+    """Refuse velocities or spins on a static entry (it never moves: they would be
+    dropped without a word)."""
+    for key in ("velocities", "angular_velocities"):
+        value = b.get(key)
+        if value is not None and np.any(np.asarray(value, dtype=float) != 0.0):
+            raise CaromError(
+                f"a static body never moves, but {key} is given; remove {key}, or make the "
+                f'bodies kind = "kinematic" (moving on their own) or "dynamic"'
+            )
+
+
 def _add_shaped(world: World, b: Mapping[str, Any], material: Material | None) -> None:
     """Add the rigid bodies of a ``[[bodies]]`` entry of a shape other than a sphere: one
     shape, one material, per-body positions, velocities, turns and spins (one for all, or
@@ -259,9 +272,11 @@ def _add_shaped(world: World, b: Mapping[str, Any], material: Material | None) -
     if kind == "dynamic" and density is None and b["mass"] is None:
         density = 1.0
     velocities = b["velocities"]
+    if kind == "static":
+        _refuse_motion(b)
     if not isinstance(b["mass"], list):
         world.add_bodies(
-            shape, positions, None if kind == "static" else velocities, density=density,
+            shape, positions, velocities, density=density,
             mass=b["mass"], material=material, kind=kind, **turning,
         )  # fmt: skip
         return
