@@ -85,10 +85,19 @@ TWICE = 'name = "rubber"\nrestitution = 0.8\n'
 BAD_SCENES: list[tuple[tuple[str, str], str]] = [
     # unparsable TOML: tomllib's line and column
     (("box = [4.0, 2.0]", "box = [4.0, 2.0"), r"scene\.toml: not valid TOML: .*line \d+"),
-    # unknown key, with its line
+    # unknown key, with its line: a misspelt one answered with the nearest, another with
+    # the list of them
     (
         ('boundary = "walls"', 'boundry = "walls"'),
-        r"scene\.toml:5: \[world\] boundry: is not a known key; use one of dimension, box",
+        r"scene\.toml:5: \[world\] boundry: is not a known key; did you mean boundary\?$",
+    ),
+    (
+        ('boundary = "walls"', 'colour = "red"'),
+        r"scene\.toml:5: \[world\] colour: is not a known key; use one of dimension, box",
+    ),
+    (
+        ("[run]", "[rnu]"),
+        r"unknown table \[rnu\]; did you mean \[run\]\?",
     ),
     # wrong type
     (

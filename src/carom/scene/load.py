@@ -20,6 +20,7 @@ from carom.scene.schema import (
     Locator,
     SceneError,
     all_tables,
+    suggest,
 )
 from carom.shape_base import SHAPES
 
@@ -78,9 +79,7 @@ class Scene:
         for table in data:
             if table not in tables:
                 raise where.error(
-                    [table],
-                    f"unknown table [{table}]",
-                    f"use one of {', '.join('[' + t + ']' for t in tables)}",
+                    [table], f"unknown table [{table}]", suggest(table, tables, wrap="[{}]")
                 )
         parts: dict[str, Any] = {}
         for table in tables:
@@ -353,9 +352,7 @@ def _check_table(
                 [table, key], f"was renamed to {new}", f"write {new} = ... instead", index
             )
         if key not in schema:
-            raise where.error(
-                [table, key], "is not a known key", f"use one of {', '.join(schema)}", index
-            )
+            raise where.error([table, key], "is not a known key", suggest(key, schema), index)
         problem = schema[key][0](value)
         if problem:
             raise where.error([table, key], problem, "", index)

@@ -4,6 +4,7 @@ and how a scene's errors are worded (file, line, table, key, what is wrong, the 
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 import re
 from collections.abc import Callable, Iterable
@@ -212,6 +213,17 @@ def _size(value: Any) -> str | None:
     return None
 
 
+def suggest(word: str, choices: Iterable[str], *, wrap: str = "{}") -> str:
+    """What to write instead of an unknown ``word``: the nearest of ``choices`` (a misspelt
+    key: "did you mean restitution?") or, with none near, the list of them (each written
+    through ``wrap``, e.g. ``"[{}]"`` for tables)."""
+    names = list(choices)
+    near = difflib.get_close_matches(word, names, n=1, cutoff=0.6)
+    if near:
+        return f"did you mean {wrap.format(near[0])}?"
+    return f"use one of {', '.join(wrap.format(name) for name in names)}"
+
+
 def _pieces(value: Any) -> str | None:
     if not isinstance(value, list) or not value or not all(isinstance(v, dict) for v in value):
         return (
@@ -221,8 +233,7 @@ def _pieces(value: Any) -> str | None:
     for k, piece in enumerate(value):
         for key, item in piece.items():
             if key not in PIECE_KEYS:
-                known = ", ".join(PIECE_KEYS)
-                return f"piece {k + 1}: {key!r} is not a known key; use one of {known}"
+                return f"piece {k + 1}: {key!r} is not a known key; {suggest(key, PIECE_KEYS)}"
             problem = PIECE_KEYS[key](item)
             if problem:
                 return f"piece {k + 1}: {key} {problem}"

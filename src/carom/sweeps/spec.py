@@ -38,6 +38,7 @@ from typing import Any
 from carom._text import printable
 from carom.errors import CaromError
 from carom.scene import Scene, SceneError, find_scene
+from carom.scene.schema import suggest
 
 __all__ = [
     "MAX_POINTS",
@@ -241,8 +242,7 @@ class SweepSpec:
         for key in head:
             if key not in known:
                 raise SweepError(
-                    f"{where}: [sweep] {key} is not a known key; use one of "
-                    f"{', '.join(sorted(known))}"
+                    f"{where}: [sweep] {key} is not a known key; {suggest(key, sorted(known))}"
                 )
         scene_name = head.get("scene")
         if not isinstance(scene_name, str) or not scene_name:
