@@ -195,3 +195,23 @@ def test_pieces_go_to_the_users_cache_when_the_folder_cannot_take_them(
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
     decompose(torus_mesh(0.2, 0.05, 12, 6))
     assert len(list((tmp_path / "cache" / "carom" / "pieces").glob("*" + CACHE_SUFFIX))) == 2
+
+
+def test_a_mesh_file_with_a_vertex_that_is_not_a_number_is_refused(tmp_path: Path) -> None:
+    # issue 45: trimesh's processing dropped the vertex and its triangle, and the run went on
+    # with one of two triangles
+    pytest.importorskip("trimesh")
+    file = tmp_path / "nan.obj"
+    file.write_text("v 0 0 0\nv 1 0 0\nv 0 nan 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n")
+    with pytest.raises(CaromError, match=r"nan\.obj: vertex 3 = \[0\.0, nan, 0\.0\] is not a"):
+        load_mesh(file)
+
+
+def test_a_mesh_file_in_an_encoding_trimesh_cannot_read_is_one_message(tmp_path: Path) -> None:
+    # issue 45: once "No module named 'charset_normalizer'"
+    pytest.importorskip("trimesh")
+    file = tmp_path / "bad.stl"
+    file.write_bytes(b"solid bad\n facet normal 0 0 1\n\xff\xfe\xfa outer loop\n")
+    with pytest.raises(CaromError, match=r"bad\.stl: cannot read it as a mesh") as caught:
+        load_mesh(file)
+    assert "module" not in str(caught.value)

@@ -126,17 +126,32 @@ def load_mesh(path: str | os.PathLike[str], *, scale: float = 1.0) -> Mesh:
     file = Path(path)
     if not file.is_file():
         raise CaromError(f"{file}: no such mesh file")
+    if not (np.isfinite(scale) and scale > 0.0):
+        raise CaromError(f"scale must be positive and finite; got {scale!r}")
     try:
-        loaded = trimesh.load(file, force="mesh", process=True)
+        # as written (process=False): trimesh's processing drops a vertex that is not a
+        # number, and the triangles that use it, without a word
+        loaded = trimesh.load(file, force="mesh", process=False)
+    except ImportError:  # (trimesh guessing a text file's encoding with a package it lacks)
+        raise CaromError(
+            f"{file}: cannot read it as a mesh: it is neither a binary mesh nor text in an "
+            f"encoding trimesh reads (UTF-8); check the file, or export it again"
+        ) from None
     except Exception as error:  # trimesh raises many kinds on a bad file
         raise CaromError(f"{file}: cannot read it as a mesh ({error})") from None
     vertices = np.asarray(loaded.vertices, float)
-    triangles = np.asarray(loaded.faces, np.int64)
+    bad = np.flatnonzero(~np.all(np.isfinite(vertices), axis=1))
+    if bad.size:
+        i = int(bad[0])
+        raise CaromError(
+            f"{file}: vertex {i + 1} = {vertices[i].tolist()} is not a number; fix it in the "
+            f"file (carom does not drop it and its triangles)"
+        )
+    processed = trimesh.Trimesh(vertices, np.asarray(loaded.faces, np.int64), process=True)
+    triangles = np.asarray(processed.faces, np.int64)
     if triangles.size == 0:
         raise CaromError(f"{file}: holds no triangles")
-    if not (np.isfinite(scale) and scale > 0.0):
-        raise CaromError(f"scale must be positive and finite; got {scale!r}")
-    return Mesh(vertices * scale, triangles)
+    return Mesh(np.asarray(processed.vertices, float) * scale, triangles)
 
 
 def _key(mesh: Mesh, threshold: float, seed: int) -> str:
