@@ -23,21 +23,27 @@ def plural(count: int, one: str, many: str | None = None) -> str:
 _HIDDEN = {"Cc", "Cf", "Zl", "Zp", "Cs", "Co", "Cn"}
 
 
-def printable(text: str) -> str:
+def printable(text: str, *, one_line: bool = False) -> str:
     r"""``text`` with every character a terminal could act on written as an escape.
 
-    Newlines and tabs are kept; anything else that is not shown as itself becomes
-    ``\xNN``, ``\uNNNN`` or ``\UNNNNNNNN``, so that a scene's keys or a file name echoed in a
-    message cannot clear, recolour or reorder the user's terminal.
+    Newlines and tabs are kept (with ``one_line``, a newline is written ``\n`` too: an error
+    message is one line, whatever file name it quotes); anything else that is not shown as
+    itself becomes ``\xNN``, ``\uNNNN`` or ``\UNNNNNNNN``, so that a scene's keys or a file
+    name echoed in a message cannot clear, recolour or reorder the user's terminal.
 
     >>> printable("ok\x1b[2J\u202e")
     'ok\\x1b[2J\\u202e'
+    >>> printable("a\nb.toml: no such file", one_line=True)
+    'a\\nb.toml: no such file'
     """
     if text.isprintable():
         return text
+    kept = "\t" if one_line else "\n\t"
     out = []
     for c in text:
-        if c in "\n\t" or unicodedata.category(c) not in _HIDDEN:
+        if c == "\n" and one_line:
+            out.append("\\n")
+        elif c in kept or unicodedata.category(c) not in _HIDDEN:
             out.append(c)
         elif ord(c) < 0x100:
             out.append(f"\\x{ord(c):02x}")

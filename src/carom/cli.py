@@ -504,7 +504,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except CaromError as exc:
         if args.debug:
             traceback.print_exc()
-        print(printable(f"carom: error: {exc}"), file=sys.stderr)
+        print(printable(f"carom: error: {exc}", one_line=True), file=sys.stderr)
         _end_if_hdf5_is_broken(2)
         return 2
     except KeyboardInterrupt:

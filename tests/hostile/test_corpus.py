@@ -74,3 +74,14 @@ def test_as_a_process_too(tmp_path: Path, name: str) -> None:
 def test_a_hostile_api_call_raises_carom_error(call, pattern: str) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(CaromError, match=pattern):
         call()
+
+
+def test_a_scene_path_with_a_newline_is_named_on_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # issue 45: the path was printed raw, over two lines
+    code = main(["run", str(tmp_path / "a\nb.toml"), "--out", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert len(err.splitlines()) == 1, err
+    assert "a\\nb.toml: no such scene file" in err
