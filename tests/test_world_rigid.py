@@ -281,3 +281,35 @@ def test_settings_assigned_after_the_engine_is_built_take_effect() -> None:
         world.engine_settings["rigid"] = 1.0 / 60.0
     with pytest.raises(CaromError, match=r"every engine keeps its settings"):
         del world.engine_settings["rigid"]
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_run_and_record_reach_every_time_asked(dim: int, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # issue 45: run(0.01) with a step of 1/60 s stopped at t = 0 and said it had arrived;
+    # now a shorter last step ends on the time asked. A box in free fall: its height is the
+    # closed form y0 - g t^2 / 2 at each of those times (free flight is exact at any step;
+    # the tolerance is round-off of 30 m)
+    from carom.shapes3d import Box as Box3D
+
+    g = 9.81
+    box = [4.0, 40.0] if dim == 2 else [4.0, 4.0, 40.0]
+    world = carom.World(dim, box, gravity=[0.0] * (dim - 1) + [-g])
+    world.add_body(Box(0.2, 0.2) if dim == 2 else Box3D([0.2] * 3), [2.0] * (dim - 1) + [30.0])
+    world.run(0.01)
+    assert world.time == 0.01
+    assert world.positions[0, -1] == pytest.approx(30.0 - 0.5 * g * 0.01**2, abs=1e-13)
+    times = np.array([0.04, 0.045, 0.05])
+    rec = world.record(times)
+    assert np.array_equal(rec.times, times)
+    fall = 30.0 - 0.5 * g * times**2
+    np.testing.assert_allclose(rec.positions[:, 0, -1], fall, rtol=0.0, atol=1e-12)
+    # a checkpoint taken between two whole steps continues bit for bit
+    world.save(tmp_path / "fall.npz")
+    again = carom.World.load(tmp_path / "fall.npz")
+    assert again.time == world.time
+    world.run(0.5)
+    again.run(0.5)
+    assert world.time == again.time == 0.5
+    assert np.array_equal(world.positions, again.positions)
+    assert np.array_equal(world.velocities, again.velocities)
+    assert world.positions[0, -1] == pytest.approx(30.0 - 0.5 * g * 0.25, abs=1e-12)

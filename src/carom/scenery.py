@@ -6,7 +6,7 @@ and each engine's settings. :class:`carom.World` is a Scenery with bodies and an
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -28,12 +28,9 @@ FloatArray = NDArray[np.float64]
 
 class EngineSettings(dict[str, Any]):
     """A world's settings of each engine, by the engine's name: assigning one checks that it
-    is that engine's settings dataclass, then calls ``on_change`` (the world drops its
-    engine, rebuilt with them at the next run); none can be removed."""
-
-    def __init__(self, values: dict[str, Any]) -> None:
-        super().__init__(values)
-        self.on_change: Callable[[], None] | None = None
+    is that engine's settings dataclass (a world built its engine with the settings object
+    it held then, and rebuilds it at the next run when another is there); none can be
+    removed."""
 
     def __setitem__(self, name: str, value: Any) -> None:
         entry = registry.find(name)
@@ -41,8 +38,6 @@ class EngineSettings(dict[str, Any]):
             want = "no settings" if entry.settings is None else entry.settings.__name__
             raise CaromError(f"settings[{name!r}]: the {name} engine takes {want}")
         super().__setitem__(entry.name, value)
-        if self.on_change is not None:
-            self.on_change()
 
     def __delitem__(self, name: str) -> None:
         raise CaromError(
@@ -104,10 +99,9 @@ class Scenery:
         #: each engine's settings, by its name (:meth:`settings_of`); assigning an engine's
         #: settings (``world.engine_settings["rigid"] = RigidSettings(...)``) checks them and
         #: rebuilds the engine at the next run, from the world as it stands
-        kept = EngineSettings(
+        self.engine_settings: dict[str, Any] = EngineSettings(
             {e.name: e.settings() for e in registry.engines() if e.settings is not None}
         )
-        self.engine_settings: dict[str, Any] = kept
         if t_c is not None or shell_thickness is not None:
             given = {"t_c": t_c, "shell_thickness": shell_thickness}
             self.engine_settings["edmd"] = EdmdSettings(
@@ -117,7 +111,6 @@ class Scenery:
             self.engine_settings["rigid"] = rigid
         for name, value in (settings or {}).items():
             self.engine_settings[name] = value
-        kept.on_change = self._invalidate
         if combine not in COMBINE_RULES:
             raise CaromError(f"combine must be one of {COMBINE_RULES}; got {combine!r}")
         self.combine: CombineRule = combine

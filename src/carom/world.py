@@ -102,6 +102,7 @@ class World(Scenery):
         no engine yet, the clock at 0."""
         self.bodies = Bodies(self.dim)
         self._engine: Engine | None = None
+        self._built_with: Any = None  # the settings it was built with (others since: rebuilt)
         self._time = 0.0
         self._log = CollisionLog()
         #: whether the last run got to its target (False: its stop request ended it early)
@@ -301,12 +302,15 @@ class World(Scenery):
     def build(self) -> Engine:
         """Build the engine now (running does it when needed), refusing bodies outside the
         box, on the wrong side of a plane, or overlapping; return it."""
+        settings = self.engine_settings.get(self.engine_entry.name)
+        if self._engine is not None and self._built_with is not settings:
+            self._invalidate()  # settings assigned since it was built: built again with them
         if self._engine is None:
             if self.bodies.n == 0:
                 raise CaromError("the world has no bodies; add some with add_spheres or add_body")
             check_body_count(self.bodies.n, "the world")
             entry = registry.pick(self.engine_choice, self)
-            self._engine = entry.plug(self.dim).build(self)
+            self._engine, self._built_with = entry.plug(self.dim).build(self), settings
         return self._engine
 
     def prepare(self) -> None:
@@ -591,3 +595,4 @@ class World(Scenery):
             return
         entry = registry.find(engine_name) if engine_name else self.engine_entry
         self._engine = entry.plug(self.dim).restore(self, engine_arrays)
+        self._built_with = self.engine_settings.get(entry.name)

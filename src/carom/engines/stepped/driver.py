@@ -18,8 +18,9 @@ names its kernels for the stages that differ (:class:`carom.engines.rigid.driver
 8. **store** the impulses for the next step, and **sleep** the islands at rest (their bodies
    stop, as in Box2D; the kinetic energy they kept goes to the ledger as lost).
 
-Beside the step: the clock in whole steps, advancing to a time or through frames, warming up,
-and the running totals that ``counters`` reports and a checkpoint keeps.
+Beside the step: the clock (whole steps, and a shorter one to end on a time asked between two),
+advancing to a time or through frames, warming up, and the running totals that ``counters``
+reports and a checkpoint keeps.
 """
 
 from __future__ import annotations
@@ -64,9 +65,9 @@ class Isolated(NamedTuple):
 
 class SteppedEngine:
     """A time-stepped rigid engine, the same for 2D and 3D: the stages of a step (module
-    docstring), the clock in whole steps, advancing to a time or through frames, and the
-    running totals (collisions with bodies and with walls or planes, the energy ledger) that
-    :meth:`counters` reports and a checkpoint keeps.
+    docstring), the clock (whole steps, a shorter one to end on a time), advancing to a time or
+    through frames, and the running totals (collisions with bodies and with walls or planes,
+    the energy ledger) that :meth:`counters` reports and a checkpoint keeps.
 
     Parameters
     ----------
@@ -229,6 +230,9 @@ class SteppedEngine:
     def _start_totals(self, time: float) -> None:
         self.start = float(time)
         self.steps = 0
+        #: the steps taken when the clock was at ``start`` (a shorter step, to reach a time
+        #: between two steps, moves the clock's origin there)
+        self.base = 0
         self._collisions = 0
         self._wall_collisions = 0
         self._energy_lost = 0.0
@@ -455,8 +459,8 @@ class SteppedEngine:
 
     @property
     def time(self) -> float:
-        """The clock [s]: the start plus whole steps."""
-        return self.start + self.steps * self.dt
+        """The clock [s]: its origin plus whole steps since."""
+        return self.start + (self.steps - self.base) * self.dt
 
     def advance(
         self,
@@ -465,15 +469,36 @@ class SteppedEngine:
         sink: Sink | None,
         stop: Callable[[], bool] | None = None,
     ) -> bool:
-        """Step until the clock reaches ``until`` [s] (to within a millionth of a step);
-        ``max_events`` bounds the steps. Impacts solved exactly go to ``sink``."""
+        """Step until the clock reaches ``until`` [s] exactly: whole steps of ``dt``, then,
+        when ``until`` falls between two steps (by more than a millionth of a step), one
+        shorter step that ends on it (the clock's origin moves there, and later steps are
+        whole steps from it). ``max_events`` bounds the steps; then, or when ``stop`` says
+        so, the clock stays short of ``until`` and False is returned. Impacts solved exactly
+        go to ``sink``."""
         target = math.floor((until - self.start) / self.dt + 1e-6)
-        todo = min(max(target - self.steps, 0), max_events)
+        wanted = max(target - (self.steps - self.base), 0)
+        todo = min(wanted, max_events)
         for k in range(todo):
             self.step(sink)
             if stop is not None and (k + 1) % STOP_CHECK_STEPS == 0 and stop():
                 return False
+        if todo < wanted:
+            return False
+        rest = until - self.time
+        if rest > 1e-6 * self.dt and todo < max_events:
+            self._step_short(rest, until, sink)
         return True
+
+    def _step_short(self, dt: float, until: float, sink: Sink | None) -> None:
+        """One step of ``dt`` [s] (less than a whole one) that ends at ``until`` [s]: every
+        stage takes ``dt`` for this step; the clock's origin moves to ``until``."""
+        full = self.dt
+        self.dt = dt
+        try:
+            self.step(sink)
+        finally:
+            self.dt = full
+        self.start, self.base = float(until), self.steps
 
     def sample(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         raise NotImplementedError
@@ -525,6 +550,7 @@ class SteppedEngine:
         return {
             "steps": np.array([self.steps]),
             "start": np.array([self.start]),
+            "base": np.array([self.base]),
             "totals": np.array(
                 [
                     self._collisions,
@@ -539,6 +565,8 @@ class SteppedEngine:
     def _restore_totals(self, arrays: Mapping[str, NDArray[Any]]) -> None:
         """Take the clock and totals back from :meth:`_totals`' arrays."""
         self.steps = int(arrays["steps"][0])
+        # (a checkpoint written before shorter steps: the clock's origin at step 0)
+        self.base = int(arrays["base"][0]) if "base" in arrays else 0
         collisions, walls, lost, given, work = (float(t) for t in arrays["totals"])
         self._collisions, self._wall_collisions = int(collisions), int(walls)
         self._energy_lost, self._energy_given, self._work_done = lost, given, work
