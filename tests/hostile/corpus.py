@@ -139,6 +139,24 @@ SCENES += [
         + 'body = {shape = "hull", vertices = [[0,0,0],[0.1,0,0],[0,0.1,0],[0,0,0.1]]}\n',
         r"\[\[lattice\]\] #1: a hull is a 3D shape",
     ),
+    # issue 45: a piece's orientation in 2D (or angle in 3D) was ignored
+    (
+        "orientation-of-a-2d-piece",
+        _with(
+            "radius = 0.1",
+            'shape = "compound"\npieces = [{shape = "circle", radius = 0.1, '
+            "orientation = [1.0, 0.0, 0.0, 0.0]}]",
+        ),
+        r"piece 1: orientation turns a piece in 3D; in 2D a piece is turned by angle = 0\.0",
+    ),
+    (
+        "angle-of-a-3d-piece",
+        _rigid_3d(
+            'shape = "box"\nsize = [0.2, 0.2, 0.2]',
+            'shape = "compound"\npieces = [{shape = "ball", radius = 0.1, angle = 0.5}]',
+        ),
+        r"piece 1: angle turns a piece in 2D; in 3D a piece is turned by orientation = ",
+    ),
     # issue 45: a static body's velocities were dropped without a word
     (
         "static-sphere-moving",

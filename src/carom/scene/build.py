@@ -222,9 +222,15 @@ def shape_of(entry: Mapping[str, Any], dim: int = 2) -> Any:
     if kind != "compound":
         return _READERS[kind, dim](read)
     (at, origin), (turn, unturned) = _PLACING[dim]
+    (_, _), (other, _) = _PLACING[5 - dim]
     parts: list[Any] = []
     for k, piece in enumerate(read.need("pieces", "[{shape = ...}, ...]")):
         try:
+            if other in piece:  # (it was ignored: the piece stood unturned)
+                raise CaromError(
+                    f"{other} turns a piece in {5 - dim}D; in {dim}D a piece is turned by "
+                    f"{turn} = {unturned!r}"
+                )
             part = shape_of(piece, dim)
         except CaromError as exc:
             raise CaromError(f"piece {k + 1}: {exc}") from None
