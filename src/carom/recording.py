@@ -229,9 +229,12 @@ def advance_frame_by_frame(
 
 
 def check_steps(dt: float | None, engine: str, **times: float | None) -> None:
-    """A time-stepped engine stops on its steps (``dt`` [s]; None: it stops at any time):
-    refuse a time (``until``, ``frame_interval``, ``warmup``: given by name, in seconds) that
-    is not a whole number of them, naming the nearest that is and the ``engine``'s table."""
+    """The frames and the end of a recorded run fall on a time-stepped engine's steps
+    (``dt`` [s]; None: an engine that stops at any time), so that what is recorded never
+    changes the steps taken (the engine can end on any time with a shorter step, which a
+    frame between two steps would insert): refuse a time (``until``, ``frame_interval``,
+    ``warmup``: given by name, in seconds) that is not a whole number of them, naming the
+    nearest that is and the ``engine``'s table."""
     if dt is None:
         return
     for name, value in times.items():
