@@ -28,6 +28,7 @@ __all__ = [
     "LARGEST",
     "MAX_BODIES",
     "MAX_FRAMES",
+    "MAX_STEPS",
     "RESOLUTION",
     "SMALLEST",
     "check_body_count",
@@ -47,6 +48,8 @@ RESOLUTION = 1e-12
 MAX_BODIES = 100_000_000
 #: frames in one trajectory (each at least a few hundred bytes, with its energies)
 MAX_FRAMES = 10_000_000
+#: steps of a time-stepped engine in one run (a billion: days of computing for a small world)
+MAX_STEPS = 1_000_000_000
 #: memory one body needs, an upper estimate: the event-driven engine's state measured 480 to
 #: 820 B per body (2D at packing 0.5, 3D at 0.3 and 0.01), the body table about 200 B, and
 #: building it briefly holds copies

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from carom.engines.base import Engine, FrameArrays, Sink
 from carom.errors import CaromError
-from carom.limits import MAX_FRAMES
+from carom.limits import LARGEST, MAX_FRAMES, MAX_STEPS
 
 __all__ = [
     "RECORD_BYTES",
@@ -24,6 +24,7 @@ __all__ = [
     "Recording",
     "advance_frame_by_frame",
     "check_interval",
+    "check_span",
     "check_steps",
     "check_times",
     "check_until",
@@ -136,7 +137,33 @@ def check_until(until: float, now: float) -> float:
         raise wrong from None
     if not math.isfinite(until) or until < now:
         raise wrong
+    if until > LARGEST:
+        raise CaromError(
+            f"until = {until:g} s exceeds {LARGEST:g} s; carom accepts magnitudes up to "
+            f"{LARGEST:g} in SI units (docs/scenes.md, Limits)"
+        )
     return until
+
+
+def check_span(
+    now: float, until: float, step: float | None, frame_interval: float | None = None
+) -> None:
+    """Refuse, before anything runs, a stretch from ``now`` to ``until`` [s] that would take
+    more than :data:`MAX_STEPS` steps of ``step`` [s] (None: an engine without steps) or
+    more than :data:`MAX_FRAMES` frames ``frame_interval`` [s] apart, with the numbers."""
+    span = until - now
+    if step is not None and span / step > MAX_STEPS:
+        raise CaromError(
+            f"reaching until = {until:g} s from {now:g} s takes {span / step:.3g} steps of "
+            f"{step:.3g} s, more than the {MAX_STEPS:.0e} carom takes in one run; run to an "
+            f"earlier time (and on from there), or take a lower rate"
+        )
+    if frame_interval is not None and span / frame_interval > MAX_FRAMES:
+        raise CaromError(
+            f"frames every {frame_interval:g} s up to until = {until:g} s are "
+            f"{span / frame_interval:.3g} frames, more than the {MAX_FRAMES:,} carom keeps; "
+            f"take a longer frame_interval"
+        )
 
 
 def check_times(grid: FloatArray, now: float, n_bodies: int, dim: int) -> None:

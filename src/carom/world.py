@@ -46,6 +46,7 @@ from carom.recording import (
     Recording,
     advance_frame_by_frame,
     check_interval,
+    check_span,
     check_times,
     check_until,
     frame_grid,
@@ -396,14 +397,12 @@ class World(Scenery):
         on_collisions: Callable[[NDArray[Any]], object] | None = None,
         stop: Callable[[], bool] | None = None,
     ) -> Iterator[Frame]:
-        """Advance to ``until``, yielding a :class:`Frame` every ``frame_interval`` (lazily).
-
-        ``log``, ``on_collisions`` and ``stop`` as for :meth:`run` (a stopped run yields no
-        more frames).
-        """
+        """Advance to ``until``, yielding a :class:`Frame` every ``frame_interval`` (lazily);
+        ``log``, ``on_collisions``, ``stop`` as for :meth:`run` (stopped: no more frames)."""
         until = check_until(until, self.time)
         if frame_interval is not None:
             check_interval(frame_interval)
+        check_span(self.time, until, self.fixed_step, frame_interval)
         engine, sink = self.build(), self._sink(log, on_collisions)
 
         def reached(done: bool) -> None:
@@ -446,6 +445,7 @@ class World(Scenery):
         """
         grid = np.ascontiguousarray(as_float_array("times", times))
         check_times(grid, self.time, self.n_bodies, self.dim)
+        check_span(self.time, float(grid[-1]) if grid.size else self.time, self.fixed_step)
         engine, sink = self.build(), self._sink(log, on_collisions)
         out = FrameArrays.empty(grid.size, self.n_bodies, self.dim)
         done = engine.advance_frames(grid, sink, stop, out)

@@ -223,6 +223,24 @@ API: list[tuple[str, Callable[[], Any], str]] = [
         lambda: carom.shapes3d.Hull(np.eye(4, 3) * 1e300),
         r"Hull points\[0, 0\] = 1e\+300 exceeds 1e\+100 m",
     ),
+    # issue 45: runs beyond reason started without a word (6e101 steps; 1e12 frames grew to
+    # 3.8 GB); the API took until = 1e300, which the CLI refuses
+    ("until-1e300-api", lambda: _one_ball().run(1e300), r"until = 1e\+300 s exceeds 1e\+100 s"),
+    (
+        "rigid-1e12-steps",
+        lambda: _one_box(rate=1e12).run(1.0),
+        r"takes 1e\+12 steps of 1e-12 s, more than the 1e\+09 carom takes in one run",
+    ),
+    (
+        "rigid-until-1e100",
+        lambda: _one_box().run(1e100),
+        r"reaching until = 1e\+100 s from 0 s takes 6e\+101 steps",
+    ),
+    (
+        "frames-1e12",
+        lambda: _one_box().run(1.0, frame_interval=1e-12),
+        r"frames every 1e-12 s up to until = 1 s are 1e\+12 frames, more than the 10,000,000",
+    ),
     (
         "decompose-seed-negative",
         lambda: carom.meshes.decompose(carom.meshes.torus_mesh(0.3, 0.1), seed=-1, cache=False),
@@ -326,4 +344,13 @@ API: list[tuple[str, Callable[[], Any], str]] = [
 def _one_ball() -> carom.World:
     world = carom.World(2, [1.0, 1.0])
     world.add_spheres([0.5, 0.5], [1.0, 0.0], radius=0.1)
+    return world
+
+
+def _one_box(**settings: float) -> carom.World:
+    """A box resting in a 2D world run by the rigid engine (``settings`` for its RigidSettings)."""
+    from carom.engines.stepped.settings import RigidSettings
+
+    world = carom.World(2, [1.0, 1.0], gravity=[0.0, -9.81], rigid=RigidSettings(**settings))
+    world.add_body(carom.shapes.Box(0.2, 0.2), [0.5, 0.1])
     return world
