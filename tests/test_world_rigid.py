@@ -313,3 +313,12 @@ def test_run_and_record_reach_every_time_asked(dim: int, tmp_path) -> None:  # t
     assert np.array_equal(world.positions, again.positions)
     assert np.array_equal(world.velocities, again.velocities)
     assert world.positions[0, -1] == pytest.approx(30.0 - 0.5 * g * 0.25, abs=1e-12)
+
+
+def test_run_events_on_a_stepped_world_takes_that_many_steps() -> None:
+    # once an OverflowError (the engine's target step from an infinite time): a stepped
+    # engine's events are its steps, so the clock moves on by count steps of 1/60 s
+    world = carom.World(2, [4.0, 4.0], gravity=[0.0, -9.81])
+    world.add_body(Box(0.2, 0.2), [2.0, 2.0])
+    world.run_events(5)
+    assert world.time == pytest.approx(5.0 / 60.0, rel=1e-15)

@@ -460,7 +460,7 @@ class SteppedEngine:
     @property
     def time(self) -> float:
         """The clock [s]: its origin plus whole steps since."""
-        return self.start + (self.steps - self.base) * self.dt
+        return self.start + self._since * self.dt
 
     def advance(
         self,
@@ -475,19 +475,25 @@ class SteppedEngine:
         whole steps from it). ``max_events`` bounds the steps; then, or when ``stop`` says
         so, the clock stays short of ``until`` and False is returned. Impacts solved exactly
         go to ``sink``."""
-        target = math.floor((until - self.start) / self.dt + 1e-6)
-        wanted = max(target - (self.steps - self.base), 0)
+        span = (until - self.start) / self.dt + 1e-6  # (inf: max_events steps, as events)
+        wanted = max_events if math.isinf(span) else max(math.floor(span) - self._since, 0)
         todo = min(wanted, max_events)
         for k in range(todo):
             self.step(sink)
             if stop is not None and (k + 1) % STOP_CHECK_STEPS == 0 and stop():
                 return False
-        if todo < wanted:
-            return False
         rest = until - self.time
-        if rest > 1e-6 * self.dt and todo < max_events:
+        short = rest > 1e-6 * self.dt  # (until between two steps, or infinite)
+        if todo < wanted or (short and todo == max_events):
+            return False  # the steps allowed are spent short of until
+        if short:
             self._step_short(rest, until, sink)
         return True
+
+    @property
+    def _since(self) -> int:
+        """Whole steps since the clock's origin (:attr:`start`)."""
+        return self.steps - self.base
 
     def _step_short(self, dt: float, until: float, sink: Sink | None) -> None:
         """One step of ``dt`` [s] (less than a whole one) that ends at ``until`` [s]: every
