@@ -283,8 +283,10 @@ class World(Scenery):
 
     @property
     def engine_entry(self) -> EngineEntry:
-        """The engine this world runs, from the table (:mod:`carom.engines.registry`):
-        the one chosen, or with ``engine="auto"`` the first that takes the world."""
+        """The engine this world runs (:mod:`carom.engines.registry`): the one built, else the
+        one chosen, or with ``engine="auto"`` the first that takes the world."""
+        if self._engine is not None:
+            return registry.find(self._engine.name)
         if self.engine_choice != AUTO:
             return registry.find(self.engine_choice)
         return registry.pick(AUTO, self)
@@ -303,15 +305,15 @@ class World(Scenery):
     def build(self) -> Engine:
         """Build the engine now (running does it when needed), refusing bodies outside the
         box, on the wrong side of a plane, or overlapping; return it."""
-        settings = self.engine_settings.get(self.engine_entry.name)
-        if self._engine is not None and self._built_with is not settings:
+        if self._engine is not None and self._built_with is not self.settings_of(self.engine_name):
             self._invalidate()  # settings assigned since it was built: built again with them
         if self._engine is None:
             if self.bodies.n == 0:
                 raise CaromError("the world has no bodies; add some with add_spheres or add_body")
             check_body_count(self.bodies.n, "the world")
             entry = registry.pick(self.engine_choice, self)
-            self._engine, self._built_with = entry.plug(self.dim).build(self), settings
+            self._engine = entry.plug(self.dim).build(self)
+            self._built_with = self.settings_of(entry.name)
         return self._engine
 
     def prepare(self) -> None:
@@ -595,4 +597,4 @@ class World(Scenery):
             return
         entry = registry.find(engine_name) if engine_name else self.engine_entry
         self._engine = entry.plug(self.dim).restore(self, engine_arrays)
-        self._built_with = self.engine_settings.get(entry.name)
+        self._built_with = self.settings_of(entry.name)

@@ -198,7 +198,6 @@ class H5MDWriter:
         _quiet_h5py_dealloc(self)
         self.dim = world.dim
         self.n = world.n_bodies
-        self.frames = 0
         meta = self.file.create_group("h5md")
         meta.attrs["version"] = np.array([1, 1], dtype=np.int32)
         meta.create_group("author").attrs["name"] = "carom user"
@@ -268,9 +267,13 @@ class H5MDWriter:
                         f"({held} < {frames}); pass --force to start again"
                     )
                 group[dataset].resize(frames, axis=0)
-        self.frames = frames
         self._hold_frames(frames)
         return self
+
+    @property
+    def frames(self) -> int:
+        """The frames written so far, those held for the next batch included."""
+        return self.written + len(self.held)
 
     def _hold_frames(self, written: int) -> None:
         """Start holding frames; ``written`` are in the file."""
@@ -330,7 +333,6 @@ class H5MDWriter:
             for value, row in zip(values, self.rows, strict=True)
         ]
         self.held.append((frame.time, rows))
-        self.frames += 1
         if len(self.held) >= self.batch:
             self._write_held()
 

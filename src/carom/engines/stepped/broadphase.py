@@ -26,7 +26,7 @@ from collections.abc import Callable
 import numpy as np
 from numba import njit
 
-from carom.geometry.bvh import overlap
+from carom.geometry.bvh import overlap, query_bvh
 from carom.laws.kinds import KIND_DYNAMIC
 
 __all__ = [
@@ -217,7 +217,7 @@ def find_pairs(
                 b = entries[j]
                 if not wanted_pair(piece_body, active, dynamic, a, b):
                     continue
-                if not _overlap_any(boxes, a, b):
+                if not overlap(boxes, a, boxes[b]):
                     continue
                 # report from the bucket of the overlap's lowest cell only
                 cx = math.floor(max(boxes[a, 0], boxes[b, 0]) * inv)
@@ -234,32 +234,25 @@ def find_pairs(
             if j == i or (big[j] and j < i):
                 continue  # two big pieces: once
             b = loose[j]
-            if not wanted_pair(piece_body, active, dynamic, a, b) or not _overlap_any(boxes, a, b):
-                continue
-            count = _put(pairs, count, capacity, a, b)
+            if wanted_pair(piece_body, active, dynamic, a, b) and overlap(boxes, a, boxes[b]):
+                count = _put(pairs, count, capacity, a, b)
     # the pieces in the tree (none dynamic), met by the loose pieces of dynamic bodies
-    stack = np.empty(128, np.int64)
+    hits = np.empty(64, np.int64)
     for i in range(n):
         a = loose[i]
-        if not dynamic[piece_body[a]] or tree_order.shape[0] == 0:
+        if not dynamic[piece_body[a]]:
             continue
-        query = boxes[a]
-        stack[0] = 0
-        top = 1
-        while top > 0:
-            top -= 1
-            node = stack[top]
-            if not overlap(tree_box, node, query):
-                continue
-            if tree_count[node] == 0:
-                stack[top] = tree_left[node] + 1
-                stack[top + 1] = tree_left[node]
-                top += 2
-                continue
-            for k in range(tree_first[node], tree_first[node] + tree_count[node]):
-                b = tree_order[k]
-                if wanted_pair(piece_body, active, dynamic, a, b) and overlap(boxes, b, query):
-                    count = _put(pairs, count, capacity, a, b)
+        found = query_bvh(
+            tree_box, tree_left, tree_first, tree_count, tree_order, boxes, boxes[a], hits
+        )
+        if found > hits.shape[0]:  # more than fit: walk again into room enough
+            hits = np.empty(2 * found, np.int64)
+            found = query_bvh(
+                tree_box, tree_left, tree_first, tree_count, tree_order, boxes, boxes[a], hits
+            )
+        for k in range(found):
+            if wanted_pair(piece_body, active, dynamic, a, hits[k]):
+                count = _put(pairs, count, capacity, a, hits[k])
     if count > capacity:
         return -count
     _sort_pairs(pairs, count, boxes.shape[0])
@@ -323,16 +316,6 @@ def refit(boxes: np.ndarray, fat: np.ndarray, piece_reach: np.ndarray, which: np
     return moved
 
 
-@njit(cache=True, inline="always")
-def _overlap_any(boxes: np.ndarray, a: int, b: int) -> bool:
-    """Whether boxes a and b (lower corner then upper, in any dimension) overlap."""
-    d = boxes.shape[1] // 2
-    overlap = True
-    for k in range(d):
-        overlap = overlap and boxes[a, k] <= boxes[b, d + k] and boxes[b, k] <= boxes[a, d + k]
-    return overlap
-
-
 @njit(cache=True)
 def select_pairs(
     candidates: np.ndarray,
@@ -351,7 +334,7 @@ def select_pairs(
     for k in range(n_candidates):
         a = candidates[k, 0]
         b = candidates[k, 1]
-        if wanted_pair(piece_body, active, dynamic, a, b) and _overlap_any(boxes, a, b):
+        if wanted_pair(piece_body, active, dynamic, a, b) and overlap(boxes, a, boxes[b]):
             pairs[count, 0] = a
             pairs[count, 1] = b
             count += 1
