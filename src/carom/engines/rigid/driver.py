@@ -146,17 +146,17 @@ class RigidEngine(SteppedEngine):
             )
         )  # fmt: skip
 
-    def _impact_kernel(self, todo: Isolated, log: FloatArray) -> int:
+    def _impact_kernel(self, todo: Isolated) -> tuple[FloatArray, int]:
         m, s, st = self.model, self.state, self.settings
-        return int(
-            impacts.exact_impacts(
-                todo.rows, todo.n, self._ci, s.x, s.angle, s.v, s.omega, self._accel,
-                self._dynamic, m.inv_mass, m.inv_inertia, m.mass, m.inertia, todo.restitution,
-                todo.friction, m.piece_start, m.piece_count, m.piece_radius, m.piece_reach,
-                m.local_vertices, m.local_normals, s.vertices, s.normals, self.dt,
-                1e-3 * st.linear_slop, log,
-            )
+        log, logged = impacts.exact_impacts(
+            (todo.rows, todo.first, todo.n, self._island_of), self._kept.pairs, self._n_pairs,
+            self._boxes, self._reach, self._ci, s.x, s.angle, s.v, s.omega, self._accel,
+            m.kind, m.inv_mass, m.inv_inertia, m.mass, m.inertia, m.material, m.e_table,
+            m.mu_table, m.body_pieces, m.piece_body, m.piece_start, m.piece_count,
+            m.piece_radius, m.piece_reach, m.local_vertices, m.local_normals, s.vertices,
+            s.normals, self.dt, 1e-3 * st.linear_slop, 4.0 * st.linear_slop,
         )  # fmt: skip
+        return log, int(logged)
 
     def _fly(self, free: NDArray[np.int64]) -> None:
         s, a = self.state, self._accel
@@ -169,6 +169,24 @@ class RigidEngine(SteppedEngine):
             self._cf, self._ci, nc, bodies, m.inv_mass, m.inv_inertia, self._dynamic, s.x,
             s.angle, s.v, s.omega, float(m.gravity[0]), float(m.gravity[1]), self._knobs(),
             work,
+        )  # fmt: skip
+
+    def _poses(self) -> tuple[FloatArray, FloatArray]:
+        return self.state.x.copy(), self.state.angle.copy()
+
+    def _continuous(
+        self,
+        nc: int,
+        closest: FloatArray,
+        bodies: NDArray[np.int64],
+        poses: tuple[FloatArray, FloatArray],
+    ) -> None:
+        m, s, slop = self.model, self.state, self.settings.linear_slop
+        impacts.continuous(
+            bodies, poses[0], poses[1], s.x, s.angle, s.v, s.omega, self._ci, nc, closest,
+            self._reach, self._dynamic, m.reach, m.body_pieces, m.piece_body, m.piece_start,
+            m.piece_count, m.piece_radius, m.piece_reach, m.local_vertices, m.local_normals,
+            s.vertices, s.normals, self.dt, 4.0 * slop, slop,
         )  # fmt: skip
 
     def _fastest(self) -> FloatArray:

@@ -20,7 +20,9 @@ inertia (Hecker's formula; :mod:`carom.laws.point_impulse`), with Coulomb fricti
   linear complementarity problem of Newton's law at both points exactly; friction follows
   per point, clamped.
 
-The pair then flies on to the end of the step, and may meet again within it.
+The pair then flies on, and may meet again, or meet another body of its island or a wall,
+within the step: an island's impacts are taken in the order they happen
+(:mod:`carom.engines.stepped.impacts`).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.engines.rigid.broadphase import sweep_box
 from carom.engines.rigid.contacts import I_FLAGS
 from carom.engines.rigid.motion import (
     apply_impulse,
@@ -39,15 +42,24 @@ from carom.engines.rigid.motion import (
     relative_velocity,
 )
 from carom.engines.stepped.impacts import (
-    MAX_IMPACTS,
     advance,
     approaching,
+    contained,
+    earliest,
+    gather,
+    impact_cap,
+    island_candidates,
+    logged_row,
+    look_around,
     search,
     take_isolated,
+    watched,
 )
+from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
+from carom.geometry.bvh import overlap, query_bvh
 from carom.geometry.manifold2d import collide, core_witness
 
-__all__ = ["IMPACT_FIELDS", "exact_impacts"]
+__all__ = ["IMPACT_FIELDS", "continuous", "exact_impacts"]
 
 #: columns of a logged impact: time into the step, body A, body B, impulse on A (x, y),
 #: normal speeds before and after (the deepest point), the point (x, y), energy lost, work
@@ -146,9 +158,11 @@ def time_of_impact(
     normals: np.ndarray,
     out: np.ndarray,
     ids: np.ndarray,
+    allow: float = 0.0,
 ) -> float:
     """First time in ``[0, horizon]`` [s] at which the pieces come within ``tol`` [m] of
-    touching, by conservative advancement; -1 if they do not (or it fails to converge).
+    touching (of overlapping by ``allow`` [m], if given), by conservative advancement; -1 if
+    they do not (after many steps, the furthest time known safe: the caller looks again).
 
     ``parting``: the pair has just been hit apart; the contact it starts in is not a new
     impact, so the search first lets the gap open beyond ``tol``."""
@@ -167,7 +181,7 @@ def time_of_impact(
         ux = (v[a, 0] + accel[a, 0] * t) - (v[b, 0] + accel[b, 0] * t)
         uy = (v[a, 1] + accel[a, 1] * t) - (v[b, 1] + accel[b, 1] * t)
         closing = -(ux * wx + uy * wy) + spin + g_rel * (horizon - t)
-        done, t, state = advance(state, t, d, closing, tol, horizon)
+        done, t, state = advance(state, t, d + allow, closing, tol, horizon)
         if done:
             return t
 
@@ -379,21 +393,31 @@ def _impact(
 
 @njit(cache=True)
 def exact_impacts(
-    isolated: np.ndarray,
-    n_isolated: int,
+    islands: tuple[np.ndarray, np.ndarray, int, np.ndarray],
+    pairs: np.ndarray,
+    n_pairs: int,
+    boxes: np.ndarray,
+    reach: tuple[
+        tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        np.ndarray,
+        np.ndarray,
+    ],
     ci: np.ndarray,
     x: np.ndarray,
     angle: np.ndarray,
     v: np.ndarray,
     omega: np.ndarray,
     accel: np.ndarray,
-    moves: np.ndarray,
+    kind: np.ndarray,
     inv_mass: np.ndarray,
     inv_inertia: np.ndarray,
     mass: np.ndarray,
     inertia: np.ndarray,
-    e_pair: np.ndarray,
-    mu_pair: np.ndarray,
+    material: np.ndarray,
+    e_table: np.ndarray,
+    mu_table: np.ndarray,
+    body_pieces: np.ndarray,
+    piece_body: np.ndarray,
     piece_start: np.ndarray,
     piece_count: np.ndarray,
     piece_radius: np.ndarray,
@@ -404,105 +428,291 @@ def exact_impacts(
     normals: np.ndarray,
     dt: float,
     touch: float,
-    log: np.ndarray,
-) -> int:
-    """Advance each isolated contact's two bodies through the step, impacts solved exactly.
+    margin: float,
+) -> tuple[np.ndarray, int]:
+    """Advance each island solved exactly through the step, its impacts taken in the order
+    they happen (:mod:`carom.engines.stepped.impacts`).
 
-    ``isolated[:n_isolated]`` are contact rows; ``e_pair``, ``mu_pair`` their coefficients;
-    ``accel`` (N, 2) each body's free acceleration (gravity, or zero); ``moves[i]`` whether
-    body i moves at all (not static). Flags the contacts exact; returns the number of impacts
-    written to ``log`` (rows of :data:`IMPACT_FIELDS`; the caller makes room for
-    ``MAX_IMPACTS`` per contact).
+    ``islands``: the contact rows of the islands (flagged exact here), island k's from
+    ``first[k]`` to ``first[k + 1]``, how many islands, and each body's island or -1
+    (:func:`carom.engines.stepped.islands.plan`); ``pairs[:n_pairs]`` the broad phase's pairs
+    and ``boxes`` (P, 4) the swept boxes it found them with (widened here where a body turned
+    by an impact can reach further); ``reach``: the static tree (node boxes, left, first,
+    count, order, its items' boxes), the static pieces it does not hold, and the pieces of
+    bodies that are not static; ``accel`` (N, 2) each body's free acceleration;
+    ``material``, ``e_table``, ``mu_table`` the coefficients; ``margin`` [m] the broad
+    phase's. Returns the impacts' log (rows of :data:`IMPACT_FIELDS`) and how many rows it
+    holds.
     """
+    isolated, island_first, n_islands, island_of = islands
     out = np.empty(8)
     ids = np.empty(2, np.int64)
+    cand_first, cand, watch_first, watch = gather(
+        pairs, n_pairs, piece_body, kind, island_of, n_islands
+    )
+    clock = np.zeros(x.shape[0])  # each island body's own time into the step [s]
+    log = np.zeros((max(16, 2 * island_first[n_islands]), IMPACT_FIELDS))
     logged = 0
-    for k in range(n_isolated):
-        m = isolated[k]
-        a, b, pa, pb = take_isolated(ci, m, I_FLAGS)
-        tol = 1e-9 * (piece_reach[pa] + piece_reach[pb])
+    for k in range(n_islands):
+        for r in range(island_first[k], island_first[k + 1]):
+            take_isolated(ci, isolated[r], I_FLAGS)
+        cp, n = island_candidates(cand, cand_first[k], cand_first[k + 1], pairs)
+        hit = np.empty(cp.shape[0])  # each candidate's time of impact into the step [s]
+        parting = np.zeros(cp.shape[0], np.bool_)
+        # how deep a pair that stopped approaching while overlapping already was [m]: only
+        # sinking deeper is an impact (a pair met late by a search, or left by the solver)
+        sunk = np.zeros(cp.shape[0])
+        for c in range(n):
+            hit[c] = _next_impact(
+                cp[c, 0], cp[c, 1], 0.0, dt, False, clock, island_of, x, angle, v, omega,
+                accel, piece_body, piece_start, piece_count, piece_radius, piece_reach,
+                local_vertices, local_normals, vertices, normals, out, ids,
+            )  # fmt: skip
         now = 0.0
-        for impact in range(MAX_IMPACTS):
-            hit = time_of_impact(
-                pa,
-                pb,
-                a,
-                b,
-                dt - now,
-                tol,
-                impact > 0,
-                x,
-                angle,
-                v,
-                omega,
-                accel,
-                piece_start,
-                piece_count,
-                piece_radius,
-                piece_reach,
-                local_vertices,
-                local_normals,
-                vertices,
-                normals,
-                out,
-                ids,
-            )
-            if hit < 0.0:
+        taken = 0
+        cap = impact_cap(n)
+        stopped = False
+        for _ in range(2 * cap):
+            c = earliest(hit, 0, n)
+            if c < 0:
                 break
-            for body in (a, b):
-                if moves[body]:
-                    fly(body, hit, x, angle, v, omega, accel[body, 0], accel[body, 1])
-            now += hit
+            now = hit[c]
+            pa, pb = cp[c, 0], cp[c, 1]
+            a, b = piece_body[pa], piece_body[pb]
             for body, piece in ((a, pa), (b, pb)):
+                _sync(body, now, clock, island_of, x, angle, v, omega, accel)
                 place_piece(
-                    piece,
-                    x[body, 0],
-                    x[body, 1],
-                    angle[body],
-                    piece_start,
-                    piece_count,
-                    local_vertices,
-                    local_normals,
-                    vertices,
-                    normals,
-                )
+                    piece, x[body, 0], x[body, 1], angle[body], piece_start, piece_count,
+                    local_vertices, local_normals, vertices, normals,
+                )  # fmt: skip
+            tol = 1e-9 * (piece_reach[pa] + piece_reach[pb])
             count = collide(
-                vertices,
-                normals,
-                piece_start[pa],
-                piece_count[pa],
-                piece_radius[pa],
-                piece_start[pb],
-                piece_count[pb],
-                piece_radius[pb],
-                2.0 * tol + touch,
-                0.0,
-                out,
-                ids,
-            )
-            if count == 0:
-                break
-            if not _impact(
-                a,
-                b,
-                count,
-                out,
-                touch,
-                e_pair[k],
-                mu_pair[k],
-                x,
-                v,
-                omega,
-                inv_mass,
-                inv_inertia,
-                mass,
-                inertia,
-                log[logged],
-            ):
-                break
+                vertices, normals, piece_start[pa], piece_count[pa], piece_radius[pa],
+                piece_start[pb], piece_count[pb], piece_radius[pb], 2.0 * tol + touch, 0.0,
+                out, ids,
+            )  # fmt: skip
+            log = logged_row(log, logged)
+            ma, mb = material[a], material[b]
+            parting[c] = True
+            if count == 0 or not _impact(
+                a, b, count, out, touch, e_table[ma, mb], mu_table[ma, mb], x, v, omega,
+                inv_mass, inv_inertia, mass, inertia, log[logged],
+            ):  # fmt: skip
+                # touching, not approaching: wait for the gap to open (or close past touch)
+                for j in range(count):
+                    sunk[c] = max(sunk[c], -out[4 + 3 * j])
+                hit[c] = _next_impact(
+                    pa, pb, now, dt, True, clock, island_of, x, angle, v, omega, accel,
+                    piece_body, piece_start, piece_count, piece_radius, piece_reach,
+                    local_vertices, local_normals, vertices, normals, out, ids, sunk[c],
+                )  # fmt: skip
+                continue
+            sunk[c] = 0.0
             log[logged, 0] = now
             logged += 1
-        for body in (a, b):
-            if moves[body]:
-                fly(body, dt - now, x, angle, v, omega, accel[body, 0], accel[body, 1])
-    return logged
+            taken += 1
+            stopped = taken == cap
+            for body in (a, b):
+                if not stopped and island_of[body] >= 0:
+                    cp, n, stopped = _reach(
+                        body, k, now, dt, cp, n, islands, pairs, boxes, reach, watch,
+                        watch_first, body_pieces, piece_body, x, angle, v, omega, accel,
+                        piece_start, piece_count, piece_radius, piece_reach, local_vertices,
+                        local_normals, vertices, normals, margin,
+                    )  # fmt: skip
+            if stopped:
+                break
+            if hit.shape[0] < cp.shape[0]:  # candidates were added: room for their times
+                more = cp.shape[0] - hit.shape[0]
+                hit = np.concatenate((hit, np.empty(more)))
+                parting = np.concatenate((parting, np.zeros(more, np.bool_)))
+                sunk = np.concatenate((sunk, np.zeros(more)))
+            for d in range(n):
+                da, db = piece_body[cp[d, 0]], piece_body[cp[d, 1]]
+                if da in (a, b) or db in (a, b):
+                    hit[d] = _next_impact(
+                        cp[d, 0], cp[d, 1], now, dt, parting[d], clock, island_of, x, angle,
+                        v, omega, accel, piece_body, piece_start, piece_count, piece_radius,
+                        piece_reach, local_vertices, local_normals, vertices, normals, out,
+                        ids, sunk[d],
+                    )  # fmt: skip
+        else:
+            stopped = True  # (as many looks as impacts allowed, twice over)
+        # the island's bodies to the end of the step, or to its last impact
+        end = now if stopped else dt
+        for r in range(island_first[k], island_first[k + 1]):
+            for body in (ci[isolated[r], I_BODY_A], ci[isolated[r], I_BODY_B]):
+                _sync(body, end, clock, island_of, x, angle, v, omega, accel)
+    return log, logged
+
+
+@njit(cache=True, inline="always")
+def _sync(
+    body: int, t: float, clock: np.ndarray, island_of: np.ndarray, x: np.ndarray,
+    angle: np.ndarray, v: np.ndarray, omega: np.ndarray, accel: np.ndarray,
+) -> None:  # fmt: skip
+    """Fly a body of an island from its own clock to ``t`` [s] into the step (a static
+    body stays)."""
+    if island_of[body] >= 0 and t > clock[body]:
+        fly(body, t - clock[body], x, angle, v, omega, accel[body, 0], accel[body, 1])
+        clock[body] = t
+
+
+@njit(cache=True)
+def _next_impact(
+    pa: int, pb: int, now: float, dt: float, parting: bool, clock: np.ndarray,
+    island_of: np.ndarray, x: np.ndarray, angle: np.ndarray, v: np.ndarray,
+    omega: np.ndarray, accel: np.ndarray, piece_body: np.ndarray, piece_start: np.ndarray,
+    piece_count: np.ndarray, piece_radius: np.ndarray, piece_reach: np.ndarray,
+    local_vertices: np.ndarray, local_normals: np.ndarray, vertices: np.ndarray,
+    normals: np.ndarray, out: np.ndarray, ids: np.ndarray, allow: float = 0.0,
+) -> float:  # fmt: skip
+    """Time into the step [s] of pieces pa and pb's next impact after ``now`` (their
+    overlapping by more than ``allow`` [m]), before the step's end ``dt``; inf if none.
+    Their bodies are flown to ``now`` first."""
+    a, b = piece_body[pa], piece_body[pb]
+    _sync(a, now, clock, island_of, x, angle, v, omega, accel)
+    _sync(b, now, clock, island_of, x, angle, v, omega, accel)
+    t = time_of_impact(
+        pa, pb, a, b, dt - now, 1e-9 * (piece_reach[pa] + piece_reach[pb]), parting, x, angle,
+        v, omega, accel, piece_start, piece_count, piece_radius, piece_reach, local_vertices,
+        local_normals, vertices, normals, out, ids, allow,
+    )  # fmt: skip
+    return now + t if t >= 0.0 else np.inf
+
+
+@njit(cache=True)
+def _reach(
+    body: int, k: int, now: float, dt: float, cp: np.ndarray, n: int,
+    islands: tuple[np.ndarray, np.ndarray, int, np.ndarray], pairs: np.ndarray,
+    boxes: np.ndarray, reach: tuple[
+        tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        np.ndarray, np.ndarray,
+    ], watch: np.ndarray, watch_first: np.ndarray, body_pieces: np.ndarray,
+    piece_body: np.ndarray, x: np.ndarray, angle: np.ndarray, v: np.ndarray,
+    omega: np.ndarray, accel: np.ndarray, piece_start: np.ndarray, piece_count: np.ndarray,
+    piece_radius: np.ndarray, piece_reach: np.ndarray, local_vertices: np.ndarray,
+    local_normals: np.ndarray, vertices: np.ndarray, normals: np.ndarray, margin: float,
+) -> tuple[np.ndarray, int, bool]:  # fmt: skip
+    """After an impact turned ``body`` (of island ``k``, at ``now``): where it can go by the
+    step's end ``dt``, each piece's swept box from now; beyond the box its pairs were found
+    in, the statics there join the candidates ``cp[:n]``
+    (:func:`carom.engines.stepped.impacts.look_around`). Returns the candidates, their
+    count, and whether the island must stop (a body moving otherwise in reach)."""
+    tree, open_statics, movers = reach
+    island_of = islands[3]
+    box = np.empty(4)
+    for p in range(body_pieces[body], body_pieces[body + 1]):
+        place_piece(
+            p, x[body, 0], x[body, 1], angle[body], piece_start, piece_count, local_vertices,
+            local_normals, vertices, normals,
+        )  # fmt: skip
+        sweep_box(
+            p, vertices, piece_start, piece_count, piece_radius, piece_reach, v[body, 0],
+            v[body, 1], omega[body], accel[body, 0], accel[body, 1], dt - now, True, margin,
+            box,
+        )  # fmt: skip
+        if not contained(box, boxes, p):
+            cp, n, stop = look_around(
+                p, k, box, boxes, island_of, piece_body, tree, open_statics, movers, cp, n
+            )
+            if stop:
+                return cp, n, True
+        if watched(p, k, box, boxes, pairs, watch, watch_first):
+            return cp, n, True
+    return cp, n, False
+
+
+@njit(cache=True)
+def continuous(
+    bodies: np.ndarray, x0: np.ndarray, angle0: np.ndarray, x: np.ndarray,
+    angle: np.ndarray, v: np.ndarray, omega: np.ndarray, ci: np.ndarray, nc: int,
+    closest: np.ndarray, reach: tuple[
+        tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        np.ndarray, np.ndarray,
+    ], dynamic: np.ndarray, body_reach: np.ndarray, body_pieces: np.ndarray,
+    piece_body: np.ndarray, piece_start: np.ndarray, piece_count: np.ndarray,
+    piece_radius: np.ndarray, piece_reach: np.ndarray, local_vertices: np.ndarray,
+    local_normals: np.ndarray, vertices: np.ndarray, normals: np.ndarray, dt: float,
+    speculative: float, slop: float,
+) -> int:  # fmt: skip
+    """Continuous collision of the solver's bodies against static geometry, as Box2D's:
+    each dynamic body of ``bodies`` that moved further this step than the speculative
+    distance [m] (from ``x0``, ``angle0`` to ``x``, ``angle``) is swept along that motion
+    against the static pieces in reach; at the first touch it is put back there, its
+    velocity kept. A static piece among its contacts (``nc`` rows, each one's least
+    separation at the start ``closest``) within the speculative distance at the start is the
+    solver's to hold: only sinking ``slop`` [m] deeper into it than at the start counts, and
+    puts the body back where it was as deep as at the start. Returns how many bodies were put
+    back."""
+    tree, open_statics, _ = reach
+    node_box, left, first, count, order, items = tree
+    n_pieces = piece_body.shape[0]
+    keys = np.full(nc, -1, np.int64)  # the near contacts' piece pairs, sorted
+    for m in range(nc):
+        if closest[m] <= speculative:
+            keys[m] = ci[m, I_PIECE_A] * n_pieces + ci[m, I_PIECE_B]
+        elif m > 0:
+            keys[m] = keys[m - 1]  # (kept sorted; a far contact is looked at)
+    still = np.zeros((x.shape[0], 2))
+    out = np.empty(8)
+    ids = np.empty(2, np.int64)
+    box = np.empty(4)
+    found = np.empty(64, np.int64)
+    put_back = 0
+    for b in bodies:
+        if not dynamic[b]:
+            continue
+        dx, dy = x[b, 0] - x0[b, 0], x[b, 1] - x0[b, 1]
+        turn = angle[b] - angle0[b]
+        if math.sqrt(dx * dx + dy * dy) + abs(turn) * body_reach[b] <= speculative:
+            continue
+        # the step's motion as a straight sweep from the start: a free flight at the mean
+        # velocity, no acceleration
+        end_x, end_y, end_angle = x[b, 0], x[b, 1], angle[b]
+        vx, vy, w = v[b, 0], v[b, 1], omega[b]
+        x[b, 0], x[b, 1], angle[b] = x0[b, 0], x0[b, 1], angle0[b]
+        v[b, 0], v[b, 1], omega[b] = dx / dt, dy / dt, turn / dt
+        touch = np.inf
+        for p in range(body_pieces[b], body_pieces[b + 1]):
+            place_piece(
+                p, x[b, 0], x[b, 1], angle[b], piece_start, piece_count, local_vertices,
+                local_normals, vertices, normals,
+            )  # fmt: skip
+            sweep_box(
+                p, vertices, piece_start, piece_count, piece_radius, piece_reach, v[b, 0],
+                v[b, 1], omega[b], 0.0, 0.0, dt, False, 0.0, box,
+            )  # fmt: skip
+            total = query_bvh(node_box, left, first, count, order, items, box, found)
+            if total > found.shape[0]:
+                found = np.empty(total, np.int64)
+                total = query_bvh(node_box, left, first, count, order, items, box, found)
+            for j in range(total + open_statics.shape[0]):
+                q = found[j] if j < total else open_statics[j - total]
+                if j >= total and not overlap(items, q, box):
+                    continue
+                key = min(p, q) * n_pieces + max(p, q)
+                at = np.searchsorted(keys, key)
+                # a contact near at the start is the solver's: only sinking into it by
+                # more than the slop (linear_slop) beyond where it began is a touch
+                near = at < nc and keys[at] == key
+                depth = max(0.0, -closest[at]) if near else 0.0
+                for allow in (depth + slop, depth):
+                    # (sunk past the slop: put back where it was as deep as at the start)
+                    t = time_of_impact(
+                        p, q, b, piece_body[q], dt, 1e-9 * (piece_reach[p] + piece_reach[q]),
+                        False, x, angle, v, omega, still, piece_start, piece_count,
+                        piece_radius, piece_reach, local_vertices, local_normals, vertices,
+                        normals, out, ids, allow,
+                    )  # fmt: skip
+                    if t < 0.0 or not near:
+                        break
+                if 0.0 <= t < touch:
+                    touch = t
+        if touch < dt:
+            fly(b, touch, x, angle, v, omega, 0.0, 0.0)
+            put_back += 1
+        else:
+            x[b, 0], x[b, 1], angle[b] = end_x, end_y, end_angle
+        v[b, 0], v[b, 1], omega[b] = vx, vy, w
+    return put_back

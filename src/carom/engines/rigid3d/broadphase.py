@@ -17,7 +17,7 @@ from numba import njit
 
 from carom.engines.rigid3d.model import PIECE_PLANE
 
-__all__ = ["piece_boxes"]
+__all__ = ["piece_boxes", "sweep_box"]
 
 
 @njit(cache=True)
@@ -35,33 +35,33 @@ def piece_boxes(
     for b in range(body_pieces.shape[0] - 1):
         if which[b]:
             for p in range(body_pieces[b], body_pieces[b + 1]):
-                _piece_box(
+                sweep_box(
                     p, b, vertices, normals, piece_kind, piece_vstart, piece_vcount,
                     piece_fstart, piece_radius, piece_reach, v, w, gravity_on, g, dt, margin,
-                    boxes,
+                    boxes[p],
                 )  # fmt: skip
 
 
 @njit(cache=True, inline="always")
-def _piece_box(
+def sweep_box(
     p: int, b: int, vertices: np.ndarray, normals: np.ndarray, piece_kind: np.ndarray,
     piece_vstart: np.ndarray, piece_vcount: np.ndarray, piece_fstart: np.ndarray,
     piece_radius: np.ndarray, piece_reach: np.ndarray, v: np.ndarray, w: np.ndarray,
-    gravity_on: np.ndarray, g: np.ndarray, dt: float, margin: float, boxes: np.ndarray,
+    gravity_on: np.ndarray, g: np.ndarray, dt: float, margin: float, box: np.ndarray,
 ) -> None:  # fmt: skip
-    """Piece ``p``'s (of body ``b``) swept box into ``boxes[p]``."""
+    """Piece ``p``'s (of body ``b``) swept box over ``dt`` [s] into ``box`` (6,)."""
     if piece_kind[p] == PIECE_PLANE:
         n = normals[piece_fstart[p]]
         at = vertices[piece_vstart[p]]
         for k in range(3):
-            boxes[p, k] = -np.inf
-            boxes[p, 3 + k] = np.inf
+            box[k] = -np.inf
+            box[3 + k] = np.inf
         for k in range(3):
             if abs(n[k]) == 1.0 and n[(k + 1) % 3] == 0.0 and n[(k + 2) % 3] == 0.0:
                 if n[k] > 0.0:
-                    boxes[p, 3 + k] = at[k]  # the solid lies below
+                    box[3 + k] = at[k]  # the solid lies below
                 else:
-                    boxes[p, k] = at[k]
+                    box[k] = at[k]
         return
     s = piece_vstart[p]
     r = piece_radius[p] + margin
@@ -77,5 +77,5 @@ def _piece_box(
         d = v[b, k] * dt
         if gravity_on[b]:
             d += 0.5 * g[k] * dt * dt
-        boxes[p, k] = min(lo, lo + d) - turn - r
-        boxes[p, 3 + k] = max(hi, hi + d) + turn + r
+        box[k] = min(lo, lo + d) - turn - r
+        box[3 + k] = max(hi, hi + d) + turn + r

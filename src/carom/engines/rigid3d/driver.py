@@ -178,17 +178,36 @@ class RigidEngine3D(SteppedEngine):
         super()._grow(size)
         self._made = _room(size)
 
-    def _impact_kernel(self, todo: Isolated, log: FloatArray) -> int:
+    def _impact_kernel(self, todo: Isolated) -> tuple[FloatArray, int]:
         m, s, st = self.model, self.state, self.settings
-        return int(
-            impacts.exact_impacts(
-                todo.rows, todo.n, todo.closing, self._ci, s.x, s.q, s.v, s.w, self._accel,
-                self._dynamic, m.inv_mass, m.inertia, m.inv_inertia, m.min_moment,
-                todo.restitution, todo.friction, self._ints, m.piece_radius, m.piece_reach,
-                m.local_vertices, m.local_normals, m.face_first, m.face_size, m.corners,
-                m.edges, s.vertices, s.normals, self.dt, st.substeps, 1e-3 * st.linear_slop,
-                log,
-            )
+        log, logged = impacts.exact_impacts(
+            (todo.rows, todo.first, todo.n, self._island_of), self._kept.pairs, self._n_pairs,
+            self._boxes, self._reach, self._ci, s.x, s.q, s.v, s.w, self._accel, m.kind,
+            self._dynamic, m.inv_mass, m.inertia, m.inv_inertia, m.min_moment,
+            (m.material, m.e_table, m.mu_table), m.body_pieces, self._ints, m.piece_radius,
+            m.piece_reach, m.local_vertices, m.local_normals, m.face_first, m.face_size,
+            m.corners, m.edges, s.vertices, s.normals, self.dt, st.substeps,
+            1e-3 * st.linear_slop, 4.0 * st.linear_slop,
+        )  # fmt: skip
+        return log, int(logged)
+
+    def _poses(self) -> tuple[FloatArray, FloatArray]:
+        return self.state.x.copy(), self.state.q.copy()
+
+    def _continuous(
+        self,
+        nc: int,
+        closest: FloatArray,
+        bodies: NDArray[np.int64],
+        poses: tuple[FloatArray, FloatArray],
+    ) -> None:
+        m, s, st = self.model, self.state, self.settings
+        impacts.continuous(
+            bodies, poses[0], s.x, s.q, s.v, s.w, self._ci, nc, closest, self._reach,
+            self._dynamic, m.inertia, m.inv_inertia, m.body_pieces, self._ints,
+            m.piece_radius, m.piece_reach, m.local_vertices, m.local_normals, m.face_first,
+            m.face_size, m.corners, m.edges, s.vertices, s.normals, self.dt,
+            4.0 * st.linear_slop, st.linear_slop,
         )  # fmt: skip
 
     def _fly(self, free: NDArray[np.int64]) -> None:

@@ -30,6 +30,7 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.engines.rigid3d.broadphase import sweep_box
 from carom.engines.rigid3d.contacts import (
     I_FLAGS,
     collide_pieces,
@@ -44,16 +45,25 @@ from carom.engines.rigid3d.motion import (
     world_inverse_row,
 )
 from carom.engines.stepped.impacts import (
-    MAX_IMPACTS,
     advance,
     approaching,
+    contained,
+    earliest,
+    gather,
+    impact_cap,
+    island_candidates,
+    logged_row,
+    look_around,
     search,
     take_isolated,
+    watched,
 )
+from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
+from carom.geometry.bvh import overlap, query_bvh
 from carom.geometry.manifold3d import MAX_POINTS, OUT_SIZE, closest_hulls
 from carom.laws.rigid_impact import collision_matrix, point_impulse
 
-__all__ = ["IMPACT_FIELDS", "exact_impacts", "normal_lcp"]
+__all__ = ["IMPACT_FIELDS", "continuous", "exact_impacts", "normal_lcp"]
 
 #: columns of a logged impact: time into the step, body A, body B, impulse on A (x, y, z),
 #: normal speeds before and after (the first touching point), the point (x, y, z), energy
@@ -387,22 +397,29 @@ def _top_spin(
 
 @njit(cache=True)
 def exact_impacts(
-    isolated: np.ndarray,
-    n_isolated: int,
-    closing: np.ndarray,
+    islands: tuple[np.ndarray, np.ndarray, int, np.ndarray],
+    pairs: np.ndarray,
+    n_pairs: int,
+    boxes: np.ndarray,
+    reach: tuple[
+        tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        np.ndarray,
+        np.ndarray,
+    ],
     ci: np.ndarray,
     x: np.ndarray,
     q: np.ndarray,
     v: np.ndarray,
     w: np.ndarray,
     accel: np.ndarray,
+    kind: np.ndarray,
     dynamic: np.ndarray,
     inv_mass: np.ndarray,
     inertia: np.ndarray,
     inv_inertia: np.ndarray,
     min_moment: np.ndarray,
-    e_pair: np.ndarray,
-    mu_pair: np.ndarray,
+    coefficients: tuple[np.ndarray, np.ndarray, np.ndarray],
+    body_pieces: np.ndarray,
     model_ints: tuple[
         np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
         np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
@@ -420,51 +437,57 @@ def exact_impacts(
     dt: float,
     substeps: int,
     touch: float,
-    log: np.ndarray,
-) -> int:  # fmt: skip
-    """Advance each isolated contact's two bodies through the step, impacts solved exactly.
-
-    ``isolated[:n_isolated]`` are contact rows, ``closing`` every contact's least normal
-    speed at the step's start (a pair already separating starts by letting its gap open);
-    ``e_pair``, ``mu_pair`` the isolated contacts' coefficients;
-    ``accel`` (N, 3) each body's free acceleration (gravity, or zero); ``dynamic[i]`` whether
-    body i moves. Flags the contacts exact; returns the number of impacts written to ``log``
-    (rows of :data:`IMPACT_FIELDS`; the caller makes room for ``MAX_IMPACTS`` per contact).
-    Free flight goes in substeps of at most ``dt / substeps``.
+    margin: float,
+) -> tuple[np.ndarray, int]:  # fmt: skip
+    """Advance each island solved exactly through the step, its impacts taken in the order
+    they happen (:mod:`carom.engines.stepped.impacts`), as the 2D engine's
+    (:func:`carom.engines.rigid.impacts.exact_impacts`: ``islands``, ``pairs``, ``boxes``,
+    ``reach``, ``margin`` alike); ``coefficients``: each body's material, the restitution
+    and friction tables. Free flight goes in substeps of at most ``dt / substeps``. Returns
+    the impacts' log (rows of :data:`IMPACT_FIELDS`) and how many rows it holds.
     """
+    isolated, island_first, n_islands, island_of = islands
+    material, e_table, mu_table = coefficients
+    piece_body = model_ints[0]
     out = np.empty(OUT_SIZE)
     ids = np.empty(MAX_POINTS, np.int64)
     h = dt / substeps
     iw = np.zeros((x.shape[0], 9))
+    cand_first, cand, watch_first, watch = gather(
+        pairs, n_pairs, piece_body, kind, island_of, n_islands
+    )
+    clock = np.zeros(x.shape[0])  # each island body's own time into the step [s]
+    log = np.zeros((max(16, 2 * island_first[n_islands]), IMPACT_FIELDS))
     logged = 0
-    for k in range(n_isolated):
-        m = isolated[k]
-        a, b, pa, pb = take_isolated(ci, m, I_FLAGS)
-        # a plane reaches everywhere (inf) and never turns: it counts for nothing here
-        reach_a = piece_reach[pa] if math.isfinite(piece_reach[pa]) else 0.0
-        reach_b = piece_reach[pb] if math.isfinite(piece_reach[pb]) else 0.0
-        tol = 1e-9 * (reach_a + reach_b)
-        now = 0.0
-        for impact in range(MAX_IMPACTS):
-            for body in (a, b):
-                world_inverse_row(body, q, inv_inertia, iw)
-            spin = _top_spin(a, w, inv_mass, iw, min_moment) * reach_a
-            spin += _top_spin(b, w, inv_mass, iw, min_moment) * reach_b
-            hit = _time_of_impact(
-                pa, pb, a, b, dt - now, tol, impact > 0 or closing[m] > 0.0, spin, h, x, q, v,
-                w, accel, inertia,
-                inv_inertia, model_ints, piece_radius, local_vertices, local_normals,
-                face_first, face_size, corners, edges, vertices, normals, out, ids,
+    for k in range(n_islands):
+        for r in range(island_first[k], island_first[k + 1]):
+            take_isolated(ci, isolated[r], I_FLAGS)
+        cp, n = island_candidates(cand, cand_first[k], cand_first[k + 1], pairs)
+        hit = np.empty(cp.shape[0])  # each candidate's time of impact into the step [s]
+        parting = np.zeros(cp.shape[0], np.bool_)
+        # how deep a pair that stopped approaching while overlapping already was [m]: only
+        # sinking deeper is an impact (a pair met late by a search, or left by the solver)
+        sunk = np.zeros(cp.shape[0])
+        for c in range(n):
+            hit[c] = _next_impact(
+                cp[c, 0], cp[c, 1], 0.0, dt, False, h, clock, island_of, x, q, v, w, accel,
+                inv_mass, inertia, inv_inertia, min_moment, iw, model_ints, piece_radius,
+                piece_reach, local_vertices, local_normals, face_first, face_size, corners,
+                edges, vertices, normals, out, ids,
             )  # fmt: skip
-            if hit < 0.0:
+        now = 0.0
+        taken = 0
+        cap = impact_cap(n)
+        stopped = False
+        for _ in range(2 * cap):
+            c = earliest(hit, 0, n)
+            if c < 0:
                 break
-            for body in (a, b):
-                if dynamic[body]:
-                    fly(
-                        body, hit, _pieces_of(hit, h), x, q, v, w,
-                        accel[body, 0], accel[body, 1], accel[body, 2], inertia, inv_inertia,
-                    )  # fmt: skip
-            now += hit
+            now = hit[c]
+            pa, pb = cp[c, 0], cp[c, 1]
+            a, b = piece_body[pa], piece_body[pb]
+            _sync(a, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia)
+            _sync(b, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia)
             gap = _gap(
                 pa, pb, a, b, 0.0, h, x, q, v, w, accel, inertia, inv_inertia, model_ints,
                 piece_radius, local_vertices, local_normals, face_first, face_size, corners,
@@ -474,28 +497,175 @@ def exact_impacts(
                 _, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount,
                 piece_cstart, piece_ccount, piece_estart, piece_ecount,
             ) = model_ints  # fmt: skip
+            tol = _tolerance(pa, pb, piece_reach)
             count = collide_pieces(
                 pa, pb, piece_kind, piece_radius, piece_vstart, piece_vcount, piece_fstart,
                 piece_fcount, piece_cstart, piece_ccount, piece_estart, piece_ecount,
                 vertices, normals, face_first, face_size, corners, edges,
                 max(2.0 * tol, gap[0]) + touch, 0.0, out, ids,
             )  # fmt: skip
-            if count == 0:
-                break
+            log = logged_row(log, logged)
+            ma, mb = material[a], material[b]
+            parting[c] = True
             for body in (a, b):
                 world_inverse_row(body, q, inv_inertia, iw)
-            if not _impact(a, b, count, out, touch, e_pair[k], mu_pair[k], x, v, w, inv_mass,
-                           iw, log[logged]):  # fmt: skip
-                break
+            if count == 0 or not _impact(
+                a, b, count, out, touch, e_table[ma, mb], mu_table[ma, mb], x, v, w,
+                inv_mass, iw, log[logged],
+            ):  # fmt: skip
+                # touching, not approaching: wait for the gap to open (or close past touch)
+                sunk[c] = max(sunk[c], -gap[0])
+                hit[c] = _next_impact(
+                    pa, pb, now, dt, True, h, clock, island_of, x, q, v, w, accel, inv_mass,
+                    inertia, inv_inertia, min_moment, iw, model_ints, piece_radius,
+                    piece_reach, local_vertices, local_normals, face_first, face_size,
+                    corners, edges, vertices, normals, out, ids, sunk[c],
+                )  # fmt: skip
+                continue
+            sunk[c] = 0.0
             log[logged, 0] = now
             logged += 1
-        for body in (a, b):
-            if dynamic[body] and dt - now > 0.0:
-                fly(
-                    body, dt - now, _pieces_of(dt - now, h), x, q, v, w,
-                    accel[body, 0], accel[body, 1], accel[body, 2], inertia, inv_inertia,
-                )  # fmt: skip
-    return logged
+            taken += 1
+            stopped = taken == cap
+            for body in (a, b):
+                if not stopped and island_of[body] >= 0:
+                    cp, n, stopped = _reach(
+                        body, k, now, dt, cp, n, island_of, pairs, boxes, reach, watch,
+                        watch_first, body_pieces, model_ints, x, q, v, w, accel, dynamic,
+                        piece_radius, piece_reach, local_vertices, local_normals, vertices,
+                        normals, margin,
+                    )  # fmt: skip
+            if stopped:
+                break
+            if hit.shape[0] < cp.shape[0]:  # candidates were added: room for their times
+                more = cp.shape[0] - hit.shape[0]
+                hit = np.concatenate((hit, np.empty(more)))
+                parting = np.concatenate((parting, np.zeros(more, np.bool_)))
+                sunk = np.concatenate((sunk, np.zeros(more)))
+            for d in range(n):
+                da, db = piece_body[cp[d, 0]], piece_body[cp[d, 1]]
+                if da in (a, b) or db in (a, b):
+                    hit[d] = _next_impact(
+                        cp[d, 0], cp[d, 1], now, dt, parting[d], h, clock, island_of, x, q,
+                        v, w, accel, inv_mass, inertia, inv_inertia, min_moment, iw,
+                        model_ints, piece_radius, piece_reach, local_vertices, local_normals,
+                        face_first, face_size, corners, edges, vertices, normals, out, ids,
+                        sunk[d],
+                    )  # fmt: skip
+        else:
+            stopped = True  # (as many looks as impacts allowed, twice over)
+        # the island's bodies to the end of the step, or to its last impact
+        end = now if stopped else dt
+        for r in range(island_first[k], island_first[k + 1]):
+            for body in (ci[isolated[r], I_BODY_A], ci[isolated[r], I_BODY_B]):
+                _sync(body, end, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia)
+    return log, logged
+
+
+@njit(cache=True, inline="always")
+def _tolerance(pa: int, pb: int, piece_reach: np.ndarray) -> float:
+    """How near two pieces count as touching [m]: a billionth of their reaches (a plane
+    reaches everywhere (inf) and never turns: it counts for nothing here)."""
+    reach_a = piece_reach[pa] if math.isfinite(piece_reach[pa]) else 0.0
+    reach_b = piece_reach[pb] if math.isfinite(piece_reach[pb]) else 0.0
+    return 1e-9 * (reach_a + reach_b)
+
+
+@njit(cache=True, inline="always")
+def _sync(
+    body: int, t: float, h: float, clock: np.ndarray, island_of: np.ndarray, x: np.ndarray,
+    q: np.ndarray, v: np.ndarray, w: np.ndarray, accel: np.ndarray, inertia: np.ndarray,
+    inv_inertia: np.ndarray,
+) -> None:  # fmt: skip
+    """Fly a body of an island from its own clock to ``t`` [s] into the step, in substeps
+    of at most ``h`` (a static body stays)."""
+    if island_of[body] >= 0 and t > clock[body]:
+        tau = t - clock[body]
+        fly(
+            body, tau, _pieces_of(tau, h), x, q, v, w, accel[body, 0], accel[body, 1],
+            accel[body, 2], inertia, inv_inertia,
+        )  # fmt: skip
+        clock[body] = t
+
+
+@njit(cache=True)
+def _next_impact(
+    pa: int, pb: int, now: float, dt: float, parting: bool, h: float, clock: np.ndarray,
+    island_of: np.ndarray, x: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray,
+    accel: np.ndarray, inv_mass: np.ndarray, inertia: np.ndarray, inv_inertia: np.ndarray,
+    min_moment: np.ndarray, iw: np.ndarray, model_ints: tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+    ],
+    piece_radius: np.ndarray, piece_reach: np.ndarray, local_vertices: np.ndarray,
+    local_normals: np.ndarray, face_first: np.ndarray, face_size: np.ndarray,
+    corners: np.ndarray, edges: np.ndarray, vertices: np.ndarray, normals: np.ndarray,
+    out: np.ndarray, ids: np.ndarray, allow: float = 0.0,
+) -> float:  # fmt: skip
+    """Time into the step [s] of pieces pa and pb's next impact after ``now`` (their
+    overlapping by more than ``allow`` [m]), before the step's end ``dt``; inf if none.
+    Their bodies are flown to ``now`` first."""
+    piece_body = model_ints[0]
+    a, b = piece_body[pa], piece_body[pb]
+    _sync(a, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia)
+    _sync(b, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia)
+    for body in (a, b):
+        world_inverse_row(body, q, inv_inertia, iw)
+    reach_a = piece_reach[pa] if math.isfinite(piece_reach[pa]) else 0.0
+    reach_b = piece_reach[pb] if math.isfinite(piece_reach[pb]) else 0.0
+    spin = _top_spin(a, w, inv_mass, iw, min_moment) * reach_a
+    spin += _top_spin(b, w, inv_mass, iw, min_moment) * reach_b
+    t = _time_of_impact(
+        pa, pb, a, b, dt - now, _tolerance(pa, pb, piece_reach), parting, spin, h, x, q, v,
+        w, accel, inertia, inv_inertia, model_ints, piece_radius, local_vertices,
+        local_normals, face_first, face_size, corners, edges, vertices, normals, out, ids,
+        allow,
+    )  # fmt: skip
+    return now + t if t >= 0.0 else np.inf
+
+
+@njit(cache=True)
+def _reach(
+    body: int, k: int, now: float, dt: float, cp: np.ndarray, n: int,
+    island_of: np.ndarray, pairs: np.ndarray, boxes: np.ndarray, reach: tuple[
+        tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        np.ndarray, np.ndarray,
+    ], watch: np.ndarray, watch_first: np.ndarray, body_pieces: np.ndarray,
+    model_ints: tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+    ],
+    x: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray, accel: np.ndarray,
+    dynamic: np.ndarray, piece_radius: np.ndarray, piece_reach: np.ndarray,
+    local_vertices: np.ndarray, local_normals: np.ndarray, vertices: np.ndarray,
+    normals: np.ndarray, margin: float,
+) -> tuple[np.ndarray, int, bool]:  # fmt: skip
+    """After an impact turned ``body`` (of island ``k``, at ``now``): each of its pieces'
+    swept box from now to the step's end ``dt``; beyond the box its pairs were found in, the
+    statics there join the candidates ``cp[:n]``
+    (:func:`carom.engines.stepped.impacts.look_around`). Returns the candidates, their
+    count, and whether the island must stop (a body moving otherwise in reach)."""
+    tree, open_statics, movers = reach
+    piece_body, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount = model_ints[:6]
+    box = np.empty(6)
+    for p in range(body_pieces[body], body_pieces[body + 1]):
+        place_piece(
+            p, x, q, body, piece_vstart, piece_vcount, piece_fstart, piece_fcount,
+            local_vertices, local_normals, vertices, normals,
+        )  # fmt: skip
+        sweep_box(
+            p, body, vertices, normals, piece_kind, piece_vstart, piece_vcount, piece_fstart,
+            piece_radius, piece_reach, v, w, dynamic, accel[body], dt - now, margin, box,
+        )  # fmt: skip
+        if not contained(box, boxes, p):
+            cp, n, stop = look_around(
+                p, k, box, boxes, island_of, piece_body, tree, open_statics, movers, cp, n
+            )
+            if stop:
+                return cp, n, True
+        if watched(p, k, box, boxes, pairs, watch, watch_first):
+            return cp, n, True
+    return cp, n, False
 
 
 @njit(cache=True)
@@ -509,9 +679,11 @@ def _time_of_impact(
     piece_radius: np.ndarray, local_vertices: np.ndarray, local_normals: np.ndarray,
     face_first: np.ndarray, face_size: np.ndarray, corners: np.ndarray, edges: np.ndarray,
     vertices: np.ndarray, normals: np.ndarray, out: np.ndarray, ids: np.ndarray,
+    allow: float = 0.0,
 ) -> float:  # fmt: skip
     """First time in ``[0, horizon]`` [s] at which the pieces come within ``tol`` [m] of
-    touching, by conservative advancement; -1 if they do not (or it fails to converge).
+    touching (of overlapping by ``allow`` [m], if given), by conservative advancement; -1 if
+    they do not (after many steps, the furthest time known safe: the caller looks again).
     ``spin`` bounds how fast turning can close the gap [m/s]; ``parting``: the pair has just
     been hit apart, so the search first lets the gap open beyond ``tol``."""
     gx = accel[a, 0] - accel[b, 0]
@@ -531,6 +703,105 @@ def _time_of_impact(
         uy = (v[a, 1] + accel[a, 1] * t) - (v[b, 1] + accel[b, 1] * t)
         uz = (v[a, 2] + accel[a, 2] * t) - (v[b, 2] + accel[b, 2] * t)
         closing = -(ux * wx + uy * wy + uz * wz) + spin + g_rel * (horizon - t)
-        done, t, state = advance(state, t, d, closing, tol, horizon)
+        done, t, state = advance(state, t, d + allow, closing, tol, horizon)
         if done:
             return t
+
+
+@njit(cache=True)
+def continuous(
+    bodies: np.ndarray, x0: np.ndarray, x: np.ndarray, q: np.ndarray, v: np.ndarray,
+    w: np.ndarray, ci: np.ndarray, nc: int, closest: np.ndarray, reach: tuple[
+        tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        np.ndarray, np.ndarray,
+    ], dynamic: np.ndarray, inertia: np.ndarray, inv_inertia: np.ndarray,
+    body_pieces: np.ndarray, model_ints: tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+    ],
+    piece_radius: np.ndarray, piece_reach: np.ndarray, local_vertices: np.ndarray,
+    local_normals: np.ndarray, face_first: np.ndarray, face_size: np.ndarray,
+    corners: np.ndarray, edges: np.ndarray, vertices: np.ndarray, normals: np.ndarray,
+    dt: float, speculative: float, slop: float,
+) -> int:  # fmt: skip
+    """Continuous collision of the solver's bodies against static geometry, as the 2D
+    engine's (:func:`carom.engines.rigid.impacts.continuous`), on the step's translation:
+    each dynamic body of ``bodies`` that moved further than the speculative distance [m]
+    from ``x0`` is swept from there to ``x`` at its orientation now (a turn within the step
+    is not swept); at the first touch it is put back there, its velocity kept. Returns how
+    many bodies were put back."""
+    tree, open_statics, _ = reach
+    node_box, left, first, count, order, items = tree
+    piece_body, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount = model_ints[:6]
+    n_pieces = piece_body.shape[0]
+    keys = np.full(nc, -1, np.int64)  # the near contacts' piece pairs, sorted
+    for m in range(nc):
+        if closest[m] <= speculative:
+            keys[m] = ci[m, I_PIECE_A] * n_pieces + ci[m, I_PIECE_B]
+        elif m > 0:
+            keys[m] = keys[m - 1]  # (kept sorted; a far contact is looked at)
+    still = np.zeros((x.shape[0], 3))
+    out = np.empty(OUT_SIZE)
+    ids = np.empty(MAX_POINTS, np.int64)
+    box = np.empty(6)
+    found = np.empty(64, np.int64)
+    put_back = 0
+    for b in bodies:
+        if not dynamic[b]:
+            continue
+        dx, dy, dz = x[b, 0] - x0[b, 0], x[b, 1] - x0[b, 1], x[b, 2] - x0[b, 2]
+        if math.sqrt(dx * dx + dy * dy + dz * dz) <= speculative:
+            continue
+        end = x[b].copy()
+        vel = v[b].copy()
+        spin = w[b].copy()
+        x[b] = x0[b]
+        v[b, 0], v[b, 1], v[b, 2] = dx / dt, dy / dt, dz / dt
+        w[b] = 0.0
+        touch = np.inf
+        for p in range(body_pieces[b], body_pieces[b + 1]):
+            place_piece(
+                p, x, q, b, piece_vstart, piece_vcount, piece_fstart, piece_fcount,
+                local_vertices, local_normals, vertices, normals,
+            )  # fmt: skip
+            sweep_box(
+                p, b, vertices, normals, piece_kind, piece_vstart, piece_vcount, piece_fstart,
+                piece_radius, piece_reach, v, w, dynamic, still[b], dt, 0.0, box,
+            )  # fmt: skip
+            total = query_bvh(node_box, left, first, count, order, items, box, found)
+            if total > found.shape[0]:
+                found = np.empty(total, np.int64)
+                total = query_bvh(node_box, left, first, count, order, items, box, found)
+            for j in range(total + open_statics.shape[0]):
+                other = found[j] if j < total else open_statics[j - total]
+                if j >= total and not overlap(items, other, box):
+                    continue
+                key = min(p, other) * n_pieces + max(p, other)
+                at = np.searchsorted(keys, key)
+                # a contact near at the start is the solver's: only sinking into it by more
+                # than the slop beyond where it began is a touch, put back where it was as
+                # deep as at the start
+                near = at < nc and keys[at] == key
+                depth = max(0.0, -closest[at]) if near else 0.0
+                for allow in (depth + slop, depth):
+                    t = _time_of_impact(
+                        p, other, b, piece_body[other], dt, _tolerance(p, other, piece_reach),
+                        False, 0.0, dt, x, q, v, w, still, inertia, inv_inertia, model_ints,
+                        piece_radius, local_vertices, local_normals, face_first, face_size,
+                        corners, edges, vertices, normals, out, ids, allow,
+                    )  # fmt: skip
+                    if t <= 0.0 or not near:
+                        break
+                # (touching at once: the body's orientation now, at where the step began,
+                # is not a pose it had; the solver holds that pair)
+                if 0.0 < t < touch:
+                    touch = t
+        if touch < dt:
+            for k in range(3):
+                x[b, k] = x0[b, k] + v[b, k] * touch
+            put_back += 1
+        else:
+            x[b] = end
+        v[b] = vel
+        w[b] = spin
+    return put_back

@@ -14,7 +14,8 @@ names its kernels for the stages that differ (:class:`carom.engines.rigid.driver
 5. **exact impacts**: isolated pairs advanced through the step with their impacts solved at
    the time of impact;
 6. **free flight**: bodies with no contact;
-7. **solve**: the soft step over the remaining contacts;
+7. **solve**: the soft step over the remaining contacts; a solved body that moved far is swept
+   against the static geometry its contacts did not hold, and put back at the first touch;
 8. **store** the impulses for the next step, and **sleep** the islands at rest (their bodies
    stop, as in Box2D; the kinetic energy they kept goes to the ledger as lost).
 
@@ -36,7 +37,6 @@ from carom.engines.base import COLLISION_DTYPE, PARTNER_BODY, Counters, FrameArr
 from carom.engines.stepped import islands
 from carom.engines.stepped.broadphase import KeptPairs, find_pairs, grid_cell
 from carom.engines.stepped.contacts import extremes, store_points
-from carom.engines.stepped.impacts import MAX_IMPACTS
 from carom.engines.stepped.memory import StepMemory, new_memory
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
 from carom.engines.stepped.settings import RigidSettings
@@ -52,15 +52,14 @@ STOP_CHECK_STEPS = 64
 
 
 class Isolated(NamedTuple):
-    """The contacts a step solves exactly: contact ``rows`` (the first ``n``), each
-    contact's least normal relative speed ``closing`` [m/s] (nc,), and each isolated
-    contact's ``restitution`` and ``friction`` (n,) [-]."""
+    """The islands a step solves exactly: their contact ``rows``, island k's
+    ``rows[first[k]:first[k + 1]]``, ``n`` islands, and each contact's least normal relative
+    speed ``closing`` [m/s] (nc,) (:func:`carom.engines.stepped.islands.plan`)."""
 
     rows: NDArray[np.int64]
+    first: NDArray[np.int64]
     n: int
     closing: FloatArray
-    restitution: FloatArray
-    friction: FloatArray
 
 
 class SteppedEngine:
@@ -149,6 +148,7 @@ class SteppedEngine:
         self._boxes = np.zeros((pieces, 2 * dims))
         self._parent = np.zeros(n, np.int64)
         self._role = np.zeros(n, np.int64)
+        self._island_of = np.zeros(n, np.int64)
         self._dynamic = model.kind == KIND_DYNAMIC
         self._kinematic = model.kind == KIND_KINEMATIC
         #: the kinematic bodies (indices)
@@ -157,6 +157,7 @@ class SteppedEngine:
         self._accel[self._dynamic] = model.gravity
         self._g = float(np.linalg.norm(model.gravity))
         self.n_contacts = 0
+        self._n_pairs = 0  # the broad phase's pairs at the last step
         # what every step reads the same way: the rows' columns the shared kernels take, a
         # cached contact's values per point, the leaving speed (inf: never)
         self._extremes_layout = (rows.POINT0, rows.POINT_FLOATS, rows.P_SEP, rows.P_VREL)
@@ -182,7 +183,15 @@ class SteppedEngine:
         bounded = np.all(np.isfinite(self._boxes), axis=1)
         still = np.flatnonzero(static[model.piece_body] & bounded)
         self._kept.settle(self._boxes, still)
-        self._tree = build_bvh(self._kept.fat, still)
+        self._tree = tree = build_bvh(self._kept.fat, still)
+        #: what an island solved exactly looks through when a body turns where its broad
+        #: phase did not look: the static tree (and its items' boxes), the static pieces it
+        #: does not hold, the pieces of bodies that are not static
+        self._reach = (
+            (tree.box, tree.left, tree.first, tree.count, tree.order, self._kept.fat),
+            np.flatnonzero(static[model.piece_body] & ~bounded).astype(np.int64),
+            np.flatnonzero(~static[model.piece_body]).astype(np.int64),
+        )
 
     def _find(self, boxes: NDArray[np.float64], active: NDArray[np.bool_], out: Any) -> int:
         tree = self._tree
@@ -250,22 +259,27 @@ class SteppedEngine:
             self._ci, nc, m.kind, mem.awake, self._moving(), mem.clock, mem.island
         ):
             nc = self._contacts()
+        n = m.kind.shape[0]
         isolated = np.zeros(max(nc, 1), np.int64)
+        island_first = np.zeros(n + 1, np.int64)
         closest, closing = extremes(self._cf, self._ci, nc, self._extremes_layout)
         n_iso = islands.plan(
             self._ci, nc, closest, closing, m.kind, mem.awake, st.exact_impacts,
             0.1 * st.linear_slop, st.restitution_threshold, self._leaving, self._parent,
-            self._role, isolated,
+            self._role, isolated, island_first, self._island_of,
         )  # fmt: skip
         if n_iso:
-            log = self._exact_impacts(isolated, n_iso, closing)
-            if log.shape[0]:
-                self._book(log, sink)
+            todo = Isolated(isolated, island_first, n_iso, closing)
+            log, logged = self._impact_kernel(todo)
+            if logged:
+                self._book(log[:logged], sink)
         self._fly(np.flatnonzero(self._role == islands.ROLE_FREE))
         bodies = self._solver_bodies()
         before = self._energy(bodies)
         work = np.zeros(1)  # by kinematic bodies on the others, this step [J]
+        poses = self._poses()
         self._solve(nc, bodies, work)
+        self._continuous(nc, closest, bodies, poses)
         self._work_done += work[0]
         change = self._energy(bodies) - before - work[0]  # the solver's own part
         if change < 0.0:
@@ -296,7 +310,7 @@ class SteppedEngine:
     def _contacts(self) -> int:
         """Stages 1 to 3: the contacts at the start of the step, into rows ``_cf``, ``_ci``;
         return how many."""
-        n_pairs = self._pairs()
+        n_pairs = self._n_pairs = self._pairs()
         while True:
             nc = self._narrow(n_pairs)
             if nc >= 0:
@@ -318,23 +332,10 @@ class SteppedEngine:
         self._cf = np.zeros((size, self.ROWS.CONTACT_FLOATS))
         self._ci = np.zeros((size, self.ROWS.CONTACT_INTS), np.int64)
 
-    def _exact_impacts(
-        self, isolated: NDArray[np.int64], n_iso: int, closing: FloatArray
-    ) -> FloatArray:
-        """Stage 5: advance the isolated contacts' pairs (rows ``isolated[:n_iso]``) through
-        the step, their impacts solved exactly; return the impacts' log, a row each."""
-        m = self.model
-        rows = isolated[:n_iso]
-        ma = m.material[self._ci[rows, I_BODY_A]]
-        mb = m.material[self._ci[rows, I_BODY_B]]
-        log = np.zeros((n_iso * MAX_IMPACTS, self.IMPACTS.IMPACT_FIELDS))
-        todo = Isolated(isolated, n_iso, closing, m.e_table[ma, mb], m.mu_table[ma, mb])
-        logged = self._impact_kernel(todo, log)
-        return log[:logged]
-
-    def _impact_kernel(self, todo: Isolated, log: FloatArray) -> int:
-        """The dimension's exact impacts (:meth:`_exact_impacts`) of the isolated contacts
-        ``todo``, logged into ``log``; return the rows logged."""
+    def _impact_kernel(self, todo: Isolated) -> tuple[FloatArray, int]:
+        """Stage 5: advance the islands solved exactly (``todo``) through the step, their
+        impacts solved at their times of impact; return the impacts' log and how many rows
+        of it are written (rows of the dimension's ``IMPACT_FIELDS``)."""
         raise NotImplementedError
 
     def _fly(self, free: NDArray[np.int64]) -> None:
@@ -348,6 +349,24 @@ class SteppedEngine:
     def _solve(self, nc: int, bodies: NDArray[np.int64], work: FloatArray) -> None:
         """Stage 7: the soft step over the contacts left to the solver; the work of kinematic
         bodies [J] is added to ``work[0]``."""
+        raise NotImplementedError
+
+    def _poses(self) -> tuple[FloatArray, FloatArray]:
+        """The bodies' positions and orientations now (copies), for :meth:`_continuous`."""
+        raise NotImplementedError
+
+    def _continuous(
+        self,
+        nc: int,
+        closest: FloatArray,
+        bodies: NDArray[np.int64],
+        poses: tuple[FloatArray, FloatArray],
+    ) -> None:
+        """Stage 7, after the solve: continuous collision of the solver's ``bodies`` that
+        moved far, from ``poses`` (:meth:`_poses` before the solve), against static geometry
+        other than what they touched at the start (the step's ``nc`` contacts, each one's
+        least separation ``closest`` [m]): at the first touch a body is put back, its
+        velocity kept (no body runs through a wall, as in Box2D)."""
         raise NotImplementedError
 
     def _knobs(self) -> tuple[float, int, float, float, float, float]:

@@ -1,7 +1,22 @@
-"""What both dimensions' exact impacts share: the isolated contacts taken in turn, and the
-search for a pair's time of impact by conservative advancement (Mirtich 1996; Erin Catto's
-time of impact in Box2D), written once as a step function the dimension calls with the gap it
-measures.
+"""What both dimensions' exact impacts share: the islands solved exactly, their impacts taken in
+the order they happen, and the search for a pair's time of impact by conservative advancement
+(Mirtich 1996; Erin Catto's time of impact in Box2D), written once as a step function the
+dimension calls with the gap it measures.
+
+An island solved exactly (:func:`carom.engines.stepped.islands.plan`) is a small event-driven
+simulation inside the step. Its candidates are the broad-phase pairs of its bodies with each
+other or with static bodies (:func:`gather`), not only the contacts that joined it. Each body
+keeps its own clock within the step and is flown to a time only when a pair of it is looked at;
+the earliest time of impact is taken, the impulse applied, and the two bodies' candidates
+searched again. A body turned by an impact may head where its broad phase did not look (a fast
+ball bounced back towards the wall behind it): when what it can reach in the rest of the step
+leaves its swept box, the static pieces in the new reach are found through the static tree
+(and the unbounded ones, few) and join the candidates (:func:`look_around`). What it cannot
+follow exactly, a body moving otherwise in its reach (another island, the solver's, a
+sleeping or kinematic body), ends the island's step at that impact, as Box2D's continuous
+collision does: its bodies keep their velocities and their poses, the rest of the step is
+dropped for them, and nothing is run through. So does an island that has taken
+:func:`impact_cap` impacts in one step (a ball at 1e100 m/s in a box).
 
 The search starts at ``t = 0``. At each time it is given the gap ``d`` [m] and a bound on how
 fast the gap can close from then to the horizon [m/s]; while the pieces are apart it moves on
@@ -16,25 +31,39 @@ import numpy as np
 from numba import njit
 
 from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
+from carom.geometry.bvh import overlap, query_bvh
+from carom.laws.kinds import KIND_STATIC
 
 __all__ = [
     "BISECTIONS",
     "MAX_IMPACTS",
     "MAX_ITERATIONS",
     "Search",
+    "add_candidate",
     "advance",
     "approaching",
+    "contained",
+    "earliest",
+    "gather",
+    "impact_cap",
+    "island_candidates",
+    "logged_row",
+    "look_around",
     "search",
     "take_isolated",
+    "watched",
 ]
 
-#: conservative-advancement iterations before giving up on a time of impact (then the pair
-#: flies on and the solver meets it at the next step)
+#: conservative-advancement iterations in one search; then it returns the furthest time known
+#: to be safe, where the caller finds no contact and searches on from there (a search never
+#: gives up with the pieces run into each other)
 MAX_ITERATIONS = 200
 #: halvings of an overshot interval before settling on its safe end
 BISECTIONS = 60
-#: impacts of one pair within one step
+#: impacts of an island within one step: this many per candidate pair, and
+#: :data:`ISLAND_IMPACTS` more
 MAX_IMPACTS = 8
+ISLAND_IMPACTS = 256
 
 #: a search's state: the last safe time, the bisected interval (lo, hi), whether it is
 #: bisecting, how many gaps it has taken in its phase, and whether it still waits for a pair
@@ -55,8 +84,9 @@ def advance(
     """One step of the search, given the gap ``d`` [m] at time ``t`` [s] and, while
     advancing, how fast it can close from ``t`` to ``horizon`` [m/s].
 
-    Returns ``(done, time, state)``: done, the time of impact in ``[0, horizon]`` or -1 when
-    there is none (or the search did not converge); else the next time to measure the gap at.
+    Returns ``(done, time, state)``: done, the time of impact in ``[0, horizon]`` (or, after
+    :data:`MAX_ITERATIONS`, the furthest time known safe) or -1 when there is none; else the
+    next time to measure the gap at.
     """
     safe, lo, hi, bisecting, taken, parting = state
     if bisecting:
@@ -81,8 +111,10 @@ def advance(
         return True, -1.0, state
     later = t + max(d, tol) / closing
     taken += 1
-    if later > horizon or taken == MAX_ITERATIONS:
+    if later > horizon:
         return True, -1.0, state
+    if taken == MAX_ITERATIONS:
+        return True, later, state  # (safe: the pieces cannot touch before it)
     return False, later, (t, lo, hi, False, taken, parting)
 
 
@@ -99,5 +131,204 @@ def approaching(un: np.ndarray, used: int) -> bool:
     """Whether any of the first ``used`` normal relative speeds ``un`` [m/s] approaches."""
     for j in range(used):  # noqa: SIM110 (a loop Numba compiles, not a generator)
         if un[j] < 0.0:
+            return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def impact_cap(candidates: int) -> int:
+    """The impacts an island of ``candidates`` pairs may take in one step."""
+    cap: int = ISLAND_IMPACTS + MAX_IMPACTS * candidates
+    return cap
+
+
+@njit(cache=True)
+def gather(
+    pairs: np.ndarray,
+    n_pairs: int,
+    piece_body: np.ndarray,
+    kind: np.ndarray,
+    island_of: np.ndarray,
+    n_islands: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Each island's candidate pairs and watched pairs, from the broad phase's ``pairs``
+    (the first ``n_pairs``): ``(cand_first, cand, watch_first, watch)``, island k's
+    candidates ``cand[cand_first[k]:cand_first[k + 1]]`` (indices into ``pairs``), in the
+    pairs' order, and its watched pairs likewise.
+
+    A candidate joins two bodies of the island, or one of it and a static body; a watched
+    pair joins a body of the island to one that moves otherwise (another island, the solver's,
+    a free or kinematic body): the island must not reach that body's box on a path the broad
+    phase did not look at.
+    """
+    counts = np.zeros((2, n_islands + 1), np.int64)
+    which = np.full((n_pairs, 2), -1, np.int64)  # (list, island) of each pair's entries
+    for k in range(n_pairs):
+        ba = piece_body[pairs[k, 0]]
+        bb = piece_body[pairs[k, 1]]
+        ia = island_of[ba]
+        ib = island_of[bb]
+        for mine, other, theirs, slot in ((ia, bb, ib, 0), (ib, ba, ia, 1)):
+            if mine < 0:
+                continue
+            if theirs == mine or kind[other] == KIND_STATIC:
+                if slot == 0 or theirs != mine:  # a pair within the island, listed once
+                    which[k, slot] = mine
+                    counts[0, mine + 1] += 1
+            else:
+                which[k, slot] = n_islands + 1 + mine  # watched
+                counts[1, mine + 1] += 1
+    for j in range(2):
+        for k in range(n_islands):
+            counts[j, k + 1] += counts[j, k]
+    cand_first = counts[0].copy()
+    watch_first = counts[1].copy()
+    cand = np.empty(cand_first[n_islands], np.int64)
+    watch = np.empty(watch_first[n_islands], np.int64)
+    fill = counts[:, :n_islands].copy()
+    for k in range(n_pairs):
+        for slot in range(2):
+            i = which[k, slot]
+            if i < 0:
+                continue
+            if i <= n_islands:
+                cand[fill[0, i]] = k
+                fill[0, i] += 1
+            else:
+                i -= n_islands + 1
+                watch[fill[1, i]] = k
+                fill[1, i] += 1
+    return cand_first, cand, watch_first, watch
+
+
+@njit(cache=True, inline="always")
+def earliest(hit: np.ndarray, lo: int, hi: int) -> int:
+    """The candidate in ``[lo, hi)`` with the earliest time of impact ``hit`` (inf: none),
+    the first of equals; -1 when none has one."""
+    best = -1
+    when = np.inf
+    for c in range(lo, hi):
+        if hit[c] < when:
+            when = hit[c]
+            best = c
+    return best
+
+
+@njit(cache=True, inline="always")
+def contained(inner: np.ndarray, outer: np.ndarray, p: int) -> bool:
+    """Whether box ``inner`` (2 d,) lies in box ``outer[p]``, up to a millionth of a
+    millionth of the outer box's size (the round-off of flying there)."""
+    d = inner.shape[0] // 2
+    for k in range(d):
+        slack = 1e-12 * (outer[p, d + k] - outer[p, k])
+        if inner[k] < outer[p, k] - slack or inner[d + k] > outer[p, d + k] + slack:
+            return False
+    return True
+
+
+@njit(cache=True)
+def logged_row(log: np.ndarray, logged: int) -> np.ndarray:
+    """``log`` with room for row ``logged`` (doubled when full)."""
+    if logged < log.shape[0]:
+        return log
+    bigger = np.zeros((2 * log.shape[0], log.shape[1]))
+    bigger[: log.shape[0]] = log
+    return bigger
+
+
+@njit(cache=True)
+def island_candidates(
+    cand: np.ndarray, lo: int, hi: int, pairs: np.ndarray
+) -> tuple[np.ndarray, int]:
+    """An island's candidates ``cand[lo:hi]`` as piece pairs (C, 2), with room for more,
+    and how many there are."""
+    cp = np.empty((max(8, 2 * (hi - lo)), 2), np.int64)
+    for c in range(lo, hi):
+        cp[c - lo, 0] = pairs[cand[c], 0]
+        cp[c - lo, 1] = pairs[cand[c], 1]
+    return cp, hi - lo
+
+
+@njit(cache=True)
+def add_candidate(cp: np.ndarray, n: int, p: int, q: int) -> tuple[np.ndarray, int]:
+    """Pieces ``p`` and ``q`` among the candidates ``cp[:n]`` (lower piece first), unless
+    they are there; the candidates (grown when full) and their count."""
+    a, b = min(p, q), max(p, q)
+    for c in range(n):
+        if cp[c, 0] == a and cp[c, 1] == b:
+            return cp, n
+    if n == cp.shape[0]:
+        bigger = np.empty((2 * n, 2), np.int64)
+        bigger[:n] = cp
+        cp = bigger
+    cp[n, 0] = a
+    cp[n, 1] = b
+    return cp, n + 1
+
+
+@njit(cache=True)
+def look_around(
+    p: int,
+    k: int,
+    box: np.ndarray,
+    boxes: np.ndarray,
+    island_of: np.ndarray,
+    piece_body: np.ndarray,
+    tree: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    open_statics: np.ndarray,
+    movers: np.ndarray,
+    cp: np.ndarray,
+    n: int,
+) -> tuple[np.ndarray, int, bool]:
+    """Piece ``p`` of a body of island ``k`` can now reach ``box`` (2 d,), beyond its swept
+    box ``boxes[p]``: widen that box to hold it, add the static pieces in it (through the
+    static ``tree``: node boxes, left, first, count, order and its items' boxes; and the
+    ``open_statics`` the tree does not hold) and the island's pieces in it to the candidates
+    ``cp[:n]``. Returns the candidates, their count, and whether a piece moving otherwise
+    (``movers``: the pieces of bodies that are not static) lies in reach: then the island
+    must stop."""
+    d = box.shape[0] // 2
+    for j in range(d):
+        boxes[p, j] = min(boxes[p, j], box[j])
+        boxes[p, d + j] = max(boxes[p, d + j], box[d + j])
+    node_box, left, first, count, order, items = tree
+    found = np.empty(64, np.int64)
+    while True:
+        total = query_bvh(node_box, left, first, count, order, items, box, found)
+        if total <= found.shape[0]:
+            break
+        found = np.empty(total, np.int64)
+    for j in range(total):
+        cp, n = add_candidate(cp, n, p, found[j])
+    for q in open_statics:
+        if overlap(boxes, q, box):
+            cp, n = add_candidate(cp, n, p, q)
+    body = piece_body[p]
+    for q in movers:
+        other = piece_body[q]
+        if other == body or not overlap(boxes, q, box):
+            continue
+        if island_of[other] != k:
+            return cp, n, True
+        cp, n = add_candidate(cp, n, p, q)
+    return cp, n, False
+
+
+@njit(cache=True, inline="always")
+def watched(
+    p: int,
+    k: int,
+    box: np.ndarray,
+    boxes: np.ndarray,
+    pairs: np.ndarray,
+    watch: np.ndarray,
+    watch_first: np.ndarray,
+) -> bool:
+    """Whether ``box`` (2 d,), where piece ``p`` of island ``k`` can go, meets the swept box
+    of a piece moving otherwise that the broad phase paired with it (island k's watched
+    pairs, :func:`gather`)."""
+    for w in range(watch_first[k], watch_first[k + 1]):
+        qa, qb = pairs[watch[w], 0], pairs[watch[w], 1]
+        if (qa == p or qb == p) and overlap(boxes, qb if qa == p else qa, box):
             return True
     return False

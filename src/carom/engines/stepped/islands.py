@@ -3,12 +3,14 @@ who flies free; who falls asleep and who wakes.
 
 Dynamic bodies touching (or about to touch) are joined by union-find (Tarjan 1975, path
 halving); static and kinematic bodies join nothing, so the ground does not make one island of
-everything on it. An island of one contact that is still apart at the start of the step (or
-touching and closing faster than the restitution threshold) is an isolated impact
-(:mod:`carom.engines.rigid.impacts`); an island with no contact flies free; the rest go to the
-solver. An island whose bodies all stayed slower than the sleep speed for the sleep time
-sleeps: it is skipped until an awake body touches one of its bodies, which wakes the whole
-island.
+everything on it. An island whose every contact is an impact still to happen (apart at the start
+of the step, or touching and closing faster than the restitution threshold), with no kinematic
+body and at most :data:`MAX_EXACT_CONTACTS` contacts, is solved exactly: its impacts are taken
+in the order they happen, each at its time of impact (:mod:`carom.engines.rigid.impacts`), so a
+fast body meets every wall in its way within one step; an island with no contact flies free;
+the rest go to the solver. An island whose bodies all stayed slower than the sleep speed for
+the sleep time sleeps: it is skipped until an awake body touches one of its bodies, which wakes
+the whole island.
 """
 
 from __future__ import annotations
@@ -19,13 +21,24 @@ from numba import njit
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 
-__all__ = ["KIND_DYNAMIC", "KIND_KINEMATIC", "KIND_STATIC", "plan", "settle", "wake"]
+__all__ = [
+    "KIND_DYNAMIC",
+    "KIND_KINEMATIC",
+    "KIND_STATIC",
+    "MAX_EXACT_CONTACTS",
+    "plan",
+    "settle",
+    "wake",
+]
 
 
 ROLE_ASLEEP = 0  # skipped
 ROLE_FREE = 1  # no contact: exact free flight
-ROLE_EXACT = 2  # one isolated impact this step
+ROLE_EXACT = 2  # in an island solved exactly this step
 ROLE_SOLVER = 3  # in the soft-step solver
+
+#: contacts of an island solved exactly, at the most: a denser cluster is the solver's
+MAX_EXACT_CONTACTS = 32
 
 
 @njit(cache=True, inline="always")
@@ -51,9 +64,11 @@ def plan(
     parent: np.ndarray,
     role: np.ndarray,
     isolated: np.ndarray,
+    island_first: np.ndarray,
+    island_of: np.ndarray,
 ) -> int:
-    """Join the islands and give every body a role; return the number of isolated contacts,
-    whose rows are written to ``isolated``.
+    """Join the islands and give every body a role; return the number of islands solved
+    exactly, whose contact rows are written to ``isolated``, island by island.
 
     Parameters
     ----------
@@ -66,7 +81,7 @@ def plan(
     awake : (N,) bool
         Awake dynamic bodies (others are ignored).
     exact : bool
-        Whether isolated impacts are solved exactly (else everything goes to the solver).
+        Whether impacts are solved exactly (else everything goes to the solver).
     apart : float
         A contact whose every point is further apart than this [m] at the start of the step
         is an impact still to happen, not a resting contact.
@@ -80,12 +95,17 @@ def plan(
         Written: each body's island root (itself for non-dynamic bodies).
     role : (N,) int64
         Written: ROLE_* of each body.
-    isolated : (capacity,) int64
-        Written: the isolated contacts' rows.
+    isolated : (nc,) int64
+        Written: the contact rows of the islands solved exactly, the first island's first.
+    island_first : (N + 1,) int64
+        Written: island k's rows are ``isolated[island_first[k]:island_first[k + 1]]``.
+    island_of : (N,) int64
+        Written: the island solved exactly that each body is in, or -1.
     """
     n = kind.shape[0]
     for i in range(n):
         parent[i] = i
+        island_of[i] = -1
     for m in range(nc):
         a = ci[m, I_BODY_A]
         b = ci[m, I_BODY_B]
@@ -99,18 +119,19 @@ def plan(
                 else:
                     parent[ra] = rb
     contacts = np.zeros(n, np.int64)
-    first = np.full(n, -1, np.int64)
+    # an island with a resting contact or a kinematic body is the solver's
+    solver_only = np.zeros(n, np.bool_)
     for m in range(nc):
         a = ci[m, I_BODY_A]
         b = ci[m, I_BODY_B]
         owner = a if kind[a] == KIND_DYNAMIC else b
         r = _root(parent, owner)
         contacts[r] += 1
-        if first[r] < 0:
-            first[r] = m
+        resting = closest[m] <= apart and -fast <= closing[m] <= leaving
+        if resting or kind[a] == KIND_KINEMATIC or kind[b] == KIND_KINEMATIC:
+            solver_only[r] = True
     for i in range(n):
         parent[i] = _root(parent, i)
-    count = 0
     for i in range(n):
         if kind[i] != KIND_DYNAMIC:
             role[i] = ROLE_SOLVER if kind[i] == KIND_KINEMATIC else ROLE_ASLEEP
@@ -120,20 +141,33 @@ def plan(
             role[i] = ROLE_FREE if contacts[parent[i]] == 0 else ROLE_SOLVER
     if not exact:
         return 0
+    count = 0
+    number = np.full(n, -1, np.int64)  # each exact island's number, by its root
     for r in range(n):
-        if contacts[r] != 1 or kind[r] != KIND_DYNAMIC or not awake[r]:
-            continue
-        m = first[r]
+        if (
+            0 < contacts[r] <= MAX_EXACT_CONTACTS
+            and not solver_only[r]
+            and kind[r] == KIND_DYNAMIC
+            and awake[r]
+        ):
+            island_first[count + 1] = contacts[r]
+            number[r] = count
+            count += 1
+    island_first[0] = 0
+    for k in range(count):
+        island_first[k + 1] += island_first[k]
+    filled = island_first[:count].copy()
+    for m in range(nc):
         a = ci[m, I_BODY_A]
-        b = ci[m, I_BODY_B]
-        if kind[a] == KIND_KINEMATIC or kind[b] == KIND_KINEMATIC:
-            continue
-        if closest[m] <= apart and -fast <= closing[m] <= leaving:
-            continue
-        isolated[count] = m
-        count += 1
-        role[a] = ROLE_EXACT if kind[a] == KIND_DYNAMIC else role[a]
-        role[b] = ROLE_EXACT if kind[b] == KIND_DYNAMIC else role[b]
+        owner = a if kind[a] == KIND_DYNAMIC else ci[m, I_BODY_B]
+        k = number[parent[owner]]
+        if k >= 0:
+            isolated[filled[k]] = m
+            filled[k] += 1
+    for i in range(n):
+        if kind[i] == KIND_DYNAMIC and role[i] != ROLE_ASLEEP and number[parent[i]] >= 0:
+            role[i] = ROLE_EXACT
+            island_of[i] = number[parent[i]]
     return count
 
 
