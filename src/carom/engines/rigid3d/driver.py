@@ -29,12 +29,6 @@ __all__ = ["RigidEngine3D"]
 
 FloatArray = NDArray[np.float64]
 
-#: a touching pair whose every point separates faster than this fraction of the restitution
-#: threshold has just bounced: it flies apart on the exact path (free flight keeps its angular
-#: momentum exactly), not through the solver. Resting contacts never separate that fast.
-LEAVING = 0.1
-
-
 _WARM = False
 
 
@@ -97,7 +91,6 @@ class RigidEngine3D(SteppedEngine):
     ROWS = contacts
     IMPACTS = impacts
     SPIN = "w"
-    LEAVING = LEAVING
 
     model: Model3D
     state: State3D

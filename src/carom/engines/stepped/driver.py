@@ -111,8 +111,11 @@ class SteppedEngine:
     IMPACTS: Any
     SPIN: str
     #: a touching pair whose every point separates faster than this fraction of the
-    #: restitution threshold flies apart on the exact path (inf: never)
-    LEAVING: float = math.inf
+    #: restitution threshold has just bounced: it flies apart on the exact path (free flight
+    #: keeps its energy and angular momentum exactly), not through the solver, whose soft
+    #: contact would take energy from a bounce ended just before the step. Resting contacts
+    #: never separate that fast. (inf: never)
+    LEAVING: float = 0.1
 
     start: float
     steps: int
