@@ -114,6 +114,22 @@ def test_a_file_in_the_way_of_the_cache_is_never_overwritten(tmp_path: Path) -> 
     assert body.mass_properties(mass=1.0).inertia[0, 0] == pytest.approx(1 / 6, rel=1e-12)
 
 
+def test_a_piece_too_thin_to_be_a_solid_is_refused_and_nothing_is_kept(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # CoACD may cut a sliver into a piece with no volume (issue 45's corpus: "surface is
+    # open", and the pieces file left beside the mesh); here it is made to return a flat one
+    import carom.meshes
+
+    path = tmp_path / "box.obj"
+    trimesh.creation.box(extents=[1.0, 1.0, 1.0]).export(path)
+    flat = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]])
+    monkeypatch.setattr(carom.meshes, "_run_coacd", lambda *args: [flat])
+    with pytest.raises(CaromError, match=r"box\.obj: CoACD cut piece 0 of 1 too thin"):
+        decompose(path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["box.obj"]
+
+
 @pytest.mark.parametrize(
     ("build", "message"),
     [

@@ -10,6 +10,8 @@ one row per body. :func:`shaped_bodies` places rigid bodies of one shape, in 2D 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import NamedTuple
 
 import numpy as np
@@ -294,7 +296,8 @@ def shaped_bodies(
         turn = per_value("angle", angles, n, "rad")
         spin = per_value("angular_velocity", spins, n, "rad/s")
         pieces3d: tuple[ConvexPiece3D, ...] = ()
-        centroid = shape.centroid
+        with _in_float64(shape):
+            centroid = shape.centroid
     else:
         assert isinstance(shape, Shape3D)
         turn = quaternions(orientations, n)
@@ -313,7 +316,8 @@ def shaped_bodies(
             centroid = np.zeros(3)
         else:
             pieces3d = shape.pieces()
-            centroid = shape.centroid
+            with _in_float64(shape):
+                centroid = shape.centroid
     if code == KIND_DYNAMIC:
         body_mass, inertia, centroid = _mass_of(shape, density, mass)
     else:
@@ -352,6 +356,22 @@ def _check_extent(shape: Shape2D | Shape3D, pieces: Pieces) -> None:
         )
 
 
+@contextmanager
+def _in_float64(shape: Shape2D | Shape3D) -> Iterator[None]:
+    """Compute a shape's area or volume moments with float64's overflow and division by zero
+    refused: a shape large enough that its moments (up to the size's fourth or fifth power)
+    overflow is refused with what to do, not run on infinities."""
+    try:
+        with np.errstate(over="raise", under="ignore", invalid="raise", divide="raise"):
+            yield
+    except (OverflowError, ZeroDivisionError, FloatingPointError, np.linalg.LinAlgError):
+        raise CaromError(
+            f"the {shape.kind}'s mass and inertia overflow float64 at this size (its moments "
+            f"grow as the size to the fourth power); scale the shape (carom takes magnitudes "
+            f"up to {LARGEST:g} in SI units, docs/scenes.md, Limits)"
+        ) from None
+
+
 def _mass_of(
     shape: Shape2D | Shape3D, density: float | None, mass: float | None
 ) -> tuple[float, FloatArray | float, FloatArray]:
@@ -360,14 +380,8 @@ def _mass_of(
     small or too large for its mass: its integrals underflow or overflow in float64)."""
     given = 1.0 if density is None and mass is None else density
     what = f"the {shape.kind}"
-    try:
-        with np.errstate(over="raise", under="ignore", invalid="raise", divide="raise"):
-            props = shape.mass_properties(given, mass=mass)
-    except (OverflowError, ZeroDivisionError, FloatingPointError, np.linalg.LinAlgError):
-        raise CaromError(
-            f"{what}'s mass and inertia overflow float64 at this size; scale the shape "
-            f"(carom takes magnitudes up to {LARGEST:g} in SI units, docs/scenes.md, Limits)"
-        ) from None
+    with _in_float64(shape):
+        props = shape.mass_properties(given, mass=mass)
     body_mass = float(props.mass)
     if not SMALLEST <= body_mass <= LARGEST:
         raise CaromError(

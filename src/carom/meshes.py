@@ -262,12 +262,24 @@ def decompose(
         pieces = _read_cache(kept, key)
         if pieces is not None:
             break
-    if pieces is None:
-        pieces = _run_coacd(vertices, triangles, threshold, seed)
-        for kept in places:  # beside the file if its folder can be written, else the user's
-            if _write_cache(kept, key, pieces):
-                break
-    return Compound([Hull(points) for points in pieces], solid=solid)
+    if pieces is not None:
+        return Compound([Hull(points) for points in pieces], solid=solid)
+    pieces = _run_coacd(vertices, triangles, threshold, seed)
+    # the pieces are made (and so checked) before anything is kept beside the mesh
+    hulls = []
+    for k, points in enumerate(pieces):
+        try:
+            hulls.append(Hull(points))
+        except (CaromError, ValueError) as error:
+            raise CaromError(
+                f"{name}: CoACD cut piece {k} of {len(pieces)} too thin to be a solid "
+                f"({error}); try another threshold or seed, or pass the mesh as one Hull if "
+                "it is convex"
+            ) from None
+    for kept in places:  # beside the file if its folder can be written, else the user's
+        if _write_cache(kept, key, pieces):
+            break
+    return Compound(hulls, solid=solid)
 
 
 def _run_coacd(

@@ -123,6 +123,15 @@ def _rigid_3d(old: str, new: str) -> str:
 
 
 SCENES += [
+    # issue 45: a box within the limits whose inertia overflows float64 (once a warning, a run
+    # that never fell and null energies)
+    (
+        "box-1e99-in-limits",
+        _rigid_3d("size = [0.2, 0.2, 0.2]", "size = [1e99, 1e99, 1e99]").replace(
+            "box = [2.0, 2.0, 2.0]", "box = [1e100, 1e100, 1e100]"
+        ),
+        r"the box's mass and inertia overflow float64 at this size",
+    ),
     # issue 45: a 3D piece in a 2D compound, a 3D body in a 2D lattice (once AssertionErrors)
     (
         "ball-in-2d-compound",
@@ -207,6 +216,25 @@ API: list[tuple[str, Callable[[], Any], str]] = [
         r"Polygon vertices\[1, 0\] = 1e\+300 exceeds 1e\+100 m",
     ),
     ("box-3d-1e300", lambda: _add_3d(carom.shapes3d.Box([1e300] * 3)), r"reaches 5e\+299 m"),
+    (
+        # within the limits, but its second moment of area (size^4) overflows: once a
+        # RuntimeWarning, and a run that wrote null energies
+        "polygon-1e99-in-limits",
+        lambda: _add_2d(carom.shapes.Polygon([[0, 0], [1e99, 0], [1e99, 1e99], [0, 1e99]])),
+        r"the polygon's mass and inertia overflow float64 at this size",
+    ),
+    (
+        "static-polygon-1e99-in-limits",
+        lambda: _add_2d(
+            carom.shapes.Polygon([[0, 0], [1e99, 0], [1e99, 1e99], [0, 1e99]]), kind="static"
+        ),
+        r"the polygon's mass and inertia overflow float64 at this size",
+    ),
+    (
+        "box-3d-1e99-in-limits",
+        lambda: _add_3d(carom.shapes3d.Box([1e99] * 3), mass=1.0),
+        r"the box's mass and inertia overflow float64 at this size",
+    ),
     ("box-3d-1e-99", lambda: _add_3d(carom.shapes3d.Box([1e-99] * 3)), r"weighs 1e-297 kg"),
     (
         "mass-1e-300",
