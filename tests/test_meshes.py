@@ -231,3 +231,47 @@ def test_a_mesh_file_in_an_encoding_trimesh_cannot_read_is_one_message(tmp_path:
     with pytest.raises(CaromError, match=r"bad\.stl: cannot read it as a mesh") as caught:
         load_mesh(file)
     assert "module" not in str(caught.value)
+
+
+def test_a_meshs_triangles_are_one_block_laid_out_as_triangle_pieces() -> None:
+    # issue 45: a static mesh's triangles are held as one block (two arrays), not an object a
+    # triangle (2e6 of them took 40 s to add and 86 s to build); the engine's arrays must be
+    # those of the triangles one by one (triangle_piece), and a saved block comes back whole
+    import carom
+    from carom.bodies import pieces_from_arrays, pieces_to_arrays
+    from carom.engines.rigid3d.model import build_model, triangle_piece
+    from carom.shapes3d import TrianglePieces
+
+    mesh = _torus(12, 8)
+    world = carom.World(3, [1.0, 1.0, 1.0])
+    i = world.add_body(mesh, [0.0, 0.0, 0.0], kind="static")
+    block = world.bodies.pieces[i]
+    assert isinstance(block, TrianglePieces)
+    corners = np.asarray(mesh.vertices)[np.asarray(mesh.triangles)]
+    np.testing.assert_array_equal(block.corners(), corners)
+
+    def model(pieces: object) -> object:
+        inf = np.array([np.inf])
+        return build_model(
+            [pieces], np.array([2]), inf, np.full((1, 3, 3), np.inf), np.zeros(1, np.int64),
+            np.ones((1, 1)), np.ones((1, 1)), np.zeros((1, 1)), np.zeros(3),
+        )  # fmt: skip
+
+    whole = model(block)
+    one_by_one = model([triangle_piece(c) for c in corners])
+    for name, value in whole._asdict().items():  # type: ignore[attr-defined]
+        other = getattr(one_by_one, name)
+        assert value.dtype == other.dtype, name
+        # normals: a row's norm summed in another order may differ in the last bit
+        np.testing.assert_allclose(value, other, rtol=4e-16, atol=0.0, err_msg=name)
+
+    box = Box([0.1, 0.2, 0.3]).pieces()
+    arrays = pieces_to_arrays([box, (), block, box], 3)
+    back = pieces_from_arrays(arrays, 4)
+    assert back[1] == ()
+    assert isinstance(back[2], TrianglePieces)
+    np.testing.assert_array_equal(back[2].corners(), corners)
+    for k in (0, 3):
+        assert len(back[k]) == 1
+        np.testing.assert_array_equal(back[k][0].vertices, box[0].vertices)
+        np.testing.assert_array_equal(back[k][0].triangles, box[0].triangles)

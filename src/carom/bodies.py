@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from carom.laws.kinds import BODY_KINDS, KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.shape_base import SHAPE_CODES
 from carom.shapes import ConvexPiece
-from carom.shapes3d import ConvexPiece3D
+from carom.shapes3d import ConvexPiece3D, TrianglePieces
 
 __all__ = [
     "BODY_KINDS",
@@ -41,8 +41,9 @@ FloatArray = NDArray[np.float64]
 #: the flat arrays that hold every body's pieces (checkpoints, trajectories)
 PIECE_ARRAYS = ("owner", "radius", "corners", "vertices", "faces", "triangles")
 
-#: a body's pieces: rounded convex polygons in 2D, rounded convex solids in 3D
-Pieces = tuple[ConvexPiece, ...] | tuple[ConvexPiece3D, ...]
+#: a body's pieces: rounded convex polygons in 2D, rounded convex solids in 3D (a static
+#: mesh's triangles as one block, :class:`carom.shapes3d.TrianglePieces`)
+Pieces = tuple[ConvexPiece, ...] | tuple[ConvexPiece3D, ...] | TrianglePieces
 
 #: every body's position, velocity, orientation and spin, as an engine samples them
 Motion = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
@@ -72,9 +73,16 @@ def pieces_to_arrays(pieces: list[Pieces], dim: int = 2) -> dict[str, NDArray[An
     int64 (0 in 2D); all ``vertices`` (V, dim) [m] in order, in the bodies' frames (spheres
     of the event-driven engine have none), and all ``triangles`` (T, 3) int64, each piece's
     counting from its own first corner."""
-    owner, radius, corners, faces = [], [], [], []
+    owner: list[int] = []
+    radius: list[float] = []
+    corners: list[int] = []
+    faces: list[int] = []
     vertices, triangles = [np.zeros((0, dim))], [np.zeros((0, 3), np.int64)]
+    blocks: list[tuple[int, int, TrianglePieces]] = []  # (body, where its rows go, block)
     for i, body in enumerate(pieces):
+        if isinstance(body, TrianglePieces):
+            blocks.append((i, len(owner), body))
+            continue
         for piece in body:
             owner.append(i)
             radius.append(piece.radius)
@@ -83,7 +91,7 @@ def pieces_to_arrays(pieces: list[Pieces], dim: int = 2) -> dict[str, NDArray[An
             own = piece.triangles if isinstance(piece, ConvexPiece3D) else triangles[0]
             faces.append(own.shape[0])
             triangles.append(np.asarray(own, np.int64).reshape(-1, 3))
-    return {
+    arrays = {
         "owner": np.array(owner, np.int64),
         "radius": np.array(radius, np.float64),
         "corners": np.array(corners, np.int64),
@@ -91,30 +99,68 @@ def pieces_to_arrays(pieces: list[Pieces], dim: int = 2) -> dict[str, NDArray[An
         "faces": np.array(faces, np.int64),
         "triangles": np.concatenate(triangles),
     }
+    return _with_blocks(arrays, blocks) if blocks else arrays
+
+
+def _with_blocks(
+    arrays: dict[str, NDArray[Any]], blocks: list[tuple[int, int, TrianglePieces]]
+) -> dict[str, NDArray[Any]]:
+    """:func:`pieces_to_arrays`' ``arrays`` with each mesh's triangles (a piece each: three
+    corners, one triangle) put in at their body's place, in whole arrays."""
+    piece_rows = np.cumsum(np.concatenate([[0], arrays["corners"]]))
+    face_rows = np.cumsum(np.concatenate([[0], arrays["faces"]]))
+    parts: dict[str, list[NDArray[Any]]] = {name: [] for name in arrays}
+    done = 0
+    for body, at, block in blocks:
+        for name in ("owner", "radius", "corners", "faces"):
+            parts[name].append(arrays[name][done:at])
+        parts["vertices"].append(arrays["vertices"][piece_rows[done] : piece_rows[at]])
+        parts["triangles"].append(arrays["triangles"][face_rows[done] : face_rows[at]])
+        t = len(block)
+        parts["owner"].append(np.full(t, body, np.int64))
+        parts["radius"].append(np.zeros(t))
+        parts["corners"].append(np.full(t, 3, np.int64))
+        parts["faces"].append(np.ones(t, np.int64))
+        parts["vertices"].append(block.corners().reshape(-1, 3))
+        parts["triangles"].append(np.tile(np.arange(3, dtype=np.int64), (t, 1)))
+        done = at
+    for name in ("owner", "radius", "corners", "faces"):
+        parts[name].append(arrays[name][done:])
+    parts["vertices"].append(arrays["vertices"][piece_rows[done] :])
+    parts["triangles"].append(arrays["triangles"][face_rows[done] :])
+    return {name: np.concatenate(chunks) for name, chunks in parts.items()}
 
 
 def pieces_from_arrays(arrays: Mapping[str, Any], n: int) -> list[Pieces]:
-    """The ``n`` bodies' pieces from the arrays :func:`pieces_to_arrays` wrote."""
+    """The ``n`` bodies' pieces from the arrays :func:`pieces_to_arrays` wrote (a mesh's
+    triangles, the only pieces of three corners, come back as one block)."""
     # (only the bodies that have pieces get a list: 10^6 spheres took 0.35 s of lists)
     bodies: dict[int, list[Any]] = {}
     vertices = np.asarray(arrays["vertices"], np.float64)
     three = vertices.ndim == 2 and vertices.shape[1] == 3 and "triangles" in arrays
     triangles = np.asarray(arrays["triangles"], np.int64) if three else None
-    row = 0
-    tri = 0
-    for k, (owner, radius, count) in enumerate(
-        zip(arrays["owner"], arrays["radius"], arrays["corners"], strict=True)
-    ):
+    owners = np.asarray(arrays["owner"], np.int64)
+    counts = np.asarray(arrays["corners"], np.int64)
+    result: list[Pieces] = [()] * n
+    flat = counts == 3 if three else np.zeros(counts.shape[0], np.bool_)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    if flat.any():
+        for owner in np.unique(owners[flat]).tolist():
+            rows = starts[flat & (owners == owner)]
+            corners = vertices[rows[:, None] + np.arange(3)].reshape(-1, 3)
+            result[owner] = TrianglePieces(corners, np.arange(corners.shape[0]).reshape(-1, 3))
+    faces = np.asarray(arrays["faces"], np.int64) if triangles is not None else counts * 0
+    firsts = np.concatenate([[0], np.cumsum(faces)[:-1]]).astype(np.int64)
+    radii = np.asarray(arrays["radius"], np.float64)
+    for k in np.flatnonzero(~flat).tolist():
+        row, count = int(starts[k]), int(counts[k])
         corners = vertices[row : row + count]
         if triangles is not None:
-            faces = int(arrays["faces"][k])
-            piece: Any = ConvexPiece3D(corners, triangles[tri : tri + faces], float(radius))
-            tri += faces
+            own = triangles[firsts[k] : firsts[k] + faces[k]]
+            piece: Any = ConvexPiece3D(corners, own, float(radii[k]))
         else:
-            piece = ConvexPiece(corners, float(radius))
-        bodies.setdefault(int(owner), []).append(piece)
-        row += int(count)
-    result: list[Pieces] = [()] * n
+            piece = ConvexPiece(corners, float(radii[k]))
+        bodies.setdefault(int(owners[k]), []).append(piece)
     for owner, body in bodies.items():
         result[owner] = tuple(body)
     return result
@@ -439,7 +485,10 @@ class Bodies:
         n = position.shape[0]
         start = self.n
         stored = self.inertia_tensor  # every tensor is stored from now on, the spheres' too
-        reach = max(piece.reach for piece in pieces) if pieces else 0.0
+        if isinstance(pieces, TrianglePieces):  # (a mesh: its triangles in one block)
+            reach = pieces.reach
+        else:
+            reach = max(piece.reach for piece in pieces) if pieces else 0.0
         tensor = np.zeros((n, 3, 3))
         if self.dim == 2:
             w = np.zeros((n, 3))

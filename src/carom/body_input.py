@@ -10,7 +10,7 @@ one row per body. :func:`shaped_bodies` places rigid bodies of one shape, in 2D 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import NamedTuple
 
@@ -32,7 +32,7 @@ from carom.limits import (
 from carom.meshes import Mesh
 from carom.shape_base import SHAPE_CODES
 from carom.shapes import Shape2D
-from carom.shapes3d import ConvexPiece3D, Plane, Shape3D, rotation_matrix
+from carom.shapes3d import ConvexPiece3D, Plane, Shape3D, TrianglePieces, rotation_matrix
 
 __all__ = [
     "ShapedBodies",
@@ -295,7 +295,7 @@ def shaped_bodies(
         assert isinstance(shape, Shape2D)
         turn = per_value("angle", angles, n, "rad")
         spin = per_value("angular_velocity", spins, n, "rad/s")
-        pieces3d: tuple[ConvexPiece3D, ...] = ()
+        pieces3d: Sequence[ConvexPiece3D] = ()
         with _in_float64(shape):
             centroid = shape.centroid
     else:
@@ -308,11 +308,7 @@ def shaped_bodies(
                     "a Mesh is a static surface; add it with kind='static', or cut a closed "
                     "mesh into convex pieces for a dynamic body: carom.meshes.decompose(path)"
                 )
-            corners = np.asarray(shape.vertices, float)
-            pieces3d = tuple(
-                ConvexPiece3D(corners[t], np.array([[0, 1, 2]]), 0.0)
-                for t in np.asarray(shape.triangles)
-            )
+            pieces3d = TrianglePieces(shape.vertices, shape.triangles)
             centroid = np.zeros(3)
         else:
             pieces3d = shape.pieces()
@@ -334,7 +330,12 @@ def shaped_bodies(
         name = shape.kind
     else:
         centre = origin + rotation_matrices(turn) @ centroid
-        moved = tuple(piece.moved(np.eye(3), -centroid) for piece in pieces3d)
+        # (a mesh's triangles stay one block: its frame is the world's, nothing to move)
+        moved = (
+            pieces3d
+            if isinstance(pieces3d, TrianglePieces)
+            else tuple(piece.moved(np.eye(3), -centroid) for piece in pieces3d)
+        )
         name = "ball" if shape.kind == "sphere" else shape.kind
     return ShapedBodies(
         centre, velocity, turn, spin, moved, SHAPE_CODES[name], body_mass, inertia, code

@@ -51,6 +51,7 @@ __all__ = [
     "Plane",
     "Shape3D",
     "Sphere",
+    "TrianglePieces",
     "rotation_matrix",
 ]
 
@@ -159,6 +160,48 @@ class ConvexPiece3D:
         return capsule_integrals(self.radius, length).moved(
             turn_z_onto(axis / length), 0.5 * (a + b)
         )
+
+
+class TrianglePieces(Sequence[ConvexPiece3D]):
+    """A static mesh's triangles as a body's pieces, held as two arrays, not one object a
+    triangle: a terrain of millions of triangles is added, built and saved in seconds
+    (issue 45). Each triangle reads as a flat :class:`ConvexPiece3D` (three corners, one
+    face, radius 0), made when it is asked for.
+
+    Parameters
+    ----------
+    vertices : (V, 3) float64
+        The corners [m], in the body's frame.
+    triangles : (T, 3) int64
+        Each triangle's corners, counter-clockwise seen from its front.
+    """
+
+    def __init__(self, vertices: ArrayLike, triangles: ArrayLike) -> None:
+        self.vertices: FloatArray = np.asarray(vertices, dtype=np.float64)
+        self.triangles: NDArray[np.int64] = np.asarray(triangles, dtype=np.int64)
+
+    def __len__(self) -> int:
+        return int(self.triangles.shape[0])
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        return ConvexPiece3D(self.vertices[self.triangles[i]], _ONE_FACE, 0.0)
+
+    @property
+    def reach(self) -> float:
+        """The farthest corner of any triangle from the frame's origin [m]."""
+        used = self.vertices[np.unique(self.triangles)]
+        return float(np.max(np.linalg.norm(used, axis=1))) if used.size else 0.0
+
+    def corners(self) -> FloatArray:
+        """Every triangle's corners, (T, 3, 3) [m]."""
+        corners: FloatArray = self.vertices[self.triangles]
+        return corners
+
+
+#: a flat piece's one face
+_ONE_FACE = np.array([[0, 1, 2]], np.int64)
 
 
 class Shape3D(ShapeBase[ConvexPiece3D, SolidIntegrals, MassProperties3D]):

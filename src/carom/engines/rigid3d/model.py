@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from carom.geometry.manifold3d import MAX_POINTS
 from carom.geometry.polyhedron import polyhedron_features, triangle_features
 from carom.laws.kinds import KIND_DYNAMIC
-from carom.shapes3d import ConvexPiece3D
+from carom.shapes3d import ConvexPiece3D, TrianglePieces
 
 __all__ = [
     "MANIFOLD_FLOATS",
@@ -249,59 +249,142 @@ class State3D(NamedTuple):
     manifold_count: IntArray
 
 
+#: a flat triangle's two faces (front, back) into its corners, and its three edges (two
+#: corners, the two faces that meet there), the same for every triangle
+_TRIANGLE_FIRST = np.array([0, 3], np.int64)
+_TRIANGLE_SIZE = np.array([3, 3], np.int64)
+_TRIANGLE_CORNERS = np.array([0, 1, 2, 0, 2, 1], np.int64)
+_TRIANGLE_EDGES = np.array([[0, 1, 0, 1], [1, 2, 0, 1], [0, 2, 0, 1]], np.int64)
+
+
+class _Layout:
+    """The flat arrays of :class:`Model3D` made piece by piece, or a mesh's triangles at
+    once: each column a list of chunks, joined at the end."""
+
+    #: per piece: its body, kind, radius, reach, and where its vertices, faces, corners and
+    #: edges start and how many it has
+    PER_PIECE = ("body", "kind", "radius", "reach", "vs", "vc", "fs", "fc", "cs", "cc", "es", "ec")
+    ROWS = ("vertices", "normals", "face_first", "face_size", "corners", "edges")
+
+    def __init__(self) -> None:
+        self.scalars: dict[str, list[float]] = {key: [] for key in self.PER_PIECE}
+        self.chunks: dict[str, list[NDArray[Any]]] = {key: [] for key in self.PER_PIECE}
+        self.rows: dict[str, list[NDArray[Any]]] = {
+            "vertices": [np.zeros((0, 3))],
+            "normals": [np.zeros((0, 3))],
+            "face_first": [_NO_INTS],
+            "face_size": [_NO_INTS],
+            "corners": [_NO_INTS],
+            "edges": [np.zeros((0, 4), np.int64)],
+        }
+        self.at = {"v": 0, "f": 0, "c": 0, "e": 0}
+        self.pieces = 0
+
+    def add(self, body: int, piece: Piece3D) -> float:
+        """One piece of ``body``; return its reach [m]."""
+        if piece.kind == PIECE_PLANE:
+            far = np.inf
+        else:
+            far = float(np.max(np.linalg.norm(piece.vertices, axis=1))) + piece.radius
+        at = self.at
+        values = (
+            body, piece.kind, piece.radius, far, at["v"], piece.vertices.shape[0], at["f"],
+            piece.normals.shape[0], at["c"], piece.corners.shape[0], at["e"],
+            piece.edges.shape[0],
+        )  # fmt: skip
+        for key, value in zip(self.PER_PIECE, values, strict=True):
+            self.scalars[key].append(value)
+        at["v"] += piece.vertices.shape[0]
+        at["f"] += piece.normals.shape[0]
+        at["c"] += piece.corners.shape[0]
+        at["e"] += piece.edges.shape[0]
+        rows = self.rows
+        rows["vertices"].append(np.asarray(piece.vertices, float))
+        rows["normals"].append(np.asarray(piece.normals, float))
+        rows["face_first"].append(np.asarray(piece.face_first, np.int64))
+        rows["face_size"].append(np.asarray(piece.face_size, np.int64))
+        rows["corners"].append(np.asarray(piece.corners, np.int64))
+        rows["edges"].append(np.asarray(piece.edges, np.int64).reshape(-1, 4))
+        self.pieces += 1
+        return far
+
+    def _flush(self) -> None:
+        """The pieces added one by one so far, as chunks."""
+        for key, values in self.scalars.items():
+            if values:
+                self.chunks[key].append(np.array(values, float))
+                values.clear()
+
+    def add_triangles(self, body: int, block: TrianglePieces) -> FloatArray:
+        """A mesh's triangles, each a flat polytope (as :func:`triangle_piece`), at once;
+        return their reaches [m] (T,)."""
+        self._flush()
+        v = block.corners()  # (T, 3, 3)
+        t = v.shape[0]
+        normal = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+        normal /= np.linalg.norm(normal, axis=1)[:, None]
+        far: FloatArray = np.max(np.linalg.norm(v.reshape(-1, 3), axis=1).reshape(t, 3), axis=1)
+        step = np.arange(t, dtype=float)
+        at = self.at
+        for key, value in (
+            ("body", np.full(t, float(body))), ("kind", np.full(t, float(PIECE_POLYTOPE))),
+            ("radius", np.zeros(t)), ("reach", far), ("vs", at["v"] + 3.0 * step),
+            ("vc", np.full(t, 3.0)), ("fs", at["f"] + 2.0 * step), ("fc", np.full(t, 2.0)),
+            ("cs", at["c"] + 6.0 * step), ("cc", np.full(t, 6.0)),
+            ("es", at["e"] + 3.0 * step), ("ec", np.full(t, 3.0)),
+        ):  # fmt: skip
+            self.chunks[key].append(value)
+        rows = self.rows
+        rows["vertices"].append(v.reshape(-1, 3).copy())
+        rows["normals"].append(np.stack([normal, -normal], axis=1).reshape(-1, 3))
+        rows["face_first"].append(np.tile(_TRIANGLE_FIRST, t))
+        rows["face_size"].append(np.tile(_TRIANGLE_SIZE, t))
+        rows["corners"].append(np.tile(_TRIANGLE_CORNERS, t))
+        rows["edges"].append(np.tile(_TRIANGLE_EDGES, (t, 1)))
+        at["v"] += 3 * t
+        at["f"] += 2 * t
+        at["c"] += 6 * t
+        at["e"] += 3 * t
+        self.pieces += t
+        return far
+
+    def columns(self) -> dict[str, NDArray[Any]]:
+        """Every column joined: the per-piece ones (float; the caller casts the counts) and
+        the rows."""
+        self._flush()
+        out: dict[str, NDArray[Any]] = {}
+        for key in self.PER_PIECE:
+            out[key] = np.concatenate(self.chunks[key]) if self.chunks[key] else np.zeros(0)
+        for key in self.ROWS:
+            out[key] = np.concatenate(self.rows[key])
+        return out
+
+
 def build_model(
-    pieces: Sequence[Sequence[Piece3D]], kind: IntArray, mass: FloatArray, inertia: FloatArray,
-    material: IntArray, e_table: FloatArray, mu_table: FloatArray, rolling_table: FloatArray,
-    gravity: FloatArray,
+    pieces: Sequence[Sequence[Piece3D] | TrianglePieces], kind: IntArray, mass: FloatArray,
+    inertia: FloatArray, material: IntArray, e_table: FloatArray, mu_table: FloatArray,
+    rolling_table: FloatArray, gravity: FloatArray,
 ) -> Model3D:  # fmt: skip
     """The Model of N bodies whose ``pieces`` are given in each body's frame (centred on its
-    centre of mass). Static and kinematic bodies must have infinite mass; ``inertia``
+    centre of mass); a static mesh's triangles as one block (:class:`TrianglePieces`), laid
+    out in whole arrays. Static and kinematic bodies must have infinite mass; ``inertia``
     (N, 3, 3) [kg m^2] is ignored for them."""
     n = len(pieces)
     kind = np.asarray(kind, np.int64)
     mass = np.asarray(mass, float)
     inertia = np.asarray(inertia, float).reshape(n, 3, 3)
     body_pieces = np.zeros(n + 1, np.int64)
-    columns: dict[str, list[float | int]] = {
-        name: []
-        for name in (
-            "body", "kind", "radius", "reach", "vs", "vc", "fs", "fc", "cs", "cc", "es", "ec",
-        )
-    }  # fmt: skip
-    verts: list[FloatArray] = [np.zeros((0, 3))]
-    norms: list[FloatArray] = [np.zeros((0, 3))]
-    firsts: list[IntArray] = [_NO_INTS]
-    counts: list[IntArray] = [_NO_INTS]
-    cors: list[IntArray] = [_NO_INTS]
-    edges: list[IntArray] = [np.zeros((0, 4), np.int64)]
-    rows = {"v": 0, "f": 0, "c": 0, "e": 0}
+    layout = _Layout()
     reach = np.zeros(n)
     for i, body in enumerate(pieces):
-        for piece in body:
-            if piece.kind == PIECE_PLANE:
-                far = np.inf
-            else:
-                far = float(np.max(np.linalg.norm(piece.vertices, axis=1))) + piece.radius
-            reach[i] = max(reach[i], far)
-            for key, value in (
-                ("body", i), ("kind", piece.kind), ("radius", piece.radius), ("reach", far),
-                ("vs", rows["v"]), ("vc", piece.vertices.shape[0]),
-                ("fs", rows["f"]), ("fc", piece.normals.shape[0]),
-                ("cs", rows["c"]), ("cc", piece.corners.shape[0]),
-                ("es", rows["e"]), ("ec", piece.edges.shape[0]),
-            ):  # fmt: skip
-                columns[key].append(value)
-            rows["v"] += piece.vertices.shape[0]
-            rows["f"] += piece.normals.shape[0]
-            rows["c"] += piece.corners.shape[0]
-            rows["e"] += piece.edges.shape[0]
-            verts.append(np.asarray(piece.vertices, float))
-            norms.append(np.asarray(piece.normals, float))
-            firsts.append(np.asarray(piece.face_first, np.int64))
-            counts.append(np.asarray(piece.face_size, np.int64))
-            cors.append(np.asarray(piece.corners, np.int64))
-            edges.append(np.asarray(piece.edges, np.int64).reshape(-1, 4))
-        body_pieces[i + 1] = len(columns["body"])
+        if isinstance(body, TrianglePieces):
+            far = layout.add_triangles(i, body)
+            reach[i] = float(np.max(far)) if far.size else 0.0
+        else:
+            for piece in body:
+                reach[i] = max(reach[i], layout.add(i, piece))
+        body_pieces[i + 1] = layout.pieces
+    columns = layout.columns()
     dynamic = kind == KIND_DYNAMIC
     inv_mass = np.zeros(n)
     inv_mass[dynamic] = 1.0 / mass[dynamic]
@@ -313,7 +396,7 @@ def build_model(
     inertia = np.where(dynamic[:, None, None], inertia, np.inf)
 
     def ints(key: str) -> IntArray:
-        return np.array(columns[key], np.int64)
+        return columns[key].astype(np.int64)
 
     return Model3D(
         kind=kind,
@@ -327,8 +410,8 @@ def build_model(
         body_pieces=body_pieces,
         piece_body=ints("body"),
         piece_kind=ints("kind"),
-        piece_radius=np.array(columns["radius"], float),
-        piece_reach=np.array(columns["reach"], float),
+        piece_radius=columns["radius"].astype(float),
+        piece_reach=columns["reach"].astype(float),
         piece_vstart=ints("vs"),
         piece_vcount=ints("vc"),
         piece_fstart=ints("fs"),
@@ -337,12 +420,12 @@ def build_model(
         piece_ccount=ints("cc"),
         piece_estart=ints("es"),
         piece_ecount=ints("ec"),
-        local_vertices=np.concatenate(verts),
-        local_normals=np.concatenate(norms),
-        face_first=np.concatenate(firsts),
-        face_size=np.concatenate(counts),
-        corners=np.concatenate(cors),
-        edges=np.concatenate(edges),
+        local_vertices=columns["vertices"],
+        local_normals=columns["normals"],
+        face_first=columns["face_first"].astype(np.int64),
+        face_size=columns["face_size"].astype(np.int64),
+        corners=columns["corners"].astype(np.int64),
+        edges=columns["edges"].astype(np.int64).reshape(-1, 4),
         e_table=np.asarray(e_table, float),
         mu_table=np.asarray(mu_table, float),
         rolling_table=np.asarray(rolling_table, float),
@@ -380,9 +463,12 @@ def empty_manifolds(rows: int) -> dict[str, NDArray[Any]]:
     }
 
 
-def engine_pieces(pieces: Sequence[ConvexPiece3D], radius: float) -> list[Piece3D]:
+def engine_pieces(pieces: Sequence[ConvexPiece3D], radius: float) -> list[Piece3D] | TrianglePieces:
     """A body's pieces as the engine stores them: a mesh triangle (three corners) as a flat
-    polytope, the others by :func:`.model.piece_of`; no pieces is a ball of ``radius``."""
+    polytope, the others by :func:`.model.piece_of`; no pieces is a ball of ``radius``; a
+    mesh's triangles held as one block stay one (:func:`build_model` lays them out)."""
+    if isinstance(pieces, TrianglePieces):
+        return pieces
     if not pieces:
         return [piece_of(ConvexPiece3D(np.zeros((1, 3)), np.zeros((0, 3), np.int64), radius),
                          np.zeros(3))]  # fmt: skip
