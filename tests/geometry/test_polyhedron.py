@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from carom.geometry.polyhedron import polyhedron_features
+from carom.geometry.polyhedron import PolyhedronFeatures, polyhedron_features
 from carom.shapes3d import Box, Hull
 
 pytest.importorskip("scipy")
@@ -33,18 +33,21 @@ def test_faces_of_random_hulls_are_planar_counterclockwise_and_close_a_sphere(
     # round-off of the hull's size) and turning counter-clockwise about its outward normal
     rng = np.random.default_rng(seed)
     hull = Hull(rng.normal(size=(count, 3)))
-    f = polyhedron_features(hull.vertices, hull.triangles)
-    assert hull.vertices.shape[0] - f.edges.shape[0] + f.normals.shape[0] == 2
-    size = float(np.max(np.abs(hull.vertices)))
+    _check_features(hull.vertices, polyhedron_features(hull.vertices, hull.triangles))
+
+
+def _check_features(vertices: np.ndarray, f: PolyhedronFeatures) -> None:
+    """Euler's V - E + F = 2; each face's corners on its plane and turning counter-clockwise
+    about its outward normal; each edge a side of the two faces it joins."""
+    assert vertices.shape[0] - f.edges.shape[0] + f.normals.shape[0] == 2
+    size = float(np.max(np.abs(vertices)))
     for face in range(f.normals.shape[0]):
-        ring = hull.vertices[
-            f.corners[f.face_start[face] : f.face_start[face] + f.face_count[face]]
-        ]
+        ring = vertices[f.corners[f.face_start[face] : f.face_start[face] + f.face_count[face]]]
         assert np.max(np.abs(ring @ f.normals[face] - f.offsets[face])) <= 1e-9 * size
         turn = np.cross(np.roll(ring, -1, axis=0) - ring, np.roll(ring, -2, axis=0) - ring)
         assert np.all(turn @ f.normals[face] > 0.0)
         # outward: every corner of the hull on or below the face's plane
-        assert np.all(hull.vertices @ f.normals[face] <= f.offsets[face] + 1e-9 * size)
+        assert np.all(vertices @ f.normals[face] <= f.offsets[face] + 1e-9 * size)
     # each edge joins two different faces, and it is a side of each (consecutive corners)
     for a, b, f0, f1 in f.edges.tolist():
         assert f0 != f1
@@ -52,6 +55,21 @@ def test_faces_of_random_hulls_are_planar_counterclockwise_and_close_a_sphere(
             ring = f.corners[f.face_start[face] : f.face_start[face] + f.face_count[face]]
             sides = {frozenset(pair) for pair in zip(ring, np.roll(ring, -1), strict=True)}
             assert frozenset((a, b)) in sides
+
+
+def test_faces_of_one_triangle_and_merged_faces_together() -> None:
+    # a box's corners under a cap of points on a sphere: the box's bottom stays one face of
+    # two triangles (the merged path), the cap's faces are one triangle each (laid out in
+    # bulk); together they must be what each gives alone: a closed, outward polyhedron
+    rng = np.random.default_rng(7)
+    box = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    cap = rng.normal(size=(300, 3))
+    cap /= np.linalg.norm(cap, axis=1)[:, None]
+    hull = Hull(np.concatenate([box, 1.6 * cap[cap[:, 2] > 0.3]]))
+    f = polyhedron_features(hull.vertices, hull.triangles)
+    assert np.any(f.face_count > 3)
+    assert np.any(f.face_count == 3)
+    _check_features(hull.vertices, f)
 
 
 def test_a_face_ring_starts_at_its_lowest_corner_however_the_corners_are_numbered() -> None:

@@ -78,12 +78,49 @@ def polyhedron_features(vertices: FloatArray, triangles: IntArray) -> Polyhedron
     plane_tol = 1e-9 * max(size, 1e-300)
     face_of = _coplanar_groups(tri, normals, plane, plane_tol)
     count = int(face_of.max()) + 1 if tri.shape[0] else 0
-    # each face's normal and plane, averaged over its triangles (weighted by area)
+    nv = max(int(v.shape[0]), 1)
+    # a face of one triangle (most of a hull of points on a sphere) is that triangle, already
+    # counter-clockwise about its normal; faces of several go through the general path; both
+    # give what the general path alone gives, bit for bit
+    size_of = np.bincount(face_of, minlength=count)
+    alone = size_of[face_of] == 1  # (T,): the triangle is a face by itself
+    one = np.flatnonzero(size_of == 1)  # those faces, in order
+    many = np.flatnonzero(size_of > 1)
+    corner_count = np.full(count, 3, np.int64)
+    n = np.zeros((count, 3))
+    offsets = np.zeros(count)
+    rings = _triangle_faces(v, tri[alone], normals[alone], area2[alone])
+    n[one], offsets[one] = rings[3], rings[4]
+    if many.size:
+        compact = np.cumsum(size_of > 1) - 1  # a merged face's number among them
+        merged = _merged_faces(
+            v, tri[~alone], normals[~alone], area2[~alone], compact[face_of[~alone]], many.size
+        )
+        corner_count[many] = merged[1]
+        n[many], offsets[many] = merged[3], merged[4]
+    start = np.concatenate([[0], np.cumsum(corner_count)[:-1]]).astype(np.int64)
+    corners = np.empty(int(corner_count.sum()), np.int64)
+    corners[(start[one][:, None] + np.arange(3)).ravel()] = rings[2]
+    if many.size:
+        first, sizes, ring = merged[0], merged[1], merged[2]
+        at = np.repeat(start[many] - first, sizes) + np.arange(ring.size)
+        corners[at] = ring
+    face = np.repeat(np.arange(count), corner_count)
+    return _with_edges(n, offsets, start, corner_count, corners, face, nv)
+
+
+def _merged_faces(
+    v: FloatArray, tri: IntArray, normals: FloatArray, area2: FloatArray, face_of: IntArray,
+    count: int,
+) -> tuple[IntArray, IntArray, IntArray, FloatArray, FloatArray]:  # fmt: skip
+    """Faces of several triangles (``face_of`` each triangle's, ``count`` faces): their ring
+    starts, sizes, rings (counter-clockwise about the normal from the lowest-numbered
+    corner), normals (averaged over the triangles, weighted by area) and plane offsets."""
+    nv = max(int(v.shape[0]), 1)
     n = np.zeros((count, 3))
     np.add.at(n, face_of, normals * area2[:, None])
     n /= np.sqrt(_dot(n, n))[:, None]
     # each face's corners: the distinct vertices of its triangles, face by face
-    nv = max(int(v.shape[0]), 1)
     key = np.sort(np.repeat(face_of, 3) * nv + tri.ravel())
     key = key[np.concatenate([[True], key[1:] != key[:-1]])]
     face, ids = key // nv, key % nv
@@ -102,13 +139,40 @@ def polyhedron_features(vertices: FloatArray, triangles: IntArray) -> Polyhedron
     angle = np.mod(np.arctan2(_dot(rel, w[face]), _dot(rel, u[face])), 2.0 * np.pi)
     angle[start] = 0.0
     corners = ids[np.lexsort((angle, face))]
-    # the edges: each side of a face's ring, which must be shared by exactly two faces
+    return start, corner_count, corners, n, offsets
+
+
+def _triangle_faces(
+    v: FloatArray, tri: IntArray, normals: FloatArray, area2: FloatArray
+) -> tuple[IntArray, IntArray, IntArray, FloatArray, FloatArray]:
+    """Faces that are one triangle each: their ring starts, sizes (3), rings from the
+    lowest-numbered corner, normals and plane offsets, computed as :func:`_merged_faces`
+    computes them (the same bits)."""
+    t = tri.shape[0]
+    n = normals * area2[:, None]
+    n /= np.sqrt(_dot(n, n))[:, None]
+    ordered = np.sort(tri, axis=1).ravel()  # (the general path sums a face's corners by number)
+    start = 3 * np.arange(t, dtype=np.int64)
+    count = np.full(t, 3, np.int64)
+    offsets = np.add.reduceat(_dot(v[ordered], np.repeat(n, 3, axis=0)), start) / count
+    first = np.argmin(tri, axis=1)
+    ring = tri[np.arange(t)[:, None], (first[:, None] + np.arange(3)) % 3]
+    return start, count, ring.ravel(), n, offsets
+
+
+def _with_edges(
+    n: FloatArray, offsets: FloatArray, start: IntArray, corner_count: IntArray,
+    corners: IntArray, face: IntArray, nv: int,
+) -> PolyhedronFeatures:  # fmt: skip
+    """The features with their edges: each side of a face's ring (``corners``, each one's
+    ``face``), which must be shared by exactly two faces."""
     following = np.arange(corners.size) + 1
     last = start + corner_count - 1
     following[last] = start
     a, b = corners, corners[following]
     low, high = np.minimum(a, b), np.maximum(a, b)
-    order = np.lexsort((face, high, low))
+    # by (low, high), then face: one key, sorted stably (the sides come in face order)
+    order = np.argsort(low * nv + high, kind="stable")
     low, high, side_face = low[order], high[order], face[order]
     first = np.flatnonzero(
         np.concatenate([[True], (low[1:] != low[:-1]) | (high[1:] != high[:-1])])
@@ -139,7 +203,9 @@ def _coplanar_groups(
     b = tri[:, [1, 2, 0]].ravel()
     owner = np.repeat(np.arange(t), 3)
     low, high = np.minimum(a, b), np.maximum(a, b)
-    order = np.lexsort((owner, high, low))
+    # by (low, high), then owner: one key, sorted stably (the edges come in owner order)
+    nv = int(tri.max()) + 1 if t else 1
+    order = np.argsort(low * nv + high, kind="stable")
     low, high, owner = low[order], high[order], owner[order]
     same = (low[1:] == low[:-1]) & (high[1:] == high[:-1])
     i, j = owner[:-1][same], owner[1:][same]
