@@ -51,12 +51,14 @@ from carom.engines.stepped.impacts import (
     island_candidates,
     logged_row,
     look_around,
+    near_keys,
     search,
+    started_sunk,
+    statics_in,
     take_isolated,
     watched,
 )
-from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
-from carom.geometry.bvh import overlap, query_bvh
+from carom.engines.stepped.rows import I_BODY_A, I_BODY_B
 from carom.geometry.manifold2d import collide, core_witness
 
 __all__ = ["IMPACT_FIELDS", "continuous", "exact_impacts"]
@@ -646,14 +648,8 @@ def continuous(
     puts the body back where it was as deep as at the start. Returns how many bodies were put
     back."""
     tree, open_statics, _ = reach
-    node_box, left, first, count, order, items = tree
     n_pieces = piece_body.shape[0]
-    keys = np.full(nc, -1, np.int64)  # the near contacts' piece pairs, sorted
-    for m in range(nc):
-        if closest[m] <= speculative:
-            keys[m] = ci[m, I_PIECE_A] * n_pieces + ci[m, I_PIECE_B]
-        elif m > 0:
-            keys[m] = keys[m - 1]  # (kept sorted; a far contact is looked at)
+    keys = near_keys(ci, nc, closest, speculative, n_pieces)
     still = np.zeros((x.shape[0], 2))
     out = np.empty(8)
     ids = np.empty(2, np.int64)
@@ -683,20 +679,12 @@ def continuous(
                 p, vertices, piece_start, piece_count, piece_radius, piece_reach, v[b, 0],
                 v[b, 1], omega[b], 0.0, 0.0, dt, False, 0.0, box,
             )  # fmt: skip
-            total = query_bvh(node_box, left, first, count, order, items, box, found)
-            if total > found.shape[0]:
-                found = np.empty(total, np.int64)
-                total = query_bvh(node_box, left, first, count, order, items, box, found)
-            for j in range(total + open_statics.shape[0]):
-                q = found[j] if j < total else open_statics[j - total]
-                if j >= total and not overlap(items, q, box):
-                    continue
-                key = min(p, q) * n_pieces + max(p, q)
-                at = np.searchsorted(keys, key)
+            found, total = statics_in(box, tree, open_statics, found)
+            for j in range(total):
+                q = found[j]
                 # a contact near at the start is the solver's: only sinking into it by
                 # more than the slop (linear_slop) beyond where it began is a touch
-                near = at < nc and keys[at] == key
-                depth = max(0.0, -closest[at]) if near else 0.0
+                near, depth = started_sunk(keys, closest, p, q, n_pieces)
                 for allow in (depth + slop, depth):
                     # (sunk past the slop: put back where it was as deep as at the start)
                     t = time_of_impact(

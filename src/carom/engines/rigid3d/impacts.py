@@ -54,12 +54,14 @@ from carom.engines.stepped.impacts import (
     island_candidates,
     logged_row,
     look_around,
+    near_keys,
     search,
+    started_sunk,
+    statics_in,
     take_isolated,
     watched,
 )
-from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
-from carom.geometry.bvh import overlap, query_bvh
+from carom.engines.stepped.rows import I_BODY_A, I_BODY_B
 from carom.geometry.manifold3d import MAX_POINTS, OUT_SIZE, closest_hulls
 from carom.laws.rigid_impact import collision_matrix, point_impulse
 
@@ -731,15 +733,9 @@ def continuous(
     is not swept); at the first touch it is put back there, its velocity kept. Returns how
     many bodies were put back."""
     tree, open_statics, _ = reach
-    node_box, left, first, count, order, items = tree
     piece_body, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount = model_ints[:6]
     n_pieces = piece_body.shape[0]
-    keys = np.full(nc, -1, np.int64)  # the near contacts' piece pairs, sorted
-    for m in range(nc):
-        if closest[m] <= speculative:
-            keys[m] = ci[m, I_PIECE_A] * n_pieces + ci[m, I_PIECE_B]
-        elif m > 0:
-            keys[m] = keys[m - 1]  # (kept sorted; a far contact is looked at)
+    keys = near_keys(ci, nc, closest, speculative, n_pieces)
     still = np.zeros((x.shape[0], 3))
     out = np.empty(OUT_SIZE)
     ids = np.empty(MAX_POINTS, np.int64)
@@ -768,21 +764,13 @@ def continuous(
                 p, b, vertices, normals, piece_kind, piece_vstart, piece_vcount, piece_fstart,
                 piece_radius, piece_reach, v, w, dynamic, still[b], dt, 0.0, box,
             )  # fmt: skip
-            total = query_bvh(node_box, left, first, count, order, items, box, found)
-            if total > found.shape[0]:
-                found = np.empty(total, np.int64)
-                total = query_bvh(node_box, left, first, count, order, items, box, found)
-            for j in range(total + open_statics.shape[0]):
-                other = found[j] if j < total else open_statics[j - total]
-                if j >= total and not overlap(items, other, box):
-                    continue
-                key = min(p, other) * n_pieces + max(p, other)
-                at = np.searchsorted(keys, key)
+            found, total = statics_in(box, tree, open_statics, found)
+            for j in range(total):
+                other = found[j]
                 # a contact near at the start is the solver's: only sinking into it by more
                 # than the slop beyond where it began is a touch, put back where it was as
                 # deep as at the start
-                near = at < nc and keys[at] == key
-                depth = max(0.0, -closest[at]) if near else 0.0
+                near, depth = started_sunk(keys, closest, p, other, n_pieces)
                 for allow in (depth + slop, depth):
                     t = _time_of_impact(
                         p, other, b, piece_body[other], dt, _tolerance(p, other, piece_reach),

@@ -49,7 +49,10 @@ __all__ = [
     "island_candidates",
     "logged_row",
     "look_around",
+    "near_keys",
     "search",
+    "started_sunk",
+    "statics_in",
     "take_isolated",
     "watched",
 ]
@@ -291,18 +294,9 @@ def look_around(
     for j in range(d):
         boxes[p, j] = min(boxes[p, j], box[j])
         boxes[p, d + j] = max(boxes[p, d + j], box[d + j])
-    node_box, left, first, count, order, items = tree
-    found = np.empty(64, np.int64)
-    while True:
-        total = query_bvh(node_box, left, first, count, order, items, box, found)
-        if total <= found.shape[0]:
-            break
-        found = np.empty(total, np.int64)
+    found, total = statics_in(box, tree, open_statics, np.empty(64, np.int64))
     for j in range(total):
         cp, n = add_candidate(cp, n, p, found[j])
-    for q in open_statics:
-        if overlap(boxes, q, box):
-            cp, n = add_candidate(cp, n, p, q)
     body = piece_body[p]
     for q in movers:
         other = piece_body[q]
@@ -332,3 +326,49 @@ def watched(
         if (qa == p or qb == p) and overlap(boxes, qb if qa == p else qa, box):
             return True
     return False
+
+
+@njit(cache=True)
+def near_keys(ci: np.ndarray, nc: int, closest: np.ndarray, near: float, pieces: int) -> np.ndarray:
+    """The piece pairs (``a * pieces + b``) of the ``nc`` contacts whose least separation at
+    the step's start ``closest`` is within ``near`` [m], sorted (a far contact repeats the
+    key before it, so that :func:`started_sunk` finds only the near ones)."""
+    keys = np.full(nc, -1, np.int64)
+    for m in range(nc):
+        if closest[m] <= near:
+            keys[m] = ci[m, I_PIECE_A] * pieces + ci[m, I_PIECE_B]
+        elif m > 0:
+            keys[m] = keys[m - 1]
+    return keys
+
+
+@njit(cache=True, inline="always")
+def started_sunk(
+    keys: np.ndarray, closest: np.ndarray, p: int, q: int, pieces: int
+) -> tuple[bool, float]:
+    """Whether pieces ``p`` and ``q`` were a near contact at the step's start
+    (:func:`near_keys`), and how deep they overlapped then [m] (0 if apart)."""
+    key = min(p, q) * pieces + max(p, q)
+    at = np.searchsorted(keys, key)
+    near = at < keys.shape[0] and keys[at] == key
+    return near, max(0.0, -closest[at]) if near else 0.0
+
+
+@njit(cache=True)
+def statics_in(
+    box: np.ndarray, tree: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+    np.ndarray], open_statics: np.ndarray, found: np.ndarray,
+) -> tuple[np.ndarray, int]:  # fmt: skip
+    """The static pieces whose boxes meet ``box`` (2 d,): through the static ``tree`` (node
+    boxes, left, first, count, order, its items' boxes), then the ``open_statics`` it does
+    not hold. Returns ``found`` (grown if need be) and how many it holds."""
+    node_box, left, first, count, order, items = tree
+    total = query_bvh(node_box, left, first, count, order, items, box, found)
+    if total + open_statics.shape[0] > found.shape[0]:
+        found = np.empty(total + open_statics.shape[0], np.int64)
+        total = query_bvh(node_box, left, first, count, order, items, box, found)
+    for q in open_statics:
+        if overlap(items, q, box):
+            found[total] = q
+            total += 1
+    return found, total
