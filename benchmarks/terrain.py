@@ -27,7 +27,7 @@ import time
 import numpy as np
 
 import carom
-from carom.meshes import Mesh
+from carom.meshes import Mesh, terrain_mesh
 from carom.shapes3d import Sphere
 
 #: the side of a terrain square (two triangles) [m]
@@ -36,16 +36,7 @@ SQUARE = 20.0 / 32.0
 
 def terrain(triangles: int) -> Mesh:
     """A heightfield of about ``triangles`` triangles, each square :data:`SQUARE` [m]."""
-    k = max(1, round(math.sqrt(triangles / 2)))
-    edge = np.arange(k + 1) * SQUARE
-    x, y = np.meshgrid(edge, edge, indexing="ij")
-    z = 1.0 + 0.2 * np.sin(x / 3.0) * np.cos(y / 4.0)
-    vertices = np.column_stack([x.ravel(), y.ravel(), z.ravel()])
-    i, j = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
-    a = (i * (k + 1) + j).ravel()
-    b, c, d = a + (k + 1), a + 1, a + (k + 1) + 1
-    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([c, b, d], 1)])
-    return Mesh(vertices, faces)
+    return terrain_mesh(max(1, round(math.sqrt(triangles / 2))), SQUARE)
 
 
 def world_on(mesh: Mesh) -> carom.World:

@@ -18,6 +18,7 @@ from carom.meshes import (
     decompose,
     load_mesh,
     save_obj,
+    terrain_mesh,
     torus_mesh,
 )
 from carom.shapes3d import Box
@@ -138,6 +139,7 @@ def test_a_piece_too_thin_to_be_a_solid_is_refused_and_nothing_is_kept(
         (lambda: Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 3]]), r"outside 0\.\.2"),
         (lambda: Mesh([[0, 0, 0], [1, 0, 0]], [[0, 1, 1]]), "V >= 3"),
         (lambda: load_mesh("/nonexistent/mug.obj"), "no such mesh file"),
+        (lambda: terrain_mesh(0, 1.0), "k >= 1 squares"),
         (lambda: decompose(Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])), "at least 4"),
     ],
 )

@@ -30,7 +30,16 @@ from carom.geometry.mass3d import SolidIntegrals, check_closed, polyhedron_integ
 from carom.limits import check_magnitude
 from carom.shapes3d import Compound, ConvexPiece3D, Hull, Shape3D
 
-__all__ = ["CACHE_SUFFIX", "Mesh", "bowl_mesh", "decompose", "load_mesh", "save_obj", "torus_mesh"]
+__all__ = [
+    "CACHE_SUFFIX",
+    "Mesh",
+    "bowl_mesh",
+    "decompose",
+    "load_mesh",
+    "save_obj",
+    "terrain_mesh",
+    "torus_mesh",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -327,6 +336,23 @@ def torus_mesh(major: float, minor: float, around: int = 24, across: int = 12) -
             d = i * across + (j + 1) % across
             triangles += [[a, b, c], [a, c, d]]
     return Mesh(vertices, np.array(triangles, np.int64))
+
+
+def terrain_mesh(k: int, square: float) -> Mesh:
+    """A square heightfield of ``k`` x ``k`` squares of side ``square`` [m], two triangles
+    each (2 k^2 in all, facing up), in gentle waves ``z = 1 + 0.2 sin(x / 3) cos(y / 4)``
+    [m] over ``0 <= x, y <= k square``: the same surface at the same place whatever ``k``.
+    Static only (it has no volume)."""
+    if k < 1 or not square > 0.0:
+        raise CaromError(f"a terrain needs k >= 1 squares of a positive side; got {k}, {square!r}")
+    edge = np.arange(k + 1) * square
+    x, y = np.meshgrid(edge, edge, indexing="ij")
+    z = 1.0 + 0.2 * np.sin(x / 3.0) * np.cos(y / 4.0)
+    vertices = np.column_stack([x.ravel(), y.ravel(), z.ravel()])
+    i, j = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
+    a = (i * (k + 1) + j).ravel()
+    b, c, d = a + (k + 1), a + 1, a + (k + 1) + 1
+    return Mesh(vertices, np.concatenate([np.stack([a, b, c], 1), np.stack([c, b, d], 1)]))
 
 
 def bowl_mesh(radius: float, around: int = 32, down: int = 8) -> Mesh:

@@ -5,32 +5,19 @@ benchmarks/terrain.py's and benchmarks/hulls.py's, RESULTS.md); counted.
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 import carom
-from carom.meshes import Mesh
+from carom.meshes import terrain_mesh
 from carom.shapes3d import Sphere, TrianglePieces
 
 SQUARE = 0.625  # a terrain square's side [m] (two triangles)
 
 
-def _terrain(k: int) -> Mesh:
-    """A k x k grid of squares, two triangles each, gently waved."""
-    edge = np.arange(k + 1) * SQUARE
-    x, y = np.meshgrid(edge, edge, indexing="ij")
-    z = 1.0 + 0.2 * np.sin(x / 3.0) * np.cos(y / 4.0)
-    vertices = np.column_stack([x.ravel(), y.ravel(), z.ravel()])
-    i, j = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
-    a = (i * (k + 1) + j).ravel()
-    b, c, d = a + (k + 1), a + 1, a + (k + 1) + 1
-    return Mesh(vertices, np.concatenate([np.stack([a, b, c], 1), np.stack([c, b, d], 1)]))
-
-
 def _pairs_per_step(k: int) -> list[int]:
     side = k * SQUARE
     world = carom.World(3, [side, side, 4.0], gravity=[0.0, 0.0, -9.81])
-    world.add_body(_terrain(k), [0.0, 0.0, 0.0], kind="static")
+    world.add_body(terrain_mesh(k, SQUARE), [0.0, 0.0, 0.0], kind="static")
     # the same place on every terrain (the waves are the same there), away from its edges
     world.add_body(Sphere(0.2), [2.6, 2.5, 1.6], velocity=[0.3, 0.2, 0.0], density=1000.0)
     assert isinstance(world.bodies.pieces[0], TrianglePieces)  # one block, not 2 k^2 objects

@@ -75,7 +75,7 @@ def start(scene: PeerScene) -> CaromSimulation:
 
 class CaromRigidSimulation:
     """carom's rigid-body engine stepping at the scene's rate (its settings as the scene
-    gives them; exact isolated impacts on)."""
+    gives them; impacts solved exactly on)."""
 
     def __init__(self, scene: RigidScene | RigidScene3D) -> None:
         world = scene.world()

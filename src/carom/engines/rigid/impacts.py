@@ -44,7 +44,6 @@ from carom.engines.rigid.motion import (
 from carom.engines.stepped.impacts import (
     advance,
     approaching,
-    contained,
     earliest,
     gather,
     impact_cap,
@@ -56,7 +55,6 @@ from carom.engines.stepped.impacts import (
     started_sunk,
     statics_in,
     take_isolated,
-    watched,
 )
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B
 from carom.geometry.manifold2d import collide, core_witness
@@ -517,7 +515,7 @@ def exact_impacts(
             for body in (a, b):
                 if not stopped and island_of[body] >= 0:
                     cp, n, stopped = _reach(
-                        body, k, now, dt, cp, n, islands, pairs, boxes, reach, watch,
+                        body, k, now, dt, cp, n, island_of, pairs, boxes, reach, watch,
                         watch_first, body_pieces, piece_body, x, angle, v, omega, accel,
                         piece_start, piece_count, piece_radius, piece_reach, local_vertices,
                         local_normals, vertices, normals, margin,
@@ -586,7 +584,7 @@ def _next_impact(
 @njit(cache=True)
 def _reach(
     body: int, k: int, now: float, dt: float, cp: np.ndarray, n: int,
-    islands: tuple[np.ndarray, np.ndarray, int, np.ndarray], pairs: np.ndarray,
+    island_of: np.ndarray, pairs: np.ndarray,
     boxes: np.ndarray, reach: tuple[
         tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
         np.ndarray, np.ndarray,
@@ -601,8 +599,6 @@ def _reach(
     in, the statics there join the candidates ``cp[:n]``
     (:func:`carom.engines.stepped.impacts.look_around`). Returns the candidates, their
     count, and whether the island must stop (a body moving otherwise in reach)."""
-    tree, open_statics, movers = reach
-    island_of = islands[3]
     box = np.empty(4)
     for p in range(body_pieces[body], body_pieces[body + 1]):
         place_piece(
@@ -614,13 +610,10 @@ def _reach(
             v[body, 1], omega[body], accel[body, 0], accel[body, 1], dt - now, True, margin,
             box,
         )  # fmt: skip
-        if not contained(box, boxes, p):
-            cp, n, stop = look_around(
-                p, k, box, boxes, island_of, piece_body, tree, open_statics, movers, cp, n
-            )
-            if stop:
-                return cp, n, True
-        if watched(p, k, box, boxes, pairs, watch, watch_first):
+        cp, n, stop = look_around(
+            p, k, box, boxes, island_of, piece_body, reach, (pairs, watch, watch_first), cp, n
+        )
+        if stop:
             return cp, n, True
     return cp, n, False
 
@@ -649,8 +642,9 @@ def continuous(
     back."""
     tree, open_statics, _ = reach
     n_pieces = piece_body.shape[0]
-    keys = near_keys(ci, nc, closest, speculative, n_pieces)
-    still = np.zeros((x.shape[0], 2))
+    # (made at the first body that moved far: most steps have none)
+    keys = np.empty(0, np.int64)
+    still = np.zeros((0, 2))
     out = np.empty(8)
     ids = np.empty(2, np.int64)
     box = np.empty(4)
@@ -663,6 +657,9 @@ def continuous(
         turn = angle[b] - angle0[b]
         if math.sqrt(dx * dx + dy * dy) + abs(turn) * body_reach[b] <= speculative:
             continue
+        if still.shape[0] == 0:
+            keys = near_keys(ci, nc, closest, speculative, n_pieces)
+            still = np.zeros((x.shape[0], 2))
         # the step's motion as a straight sweep from the start: a free flight at the mean
         # velocity, no acceleration
         end_x, end_y, end_angle = x[b, 0], x[b, 1], angle[b]

@@ -47,7 +47,6 @@ from carom.engines.rigid3d.motion import (
 from carom.engines.stepped.impacts import (
     advance,
     approaching,
-    contained,
     earliest,
     gather,
     impact_cap,
@@ -59,7 +58,6 @@ from carom.engines.stepped.impacts import (
     started_sunk,
     statics_in,
     take_isolated,
-    watched,
 )
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B
 from carom.geometry.manifold3d import MAX_POINTS, OUT_SIZE, closest_hulls
@@ -647,7 +645,6 @@ def _reach(
     statics there join the candidates ``cp[:n]``
     (:func:`carom.engines.stepped.impacts.look_around`). Returns the candidates, their
     count, and whether the island must stop (a body moving otherwise in reach)."""
-    tree, open_statics, movers = reach
     piece_body, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount = model_ints[:6]
     box = np.empty(6)
     for p in range(body_pieces[body], body_pieces[body + 1]):
@@ -659,13 +656,10 @@ def _reach(
             p, body, vertices, normals, piece_kind, piece_vstart, piece_vcount, piece_fstart,
             piece_radius, piece_reach, v, w, dynamic, accel[body], dt - now, margin, box,
         )  # fmt: skip
-        if not contained(box, boxes, p):
-            cp, n, stop = look_around(
-                p, k, box, boxes, island_of, piece_body, tree, open_statics, movers, cp, n
-            )
-            if stop:
-                return cp, n, True
-        if watched(p, k, box, boxes, pairs, watch, watch_first):
+        cp, n, stop = look_around(
+            p, k, box, boxes, island_of, piece_body, reach, (pairs, watch, watch_first), cp, n
+        )
+        if stop:
             return cp, n, True
     return cp, n, False
 
@@ -735,8 +729,9 @@ def continuous(
     tree, open_statics, _ = reach
     piece_body, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount = model_ints[:6]
     n_pieces = piece_body.shape[0]
-    keys = near_keys(ci, nc, closest, speculative, n_pieces)
-    still = np.zeros((x.shape[0], 3))
+    # (made at the first body that moved far: most steps have none)
+    keys = np.empty(0, np.int64)
+    still = np.zeros((0, 3))
     out = np.empty(OUT_SIZE)
     ids = np.empty(MAX_POINTS, np.int64)
     box = np.empty(6)
@@ -748,6 +743,9 @@ def continuous(
         dx, dy, dz = x[b, 0] - x0[b, 0], x[b, 1] - x0[b, 1], x[b, 2] - x0[b, 2]
         if math.sqrt(dx * dx + dy * dy + dz * dz) <= speculative:
             continue
+        if still.shape[0] == 0:
+            keys = near_keys(ci, nc, closest, speculative, n_pieces)
+            still = np.zeros((x.shape[0], 3))
         end = x[b].copy()
         vel = v[b].copy()
         spin = w[b].copy()

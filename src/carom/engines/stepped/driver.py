@@ -9,10 +9,11 @@ names its kernels for the stages that differ (:class:`carom.engines.rigid.driver
    (:mod:`carom.engines.stepped.broadphase`);
 3. **narrow phase**: their manifolds, warm-started from the last step; an awake body touching
    a sleeping island wakes it, and the phases run again;
-4. **islands**: each body's role: free flight, an isolated impact, or the solver
+4. **islands**: each body's role: free flight, an island solved exactly, or the solver
    (:mod:`carom.engines.stepped.islands`);
-5. **exact impacts**: isolated pairs advanced through the step with their impacts solved at
-   the time of impact;
+5. **exact impacts**: the islands solved exactly advanced through the step, their impacts
+   taken in the order they happen, each at its time of impact
+   (:mod:`carom.engines.stepped.impacts`);
 6. **free flight**: bodies with no contact;
 7. **solve**: the soft step over the remaining contacts; a solved body that moved far is swept
    against the static geometry its contacts did not hold, and put back at the first touch;
@@ -53,13 +54,12 @@ STOP_CHECK_STEPS = 64
 
 class Isolated(NamedTuple):
     """The islands a step solves exactly: their contact ``rows``, island k's
-    ``rows[first[k]:first[k + 1]]``, ``n`` islands, and each contact's least normal relative
-    speed ``closing`` [m/s] (nc,) (:func:`carom.engines.stepped.islands.plan`)."""
+    ``rows[first[k]:first[k + 1]]``, ``n`` islands
+    (:func:`carom.engines.stepped.islands.plan`)."""
 
     rows: NDArray[np.int64]
     first: NDArray[np.int64]
     n: int
-    closing: FloatArray
 
 
 class SteppedEngine:
@@ -277,7 +277,7 @@ class SteppedEngine:
             self._role, isolated, island_first, self._island_of,
         )  # fmt: skip
         if n_iso:
-            todo = Isolated(isolated, island_first, n_iso, closing)
+            todo = Isolated(isolated, island_first, n_iso)
             log, logged = self._impact_kernel(todo)
             if logged:
                 self._book(log[:logged], sink)
@@ -285,9 +285,10 @@ class SteppedEngine:
         bodies = self._solver_bodies()
         before = self._energy(bodies)
         work = np.zeros(1)  # by kinematic bodies on the others, this step [J]
-        poses = self._poses()
+        poses = self._poses() if bodies.size else None
         self._solve(nc, bodies, work)
-        self._continuous(nc, closest, bodies, poses)
+        if poses is not None:
+            self._continuous(nc, closest, bodies, poses)
         self._work_done += work[0]
         change = self._energy(bodies) - before - work[0]  # the solver's own part
         if change < 0.0:

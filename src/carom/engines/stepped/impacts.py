@@ -42,7 +42,6 @@ __all__ = [
     "add_candidate",
     "advance",
     "approaching",
-    "contained",
     "earliest",
     "gather",
     "impact_cap",
@@ -54,7 +53,6 @@ __all__ = [
     "started_sunk",
     "statics_in",
     "take_isolated",
-    "watched",
 ]
 
 #: conservative-advancement iterations in one search; then it returns the furthest time known
@@ -218,7 +216,7 @@ def earliest(hit: np.ndarray, lo: int, hi: int) -> int:
 
 
 @njit(cache=True, inline="always")
-def contained(inner: np.ndarray, outer: np.ndarray, p: int) -> bool:
+def _contained(inner: np.ndarray, outer: np.ndarray, p: int) -> bool:
     """Whether box ``inner`` (2 d,) lies in box ``outer[p]``, up to a millionth of a
     millionth of the outer box's size (the round-off of flying there)."""
     d = inner.shape[0] // 2
@@ -277,39 +275,46 @@ def look_around(
     boxes: np.ndarray,
     island_of: np.ndarray,
     piece_body: np.ndarray,
-    tree: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-    open_statics: np.ndarray,
-    movers: np.ndarray,
+    reach: tuple[
+        tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        np.ndarray,
+        np.ndarray,
+    ],
+    watching: tuple[np.ndarray, np.ndarray, np.ndarray],
     cp: np.ndarray,
     n: int,
 ) -> tuple[np.ndarray, int, bool]:
-    """Piece ``p`` of a body of island ``k`` can now reach ``box`` (2 d,), beyond its swept
-    box ``boxes[p]``: widen that box to hold it, add the static pieces in it (through the
-    static ``tree``: node boxes, left, first, count, order and its items' boxes; and the
-    ``open_statics`` the tree does not hold) and the island's pieces in it to the candidates
-    ``cp[:n]``. Returns the candidates, their count, and whether a piece moving otherwise
-    (``movers``: the pieces of bodies that are not static) lies in reach: then the island
-    must stop."""
-    d = box.shape[0] // 2
-    for j in range(d):
-        boxes[p, j] = min(boxes[p, j], box[j])
-        boxes[p, d + j] = max(boxes[p, d + j], box[d + j])
-    found, total = statics_in(box, tree, open_statics, np.empty(64, np.int64))
-    for j in range(total):
-        cp, n = add_candidate(cp, n, p, found[j])
-    body = piece_body[p]
-    for q in movers:
-        other = piece_body[q]
-        if other == body or not overlap(boxes, q, box):
-            continue
-        if island_of[other] != k:
-            return cp, n, True
-        cp, n = add_candidate(cp, n, p, q)
-    return cp, n, False
+    """Piece ``p`` of a body of island ``k``, turned by an impact, can now reach ``box``
+    (2 d,) by the step's end. Beyond its swept box ``boxes[p]``: widen that box to hold it,
+    add the static pieces in it (``reach``: the static tree, its items' boxes, the static
+    pieces it does not hold; :func:`statics_in`) and the island's pieces in it to the
+    candidates ``cp[:n]``. Returns the candidates, their count, and whether the island must
+    stop: a piece moving otherwise lies in reach (``reach``'s pieces of bodies that are not
+    static, beyond the swept box; within it, the ``watching`` pairs: the broad phase's pairs
+    and island k's watched ones, :func:`gather`)."""
+    if not _contained(box, boxes, p):
+        d = box.shape[0] // 2
+        for j in range(d):
+            boxes[p, j] = min(boxes[p, j], box[j])
+            boxes[p, d + j] = max(boxes[p, d + j], box[d + j])
+        tree, open_statics, movers = reach
+        found, total = statics_in(box, tree, open_statics, np.empty(64, np.int64))
+        for j in range(total):
+            cp, n = add_candidate(cp, n, p, found[j])
+        body = piece_body[p]
+        for q in movers:
+            other = piece_body[q]
+            if other == body or not overlap(boxes, q, box):
+                continue
+            if island_of[other] != k:
+                return cp, n, True
+            cp, n = add_candidate(cp, n, p, q)
+    pairs, watch, watch_first = watching
+    return cp, n, _watched(p, k, box, boxes, pairs, watch, watch_first)
 
 
 @njit(cache=True, inline="always")
-def watched(
+def _watched(
     p: int,
     k: int,
     box: np.ndarray,

@@ -31,7 +31,7 @@ I_PIECE_A = 2
 I_PIECE_B = 3
 I_COUNT = 4  # points in the manifold
 I_ID0 = 5  # the points' feature ids: I_ID0 + j
-#: bit of the flags: the contact was solved exactly this step (an isolated impact)
+#: bit of the flags: the contact was solved exactly this step (an island solved exactly)
 FLAG_EXACT = 1
 
 
