@@ -108,10 +108,12 @@ P_T1MASS = _POINT.size  # effective masses along t1, t2 [kg]
 P_T2MASS = _POINT.size + 1
 P_KA = _POINT.size + 2  # A's core anchor is c_A = r_A + k_A n [m], B's c_B = r_B - k_B n
 P_KB = _POINT.size + 3
-POINT_FLOATS = _POINT.size + 4
+P_LAX = _POINT.size + 4  # the point in A's body frame, relative to A's centre [m]
+POINT_FLOATS = _POINT.size + 7
 CONTACT_FLOATS = POINT0 + MAX_POINTS * POINT_FLOATS
-#: a cached contact's impulses: per point the normal one and the tangent one as a world vector
-CACHE_IMPULSES = (MAX_POINTS, 4)
+#: a cached contact's points: per point the normal impulse, the tangent one as a world vector,
+#: and where the point was in A's body frame (a point whose feature id changed is matched by it)
+CACHE_IMPULSES = (MAX_POINTS, 7)
 
 # int columns of a contact row
 # the declared integer columns (carom.engines.stepped.rows): bodies, pieces, points (1 to
@@ -501,6 +503,10 @@ def narrow_phase(
             cf[m, o + P_X] = px
             cf[m, o + P_Y] = py
             cf[m, o + P_Z] = pz
+            for c in range(3):  # R_A^T r_A
+                cf[m, o + P_LAX + c] = (
+                    rot[ba, c] * ra[0] + rot[ba, 3 + c] * ra[1] + rot[ba, 6 + c] * ra[2]
+                )
             shared.open_point(
                 cf, ci, m, kept, o, un, sep, ids[j], (P_VREL, P_SEP),
                 (P_NMASS, P_JN, P_JT1, P_JT2, P_TOTAL),
@@ -526,24 +532,66 @@ def narrow_phase(
         cf[m, F_JR2] = 0.0
         row, cursor = shared.find_cached(cache_keys, n_cache, pa * n_pieces + pb, cursor)
         if row >= 0:
-            for j in range(kept):
-                o = point_offset(j)
-                for c in range(MAX_POINTS):
-                    if cache_ids[row, c] == ci[m, I_ID0 + j]:
-                        jt = cache_impulses[row, c]
-                        cf[m, o + P_JN] = jt[0]
-                        cf[m, o + P_JT1] = jt[1] * t1x + jt[2] * t1y + jt[3] * t1z
-                        cf[m, o + P_JT2] = jt[1] * t2x + jt[2] * t2y + jt[3] * t2z
-                        break
+            _warm_start(cf, ci, m, kept, cache_ids[row], cache_impulses[row], 2.0 * slop)
         m += 1
     return m
 
 
+@njit(cache=True, inline="always")
+def _warm_start(
+    cf: np.ndarray, ci: np.ndarray, m: int, count: int, ids: np.ndarray, cached: np.ndarray,
+    near: float,
+) -> None:
+    """Contact m's ``count`` points warm-started from its cached points (``ids`` (4,),
+    ``cached`` (4, 7), :data:`CACHE_IMPULSES`): each point takes the impulses of the cached
+    point with its feature id; a point that finds none takes those of the nearest cached point
+    left, in A's body frame, if within ``near`` [m]. Clipping two faces that line up (a box
+    on a box) names the same corner by another pair of features from one step to the next;
+    without this, a stack's warm start was lost at almost every step and it rocked."""
+    taken = 0  # the cached points used, one bit each
+    found = 0  # the points matched
+    for j in range(count):
+        for c in range(MAX_POINTS):
+            if ids[c] >= 0 and ids[c] == ci[m, I_ID0 + j] and not (taken >> c) & 1:
+                _take(cf, m, j, cached[c])
+                taken |= 1 << c
+                found |= 1 << j
+                break
+    for j in range(count):
+        if (found >> j) & 1:
+            continue
+        o = point_offset(j)
+        best = -1
+        best_d2 = near * near
+        for c in range(MAX_POINTS):
+            if ids[c] < 0 or (taken >> c) & 1:
+                continue
+            d2 = 0.0
+            for k in range(3):
+                d2 += (cf[m, o + P_LAX + k] - cached[c, 4 + k]) ** 2
+            if d2 <= best_d2:
+                best_d2 = d2
+                best = c
+        if best >= 0:
+            _take(cf, m, j, cached[best])
+            taken |= 1 << best
+
+
+@njit(cache=True, inline="always")
+def _take(cf: np.ndarray, m: int, j: int, cached: np.ndarray) -> None:
+    """Point j of contact m takes a cached point's normal impulse and its tangent one (a world
+    vector) on the contact's tangents."""
+    o = point_offset(j)
+    cf[m, o + P_JN] = cached[0]
+    for t, f in ((P_JT1, F_T1X), (P_JT2, F_T2X)):
+        cf[m, o + t] = cached[1] * cf[m, f] + cached[2] * cf[m, f + 1] + cached[3] * cf[m, f + 2]
+
+
 @njit(cache=True)
 def store_tangents(cf: np.ndarray, ci: np.ndarray, n_contacts: int, cache: np.ndarray) -> None:
-    """Each point's tangent impulse as a world vector into the warm-start cache (K, 4, 4),
+    """Each point's tangent impulse as a world vector into the warm-start cache (K, 4, 7),
     beside the normal one (:func:`carom.engines.stepped.contacts.store_points`): a turning
-    normal carries it over."""
+    normal carries it over; and where the point is in A's body frame."""
     for m in range(n_contacts):
         for q in range(ci[m, I_COUNT]):
             o = point_offset(q)
@@ -551,3 +599,4 @@ def store_tangents(cf: np.ndarray, ci: np.ndarray, n_contacts: int, cache: np.nd
             j2 = cf[m, o + P_JT2]
             for k in range(3):
                 cache[m, q, 1 + k] = j1 * cf[m, F_T1X + k] + j2 * cf[m, F_T2X + k]
+                cache[m, q, 4 + k] = cf[m, o + P_LAX + k]
