@@ -88,7 +88,10 @@ def color_groups(ci: np.ndarray, nc: int, inv_mass: np.ndarray, flags: int) -> n
 
     Greedy colouring in row order: a contact takes the lowest colour that neither of its
     bodies has used; a body of zero inverse mass (static, kinematic) takes none, so any number
-    of contacts with the ground share a colour. A contact whose bodies have used all
+    of contacts with the ground share a colour. As in Box2D v3, colour 0 is kept for contacts
+    between two moving bodies: one with a static or kinematic body starts at colour 1, so a
+    pass solves a stack's contacts with the ground after those within it (solved first, the
+    ground's made a stack of boxes sway more and gain more energy as it settled). A contact whose bodies have used all
     :data:`COLORS` colours gets a group to itself.
 
     Parameters
@@ -123,7 +126,7 @@ def color_groups(ci: np.ndarray, nc: int, inv_mass: np.ndarray, flags: int) -> n
             taken |= used[a]
         if inv_mass[b] > 0.0:
             taken |= used[b]
-        c = 0
+        c = 0 if inv_mass[a] > 0.0 and inv_mass[b] > 0.0 else 1
         while c < COLORS and (taken >> np.uint64(c)) & one:
             c += 1
         color[m] = c
