@@ -86,7 +86,8 @@ def test_contacts_with_a_static_body_are_solved_after_those_between_two_moving_o
     ci = _contacts([(0, 1), (1, 2), (2, 3)])
     lanes = color_groups(ci, 3, inv_mass, I_FLAGS)
     _check(lanes, ci, 3, inv_mass)
-    assert lanes[0, 0] == 1 and np.all(lanes[0, 1:] == -1)
+    assert lanes[0, 0] == 1
+    assert np.all(lanes[0, 1:] == -1)
     assert sorted(lanes[1][lanes[1] >= 0].tolist()) == [0, 2]
 
 

@@ -541,7 +541,7 @@ def narrow_phase(
 def _warm_start(
     cf: np.ndarray, ci: np.ndarray, m: int, count: int, ids: np.ndarray, cached: np.ndarray,
     near: float,
-) -> None:
+) -> None:  # fmt: skip
     """Contact m's ``count`` points warm-started from its cached points (``ids`` (4,),
     ``cached`` (4, 7), :data:`CACHE_IMPULSES`): each point takes the impulses of the cached
     point with its feature id; a point that finds none takes those of the nearest cached point

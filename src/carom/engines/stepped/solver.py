@@ -91,8 +91,8 @@ def color_groups(ci: np.ndarray, nc: int, inv_mass: np.ndarray, flags: int) -> n
     of contacts with the ground share a colour. As in Box2D v3, colour 0 is kept for contacts
     between two moving bodies: one with a static or kinematic body starts at colour 1, so a
     pass solves a stack's contacts with the ground after those within it (solved first, the
-    ground's made a stack of boxes sway more and gain more energy as it settled). A contact whose bodies have used all
-    :data:`COLORS` colours gets a group to itself.
+    ground's made a stack of boxes sway more and gain more energy as it settled). A contact
+    whose bodies have used all :data:`COLORS` colours gets a group to itself.
 
     Parameters
     ----------
