@@ -54,13 +54,11 @@ def stands(metrics: dict[str, Any]) -> bool:
     )
 
 
-def box2d_v3(source: Path, until: float) -> dict[str, float]:
-    """Build Box2D v3 from ``source`` and run carom's pyramid harness on it for ``until`` s.
-
-    Returns ms per step, the top box's move [m] and the largest turn at the end [deg]."""
+def build_box2d_v3(source: Path, harness: str, build: Path) -> Path:
+    """Build Box2D v3 from ``source`` (Release, its default options) in ``build`` and link
+    carom's harness ``benchmarks/box2d_v3/<harness>.c`` to it; return the executable."""
     if shutil.which("cmake") is None or shutil.which("cc") is None:
         sys.exit("--box2d-v3 needs cmake and a C compiler")
-    build = Path(tempfile.mkdtemp(prefix="box2d-v3-"))
     quiet = {"check": True, "stdout": subprocess.DEVNULL}
     subprocess.run(
         ["cmake", "-S", str(source), "-B", str(build), "-DCMAKE_BUILD_TYPE=Release",
@@ -68,14 +66,23 @@ def box2d_v3(source: Path, until: float) -> dict[str, float]:
         **quiet,
     )  # fmt: skip
     subprocess.run(["cmake", "--build", str(build), "-j2", "--target", "box2d"], **quiet)
-    harness = build / "pyramid"
+    program = build / harness
     library = next(build.rglob("libbox2d.a"))
     subprocess.run(
         ["cc", "-O2", "-std=c17", "-I", str(source / "include"),
-         str(Path(__file__).parent / "box2d_v3" / "pyramid.c"), str(library), "-lm",
-         "-lpthread", "-o", str(harness)],
+         str(Path(__file__).parent / "box2d_v3" / f"{harness}.c"), str(library), "-lm",
+         "-lpthread", "-o", str(program)],
         check=True,
     )  # fmt: skip
+    return program
+
+
+def box2d_v3(source: Path, until: float) -> dict[str, float]:
+    """Build Box2D v3 from ``source`` and run carom's pyramid harness on it for ``until`` s.
+
+    Returns ms per step, the top box's move [m] and the largest turn at the end [deg]."""
+    build = Path(tempfile.mkdtemp(prefix="box2d-v3-"))
+    harness = build_box2d_v3(source, "pyramid", build)
     out = subprocess.run([str(harness), "100", str(until)], check=True, capture_output=True)
     words = out.stdout.decode().split()
     found = dict(zip(words[::2], words[1::2], strict=True))
