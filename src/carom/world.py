@@ -37,6 +37,7 @@ from carom.engines import registry
 from carom.engines.base import Counters, Engine, FrameArrays, describe_partner
 from carom.engines.registry import AUTO, EngineEntry
 from carom.errors import CaromError
+from carom.gameloop import GameLoop
 from carom.limits import check_body_count
 from carom.materials import Material
 from carom.observables import Stats
@@ -60,7 +61,7 @@ __all__ = ["LOG_LIMIT", "RECORD_BYTES", "Frame", "Material", "Recording", "World
 FloatArray = NDArray[np.float64]
 
 
-class World(Scenery):
+class World(Scenery, GameLoop):
     """Bodies in a box, advanced by an engine: spheres (3D) or disks (2D) simulated exactly,
     event by event, or rigid bodies of any shape in 2D and 3D, step by step.
 
@@ -544,10 +545,7 @@ class World(Scenery):
         """Collisions not kept because the log was full (:data:`LOG_LIMIT`)."""
         return self._log.dropped
 
-    @staticmethod
-    def describe_partner(kind: int, partner: int) -> str:
-        """A readable name for a collision's partner: ``body 3``, ``wall x-``, ``plane 0``."""
-        return describe_partner(kind, partner)
+    describe_partner = staticmethod(describe_partner)  # ``body 3``, ``wall x-``, ``plane 0``
 
     # -- checkpoints --------------------------------------------------------------------------
 

@@ -518,14 +518,24 @@ class SteppedEngine:
             self._step_short(rest, until, sink)
         return True
 
+    def step_of(self, dt: float, sink: Sink | None = None) -> None:
+        """One step of ``dt`` [s]: :meth:`step` when ``dt`` is the engine's own, else one step
+        of that length in every stage (longer or shorter), after which the clock's origin is
+        where it ended and later steps are whole ones from there."""
+        if dt == self.dt:
+            self.step(sink)
+        else:
+            self._step_short(dt, self.time + dt, sink)
+
     @property
     def _since(self) -> int:
         """Whole steps since the clock's origin (:attr:`start`)."""
         return self.steps - self.base
 
     def _step_short(self, dt: float, until: float, sink: Sink | None) -> None:
-        """One step of ``dt`` [s] (less than a whole one) that ends at ``until`` [s]: every
-        stage takes ``dt`` for this step; the clock's origin moves to ``until``."""
+        """One step of ``dt`` [s] (other than a whole one: shorter to end on a time, or any
+        length :meth:`step_of` is given) that ends at ``until`` [s]: every stage takes ``dt``
+        for this step; the clock's origin moves to ``until``."""
         full = self.dt
         self.dt = dt
         try:
