@@ -4,7 +4,9 @@ A game loop advances the world by one frame at a time and reaches into it betwee
 :class:`GameLoop` is the part of :class:`carom.World` that does that: ``world.step()`` takes
 one step of the engine's own length (the rigid engines' ``1 / rate``), ``world.step(dt)`` one
 of any length, and :attr:`GameLoop.steps` counts them. Stepping by hand and ``run`` take the
-same steps, so they give the same bits at the same times.
+same steps, so they give the same bits at the same times. Between steps, ``world.body(i)``
+reads and sets a body's motion and takes impulses; ``world.apply_impulses`` and
+``world.set_velocities`` do so for many bodies in one call (the rigid engines).
 
 >>> import carom
 >>> from carom.shapes import Box
@@ -23,14 +25,15 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from carom.engines.base import Engine
 from carom.engines.stepped.driver import SteppedEngine
 from carom.errors import CaromError
+from carom.laws.kinds import KIND_DYNAMIC, KIND_NAMES
 from carom.limits import LARGEST
 
-__all__ = ["GameLoop"]
+__all__ = ["Body", "GameLoop"]
 
 
 class _Running(Protocol):
@@ -43,6 +46,12 @@ class _Running(Protocol):
 
     @property
     def engine(self) -> Engine | None: ...
+
+    @property
+    def dim(self) -> int: ...
+
+    @property
+    def n_bodies(self) -> int: ...
 
     def build(self) -> Engine: ...
 
@@ -114,6 +123,225 @@ class GameLoop:
             return engine.steps
         kept, count = getattr(self, _HAND, (None, 0))
         return int(count) if kept is engine else 0
+
+    # -- reaching bodies between steps ------------------------------------------------------
+
+    def body(self: _Running, index: int) -> Body:
+        """A light handle on body ``index`` (:class:`Body`): read and set its motion, push it."""
+        return Body(self, _index(self, index))
+
+    def apply_impulses(
+        self: _Running, ids: ArrayLike, impulses: ArrayLike, points: ArrayLike | None = None
+    ) -> None:
+        """Impulses on many dynamic bodies at once, in order (a body may appear twice).
+
+        Parameters
+        ----------
+        ids : (k,) array_like of int
+            Body indices.
+        impulses : (k, d) or (d,) array_like
+            Impulses [N s] (one for all when (d,)).
+        points : (k, d) or (d,) array_like, optional
+            World points where they act [m]; at each centre of mass when left out (no spin).
+
+        Raises
+        ------
+        CaromError
+            An index out of range, a body not dynamic, a value not finite or beyond carom's
+            limits, a shape that does not fit; nothing has changed then. The event-driven
+            engine does not take impulses yet.
+        """
+        engine, rows = _dynamic_rows(self, ids, "impulses")
+        j = _vectors(self, "impulses", impulses, rows.size)
+        at = None if points is None else _vectors(self, "points", points, rows.size)
+        engine.apply_impulses(rows, j, at)
+
+    def set_velocities(self: _Running, ids: ArrayLike, velocities: ArrayLike) -> None:
+        """Set the velocities (k, d) or (d,) [m/s] of the dynamic bodies ``ids`` (k,); as
+        :meth:`apply_impulses` for what is refused."""
+        engine, rows = _dynamic_rows(self, ids, "velocities")
+        engine.set_motion(rows, "v", _vectors(self, "velocities", velocities, rows.size))
+
+
+class Body:
+    """Body ``index`` of a world, between steps (:meth:`GameLoop.body`).
+
+    Reads give the state now; writes take effect at once and wake the body (the energy they
+    change is booked as work done on it, so the ledger still closes). The rigid engines.
+    """
+
+    __slots__ = ("_world", "index")
+
+    def __init__(self, world: Any, index: int) -> None:
+        self._world = world
+        #: the body's index in the world
+        self.index = index
+
+    def __repr__(self) -> str:
+        return f"<carom body {self.index}, {self.kind}>"
+
+    def _engine(self) -> SteppedEngine:
+        engine, _ = _dynamic_rows(self._world, [self.index], None)
+        return engine
+
+    def _read(self, field: str) -> NDArray[np.float64]:
+        engine = self._world.build()
+        if not isinstance(engine, SteppedEngine):
+            raise CaromError(_NOT_YET)
+        return np.array(getattr(engine.state, field)[self.index], dtype=np.float64)
+
+    def _write(self, field: str, value: ArrayLike, shape: tuple[int, ...], name: str) -> None:
+        engine = self._engine()
+        values = _vectors(self._world, name, value, 1, shape)
+        engine.set_motion(np.array([self.index]), field, values)
+
+    @property
+    def kind(self) -> str:
+        """ "dynamic", "kinematic" or "static"."""
+        return KIND_NAMES[int(self._world.bodies.kind[self.index])]
+
+    @property
+    def awake(self) -> bool:
+        """Whether the engine moves it now (False: asleep, or not dynamic)."""
+        engine = self._world.build()
+        if not isinstance(engine, SteppedEngine):
+            return self.kind == "dynamic"
+        return bool(engine.memory.awake[self.index])
+
+    @property
+    def position(self) -> NDArray[np.float64]:
+        """Centre of mass (d,) [m]."""
+        return self._read("x")
+
+    @position.setter
+    def position(self, value: ArrayLike) -> None:
+        self._write("x", value, (self._world.dim,), "position")
+
+    @property
+    def velocity(self) -> NDArray[np.float64]:
+        """Velocity of the centre of mass (d,) [m/s]."""
+        return self._read("v")
+
+    @velocity.setter
+    def velocity(self, value: ArrayLike) -> None:
+        self._write("v", value, (self._world.dim,), "velocity")
+
+    @property
+    def angle(self) -> float:
+        """Orientation [rad] (2D)."""
+        self._planar("angle")
+        return float(self._read("angle"))
+
+    @angle.setter
+    def angle(self, value: float) -> None:
+        self._planar("angle")
+        self._write("angle", value, (), "angle")
+
+    @property
+    def orientation(self) -> NDArray[np.float64]:
+        """Orientation (4,), a unit quaternion ``w, x, y, z`` (3D)."""
+        self._spatial("orientation")
+        return self._read("q")
+
+    @orientation.setter
+    def orientation(self, value: ArrayLike) -> None:
+        self._spatial("orientation")
+        q = _vectors(self._world, "orientation", value, 1, (4,))
+        size = float(np.linalg.norm(q))
+        if abs(size - 1.0) > 1e-6:
+            raise CaromError(
+                f"orientation must be a unit quaternion w, x, y, z; got one of norm {size:.9g}"
+                " (divide it by its norm)"
+            )
+        self._engine().set_motion(np.array([self.index]), "q", q / size)
+
+    @property
+    def angular_velocity(self) -> Any:
+        """Spin [rad/s]: a number in 2D, a vector (3,) in 3D."""
+        if self._world.dim == 2:
+            return float(self._read("omega"))
+        return self._read("w")
+
+    @angular_velocity.setter
+    def angular_velocity(self, value: ArrayLike) -> None:
+        if self._world.dim == 2:
+            self._write("omega", value, (), "angular_velocity")
+        else:
+            self._write("w", value, (3,), "angular_velocity")
+
+    def apply_impulse(self, impulse: ArrayLike, point: ArrayLike | None = None) -> None:
+        """An impulse (d,) [N s] at the world point ``point`` (d,) [m] (the centre of mass
+        when left out): velocity and spin change at once (:meth:`GameLoop.apply_impulses`)."""
+        self._world.apply_impulses([self.index], impulse, point)
+
+    def _planar(self, name: str) -> None:
+        if self._world.dim != 2:
+            raise CaromError(f"{name} is a 2D body's; a 3D body has an orientation (w, x, y, z)")
+
+    def _spatial(self, name: str) -> None:
+        if self._world.dim != 3:
+            raise CaromError(f"{name} is a 3D body's; a 2D body has an angle [rad]")
+
+
+_NOT_YET = (
+    "reaching a body between steps is done for the rigid engines only so far; the "
+    "event-driven engine's bodies are set before its run (add_spheres)"
+)
+
+
+def _index(world: _Running, index: object) -> int:
+    """``index`` as a body index of ``world``, or a CaromError naming it."""
+    if isinstance(index, bool) or not isinstance(index, int | np.integer):
+        raise CaromError(f"a body index is a whole number; got {index!r}")
+    if not 0 <= int(index) < world.n_bodies:
+        raise CaromError(
+            f"body {index} is not in the world: its indices run from 0 to {world.n_bodies - 1}"
+        )
+    return int(index)
+
+
+def _dynamic_rows(
+    world: _Running, ids: ArrayLike, what: str | None
+) -> tuple[SteppedEngine, NDArray[np.int64]]:
+    """The rigid engine and the indices ``ids`` (k,), each a dynamic body (``what``: what is
+    given to them, for the message; None: any kind)."""
+    raw = np.asarray(ids)
+    if raw.ndim != 1 or raw.size == 0 or raw.dtype.kind not in "iu":
+        raise CaromError(f"ids must be a 1-D array of body indices; got {ids!r}")
+    rows = np.array([_index(world, int(i)) for i in raw], dtype=np.int64)
+    engine = world.build()
+    if not isinstance(engine, SteppedEngine):
+        raise CaromError(_NOT_YET)
+    if what is not None:
+        kind = engine.model.kind[rows]
+        if np.any(kind != KIND_DYNAMIC):
+            bad = int(rows[np.flatnonzero(kind != KIND_DYNAMIC)[0]])
+            raise CaromError(
+                f"body {bad} is {KIND_NAMES[int(engine.model.kind[bad])]}: {what} move dynamic "
+                "bodies only"
+            )
+    return engine, rows
+
+
+def _vectors(
+    world: _Running, name: str, values: ArrayLike, k: int, shape: tuple[int, ...] | None = None
+) -> NDArray[np.float64]:
+    """``values`` as (k, *shape) floats (one for all broadcast), finite and within carom's
+    limits, or a CaromError naming ``name``; ``shape`` defaults to (d,)."""
+    each = (world.dim,) if shape is None else shape
+    try:
+        array = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise CaromError(f"{name} must be numbers; got {values!r}") from None
+    if array.shape == each:
+        array = np.broadcast_to(array, (k, *each))
+    if array.shape != (k, *each):
+        raise CaromError(f"{name} must have shape {each} or {(k, *each)}; got {array.shape}")
+    if not np.all(np.isfinite(array)) or np.any(np.abs(array) > LARGEST):
+        raise CaromError(
+            f"{name} must be finite, within carom's limits (|x| <= {LARGEST:g}); got {values!r}"
+        )
+    return np.array(array)
 
 
 def _positive_time(dt: object) -> float:

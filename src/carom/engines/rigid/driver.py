@@ -206,6 +206,18 @@ class RigidEngine(SteppedEngine):
             s.omega[i] = 0.0
         return taken
 
+    def _kick(
+        self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray | None
+    ) -> None:
+        m, s = self.model, self.state
+        for k, i in enumerate(ids.tolist()):
+            jx, jy = float(impulses[k, 0]), float(impulses[k, 1])
+            s.v[i, 0] += m.inv_mass[i] * jx
+            s.v[i, 1] += m.inv_mass[i] * jy
+            if points is not None:
+                rx, ry = float(points[k, 0] - s.x[i, 0]), float(points[k, 1] - s.x[i, 1])
+                s.omega[i] += m.inv_inertia[i] * (rx * jy - ry * jx)
+
     def _energy(self, rows: NDArray[np.int64]) -> float:
         m, s = self.model, self.state
         gx, gy = float(m.gravity[0]), float(m.gravity[1])

@@ -518,6 +518,45 @@ class SteppedEngine:
             self._step_short(rest, until, sink)
         return True
 
+    # -- reaching a body between steps (issue 43) --------------------------------------------
+
+    def apply_impulses(
+        self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray | None
+    ) -> None:
+        """Impulses ``impulses`` (k, d) [N s] on the dynamic bodies ``ids`` (k,), each at the
+        world point ``points[j]`` (k, d) [m] (None: at the centre of mass), in order: the
+        velocity changes by ``J / m`` and the spin by ``I^-1 (r x J)`` at once, an impulse's
+        exact effect. The bodies wake; the energy they gain or lose is booked as work done on
+        them (:attr:`Counters.work_done`)."""
+        rows = np.unique(ids)
+        before = self._energy(rows)
+        self._kick(ids, impulses, points)
+        self._wake_bodies(rows)
+        self._work_done += self._energy(rows) - before
+
+    def set_motion(self, ids: NDArray[np.int64], field: str, values: FloatArray) -> None:
+        """Set the state column ``field`` ("x", "v", the dimension's orientation or spin) of
+        bodies ``ids`` (k,) to ``values`` (k, ...); they wake, and the change of energy is
+        booked as work done on them."""
+        rows = np.unique(ids)
+        before = self._energy(rows)
+        getattr(self.state, field)[ids] = values
+        self._wake_bodies(rows)
+        self._work_done += self._energy(rows) - before
+
+    def _kick(
+        self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray | None
+    ) -> None:
+        """The dimension's own part of :meth:`apply_impulses`."""
+        raise NotImplementedError
+
+    def _wake_bodies(self, rows: NDArray[np.int64]) -> None:
+        """Wake the dynamic bodies among ``rows`` (their islands wake through their
+        contacts at the next step, whose broad phase finds their pieces where they are)."""
+        dynamic = rows[self._dynamic[rows]]
+        self.memory.awake[dynamic] = True
+        self.memory.clock[dynamic] = 0.0
+
     def step_of(self, dt: float, sink: Sink | None = None) -> None:
         """One step of ``dt`` [s]: :meth:`step` when ``dt`` is the engine's own, else one step
         of that length in every stage (longer or shorter), after which the clock's origin is
