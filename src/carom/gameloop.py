@@ -5,8 +5,9 @@ A game loop advances the world by one frame at a time and reaches into it betwee
 one step of the engine's own length (the rigid engines' ``1 / rate``), ``world.step(dt)`` one
 of any length, and :attr:`GameLoop.steps` counts them. Stepping by hand and ``run`` take the
 same steps, so they give the same bits at the same times. Between steps, ``world.body(i)``
-reads and sets a body's motion and takes impulses; ``world.apply_impulses`` and
-``world.set_velocities`` do so for many bodies in one call (the rigid engines).
+reads and sets a body's motion and takes impulses; ``world.apply_impulses``,
+``world.set_velocities``, ``world.set_positions`` and ``world.set_angular_velocities`` do so
+for many bodies in one call (the rigid engines).
 
 >>> import carom
 >>> from carom.shapes import Box
@@ -161,6 +162,22 @@ class GameLoop:
         :meth:`apply_impulses` for what is refused."""
         engine, rows = _dynamic_rows(self, ids, "velocities")
         engine.set_motion(rows, "v", _vectors(self, "velocities", velocities, rows.size))
+
+    def set_positions(self: _Running, ids: ArrayLike, positions: ArrayLike) -> None:
+        """Move the dynamic bodies ``ids`` (k,) to ``positions`` (k, d) or (d,) [m] (their
+        centres of mass), at once: a body put into another is pushed out by the next step's
+        contacts. As :meth:`apply_impulses` for what is refused."""
+        engine, rows = _dynamic_rows(self, ids, "positions")
+        engine.set_motion(rows, "x", _vectors(self, "positions", positions, rows.size))
+
+    def set_angular_velocities(self: _Running, ids: ArrayLike, spins: ArrayLike) -> None:
+        """Set the spins of the dynamic bodies ``ids`` (k,) [rad/s]: (k,) or one number in 2D,
+        (k, 3) or (3,) in 3D. As :meth:`apply_impulses` for what is refused."""
+        engine, rows = _dynamic_rows(self, ids, "spins")
+        if self.dim == 2:
+            engine.set_motion(rows, "omega", _vectors(self, "spins", spins, rows.size, ()))
+        else:
+            engine.set_motion(rows, "w", _vectors(self, "spins", spins, rows.size, (3,)))
 
 
 class Body:
