@@ -325,7 +325,10 @@ def _dynamic_rows(
     raw = np.asarray(ids)
     if raw.ndim != 1 or raw.size == 0 or raw.dtype.kind not in "iu":
         raise CaromError(f"ids must be a 1-D array of body indices; got {ids!r}")
-    rows = np.array([_index(world, int(i)) for i in raw], dtype=np.int64)
+    rows = raw.astype(np.int64)
+    outside = (rows < 0) | (rows >= world.n_bodies)
+    if outside.any():
+        _index(world, int(rows[outside][0]))  # (names the first one outside)
     engine = world.build()
     if not isinstance(engine, SteppedEngine):
         raise CaromError(_NOT_YET)

@@ -210,13 +210,15 @@ class RigidEngine(SteppedEngine):
         self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray | None
     ) -> None:
         m, s = self.model, self.state
-        for k, i in enumerate(ids.tolist()):
-            jx, jy = float(impulses[k, 0]), float(impulses[k, 1])
-            s.v[i, 0] += m.inv_mass[i] * jx
-            s.v[i, 1] += m.inv_mass[i] * jy
-            if points is not None:
-                rx, ry = float(points[k, 0] - s.x[i, 0]), float(points[k, 1] - s.x[i, 1])
-                s.omega[i] += m.inv_inertia[i] * (rx * jy - ry * jx)
+        # (np.add.at adds in order, a body named twice takes both)
+        np.add.at(s.v, ids, m.inv_mass[ids, None] * impulses)
+        if points is not None:
+            r = points - s.x[ids]
+            np.add.at(
+                s.omega,
+                ids,
+                m.inv_inertia[ids] * (r[:, 0] * impulses[:, 1] - r[:, 1] * impulses[:, 0]),
+            )
 
     def _energy(self, rows: NDArray[np.int64]) -> float:
         m, s = self.model, self.state

@@ -22,7 +22,7 @@ from carom.engines.rigid3d.model import Model3D, State3D, empty_manifolds
 from carom.engines.stepped import islands
 from carom.engines.stepped.driver import Isolated, SteppedEngine
 from carom.engines.stepped.settings import RigidSettings
-from carom.geometry.rotation import matrix, turn
+from carom.geometry.rotation import turn
 from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
 
 __all__ = ["RigidEngine3D"]
@@ -256,14 +256,14 @@ class RigidEngine3D(SteppedEngine):
         self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray | None
     ) -> None:
         m, s = self.model, self.state
-        rotation = np.empty(9)
+        np.add.at(s.v, ids, m.inv_mass[ids, None] * impulses)  # in order, as 2D
+        if points is None:
+            return
+        inverse = np.empty((1, 9))
         for k, i in enumerate(ids.tolist()):
-            s.v[i] += m.inv_mass[i] * impulses[k]
-            if points is not None:
-                matrix(s.q, i, rotation)
-                r = rotation.reshape(3, 3)
-                moment = np.cross(points[k] - s.x[i], impulses[k])
-                s.w[i] += r @ (m.inv_inertia[i] @ (r.T @ moment))
+            motion.world_inverse_row(0, s.q[i : i + 1], m.inv_inertia[i : i + 1], inverse)
+            moment = np.cross(points[k] - s.x[i], impulses[k])
+            s.w[i] += inverse.reshape(3, 3) @ moment
 
     def _energy(self, rows: NDArray[np.int64]) -> float:
         m, s = self.model, self.state
