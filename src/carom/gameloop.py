@@ -5,7 +5,8 @@ A game loop advances the world by one frame at a time and reaches into it betwee
 one step of the engine's own length (the rigid engines' ``1 / rate``), ``world.step(dt)`` one
 of any length, and :attr:`GameLoop.steps` counts them. Stepping by hand and ``run`` take the
 same steps, so they give the same bits at the same times. Between steps, ``world.body(i)``
-reads and sets a body's motion and takes impulses; ``world.apply_impulses``,
+reads and sets a body's motion and takes impulses, and forces and torques for the next step;
+``world.apply_impulses``, ``world.apply_forces``, ``world.apply_torques``,
 ``world.set_velocities``, ``world.set_positions`` and ``world.set_angular_velocities`` do so
 for many bodies in one call (the rigid engines).
 
@@ -30,11 +31,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from carom.engines.base import Engine
 from carom.engines.stepped.driver import SteppedEngine
+from carom.engines.stepped.events import EventArrays
 from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC, KIND_NAMES
 from carom.limits import LARGEST
 
-__all__ = ["Body", "GameLoop"]
+__all__ = ["Body", "EventArrays", "GameLoop"]
 
 
 class _Running(Protocol):
@@ -63,6 +65,8 @@ class _Running(Protocol):
 
 #: the attribute in which a world keeps its event-driven engine and the steps taken on it
 _HAND = "_hand_steps"
+#: the attribute in which a world keeps its hit threshold [m/s]
+_THRESHOLD = "_hit_threshold"
 
 
 class GameLoop:
@@ -98,6 +102,9 @@ class GameLoop:
                     f"({engine.dt:g} s); take dt >= {1e-6 * engine.dt:g} s"
                 )
             _within_limits(step, self.time)
+            events = engine.events
+            events.threshold = float(getattr(self, _THRESHOLD, 1.0))
+            events.on = True
             engine.step_of(step, sink)
             self.reached = True
             return
@@ -111,6 +118,49 @@ class GameLoop:
         self.reached = engine.advance(self.time + step, np.iinfo(np.int64).max, sink)
         kept, count = getattr(self, _HAND, (None, 0))
         setattr(self, _HAND, (engine, (count if kept is engine else 0) + 1))
+
+    def contact_events(self: _Running) -> EventArrays:
+        """The contact events of the last step (the rigid engines), as NumPy structured
+        arrays: no Python object a contact.
+
+        Returns
+        -------
+        EventArrays
+            ``begin``: pairs that began touching (``a``, ``b``, ``point`` (d,) [m], ``normal``
+            (d,) from a to b); ``end``: pairs that stopped (``a``, ``b``); ``hit``: impacts
+            approaching at least :attr:`hit_threshold` (``a``, ``b``, ``time`` [s], ``point``,
+            ``normal``, ``speed`` [m/s], the approach speed along the normal). Bodies are the
+            world's indices, ``a < b``; -1 is a wall of the world's box.
+
+        Notes
+        -----
+        A pair touches when a point of its contact lies within the linear slop (the soft
+        contacts rest a little inside it), or when the two met in an impact solved exactly
+        during the step: such a pair touches in that step, and ends in the next if it bounced
+        apart. An impact solved exactly is a hit at its own time; a solver contact is a hit
+        when it pushed and its points approached at least the threshold at the step's start.
+        Gathered by :meth:`step` (a game loop's steps) and, once this has been called, by
+        every step (``run`` and ``frames``, which otherwise do not pay for them). Empty before
+        the first step gathered; that step's ``begin`` holds every pair touching then.
+        """
+        engine = self.build()
+        if not isinstance(engine, SteppedEngine):
+            raise CaromError(_NOT_YET_EVENTS)
+        engine.events.on = True
+        return engine.events.last
+
+    @property
+    def hit_threshold(self: _Running) -> float:
+        """The least approach speed [m/s] of a hit event (default 1 m/s, as Box2D's)."""
+        return float(getattr(self, _THRESHOLD, 1.0))
+
+    @hit_threshold.setter
+    def hit_threshold(self: _Running, speed: float) -> None:
+        value = _positive_time(speed, "hit_threshold", "speed [m/s]")
+        setattr(self, _THRESHOLD, value)
+        engine = self.engine
+        if engine is not None and isinstance(engine, SteppedEngine):
+            engine.events.threshold = value
 
     @property
     def steps(self: _Running) -> int:
@@ -156,6 +206,46 @@ class GameLoop:
         j = _vectors(self, "impulses", impulses, rows.size)
         at = None if points is None else _vectors(self, "points", points, rows.size)
         engine.apply_impulses(rows, j, at)
+
+    def apply_forces(
+        self: _Running, ids: ArrayLike, forces: ArrayLike, points: ArrayLike | None = None
+    ) -> None:
+        """Forces on many dynamic bodies through the next step, then cleared (as Box2D's
+        ``b2Body_ApplyForce``); given twice, they add up.
+
+        Parameters
+        ----------
+        ids : (k,) array_like of int
+            Body indices.
+        forces : (k, d) or (d,) array_like
+            Forces [N] (one for all when (d,)).
+        points : (k, d) or (d,) array_like, optional
+            World points where they act [m] now; at each centre of mass when left out (no
+            torque). The arm is taken now and kept through the step.
+
+        Notes
+        -----
+        The force is constant through the step. Free flight stays exact under it (the
+        centre follows ``x + v t + (g + F / m) t^2 / 2``); the solver takes it each substep,
+        as it takes gravity. Its work is booked in the energy ledger.
+
+        Raises
+        ------
+        CaromError
+            As :meth:`apply_impulses`.
+        """
+        engine, rows = _dynamic_rows(self, ids, "forces")
+        f = _vectors(self, "forces", forces, rows.size)
+        at = None if points is None else _vectors(self, "points", points, rows.size)
+        engine.apply_forces(rows, f, at)
+
+    def apply_torques(self: _Running, ids: ArrayLike, torques: ArrayLike) -> None:
+        """Torques on many dynamic bodies through the next step, then cleared: (k,) or one
+        number in 2D, (k, 3) or (3,) (world axes) in 3D [N m]. As :meth:`apply_impulses` for
+        what is refused."""
+        engine, rows = _dynamic_rows(self, ids, "torques")
+        shape: tuple[int, ...] = () if self.dim == 2 else (3,)
+        engine.apply_torques(rows, _vectors(self, "torques", torques, rows.size, shape))
 
     def set_velocities(self: _Running, ids: ArrayLike, velocities: ArrayLike) -> None:
         """Set the velocities (k, d) or (d,) [m/s] of the dynamic bodies ``ids`` (k,); as
@@ -291,6 +381,16 @@ class Body:
         when left out): velocity and spin change at once (:meth:`GameLoop.apply_impulses`)."""
         self._world.apply_impulses([self.index], impulse, point)
 
+    def apply_force(self, force: ArrayLike, point: ArrayLike | None = None) -> None:
+        """A force (d,) [N] through the next step, at the world point ``point`` (d,) [m] (the
+        centre of mass when left out), then cleared (:meth:`GameLoop.apply_forces`)."""
+        self._world.apply_forces([self.index], force, point)
+
+    def apply_torque(self, torque: ArrayLike) -> None:
+        """A torque through the next step, then cleared: a number in 2D, a world vector (3,)
+        in 3D [N m] (:meth:`GameLoop.apply_torques`)."""
+        self._world.apply_torques([self.index], torque)
+
     def _planar(self, name: str) -> None:
         if self._world.dim != 2:
             raise CaromError(f"{name} is a 2D body's; a 3D body has an orientation (w, x, y, z)")
@@ -299,6 +399,11 @@ class Body:
         if self._world.dim != 3:
             raise CaromError(f"{name} is a 3D body's; a 2D body has an angle [rad]")
 
+
+_NOT_YET_EVENTS = (
+    "contact events are the rigid engines' so far; the event-driven engine reports its "
+    "collisions through run(log=True) (World.collisions) or run(on_collisions=...)"
+)
 
 _NOT_YET = (
     "reaching a body between steps is done for the rigid engines only so far; the "
@@ -364,9 +469,9 @@ def _vectors(
     return np.array(array)
 
 
-def _positive_time(dt: object) -> float:
-    """``dt`` as a positive finite float [s], or a CaromError naming it."""
-    wrong = CaromError(f"dt must be a positive finite time [s]; got {dt!r}")
+def _positive_time(dt: object, name: str = "dt", what: str = "time [s]") -> float:
+    """``dt`` as a positive finite float, or a CaromError naming it (``name``, a ``what``)."""
+    wrong = CaromError(f"{name} must be a positive finite {what}; got {dt!r}")
     if isinstance(dt, str | bytes | bool):
         raise wrong
     try:

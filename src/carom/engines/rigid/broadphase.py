@@ -29,6 +29,7 @@ def piece_boxes(
     gravity_on: np.ndarray,
     gx: float,
     gy: float,
+    pull: np.ndarray,
     dt: float,
     margin: float,
     boxes: np.ndarray,
@@ -36,14 +37,15 @@ def piece_boxes(
     """Swept boxes ``(min x, min y, max x, max y)`` [m] of every piece, into ``boxes`` (P, 4).
 
     ``moving[i]``: body i moves this step (awake dynamic or kinematic); ``gravity_on[i]``:
-    gravity acts on it.
+    gravity acts on it; ``pull[i]``: the most the forces and torques given to it for this
+    step accelerate any of its points [m/s^2] (0 without).
     """
     for p in range(piece_start.shape[0]):
         b = piece_body[p]
         sweep_box(
             p, vertices, piece_start, piece_count, piece_radius, piece_reach, velocity[b, 0],
             velocity[b, 1], omega[b] if moving[b] else 0.0, gx, gy,
-            dt if moving[b] else 0.0, gravity_on[b], margin, boxes[p],
+            dt if moving[b] else 0.0, gravity_on[b], pull[b], margin, boxes[p],
         )  # fmt: skip
 
 
@@ -51,11 +53,13 @@ def piece_boxes(
 def sweep_box(
     p: int, vertices: np.ndarray, piece_start: np.ndarray, piece_count: np.ndarray,
     piece_radius: np.ndarray, piece_reach: np.ndarray, vx: float, vy: float, omega: float,
-    gx: float, gy: float, dt: float, gravity_on: bool, margin: float, box: np.ndarray,
+    gx: float, gy: float, dt: float, gravity_on: bool, pull: float, margin: float,
+    box: np.ndarray,
 ) -> None:  # fmt: skip
     """Placed piece ``p``'s box swept by where its points can go in ``dt`` [s] (its body's
-    velocity ``(vx, vy)`` [m/s] and spin ``omega`` [rad/s], and gravity ``(gx, gy)`` if
-    ``gravity_on``), grown by its radius and ``margin`` [m], into ``box`` (4,)."""
+    velocity ``(vx, vy)`` [m/s] and spin ``omega`` [rad/s], gravity ``(gx, gy)`` if
+    ``gravity_on``, and any acceleration up to ``pull`` [m/s^2] besides), grown by its
+    radius and ``margin`` [m], into ``box`` (4,)."""
     s = piece_start[p]
     lo_x = vertices[s, 0]
     hi_x = lo_x
@@ -78,6 +82,7 @@ def sweep_box(
         turn = abs(omega) * dt * piece_reach[p]
         # an arc of angle |omega| dt is no longer than its chord bound, 2 reach
         turn = min(turn, 2.0 * piece_reach[p])
+        turn += 0.5 * pull * dt * dt
         lo_x = min(lo_x, lo_x + dx) - turn
         hi_x = max(hi_x, hi_x + dx) + turn
         lo_y = min(lo_y, lo_y + dy) - turn

@@ -88,6 +88,7 @@ def narrow_phase(
     omega: np.ndarray,
     gravity_on: np.ndarray,
     g: float,
+    pull: np.ndarray,
     dt: float,
     speculative: float,
     slop: float,
@@ -120,6 +121,7 @@ def narrow_phase(
         closing += abs(omega[ba]) * piece_reach[pa] + abs(omega[bb]) * piece_reach[pb]
         if gravity_on[ba] != gravity_on[bb]:
             closing += g * dt
+        closing += (pull[ba] + pull[bb]) * dt
         reach = speculative + closing * dt
         count = collide(
             vertices,
@@ -151,7 +153,8 @@ def narrow_phase(
             # relative velocity of the contact points, A's less B's
             ux, uy = relative_velocity(ba, bb, rax, ray, rbx, rby, v, omega)
             un = ux * nx + uy * ny
-            if not keeps_point(un, sep, gravity_on[ba] != gravity_on[bb], g, dt, speculative):
+            falls = gravity_on[ba] != gravity_on[bb]
+            if not keeps_point(un, sep, falls, g, dt, speculative, pull[ba] + pull[bb]):
                 continue
             o = point_offset(kept)
             cf[m, o + P_RAX] = rax

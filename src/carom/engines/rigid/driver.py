@@ -109,7 +109,7 @@ class RigidEngine(SteppedEngine):
         broadphase.piece_boxes(
             s.vertices, m.piece_start, m.piece_count, m.piece_radius, m.piece_reach,
             m.piece_body, s.v, s.omega, moving, self._dynamic, float(m.gravity[0]),
-            float(m.gravity[1]), dt, 4.0 * self.settings.linear_slop, self._boxes,
+            float(m.gravity[1]), self._pull, dt, 4.0 * self.settings.linear_slop, self._boxes,
         )  # fmt: skip
 
     @staticmethod
@@ -140,8 +140,8 @@ class RigidEngine(SteppedEngine):
             contacts.narrow_phase(
                 self._kept.pairs, n_pairs, s.vertices, s.normals, m.piece_start,
                 m.piece_count, m.piece_radius, m.piece_reach, m.piece_body, m.material,
-                m.e_table, m.mu_table, s.x, s.v, s.omega, self._dynamic, self._g, self.dt,
-                4.0 * st.linear_slop, st.linear_slop, mem.cache_keys, mem.cache_ids,
+                m.e_table, m.mu_table, s.x, s.v, s.omega, self._dynamic, self._g, self._pull,
+                self.dt, 4.0 * st.linear_slop, st.linear_slop, mem.cache_keys, mem.cache_ids,
                 mem.cache_impulses, int(mem.cache_count[0]), self._cf, self._ci,
             )
         )  # fmt: skip
@@ -159,16 +159,23 @@ class RigidEngine(SteppedEngine):
         return log, int(logged)
 
     def _fly(self, free: NDArray[np.int64]) -> None:
-        s, a = self.state, self._accel
+        s, a, dt = self.state, self._accel, self.dt
         for i in free.tolist():
-            motion.fly(i, self.dt, s.x, s.angle, s.v, s.omega, a[i, 0], a[i, 1])
+            motion.fly(i, dt, s.x, s.angle, s.v, s.omega, a[i, 0], a[i, 1])
+        if self._loads.on:  # a torque's constant angular acceleration, exactly
+            alpha = self._spin_load[free]
+            s.angle[free] += 0.5 * alpha * dt * dt
+            s.omega[free] += alpha * dt
+
+    def _spin_of(self, torque: FloatArray) -> FloatArray:
+        spin: FloatArray = torque * self.model.inv_inertia
+        return spin
 
     def _solve(self, nc: int, bodies: NDArray[np.int64], work: FloatArray) -> None:
         m, s = self.model, self.state
         solver.solve_step(
-            self._cf, self._ci, nc, bodies, m.inv_mass, m.inv_inertia, self._dynamic, s.x,
-            s.angle, s.v, s.omega, float(m.gravity[0]), float(m.gravity[1]), self._knobs(),
-            work,
+            self._cf, self._ci, nc, bodies, m.inv_mass, m.inv_inertia, self._accel,
+            self._spin_load, s.x, s.angle, s.v, s.omega, self._knobs(), work,
         )  # fmt: skip
 
     def _poses(self) -> tuple[FloatArray, FloatArray]:

@@ -63,8 +63,8 @@ __all__ = ["IMPACT_FIELDS", "continuous", "exact_impacts"]
 
 #: columns of a logged impact: time into the step, body A, body B, impulse on A (x, y),
 #: normal speeds before and after (the deepest point), the point (x, y), energy lost, work
-#: done by a kinematic partner
-IMPACT_FIELDS = 11
+#: done by a kinematic partner, the normal (x, y; from B to A)
+IMPACT_FIELDS = 13
 
 
 @njit(cache=True)
@@ -388,6 +388,8 @@ def _impact(
     record[8] = x[a, 1] + ray[j0]
     record[9] = energy - after + work
     record[10] = work
+    record[11] = nx
+    record[12] = ny
     return True
 
 
@@ -607,8 +609,8 @@ def _reach(
         )  # fmt: skip
         sweep_box(
             p, vertices, piece_start, piece_count, piece_radius, piece_reach, v[body, 0],
-            v[body, 1], omega[body], accel[body, 0], accel[body, 1], dt - now, True, margin,
-            box,
+            v[body, 1], omega[body], accel[body, 0], accel[body, 1], dt - now, True, 0.0,
+            margin, box,
         )  # fmt: skip
         cp, n, stop = look_around(
             p, k, box, boxes, island_of, piece_body, reach, (pairs, watch, watch_first), cp, n
@@ -674,7 +676,7 @@ def continuous(
             )  # fmt: skip
             sweep_box(
                 p, vertices, piece_start, piece_count, piece_radius, piece_reach, v[b, 0],
-                v[b, 1], omega[b], 0.0, 0.0, dt, False, 0.0, box,
+                v[b, 1], omega[b], 0.0, 0.0, dt, False, 0.0, 0.0, box,
             )  # fmt: skip
             found, total = statics_in(box, tree, open_statics, found)
             for j in range(total):

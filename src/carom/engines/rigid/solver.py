@@ -445,13 +445,12 @@ def solve_step(
     bodies: np.ndarray,
     inv_mass: np.ndarray,
     inv_inertia: np.ndarray,
-    gravity_on: np.ndarray,
+    accel: np.ndarray,
+    alpha: np.ndarray,
     x: np.ndarray,
     angle: np.ndarray,
     v: np.ndarray,
     omega: np.ndarray,
-    gx: float,
-    gy: float,
     knobs: tuple[float, int, float, float, float, float],
     work: np.ndarray,
 ) -> None:
@@ -463,6 +462,9 @@ def solve_step(
 
     Contacts flagged exact are skipped; every other contact must join bodies of ``bodies``
     or a body that does not move under impulses (static, kinematic: infinite mass).
+    ``accel`` (N, 2) [m/s^2] is each body's acceleration (gravity, and the forces given for
+    this step over the mass), ``alpha`` (N,) [rad/s^2] its angular acceleration (the torques
+    given over the moment of inertia); both enter the velocities each substep, as in Box2D.
     ``work[0]`` gains the work kinematic bodies did on the others [J].
     """
     dt, substeps, contact_hertz, damping_ratio, push_speed, restitution_threshold = knobs
@@ -480,9 +482,9 @@ def solve_step(
     )
     for _ in range(substeps):
         for i in bodies:
-            if gravity_on[i]:
-                state[i, S_VX] += h * gx
-                state[i, S_VY] += h * gy
+            state[i, S_VX] += h * accel[i, 0]
+            state[i, S_VY] += h * accel[i, 1]
+            state[i, S_W] += h * alpha[i]
         _warm_start(group, pair, kinematic, state, work)
         _solve(group, pair, kinematic, state, 1.0 / h, True, push_speed, work)
         for i in bodies:

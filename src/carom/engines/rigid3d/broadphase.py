@@ -25,11 +25,13 @@ def piece_boxes(
     vertices: np.ndarray, normals: np.ndarray, piece_kind: np.ndarray, piece_vstart: np.ndarray,
     piece_vcount: np.ndarray, piece_fstart: np.ndarray, piece_radius: np.ndarray,
     piece_reach: np.ndarray, piece_body: np.ndarray, v: np.ndarray, w: np.ndarray,
-    which: np.ndarray, gravity_on: np.ndarray, g: np.ndarray, dt: float, margin: float,
-    body_pieces: np.ndarray, boxes: np.ndarray,
+    which: np.ndarray, gravity_on: np.ndarray, g: np.ndarray, pull: np.ndarray, dt: float,
+    margin: float, body_pieces: np.ndarray, boxes: np.ndarray,
 ) -> None:  # fmt: skip
     """Swept boxes ``(lo x, lo y, lo z, hi x, hi y, hi z)`` [m] of the pieces of the bodies with
-    ``which[b]`` true, into ``boxes`` (P, 6); ``gravity_on[b]``: gravity ``g`` (3,) acts.
+    ``which[b]`` true, into ``boxes`` (P, 6); ``gravity_on[b]``: gravity ``g`` (3,) acts;
+    ``pull[b]``: the most the forces and torques given to body b for this step accelerate
+    any of its points [m/s^2] (0 without).
     Body b's pieces are ``body_pieces[b]`` to ``body_pieces[b + 1]``: the other bodies'
     pieces (a static terrain's millions of triangles) are not looked at."""
     for b in range(body_pieces.shape[0] - 1):
@@ -37,8 +39,8 @@ def piece_boxes(
             for p in range(body_pieces[b], body_pieces[b + 1]):
                 sweep_box(
                     p, b, vertices, normals, piece_kind, piece_vstart, piece_vcount,
-                    piece_fstart, piece_radius, piece_reach, v, w, gravity_on, g, dt, margin,
-                    boxes[p],
+                    piece_fstart, piece_radius, piece_reach, v, w, gravity_on, g, pull[b], dt,
+                    margin, boxes[p],
                 )  # fmt: skip
 
 
@@ -47,9 +49,11 @@ def sweep_box(
     p: int, b: int, vertices: np.ndarray, normals: np.ndarray, piece_kind: np.ndarray,
     piece_vstart: np.ndarray, piece_vcount: np.ndarray, piece_fstart: np.ndarray,
     piece_radius: np.ndarray, piece_reach: np.ndarray, v: np.ndarray, w: np.ndarray,
-    gravity_on: np.ndarray, g: np.ndarray, dt: float, margin: float, box: np.ndarray,
+    gravity_on: np.ndarray, g: np.ndarray, pull: float, dt: float, margin: float,
+    box: np.ndarray,
 ) -> None:  # fmt: skip
-    """Piece ``p``'s (of body ``b``) swept box over ``dt`` [s] into ``box`` (6,)."""
+    """Piece ``p``'s (of body ``b``) swept box over ``dt`` [s] into ``box`` (6,); ``pull``
+    [m/s^2] bounds what accelerates its points besides gravity."""
     if piece_kind[p] == PIECE_PLANE:
         n = normals[piece_fstart[p]]
         at = vertices[piece_vstart[p]]
@@ -67,6 +71,7 @@ def sweep_box(
     r = piece_radius[p] + margin
     turn = min(math.sqrt(w[b, 0] ** 2 + w[b, 1] ** 2 + w[b, 2] ** 2) * dt, 2.0)
     turn *= piece_reach[p]
+    turn += 0.5 * pull * dt * dt
     for k in range(3):
         lo = vertices[s, k]
         hi = lo

@@ -373,6 +373,7 @@ def narrow_phase(
     w: np.ndarray,
     gravity_on: np.ndarray,
     g: float,
+    pull: np.ndarray,
     dt: float,
     speculative: float,
     slop: float,
@@ -430,6 +431,7 @@ def narrow_phase(
             closing += math.sqrt(w[bb, 0] ** 2 + w[bb, 1] ** 2 + w[bb, 2] ** 2) * piece_reach[pb]
         if gravity_on[ba] != gravity_on[bb]:
             closing += g * dt
+        closing += (pull[ba] + pull[bb]) * dt
         margin = speculative + closing * dt
         # the kept manifold, if the pair has not moved too far since it was made
         key = pa * n_pieces + pb
@@ -482,8 +484,9 @@ def narrow_phase(
             ux, uy, uz = relative_velocity(ba, bb, ra, rb, v, w)
             un = ux * nx + uy * ny + uz * nz
             if not shared.keeps_point(
-                un, sep, gravity_on[ba] != gravity_on[bb], g, dt, speculative
-            ):
+                un, sep, gravity_on[ba] != gravity_on[bb], g, dt, speculative,
+                pull[ba] + pull[bb],
+            ):  # fmt: skip
                 continue
             o = point_offset(kept)
             cf[m, o + P_RAX] = ra[0]

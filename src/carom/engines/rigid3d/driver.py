@@ -139,7 +139,8 @@ class RigidEngine3D(SteppedEngine):
         broadphase.piece_boxes(
             s.vertices, s.normals, m.piece_kind, m.piece_vstart, m.piece_vcount,
             m.piece_fstart, m.piece_radius, m.piece_reach, m.piece_body, v, w, which,
-            self._dynamic, m.gravity, dt, 4.0 * self.settings.linear_slop, m.body_pieces,
+            self._dynamic, m.gravity, self._pull, dt, 4.0 * self.settings.linear_slop,
+            m.body_pieces,
             self._boxes,
         )  # fmt: skip
 
@@ -158,7 +159,8 @@ class RigidEngine3D(SteppedEngine):
                 self._kept.pairs, n_pairs, self._ints, m.piece_radius, m.piece_reach,
                 s.vertices, s.normals, m.face_first, m.face_size, m.corners, m.edges,
                 m.material, m.e_table, m.mu_table, m.rolling_table, s.x, s.q, s.v, s.w,
-                self._dynamic, self._g, self.dt, 4.0 * st.linear_slop, st.linear_slop,
+                self._dynamic, self._g, self._pull, self.dt, 4.0 * st.linear_slop,
+                st.linear_slop,
                 st.manifold_reuse * st.linear_slop, mem.cache_keys, mem.cache_ids,
                 mem.cache_impulses, int(mem.cache_count[0]), kept, self._made, self._cf, self._ci,
             )
@@ -204,11 +206,11 @@ class RigidEngine3D(SteppedEngine):
         )  # fmt: skip
 
     def _fly(self, free: NDArray[np.int64]) -> None:
-        m, s, g = self.model, self.state, self.model.gravity
+        m, s, a, t = self.model, self.state, self._accel, self._spin_load
         for i in free.tolist():
             motion.fly(
-                i, self.dt, self.settings.substeps, s.x, s.q, s.v, s.w, g[0], g[1], g[2],
-                m.inertia, m.inv_inertia,
+                i, self.dt, self.settings.substeps, s.x, s.q, s.v, s.w, a[i, 0], a[i, 1],
+                a[i, 2], m.inertia, m.inv_inertia, (t[i, 0], t[i, 1], t[i, 2]),
             )  # fmt: skip
 
     def _solver_bodies(self) -> NDArray[np.int64]:
@@ -218,7 +220,8 @@ class RigidEngine3D(SteppedEngine):
         m, s, dt = self.model, self.state, self.dt
         solver.solve_step(
             self._cf, self._ci, nc, bodies, m.inv_mass, m.inertia, m.inv_inertia,
-            self._dynamic, self._movers, s.x, s.q, s.v, s.w, m.gravity, self._knobs(), work,
+            self._accel, self._spin_load, self._movers, s.x, s.q, s.v, s.w, self._knobs(),
+            work,
         )  # fmt: skip
         for i in self._movers.tolist():  # kinematic bodies: their own steady motion
             s.x[i] += dt * s.v[i]

@@ -67,8 +67,8 @@ __all__ = ["IMPACT_FIELDS", "continuous", "exact_impacts", "normal_lcp"]
 
 #: columns of a logged impact: time into the step, body A, body B, impulse on A (x, y, z),
 #: normal speeds before and after (the first touching point), the point (x, y, z), energy
-#: lost
-IMPACT_FIELDS = 13
+#: lost, work done by a kinematic partner, the normal (x, y, z; from B to A)
+IMPACT_FIELDS = 16
 
 
 @njit(cache=True, inline="always")
@@ -294,6 +294,8 @@ def _impact(
     record[6] = un[0]
     record[7] = ux * n[0] + uy * n[1] + uz * n[2]
     record[11] = energy - after
+    for c in range(3):
+        record[13 + c] = n[c]
     return True
 
 
@@ -654,7 +656,7 @@ def _reach(
         )  # fmt: skip
         sweep_box(
             p, body, vertices, normals, piece_kind, piece_vstart, piece_vcount, piece_fstart,
-            piece_radius, piece_reach, v, w, dynamic, accel[body], dt - now, margin, box,
+            piece_radius, piece_reach, v, w, dynamic, accel[body], 0.0, dt - now, margin, box,
         )  # fmt: skip
         cp, n, stop = look_around(
             p, k, box, boxes, island_of, piece_body, reach, (pairs, watch, watch_first), cp, n
@@ -760,7 +762,7 @@ def continuous(
             )  # fmt: skip
             sweep_box(
                 p, b, vertices, normals, piece_kind, piece_vstart, piece_vcount, piece_fstart,
-                piece_radius, piece_reach, v, w, dynamic, still[b], dt, 0.0, box,
+                piece_radius, piece_reach, v, w, dynamic, still[b], 0.0, dt, 0.0, box,
             )  # fmt: skip
             found, total = statics_in(box, tree, open_statics, found)
             for j in range(total):

@@ -35,6 +35,7 @@ __all__ = [
     "place_pieces",
     "relative_velocity",
     "spin_energy",
+    "turn_under",
     "world_inverse_inertia",
     "world_inverse_row",
 ]
@@ -230,6 +231,18 @@ def free_turn(
     in ``substeps`` steps, or more so that none turns it by more than 0.02 rad (the error,
     ``(h |w|)^5 / 120`` a step, stays below 3e-11 of the energy); ``w`` is then the angular
     velocity that carries ``L`` at the new orientation."""
+    turn_under(i, dt, substeps, q, w, inertia, inv_inertia, 0.0, 0.0, 0.0)
+
+
+@njit(cache=True)
+def turn_under(
+    i: int, dt: float, substeps: int, q: np.ndarray, w: np.ndarray, inertia: np.ndarray,
+    inv_inertia: np.ndarray, tx: float, ty: float, tz: float,
+) -> None:  # fmt: skip
+    """Turn body ``i`` for ``dt`` [s] under the constant world torque ``(tx, ty, tz)`` [N m]:
+    its angular momentum is ``L + T t`` exactly, the orientation integrated as in
+    :func:`free_turn` (which this is, with no torque)."""
+    torqued = tx != 0.0 or ty != 0.0 or tz != 0.0
     r = np.empty(9)
     matrix(q, i, r)
     bx = r[0] * w[i, 0] + r[3] * w[i, 1] + r[6] * w[i, 2]
@@ -244,7 +257,8 @@ def free_turn(
     cy = bz * sx - bx * sz
     cz = bx * sy - by * sx
     size = abs(cx) + abs(cy) + abs(cz)
-    if size <= 1e-15 * (abs(sx) + abs(sy) + abs(sz)) * (abs(bx) + abs(by) + abs(bz)):
+    steady = size <= 1e-15 * (abs(sx) + abs(sy) + abs(sz)) * (abs(bx) + abs(by) + abs(bz))
+    if steady and not torqued:
         turn(q, i, w[i, 0], w[i, 1], w[i, 2], dt, 3)
         return
     # the angular momentum in the world, fixed
@@ -253,22 +267,30 @@ def free_turn(
     lz = r[6] * sx + r[7] * sy + r[8] * sz
     kinv = inv_inertia[i]
     spin = np.sqrt(w[i, 0] ** 2 + w[i, 1] ** 2 + w[i, 2] ** 2)
+    if torqued:  # the most it spins by the end, from the most I^-1 can give T
+        most = np.abs(kinv).sum() * np.sqrt(tx * tx + ty * ty + tz * tz) * dt
+        spin += most
     pieces = max(substeps, int(np.ceil(spin * dt / 0.02)))
     h = dt / pieces
-    for _ in range(pieces):
+    for k in range(pieces):
         p0, p1, p2, p3 = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
-        a0, a1, a2, a3 = _spin_rate(p0, p1, p2, p3, lx, ly, lz, kinv)
+        # L at the piece's start, middle and end (no torque: the same L throughout)
+        t0, t1 = k * h, (k + 0.5) * h
+        mx, my, mz = lx + tx * t1, ly + ty * t1, lz + tz * t1
+        a0, a1, a2, a3 = _spin_rate(p0, p1, p2, p3, lx + tx * t0, ly + ty * t0, lz + tz * t0, kinv)
         b0, b1, b2, b3 = _spin_rate(
             p0 + 0.5 * h * a0, p1 + 0.5 * h * a1, p2 + 0.5 * h * a2, p3 + 0.5 * h * a3,
-            lx, ly, lz, kinv,
+            mx, my, mz, kinv,
         )  # fmt: skip
         c0, c1, c2, c3 = _spin_rate(
             p0 + 0.5 * h * b0, p1 + 0.5 * h * b1, p2 + 0.5 * h * b2, p3 + 0.5 * h * b3,
-            lx, ly, lz, kinv,
+            mx, my, mz, kinv,
         )  # fmt: skip
+        t2 = (k + 1) * h
         d0, d1, d2, d3 = _spin_rate(
-            p0 + h * c0, p1 + h * c1, p2 + h * c2, p3 + h * c3, lx, ly, lz, kinv
-        )
+            p0 + h * c0, p1 + h * c1, p2 + h * c2, p3 + h * c3, lx + tx * t2, ly + ty * t2,
+            lz + tz * t2, kinv,
+        )  # fmt: skip
         p0 += h / 6.0 * (a0 + 2.0 * b0 + 2.0 * c0 + d0)
         p1 += h / 6.0 * (a1 + 2.0 * b1 + 2.0 * c1 + d1)
         p2 += h / 6.0 * (a2 + 2.0 * b2 + 2.0 * c2 + d2)
@@ -276,6 +298,9 @@ def free_turn(
         norm = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2 + p3 * p3)
         q[i, 0], q[i, 1], q[i, 2], q[i, 3] = p0 / norm, p1 / norm, p2 / norm, p3 / norm
     # the angular velocity that carries L at the new orientation
+    lx += tx * dt
+    ly += ty * dt
+    lz += tz * dt
     matrix(q, i, r)
     bx = r[0] * lx + r[3] * ly + r[6] * lz
     by = r[1] * lx + r[4] * ly + r[7] * lz
@@ -302,16 +327,18 @@ def fly(
     az: float,
     inertia: np.ndarray,
     inv_inertia: np.ndarray,
+    torque: tuple[float, float, float] = (0.0, 0.0, 0.0),
 ) -> None:
     """Body ``i`` in free flight for ``dt`` [s] under acceleration ``a`` [m/s^2]: the centre
-    exactly, the rotation by :func:`free_turn`."""
+    exactly, the rotation by :func:`turn_under` the world ``torque`` [N m] (by default none:
+    :func:`free_turn`)."""
     x[i, 0] += dt * (v[i, 0] + 0.5 * dt * ax)
     x[i, 1] += dt * (v[i, 1] + 0.5 * dt * ay)
     x[i, 2] += dt * (v[i, 2] + 0.5 * dt * az)
     v[i, 0] += dt * ax
     v[i, 1] += dt * ay
     v[i, 2] += dt * az
-    free_turn(i, dt, substeps, q, w, inertia, inv_inertia)
+    turn_under(i, dt, substeps, q, w, inertia, inv_inertia, torque[0], torque[1], torque[2])
 
 
 @njit(cache=True)

@@ -650,11 +650,19 @@ def _solve(
         _scatter(buf, pair, g, state)
 
 
+@njit(cache=True, inline="always")
+def _spin_up(state: np.ndarray, i: int, iw: np.ndarray, t: np.ndarray, h: float) -> None:
+    """Body ``i``'s spin in the solver's ``state`` gains ``h I^-1 T`` (``iw`` (9,) its world
+    inverse inertia, row by row; ``t`` (3,) the torque [N m]; ``h`` the substep [s])."""
+    for a in range(3):
+        state[i, S_W + a] += h * (iw[3 * a] * t[0] + iw[3 * a + 1] * t[1] + iw[3 * a + 2] * t[2])
+
+
 @njit(cache=True)
 def solve_step(
     cf: np.ndarray, ci: np.ndarray, nc: int, bodies: np.ndarray, inv_mass: np.ndarray,
-    inertia: np.ndarray, inv_inertia: np.ndarray, gravity_on: np.ndarray, movers: np.ndarray,
-    x: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray, g: np.ndarray,
+    inertia: np.ndarray, inv_inertia: np.ndarray, accel: np.ndarray, torque: np.ndarray,
+    movers: np.ndarray, x: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray,
     knobs: tuple[float, int, float, float, float, float], work: np.ndarray,
 ) -> None:  # fmt: skip
     """Advance the ``bodies`` (indices) and their contacts by one step, with ``knobs`` as in
@@ -664,8 +672,11 @@ def solve_step(
     a body that impulses do not move (static, kinematic: infinite mass); the kinematic ones
     among them are ``movers`` (indices), whose steady motion over the substeps counts in the
     contacts' separations (the driver moves them after the step). ``inertia`` and
-    ``inv_inertia`` (N, 3, 3) are body-frame tensors; ``g`` (3,) [m/s^2] acts on the bodies
-    with ``gravity_on``; ``work[0]`` gains the work kinematic bodies did on the others [J].
+    ``inv_inertia`` (N, 3, 3) are body-frame tensors; ``accel`` (N, 3) [m/s^2] is each body's
+    acceleration (gravity, and the forces given for this step over the mass) and ``torque``
+    (N, 3) [N m] the world torque given for this step, both entering the velocities each
+    substep as in Box2D; ``work[0]`` gains the work kinematic bodies did on the others, and
+    the torques' work on the bodies they turn [J].
     """
     dt, substeps, contact_hertz, damping_ratio, push_speed, restitution_threshold = knobs
     h, soft_moving, soft_fixed = shared.substep_softness(dt, substeps, contact_hertz, damping_ratio)
@@ -693,11 +704,13 @@ def solve_step(
     )  # fmt: skip
     turned = np.empty(9)
     elapsed = 0.0
+    torqued = np.any(torque != 0.0)
     for _ in range(substeps):
         for i in bodies:
-            if gravity_on[i]:
-                for k in range(3):
-                    state[i, S_V + k] += h * g[k]
+            for k in range(3):
+                state[i, S_V + k] += h * accel[i, k]
+            if torqued:
+                _spin_up(state, i, iw[i], torque[i], h)
         _warm_start(group, pair, kinematic, rolling, state, work)
         _solve(group, pair, kinematic, rolling, state, 1.0 / h, True, push_speed, work)
         for i in bodies:
@@ -707,6 +720,10 @@ def solve_step(
                 x[i, k] += h * v[i, k]
                 state[i, S_D + k] += h * v[i, k]
             free_turn(i, h, 1, q, w, inertia, inv_inertia)
+            if torqued:  # T . w over the substep, the w that turned the body
+                work[0] += h * (
+                    torque[i, 0] * w[i, 0] + torque[i, 1] * w[i, 1] + torque[i, 2] * w[i, 2]
+                )
             for k in range(3):
                 state[i, S_W + k] = w[i, k]  # the spin that carries the angular momentum
             # the turn since the step began: R(q) R(q_start)^T

@@ -12,6 +12,7 @@ with kernel_cache():
     from carom.engines.stepped import (  # noqa: F401
         broadphase,
         contacts,
+        events,
         islands,
         solver,
     )

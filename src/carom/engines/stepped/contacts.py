@@ -51,15 +51,19 @@ def find_cached(keys: np.ndarray, count: int, key: int, cursor: int) -> tuple[in
 
 @njit(cache=True, inline="always")
 def keeps_point(
-    un: float, sep: float, falls_apart: bool, g: float, dt: float, speculative: float
-) -> bool:
+    un: float, sep: float, falls_apart: bool, g: float, dt: float, speculative: float,
+    pull: float,
+) -> bool:  # fmt: skip
     """Whether a manifold point of separation ``sep`` [m] and normal relative speed ``un``
     [m/s] (negative: approaching) is kept: it lies within the speculative distance plus how
     far the pair can close along the normal during the step ``dt`` [s], the approach speed
-    and, when gravity ``g`` [m/s^2] acts on one body only (``falls_apart``), what it adds."""
+    and, when gravity ``g`` [m/s^2] acts on one body only (``falls_apart``), what it adds,
+    and what the forces and torques on the two bodies can add (``pull``, the most they
+    accelerate a point of either, summed [m/s^2]; 0 without)."""
     approach = max(0.0, -un)
     if falls_apart:
         approach += g * dt
+    approach += pull * dt
     kept: bool = sep <= speculative + approach * dt
     return kept
 

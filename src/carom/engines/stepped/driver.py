@@ -38,8 +38,10 @@ from carom.engines.base import COLLISION_DTYPE, PARTNER_BODY, Counters, FrameArr
 from carom.engines.stepped import islands
 from carom.engines.stepped.broadphase import KeptPairs, find_pairs, grid_cell
 from carom.engines.stepped.contacts import extremes, store_points
+from carom.engines.stepped.events import ContactEvents
+from carom.engines.stepped.loads import Loads
 from carom.engines.stepped.memory import StepMemory, new_memory
-from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
+from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT, point_layout
 from carom.engines.stepped.settings import RigidSettings
 from carom.geometry.bvh import build_bvh
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
@@ -137,12 +139,19 @@ class SteppedEngine:
         self.settings = settings
         self._start_totals(time)
         self.dt = settings.dt
+        #: the engine's whole step [s] (``dt`` is another during a step of another length)
+        self._whole = settings.dt
         n = model.kind.shape[0]
         if partners is None:
             partners = Partners(np.zeros(n, np.int8), np.arange(n, dtype=np.int64))
         self.partners = partners
         #: the caller's bodies: the first ``n_bodies``
         self.n_bodies = int(np.count_nonzero(partners.kind == PARTNER_BODY))
+        #: the contact events of the last step (:mod:`.events`)
+        self.events = ContactEvents(
+            self.DIMS, np.where(partners.kind == PARTNER_BODY, partners.number, -1),
+            point_layout(self.DIMS),
+        )  # fmt: skip
         self.cell = grid_cell(model.kind, model.piece_body, model.piece_reach)
         rows, dims = self.ROWS, self.DIMS
         self._cf = np.zeros((max(64, 2 * n), rows.CONTACT_FLOATS))
@@ -158,6 +167,13 @@ class SteppedEngine:
         self._movers = np.flatnonzero(self._kinematic)
         self._accel = np.zeros((n, dims))
         self._accel[self._dynamic] = model.gravity
+        #: the forces and torques given for the next step; during a step, the most they
+        #: accelerate each body's points [m/s^2] and each body's angular acceleration
+        #: [rad/s^2] in 2D, the torque [N m] in 3D (zeros without loads)
+        self._loads = loads = Loads(n, dims)
+        self._pull = loads.no_pull
+        self._spin_load = np.zeros_like(loads.torque)
+        self._no_impacts = np.zeros((0, self.IMPACTS.IMPACT_FIELDS))
         self._g = float(np.linalg.norm(model.gravity))
         self.n_contacts = 0
         self._n_pairs = 0  # the broad phase's pairs at the last step
@@ -262,6 +278,7 @@ class SteppedEngine:
         """Advance one step of ``dt`` [s]: stages 1 to 8 (module docstring)."""
         m, mem, st = self.model, self.memory, self.settings
         rows = self.ROWS
+        loaded = self._load() if self._loads.on else None
         nc = self._contacts()
         if st.sleep and islands.wake(
             self._ci, nc, m.kind, mem.awake, self._moving(), mem.clock, mem.island
@@ -273,15 +290,25 @@ class SteppedEngine:
         closest, closing = extremes(self._cf, self._ci, nc, self._extremes_layout)
         n_iso = islands.plan(
             self._ci, nc, closest, closing, m.kind, mem.awake, st.exact_impacts,
-            0.1 * st.linear_slop, self._closing_fast, self._leaving, self._parent,
+            0.1 * st.linear_slop, self._closing_fast, self._leaving,
+            self._loads.none_torqued if loaded is None else loaded[2], self._parent,
             self._role, isolated, island_first, self._island_of,
         )  # fmt: skip
+        met = self._no_impacts
         if n_iso:
             todo = Isolated(isolated, island_first, n_iso)
             log, logged = self._impact_kernel(todo)
             if logged:
-                self._book(log[:logged], sink)
-        self._fly(np.flatnonzero(self._role == islands.ROLE_FREE))
+                met = log[:logged]
+                self._book(met, sink)
+        free = np.flatnonzero(self._role == islands.ROLE_FREE)
+        if loaded is None:
+            self._fly(free)
+        else:  # a free body's load does all the work on it
+            pushed = free[loaded[0][free]]
+            before = self._energy(pushed)
+            self._fly(free)
+            self._work_done += self._energy(pushed) - before
         bodies = self._solver_bodies()
         before = self._energy(bodies)
         work = np.zeros(1)  # by kinematic bodies on the others, this step [J]
@@ -289,6 +316,8 @@ class SteppedEngine:
         self._solve(nc, bodies, work)
         if poses is not None:
             self._continuous(nc, closest, bodies, poses)
+        if loaded is not None:
+            work[0] += self._load_work(bodies, loaded)
         self._work_done += work[0]
         change = self._energy(bodies) - before - work[0]  # the solver's own part
         if change < 0.0:
@@ -311,10 +340,64 @@ class SteppedEngine:
         )  # fmt: skip
         rows.store_tangents(self._cf, self._ci, nc, cache)
         self._keep_manifolds()
+        if self.events.on:
+            self.events.update(
+                (self._cf, self._ci, nc), (rows.POINT0, rows.POINT_FLOATS, rows.I_FLAGS),
+                st.linear_slop, met, self.time, self._dynamic & mem.awake,
+            )  # fmt: skip
+        if loaded is not None:
+            self._work_done += self._load_work(
+                np.flatnonzero(self._role == islands.ROLE_EXACT), loaded
+            )
+            self._unload()
         if st.sleep:
             self._settle(nc)
         self.n_contacts = nc
         self.steps += 1
+
+    def _load(self) -> tuple[NDArray[np.bool_], FloatArray, NDArray[np.bool_], FloatArray]:
+        """Take the loads given for this step (:mod:`.loads`): each dynamic body's acceleration
+        gains ``F / m``, its points' reach the load's pull, its spin the torque; return the
+        bodies loaded, their positions now, those torqued, and their orientations now (2D:
+        the angles; 3D: none kept), for :meth:`_load_work`."""
+        m, loads = self.model, self._loads
+        on = loads.loaded()
+        dynamic = self._dynamic
+        self._accel[dynamic] += loads.force[dynamic] * m.inv_mass[dynamic, None]
+        self._pull = loads.pull(m.inv_mass, m.inv_inertia, m.reach)
+        self._spin_load = self._spin_of(loads.torque)
+        turn = self.state.angle.copy() if self.DIMS == 2 else np.zeros(0)
+        return on, self.state.x.copy(), loads.torqued(), turn
+
+    def _spin_of(self, torque: FloatArray) -> FloatArray:
+        """What the solver and free flight take of the torques (N,) or (N, 3) [N m]: 2D, the
+        angular accelerations [rad/s^2]; 3D, the torques themselves."""
+        return torque
+
+    def _load_work(
+        self,
+        rows: NDArray[np.int64],
+        loaded: tuple[NDArray[np.bool_], FloatArray, NDArray[np.bool_], FloatArray],
+    ) -> float:
+        """The work [J] the loads did on the bodies ``rows`` over the step: ``F . dx`` (exact
+        for a force constant through the step), and in 2D ``T dtheta`` (3D: the solver books
+        its torques' work, and the torques' islands are never solved exactly)."""
+        on, x0, _, turn0 = loaded
+        rows = rows[on[rows]]
+        if rows.size == 0:
+            return 0.0
+        loads, s = self._loads, self.state
+        work = float(np.sum(loads.force[rows] * (s.x[rows] - x0[rows])))
+        if self.DIMS == 2:
+            work += float(np.sum(loads.torque[rows] * (s.angle[rows] - turn0[rows])))
+        return work
+
+    def _unload(self) -> None:
+        """After the step: the loads cleared, each dynamic body's acceleration gravity again."""
+        self._accel[self._dynamic] = self.model.gravity
+        self._pull = self._loads.no_pull
+        self._spin_load = np.zeros_like(self._loads.torque)
+        self._loads.clear()
 
     def _contacts(self) -> int:
         """Stages 1 to 3: the contacts at the start of the step, into rows ``_cf``, ``_ci``;
@@ -488,7 +571,7 @@ class SteppedEngine:
     @property
     def time(self) -> float:
         """The clock [s]: its origin plus whole steps since."""
-        return self.start + self._since * self.dt
+        return self.start + self._since * self._whole
 
     def advance(
         self,
@@ -533,6 +616,22 @@ class SteppedEngine:
         self._kick(ids, impulses, points)
         self._wake_bodies(rows)
         self._work_done += self._energy(rows) - before
+
+    def apply_forces(
+        self, ids: NDArray[np.int64], forces: FloatArray, points: FloatArray | None
+    ) -> None:
+        """Forces ``forces`` (k, d) [N] on the dynamic bodies ``ids`` (k,) through the next step,
+        each at the world point ``points[j]`` (k, d) [m] (None: at the centre of mass), then
+        cleared (:mod:`.loads`). The bodies wake."""
+        arms = None if points is None else points - self.state.x[ids]
+        self._loads.add_forces(ids, forces, arms)
+        self._wake_bodies(np.unique(ids))
+
+    def apply_torques(self, ids: NDArray[np.int64], torques: FloatArray) -> None:
+        """Torques (k,) in 2D, (k, 3) in 3D [N m] on the dynamic bodies ``ids`` (k,) through
+        the next step, then cleared. The bodies wake."""
+        self._loads.add_torques(ids, torques)
+        self._wake_bodies(np.unique(ids))
 
     def set_motion(self, ids: NDArray[np.int64], field: str, values: FloatArray) -> None:
         """Set the state column ``field`` ("x", "v", the dimension's orientation or spin) of

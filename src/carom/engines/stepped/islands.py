@@ -61,6 +61,7 @@ def plan(
     apart: float,
     fast: float,
     leaving: float,
+    torqued: np.ndarray,
     parent: np.ndarray,
     role: np.ndarray,
     isolated: np.ndarray,
@@ -91,6 +92,9 @@ def plan(
     leaving : float
         And so is a touching contact whose every point separates faster than this [m/s]: the
         pair has just bounced, and flies apart exactly (inf: never).
+    torqued : (N,) bool
+        Bodies given a torque for this step: an island with one is the solver's (the exact
+        impacts move bodies at a constant spin between impacts).
     parent : (N,) int64
         Written: each body's island root (itself for non-dynamic bodies).
     role : (N,) int64
@@ -132,6 +136,8 @@ def plan(
             solver_only[r] = True
     for i in range(n):
         parent[i] = _root(parent, i)
+        if torqued[i]:
+            solver_only[parent[i]] = True
     for i in range(n):
         if kind[i] != KIND_DYNAMIC:
             role[i] = ROLE_SOLVER if kind[i] == KIND_KINEMATIC else ROLE_ASLEEP

@@ -1,0 +1,201 @@
+"""Contact events of the last step: pairs that began and ended touching, and hits.
+
+After each step a rigid engine knows which pairs of bodies touch: the contacts of the step's
+narrow phase with a point within the linear slop, and the pairs that met in an impact solved
+exactly during the step (an impact between two steps touches for an instant; it counts as
+touching in the step it happened). Against the last step's pairs this gives
+
+- **begin**: pairs touching now that did not at the last step (the point and normal of the
+  contact's deepest point; for a pair that met in an exact impact, the impact's);
+- **end**: pairs that touched at the last step and do not now;
+- **hit**: every exact impact and every solver contact that pushed, approaching at least the
+  threshold [m/s]; its time, point, normal and approach speed.
+
+Events name two bodies ``a < b`` (the engine's rows; a wall or plane of the world's box, not
+one of the caller's bodies, is -1 and comes first) and the normal points from ``a`` to ``b``.
+The arrays are NumPy structured arrays (:func:`event_dtypes`); the kernel reads the contact
+rows once, so events cost a few microseconds a step.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_COUNT, PointLayout
+
+__all__ = ["ContactEvents", "EventArrays", "event_dtypes", "touches"]
+
+
+def event_dtypes(d: int) -> tuple[np.dtype[np.void], np.dtype[np.void], np.dtype[np.void]]:
+    """The structured dtypes of ``begin``, ``end`` and ``hit`` events in ``d`` dimensions."""
+    begin = np.dtype([("a", np.int64), ("b", np.int64), ("point", np.float64, (d,)),
+                      ("normal", np.float64, (d,))])  # fmt: skip
+    end = np.dtype([("a", np.int64), ("b", np.int64)])
+    hit = np.dtype([("a", np.int64), ("b", np.int64), ("time", np.float64),
+                    ("point", np.float64, (d,)), ("normal", np.float64, (d,)),
+                    ("speed", np.float64)])  # fmt: skip
+    return begin, end, hit
+
+
+class EventArrays(NamedTuple):
+    """One step's contact events: structured arrays (:func:`event_dtypes`)."""
+
+    #: pairs that began touching: ``a``, ``b``, ``point`` (d,) [m], ``normal`` (d,) from a to b
+    begin: NDArray[np.void]
+    #: pairs that stopped touching: ``a``, ``b``
+    end: NDArray[np.void]
+    #: impacts at least the threshold: ``a``, ``b``, ``time`` [s], ``point``, ``normal``,
+    #: ``speed`` [m/s] (the approach speed along the normal, positive)
+    hit: NDArray[np.void]
+
+
+@njit(cache=True)
+def touches(
+    cf: np.ndarray, ci: np.ndarray, nc: int, point0: int, point_floats: int, d: int,
+    layout: tuple[int, int, int, int], flags: int, slop: float, threshold: float,
+    log: np.ndarray, logged: int, number: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """The pairs touching this step and its hits.
+
+    ``cf``, ``ci``: the step's ``nc`` contact rows (their points from column ``point0``,
+    ``point_floats`` each; ``layout``: a point's separation, normal relative speed, total
+    normal impulse and position columns; the flags' column ``flags``); ``log``: the step's
+    ``logged`` exact impacts (time into the step, A, B, ..., the normal in the last ``d``
+    columns, the point after the impulse and speeds, as the dimension logs them); ``number``
+    (N,): each engine row's caller number (-1: a wall or plane).
+
+    Returns ``keys`` (k,) int64 (``a`` and ``b``, in ``number``'s terms plus one, as
+    ``a * (N + 1) + b``), ``where`` (k, 2 d) their point and normal, and the hits as ``pairs``
+    (h, 2), ``times`` (h,) (into the step), ``values`` (h, 2 d + 1) point, normal, speed.
+    """
+    sep_col, vrel_col, total_col, at_col = layout
+    n = number.shape[0] + 1
+    keys = np.empty(nc + logged, np.int64)
+    where = np.empty((nc + logged, 2 * d))
+    pairs = np.empty((nc + logged, 2), np.int64)
+    times = np.empty(nc + logged)
+    values = np.empty((nc + logged, 2 * d + 1))
+    k = 0
+    h = 0
+    for m in range(nc):
+        a = number[ci[m, I_BODY_A]]
+        b = number[ci[m, I_BODY_B]]
+        sign = 1.0 if a < b else -1.0  # the normal from a to b: the rows' is from B to A
+        lo, hi = min(a, b), max(a, b)
+        deepest = np.inf
+        best = 0
+        fastest = 0.0
+        quick = -1
+        for j in range(ci[m, I_COUNT]):
+            o = point0 + j * point_floats
+            if cf[m, o + sep_col] < deepest:
+                deepest = cf[m, o + sep_col]
+                best = o
+            approach = -cf[m, o + vrel_col]
+            exact = ci[m, flags] & FLAG_EXACT
+            if not exact and cf[m, o + total_col] > 0.0 and approach > fastest:
+                fastest = approach
+                quick = o
+        if deepest <= slop:
+            keys[k] = (lo + 1) * n + (hi + 1)
+            for c in range(d):
+                where[k, c] = cf[m, best + at_col + c]
+                where[k, d + c] = -sign * cf[m, c]
+            k += 1
+        if quick >= 0 and fastest >= threshold:
+            pairs[h, 0], pairs[h, 1] = lo, hi
+            times[h] = 0.0
+            for c in range(d):
+                values[h, c] = cf[m, quick + at_col + c]
+                values[h, d + c] = -sign * cf[m, c]
+            values[h, 2 * d] = fastest
+            h += 1
+    width = log.shape[1]
+    for r in range(logged):
+        a = number[int(log[r, 1])]
+        b = number[int(log[r, 2])]
+        sign = 1.0 if a < b else -1.0
+        lo, hi = min(a, b), max(a, b)
+        keys[k] = (lo + 1) * n + (hi + 1)
+        for c in range(d):
+            where[k, c] = log[r, 5 + d + c]
+            where[k, d + c] = -sign * log[r, width - d + c]
+        k += 1
+        approach = -log[r, 3 + d]
+        if approach >= threshold:
+            pairs[h, 0], pairs[h, 1] = lo, hi
+            times[h] = log[r, 0]
+            for c in range(2 * d):
+                values[h, c] = where[k - 1, c]
+            values[h, 2 * d] = approach
+            h += 1
+    return keys[:k], where[:k], pairs[:h], times[:h], values[:h]
+
+
+class ContactEvents:
+    """The pairs touching at the last step, and the events of the last step, for an engine of
+    ``d`` dimensions whose rows are numbered ``number`` (N,) for the caller (-1: walls).
+
+    :meth:`update` after each step while :attr:`on`; :attr:`last` the step's events.
+    """
+
+    def __init__(self, d: int, number: NDArray[np.int64], layout: PointLayout) -> None:
+        self.d = d
+        self.number = number
+        self.layout = (layout.sep, layout.vrel, layout.total, layout.at)
+        self.dtypes = event_dtypes(d)
+        #: the last step's touching pairs (sorted keys) and the threshold for hits [m/s]
+        self.keys = np.zeros(0, np.int64)
+        self.threshold = 1.0
+        #: whether steps gather events (a game loop's steps do; a run's need not pay for them)
+        self.on = False
+        self.last = EventArrays(*(np.zeros(0, t) for t in self.dtypes))
+
+    def update(
+        self,
+        rows: tuple[NDArray[np.float64], NDArray[np.int64], int],
+        columns: tuple[int, int, int],
+        slop: float,
+        log: NDArray[np.float64],
+        start: float,
+        moving: NDArray[np.bool_],
+    ) -> None:
+        """The events of the step that began at ``start`` [s], from its contact ``rows``
+        (floats, ints, count; ``columns``: the first point's column, a point's width, the
+        flags' column) and its exact impacts' ``log``. ``moving`` (N,) marks the awake
+        dynamic bodies: a pair of which neither moves (asleep, static) has no contact row
+        while it sleeps, and still touches (as in Box2D, sleep ends nothing)."""
+        cf, ci, nc = rows
+        point0, point_floats, flags = columns
+        keys, where, pairs, times, values = touches(
+            cf, ci, nc, point0, point_floats, self.d, self.layout, flags, slop,
+            self.threshold, log, log.shape[0], self.number,
+        )  # fmt: skip
+        n = self.number.shape[0] + 1
+        kept = self.keys
+        if kept.size:
+            a, b = kept // n - 1, kept % n - 1  # (a wall, -1, never moves)
+            still = ~(moving[np.maximum(a, 0)] & (a >= 0)) & ~(moving[np.maximum(b, 0)] & (b >= 0))
+            kept = kept[still]
+        now, first = np.unique(np.concatenate((keys, kept)), return_index=True)
+        began = ~np.isin(now, self.keys, assume_unique=True)
+        ended = self.keys[~np.isin(self.keys, now, assume_unique=True)]
+        d = self.d
+        begin_t, end_t, hit_t = self.dtypes
+        begin = np.zeros(int(began.sum()), begin_t)
+        begin["a"], begin["b"] = now[began] // n - 1, now[began] % n - 1
+        chosen = where[first[began]]  # (a pair that began has a row this step)
+        begin["point"], begin["normal"] = chosen[:, :d], chosen[:, d:]
+        end = np.zeros(ended.size, end_t)
+        end["a"], end["b"] = ended // n - 1, ended % n - 1
+        hit = np.zeros(pairs.shape[0], hit_t)
+        hit["a"], hit["b"] = pairs[:, 0], pairs[:, 1]
+        hit["time"] = start + times
+        hit["point"], hit["normal"] = values[:, :d], values[:, d : 2 * d]
+        hit["speed"] = values[:, 2 * d]
+        self.keys = now
+        self.last = EventArrays(begin, end, hit)
