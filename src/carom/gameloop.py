@@ -130,7 +130,8 @@ class GameLoop:
             (d,) from a to b); ``end``: pairs that stopped (``a``, ``b``); ``hit``: impacts
             approaching at least :attr:`hit_threshold` (``a``, ``b``, ``time`` [s], ``point``,
             ``normal``, ``speed`` [m/s], the approach speed along the normal). Bodies are the
-            world's indices, ``a < b``; -1 is a wall of the world's box.
+            world's indices, ``a < b``; -1 is a wall or plane of the world's scenery
+            (its box, :meth:`add_plane`).
 
         Notes
         -----

@@ -41,6 +41,7 @@ from carom.gameloop import GameLoop
 from carom.limits import check_body_count
 from carom.materials import Material
 from carom.observables import Stats
+from carom.queries import Queries
 from carom.recording import (
     RECORD_BYTES,
     Frame,
@@ -61,7 +62,7 @@ __all__ = ["LOG_LIMIT", "RECORD_BYTES", "Frame", "Material", "Recording", "World
 FloatArray = NDArray[np.float64]
 
 
-class World(Scenery, GameLoop):
+class World(Scenery, GameLoop, Queries):
     """Bodies in a box, advanced by an engine: spheres (3D) or disks (2D) simulated exactly,
     event by event, or rigid bodies of any shape in 2D and 3D, step by step.
 

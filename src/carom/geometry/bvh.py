@@ -23,7 +23,9 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-__all__ = ["LEAF", "Bvh", "build_bvh", "empty_bvh", "query_bvh"]
+from carom.geometry.rays import ray_box
+
+__all__ = ["LEAF", "Bvh", "build_bvh", "empty_bvh", "query_bvh", "ray_query_bvh"]
 
 #: boxes in a leaf at most
 LEAF = 4
@@ -186,6 +188,42 @@ def query_bvh(
             for k in range(first[node], first[node] + count[node]):
                 item = order[k]
                 if not overlap(boxes, item, query):
+                    continue
+                if found < out.shape[0]:
+                    out[found] = item
+                found += 1
+            continue
+        stack[top] = left[node] + 1
+        stack[top + 1] = left[node]
+        top += 2
+    return found
+
+
+@njit(cache=True)
+def ray_query_bvh(
+    node_box: np.ndarray, left: np.ndarray, first: np.ndarray, count: np.ndarray,
+    order: np.ndarray, boxes: np.ndarray, o: np.ndarray, inv: np.ndarray, t_max: float,
+    out: np.ndarray, start: int,
+) -> int:  # fmt: skip
+    """The boxes of ``boxes`` (T, 2 d) in the tree that the ray from ``o`` (d,) with inverse
+    direction ``inv`` (d,) meets within ``[0, t_max]`` [m] (:func:`carom.geometry.rays.ray_box`),
+    into ``out`` from ``start``; returns where they end (past ``out``'s size: grow it and ask
+    again)."""
+    stack = np.empty(128, np.int64)
+    stack[0] = 0
+    top = 1
+    found = start
+    while top > 0:
+        top -= 1
+        node = stack[top]
+        if count[node] == 0 and left[node] == 0:
+            continue  # an empty tree's root
+        if not ray_box(o, inv, node_box[node], t_max):
+            continue
+        if count[node] > 0:
+            for k in range(first[node], first[node] + count[node]):
+                item = order[k]
+                if not ray_box(o, inv, boxes[item], t_max):
                     continue
                 if found < out.shape[0]:
                     out[found] = item

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.rigid import broadphase, contacts, impacts, motion, solver
+from carom.engines.rigid import broadphase, contacts, impacts, motion, queries, solver
 from carom.engines.rigid.model import RigidModel, RigidState
 from carom.engines.stepped.driver import Isolated, SteppedEngine
 from carom.engines.stepped.settings import RigidSettings
@@ -166,6 +166,14 @@ class RigidEngine(SteppedEngine):
             alpha = self._spin_load[free]
             s.angle[free] += 0.5 * alpha * dt * dt
             s.omega[free] += alpha * dt
+
+    def _cast(self, rays: tuple[FloatArray, ...], movers: tuple[Any, ...], hits: Any) -> None:
+        m, s = self.model, self.state
+        queries.cast_rays(
+            rays[0], rays[1], rays[2], self._reach[0], self._reach[1], movers, s.x, s.angle,
+            m.piece_body, m.piece_start, m.piece_count, m.piece_radius, m.local_vertices,
+            m.local_normals, hits[0], hits[1], hits[2],
+        )  # fmt: skip
 
     def _spin_of(self, torque: FloatArray) -> FloatArray:
         spin: FloatArray = torque * self.model.inv_inertia

@@ -10,4 +10,11 @@ flight), ``broadphase`` (swept boxes in a hashed grid), ``contacts`` (manifolds,
 from carom.jit import kernel_cache
 
 with kernel_cache():
-    from carom.engines.rigid3d import broadphase, contacts, impacts, motion, solver  # noqa: F401
+    from carom.engines.rigid3d import (  # noqa: F401
+        broadphase,
+        contacts,
+        impacts,
+        motion,
+        queries,
+        solver,
+    )

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.rigid3d import broadphase, contacts, impacts, motion, solver
+from carom.engines.rigid3d import broadphase, contacts, impacts, motion, queries, solver
 from carom.engines.rigid3d.model import Model3D, State3D, empty_manifolds
 from carom.engines.stepped import islands
 from carom.engines.stepped.driver import Isolated, SteppedEngine
@@ -212,6 +212,15 @@ class RigidEngine3D(SteppedEngine):
                 i, self.dt, self.settings.substeps, s.x, s.q, s.v, s.w, a[i, 0], a[i, 1],
                 a[i, 2], m.inertia, m.inv_inertia, (t[i, 0], t[i, 1], t[i, 2]),
             )  # fmt: skip
+
+    def _cast(self, rays: tuple[FloatArray, ...], movers: tuple[Any, ...], hits: Any) -> None:
+        m, s = self.model, self.state
+        queries.cast_rays(
+            rays[0], rays[1], rays[2], self._reach[0], self._reach[1], movers, s.x, s.q,
+            (m.piece_body, m.piece_kind, m.piece_vstart, m.piece_vcount, m.piece_fstart,
+             m.piece_fcount, m.piece_cstart), m.piece_radius, m.local_vertices,
+            m.local_normals, m.face_first, m.face_size, m.corners, hits[0], hits[1], hits[2],
+        )  # fmt: skip
 
     def _solver_bodies(self) -> NDArray[np.int64]:
         return np.flatnonzero((self._role == islands.ROLE_SOLVER) & self._dynamic)

@@ -43,7 +43,7 @@ from carom.engines.stepped.loads import Loads
 from carom.engines.stepped.memory import StepMemory, new_memory
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT, point_layout
 from carom.engines.stepped.settings import RigidSettings
-from carom.geometry.bvh import build_bvh
+from carom.geometry.bvh import build_bvh, empty_bvh
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
 
 __all__ = ["STOP_CHECK_STEPS", "Isolated", "SteppedEngine"]
@@ -632,6 +632,40 @@ class SteppedEngine:
         the next step, then cleared. The bodies wake."""
         self._loads.add_torques(ids, torques)
         self._wake_bodies(np.unique(ids))
+
+    def cast_rays(
+        self, origins: FloatArray, directions: FloatArray, lengths: FloatArray
+    ) -> tuple[FloatArray, NDArray[np.int64], FloatArray]:
+        """Rays from ``origins`` (R, d) [m] along unit ``directions`` (R, d) up to ``lengths``
+        (R,) [m] against every body now (:mod:`carom.geometry.rays`): each one's distance [m]
+        (inf: no hit), the engine row of the body hit (-1) and the outward normal there
+        (R, d)."""
+        m, s = self.model, self.state
+        rays = origins.shape[0]
+        distance = np.empty(rays)
+        piece = np.empty(rays, np.int64)
+        normal = np.zeros((rays, self.DIMS))
+        movers = self._reach[2]
+        # the moving bodies' pieces within their reach of their centres now: a tree over those
+        # boxes for many rays, one by one for a few
+        boxes = np.zeros((m.piece_body.shape[0], 2 * self.DIMS))
+        if movers.size:
+            centre = s.x[m.piece_body[movers]]
+            reach = (m.piece_reach[movers] + m.piece_radius[movers])[:, None]
+            boxes[movers] = np.hstack((centre - reach, centre + reach))
+        if rays >= 8 and movers.size:
+            tree = build_bvh(boxes, movers)
+            kept = movers[:0]
+        else:
+            tree, kept = empty_bvh(self.DIMS), movers
+        trees = (tree.box, tree.left, tree.first, tree.count, tree.order, boxes, kept)
+        self._cast((origins, directions, lengths), trees, (distance, piece, normal))
+        body = np.where(piece >= 0, m.piece_body[np.maximum(piece, 0)], -1)
+        return distance, body, normal
+
+    def _cast(self, rays: tuple[FloatArray, ...], movers: tuple[Any, ...], hits: Any) -> None:
+        """The dimension's ray kernel (:meth:`cast_rays`)."""
+        raise NotImplementedError
 
     def set_motion(self, ids: NDArray[np.int64], field: str, values: FloatArray) -> None:
         """Set the state column ``field`` ("x", "v", the dimension's orientation or spin) of

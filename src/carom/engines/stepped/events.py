@@ -11,8 +11,9 @@ touching in the step it happened). Against the last step's pairs this gives
 - **hit**: every exact impact and every solver contact that pushed, approaching at least the
   threshold [m/s]; its time, point, normal and approach speed.
 
-Events name two bodies ``a < b`` (the engine's rows; a wall or plane of the world's box, not
-one of the caller's bodies, is -1 and comes first) and the normal points from ``a`` to ``b``.
+Events name two bodies ``a < b`` (the caller's numbers; a wall of the world's box or a plane,
+not one of the caller's bodies, is -1 and comes first) and the normal points from ``a`` to
+``b``.
 The arrays are NumPy structured arrays (:func:`event_dtypes`); the kernel reads the contact
 rows once, so events cost a few microseconds a step.
 """

@@ -1,0 +1,88 @@
+"""Rays cast into a 2D rigid world, many in one compiled call (:mod:`carom.geometry.rays`).
+
+A ray meets the pieces whose boxes it crosses: the static pieces through the engine's tree
+over them (built once), the pieces of the bodies that move through a tree over their reach
+built for the call (or one by one for a few rays), and each piece met is placed at its body's
+pose now and tested exactly. The nearest hit within the ray's length wins.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from carom.geometry.bvh import ray_query_bvh
+from carom.geometry.rays import ray_box, ray_rounded_polygon
+
+__all__ = ["cast_rays"]
+
+
+@njit(cache=True, error_model="numpy")
+def cast_rays(
+    origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray, statics: tuple[Any, ...],
+    open_statics: np.ndarray, movers: tuple[Any, ...], x: np.ndarray, angle: np.ndarray,
+    piece_body: np.ndarray, piece_start: np.ndarray, piece_count: np.ndarray,
+    piece_radius: np.ndarray, local_vertices: np.ndarray, local_normals: np.ndarray,
+    distance: np.ndarray, piece: np.ndarray, normal: np.ndarray,
+) -> None:  # fmt: skip
+    """Cast rays ``origins`` (R, 2) [m] along unit ``directions`` (R, 2) up to ``lengths``
+    (R,) [m]: each one's ``distance`` [m] (inf: no hit), the ``piece`` hit (-1) and the outward
+    ``normal`` (R, 2) there.
+
+    ``statics``: the static pieces' tree (node boxes, left, first, count, order) and their
+    boxes; ``open_statics`` the static pieces with no finite box; ``movers``: the other pieces'
+    tree and boxes (a tree of one empty root: test ``movers[5]``'s pieces one by one).
+    """
+    s_box, s_left, s_first, s_count, s_order, s_boxes = statics
+    m_box, m_left, m_first, m_count, m_order, m_boxes, m_all = movers
+    widest = 1
+    for p in range(piece_count.shape[0]):
+        widest = max(widest, piece_count[p])
+    v = np.empty((widest, 2))
+    n = np.empty((widest, 2))
+    found = np.empty(64, np.int64)
+    inv = np.empty(2)
+    out = np.empty(2)
+    for r in range(origins.shape[0]):
+        o, d = origins[r], directions[r]
+        inv[0], inv[1] = 1.0 / d[0], 1.0 / d[1]
+        best = lengths[r]
+        distance[r] = math.inf
+        piece[r] = -1
+        while True:
+            k = ray_query_bvh(s_box, s_left, s_first, s_count, s_order, s_boxes, o, inv, best,
+                              found, 0)  # fmt: skip
+            if m_count.shape[0] > 1 or m_count[0] > 0:
+                k = ray_query_bvh(m_box, m_left, m_first, m_count, m_order, m_boxes, o, inv,
+                                  best, found, k)  # fmt: skip
+            if k <= found.shape[0]:
+                break
+            found = np.empty(2 * k, np.int64)
+        for j in range(k + open_statics.shape[0] + m_all.shape[0]):
+            if j < k:
+                p = found[j]
+            elif j < k + open_statics.shape[0]:
+                p = open_statics[j - k]
+            else:
+                p = m_all[j - k - open_statics.shape[0]]
+                if not ray_box(o, inv, m_boxes[p], best):
+                    continue
+            b = piece_body[p]
+            c, s = math.cos(angle[b]), math.sin(angle[b])
+            first, count = piece_start[p], piece_count[p]
+            for i in range(count):
+                lx, ly = local_vertices[first + i, 0], local_vertices[first + i, 1]
+                v[i, 0] = x[b, 0] + (c * lx - s * ly)
+                v[i, 1] = x[b, 1] + (s * lx + c * ly)
+                nx, ny = local_normals[first + i, 0], local_normals[first + i, 1]
+                n[i, 0] = c * nx - s * ny
+                n[i, 1] = s * nx + c * ny
+            t = ray_rounded_polygon(o, d, v, n, count, piece_radius[p], out)
+            if t <= best and t < distance[r]:
+                best = t
+                distance[r] = t
+                piece[r] = p
+                normal[r, 0], normal[r, 1] = out[0], out[1]

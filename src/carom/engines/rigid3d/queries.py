@@ -1,0 +1,113 @@
+"""Rays cast into a 3D rigid world, many in one compiled call (:mod:`carom.geometry.rays`).
+
+As in 2D (:mod:`carom.engines.rigid.queries`): the static pieces through the engine's tree
+over them, the planes one by one, the moving bodies' pieces through a tree over their reach
+(or one by one for a few rays); each piece met is placed at its body's pose now and tested
+exactly: a sphere, a capsule, a convex polytope (boxes, hulls, a mesh's triangles) or a plane.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from carom.engines.rigid3d.model import PIECE_PLANE, PIECE_ROUND
+from carom.geometry.bvh import ray_query_bvh
+from carom.geometry.rays import ray_box, ray_capsule, ray_plane, ray_polytope, ray_sphere
+from carom.geometry.rotation import matrix
+
+__all__ = ["cast_rays"]
+
+
+@njit(cache=True, error_model="numpy")
+def cast_rays(
+    origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray, statics: tuple[Any, ...],
+    open_statics: np.ndarray, movers: tuple[Any, ...], x: np.ndarray, q: np.ndarray,
+    model_ints: tuple[Any, ...], piece_radius: np.ndarray, local_vertices: np.ndarray,
+    local_normals: np.ndarray, face_first: np.ndarray, face_size: np.ndarray,
+    corners: np.ndarray, distance: np.ndarray, piece: np.ndarray, normal: np.ndarray,
+) -> None:  # fmt: skip
+    """Cast rays ``origins`` (R, 3) [m] along unit ``directions`` (R, 3) up to ``lengths``
+    (R,) [m]: each one's ``distance`` [m] (inf: no hit), the ``piece`` hit (-1) and the outward
+    ``normal`` (R, 3) there. ``model_ints``: the pieces' body, kind, vertex start and count,
+    face start and count, corner start (:class:`.model.Model3D`); ``statics``, ``open_statics``
+    and ``movers`` as in 2D (:func:`carom.engines.rigid.queries.cast_rays`)."""
+    piece_body, piece_kind, vstart, vcount, fstart, fcount, cstart = model_ints
+    s_box, s_left, s_first, s_count, s_order, s_boxes = statics
+    m_box, m_left, m_first, m_count, m_order, m_boxes, m_all = movers
+    widest, faces = 1, 1
+    for p in range(piece_body.shape[0]):
+        widest = max(widest, vcount[p])
+        faces = max(faces, fcount[p])
+    v = np.empty((widest, 3))
+    n = np.empty((faces, 3))
+    rot = np.empty(9)
+    found = np.empty(64, np.int64)
+    inv = np.empty(3)
+    out = np.empty(3)
+    for r in range(origins.shape[0]):
+        o, d = origins[r], directions[r]
+        for k in range(3):
+            inv[k] = 1.0 / d[k]
+        best = lengths[r]
+        distance[r] = math.inf
+        piece[r] = -1
+        while True:
+            k = ray_query_bvh(s_box, s_left, s_first, s_count, s_order, s_boxes, o, inv, best,
+                              found, 0)  # fmt: skip
+            if m_count.shape[0] > 1 or m_count[0] > 0:
+                k = ray_query_bvh(m_box, m_left, m_first, m_count, m_order, m_boxes, o, inv,
+                                  best, found, k)  # fmt: skip
+            if k <= found.shape[0]:
+                break
+            found = np.empty(2 * k, np.int64)
+        n_open = open_statics.shape[0]
+        for j in range(k + n_open + m_all.shape[0]):
+            if j < k:
+                p = found[j]
+            elif j < k + n_open:
+                p = open_statics[j - k]
+            else:
+                p = m_all[j - k - n_open]
+                if not ray_box(o, inv, m_boxes[p], best):
+                    continue
+            b = piece_body[p]
+            matrix(q, b, rot)
+            for i in range(vcount[p]):
+                lv = local_vertices[vstart[p] + i]
+                for a in range(3):
+                    v[i, a] = (
+                        x[b, a]
+                        + rot[3 * a] * lv[0]
+                        + rot[3 * a + 1] * lv[1]
+                        + (rot[3 * a + 2] * lv[2])
+                    )
+            for f in range(fcount[p]):
+                ln = local_normals[fstart[p] + f]
+                for a in range(3):
+                    n[f, a] = rot[3 * a] * ln[0] + rot[3 * a + 1] * ln[1] + rot[3 * a + 2] * ln[2]
+            kind = piece_kind[p]
+            if kind == PIECE_PLANE:
+                t = ray_plane(o, d, v[0], n[0])
+                out[0], out[1], out[2] = n[0, 0], n[0, 1], n[0, 2]
+            elif kind == PIECE_ROUND and vcount[p] == 1:
+                t = ray_sphere(o, d, v[0], piece_radius[p])
+                if t < math.inf:
+                    for a in range(3):
+                        out[a] = (o[a] + t * d[a] - v[0, a]) / piece_radius[p]
+            elif kind == PIECE_ROUND:
+                t = ray_capsule(o, d, v[0], v[1], piece_radius[p], out)
+            else:
+                fs, fc = fstart[p], fcount[p]
+                t = ray_polytope(
+                    o, d, v[: vcount[p]], n[:fc], face_first[fs : fs + fc],
+                    face_size[fs : fs + fc], corners[cstart[p] :], out,
+                )  # fmt: skip
+            if t <= best and t < distance[r]:
+                best = t
+                distance[r] = t
+                piece[r] = p
+                normal[r, 0], normal[r, 1], normal[r, 2] = out[0], out[1], out[2]

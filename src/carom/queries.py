@@ -1,0 +1,186 @@
+"""Asking a world about its bodies now: rays (issue 43, item 4).
+
+:class:`Queries` is the part of :class:`carom.World` that casts rays: ``world.ray_cast`` for
+one (the first body a line of sight meets), ``world.ray_casts`` for many in one compiled call
+(a lidar, a line of sight for every unit). Every shape kind is met exactly, at its closed form
+(:mod:`carom.geometry.rays`): circles, capsules, boxes, polygons, compounds, segments and
+chains in 2D; spheres, capsules, boxes, hulls, compounds, meshes and planes in 3D. A ray that
+starts inside a body does not hit that body. The rigid engines.
+
+>>> import carom
+>>> from carom.shapes import Circle
+>>> world = carom.World(2, [10.0, 10.0], boundary="open")
+>>> _ = world.add_body(Circle(1.0), [5.0, 5.0])
+>>> hit = world.ray_cast([0.0, 5.0], [1.0, 0.0])
+>>> hit.body, round(hit.distance, 12), hit.normal.tolist()
+(0, 4.0, [-1.0, 0.0])
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple, Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from carom.engines.base import PARTNER_BODY, Engine
+from carom.engines.stepped.driver import SteppedEngine
+from carom.errors import CaromError
+from carom.limits import LARGEST
+
+__all__ = ["Queries", "RayHit", "ray_dtype"]
+
+
+class _World(Protocol):
+    """What :class:`Queries` takes from the World it is part of."""
+
+    @property
+    def dim(self) -> int: ...
+
+    def build(self) -> Engine: ...
+
+
+class RayHit(NamedTuple):
+    """The first body a ray meets (:meth:`Queries.ray_cast`)."""
+
+    #: the body's index (-1: a wall or plane of the world's scenery)
+    body: int
+    #: where the ray enters it (d,) [m]
+    point: NDArray[np.float64]
+    #: the body's outward unit normal there (d,)
+    normal: NDArray[np.float64]
+    #: from the ray's origin [m]
+    distance: float
+
+
+def ray_dtype(d: int) -> np.dtype[np.void]:
+    """The structured dtype of :meth:`Queries.ray_casts`' hits in ``d`` dimensions."""
+    return np.dtype([("body", np.int64), ("point", np.float64, (d,)),
+                     ("normal", np.float64, (d,)), ("distance", np.float64)])  # fmt: skip
+
+
+class Queries:
+    """Rays cast into a :class:`carom.World` as it is now."""
+
+    def ray_cast(
+        self: _World,
+        origin: ArrayLike,
+        direction: ArrayLike,
+        max_distance: float = math.inf,
+    ) -> RayHit | None:
+        """The first body the ray from ``origin`` along ``direction`` meets.
+
+        Parameters
+        ----------
+        origin : (d,) array_like
+            Where the ray starts [m].
+        direction : (d,) array_like
+            Its direction (any length but zero; distances are along the unit vector).
+        max_distance : float, optional
+            How far it reaches [m] (default: without end).
+
+        Returns
+        -------
+        RayHit or None
+            The body, the point where the ray enters it, the outward normal there and the
+            distance [m]; None when it meets nothing within ``max_distance``.
+
+        Raises
+        ------
+        CaromError
+            A value not finite or beyond carom's limits, a zero direction, a shape that does
+            not fit, ``max_distance`` not positive; the event-driven engine.
+        """
+        hits = Queries.ray_casts(self, [origin], [direction], max_distance)  # type: ignore[arg-type]
+        (hit,) = hits
+        if hit["body"] == -2:
+            return None
+        return RayHit(
+            int(hit["body"]), hit["point"].copy(), hit["normal"].copy(), float(hit["distance"])
+        )
+
+    def ray_casts(
+        self: _World,
+        origins: ArrayLike,
+        directions: ArrayLike,
+        max_distance: float | ArrayLike = math.inf,
+    ) -> NDArray[np.void]:
+        """Many rays in one compiled call: the first body each meets.
+
+        Parameters
+        ----------
+        origins : (R, d) array_like
+            Where they start [m].
+        directions : (R, d) or (d,) array_like
+            Their directions (one for all when (d,)); none zero.
+        max_distance : float or (R,) array_like, optional
+            How far each reaches [m] (default: without end).
+
+        Returns
+        -------
+        (R,) structured array
+            ``body`` (-2: no hit; -1: a wall or plane of the world's scenery), ``point`` (d,) [m],
+            ``normal`` (d,), ``distance`` [m] (inf: no hit) (:func:`ray_dtype`).
+
+        Raises
+        ------
+        CaromError
+            As :meth:`ray_cast`; nothing is cast then.
+        """
+        engine = self.build()
+        if not isinstance(engine, SteppedEngine):
+            raise CaromError(
+                "ray casts are the rigid engines' so far; the event-driven engine's spheres "
+                "are in World.positions"
+            )
+        d = self.dim
+        o = _finite("origins", origins, d)
+        if o.ndim == 1:
+            o = o[None, :]
+        if o.ndim != 2 or o.shape[1] != d:
+            raise CaromError(f"origins must have shape (R, {d}); got {o.shape}")
+        rays = o.shape[0]
+        u = _finite("directions", directions, d)
+        if u.shape == (d,):
+            u = np.broadcast_to(u, (rays, d))
+        if u.shape != (rays, d):
+            raise CaromError(f"directions must have shape ({d},) or ({rays}, {d}); got {u.shape}")
+        size = np.sqrt(np.sum(u * u, axis=1))
+        if np.any(size == 0.0):
+            bad = int(np.flatnonzero(size == 0.0)[0])
+            raise CaromError(f"ray {bad} has a zero direction; give it a direction to look in")
+        u = u / size[:, None]
+        lengths = np.broadcast_to(np.asarray(max_distance, dtype=np.float64), (rays,))
+        if lengths.ndim != 1 or np.any(np.isnan(lengths)) or np.any(lengths <= 0.0):
+            raise CaromError(
+                f"max_distance must be positive [m] (inf: without end); got {max_distance!r}"
+            )
+        distance, row, normal = engine.cast_rays(
+            np.ascontiguousarray(o), np.ascontiguousarray(u), np.array(lengths, dtype=float)
+        )
+        partners = engine.partners
+        hit = row >= 0
+        body = np.full(rays, -2, np.int64)
+        where = row[hit]
+        body[hit] = np.where(partners.kind[where] == PARTNER_BODY, partners.number[where], -1)
+        out = np.zeros(rays, ray_dtype(d))
+        out["body"] = body
+        out["distance"] = distance
+        out["point"] = out["normal"] = np.nan
+        out["point"][hit] = o[hit] + distance[hit, None] * u[hit]
+        out["normal"][hit] = normal[hit]
+        return out
+
+
+def _finite(name: str, values: Any, d: int) -> NDArray[np.float64]:
+    """``values`` as floats, finite and within carom's limits, or a CaromError naming it."""
+    try:
+        array = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise CaromError(f"{name} must be numbers; got {values!r}") from None
+    if not np.all(np.isfinite(array)) or np.any(np.abs(array) > LARGEST):
+        raise CaromError(
+            f"{name} must be finite, within carom's limits (|x| <= {LARGEST:g}); got {values!r}"
+        )
+    return array
