@@ -134,6 +134,10 @@ def save_world(world: Checkpointed, path: Path, extra: Mapping[str, NDArray[Any]
     if engine is not None:
         arrays |= {f"engine.{k}": v for k, v in engine.arrays().items()}
     arrays["log"] = world.collisions
+    filters = getattr(world, "collision_filters", None)  # (a World's, issue 43)
+    if filters is not None and len(filters):
+        arrays["filters"] = filters
+        arrays["alive"] = world.alive  # type: ignore[attr-defined]
     arrays |= {f"extra.{k}": v for k, v in extra.items()}
     tmp = path.with_name(path.name + ".partial")
     with tmp.open("wb") as handle:
@@ -214,6 +218,8 @@ def _read(path: Path, data: Any, make: Callable[..., W]) -> tuple[W, dict[str, N
         meta["collisions_dropped"],
         meta["engine"],
     )
+    if "filters" in data.files:
+        world.restore_filters(data["filters"], data["alive"])  # type: ignore[attr-defined]
     extra = {k[len("extra.") :]: data[k] for k in data.files if k.startswith("extra.")}
     return world, extra
 

@@ -32,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from carom.engines.base import Engine
 from carom.engines.stepped.driver import SteppedEngine
 from carom.engines.stepped.events import EventArrays
+from carom.engines.stepped.filters import bits64, whole_number
 from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC, KIND_NAMES
 from carom.limits import LARGEST
@@ -248,6 +249,110 @@ class GameLoop:
         shape: tuple[int, ...] = () if self.dim == 2 else (3,)
         engine.apply_torques(rows, _vectors(self, "torques", torques, rows.size, shape))
 
+    def set_filter(
+        self: _Running,
+        ids: int | ArrayLike,
+        *,
+        category: int | None = None,
+        mask: int | None = None,
+        group: int | None = None,
+    ) -> None:
+        """Which bodies ``ids`` touch (Box2D's ``b2Filter``); what is left out is kept.
+
+        Parameters
+        ----------
+        ids : int or (k,) array_like of int
+            Body indices (any kind).
+        category : int, optional
+            The bits the bodies are, 0 to 2**64 - 1 (default for every body: 1).
+        mask : int, optional
+            The bits they touch (default: all).
+        group : int, optional
+            Two bodies of the same nonzero group always touch when it is positive and never
+            when it is negative, whatever their bits (default 0: the bits decide).
+
+        Notes
+        -----
+        Two bodies touch when each one's mask holds a bit of the other's category. A pair
+        kept apart has no contact, no impact and no sweep against the other: it passes
+        through. Filters hold from the next step, through rebuilds and runs; bodies added
+        later start with the defaults. The rigid engines.
+
+        Raises
+        ------
+        CaromError
+            An index out of range; bits not a whole number in range; the event-driven
+            engine. Nothing has changed then.
+        """
+        rows = _rows(self, np.atleast_1d(np.asarray(ids)))
+        values = [
+            None if category is None else bits64("category", category),
+            None if mask is None else bits64("mask", mask),
+            None if group is None else whole_number("group", group, -(2**63), 2**63 - 1),
+        ]
+        table = _filters_of(self)
+        kept = table.copy()
+        for column, value in enumerate(values):
+            if value is not None:
+                table[rows, column] = value
+        try:  # (a new engine takes the table: bodies kept apart may overlap at its start)
+            engine, _ = _dynamic_rows(self, rows, None)
+        except CaromError:
+            table[:] = kept
+            raise
+        engine.set_filters(rows, *values)
+
+    def remove_body(self: _Running, index: int) -> None:
+        """Take body ``index`` out of the world; every other body keeps its index.
+
+        The body stops where it is and never moves again; nothing touches it, no ray sees it,
+        and its index is refused from then on (:attr:`alive` says which bodies are in). The
+        kinetic energy it had leaves the ledger as work done on it. Its place in the arrays
+        (positions, frames) stays, frozen. The rigid engines.
+
+        Raises
+        ------
+        CaromError
+            An index out of range or already removed; the event-driven engine. Nothing has
+            changed then.
+        """
+        i = _index(self, index)
+        engine = self.build()
+        if not isinstance(engine, SteppedEngine):
+            raise CaromError(_NOT_YET)
+        table = _filters_of(self)
+        table[i] = 0  # no category, no mask: nothing touches it, no ray sees it
+        alive = _alive_of(self)
+        alive[i] = False
+        engine.use_filters(table)
+        engine.retire(np.array([i]))
+
+    @property
+    def alive(self: _Running) -> NDArray[np.bool_]:
+        """Which bodies are in the world (n,): False for those removed (:meth:`remove_body`).
+        A copy."""
+        return _alive_of(self).copy()
+
+    def restore_filters(
+        self: _Running, table: NDArray[np.int64], alive: NDArray[np.bool_] | None = None
+    ) -> None:
+        """Take every body's filter from ``table`` (n, 3), as :attr:`collision_filters` gave
+        it, and which bodies are in from ``alive`` (n,) (a checkpoint's); the engine, if
+        built, takes the filters too (it kept the removed bodies' rest itself)."""
+        kept = np.array(table, dtype=np.int64)
+        self._filter_table = kept
+        if alive is not None:
+            self._alive = np.array(alive, dtype=np.bool_)
+        engine = self.engine
+        if engine is not None and isinstance(engine, SteppedEngine):
+            engine.use_filters(kept)
+
+    @property
+    def collision_filters(self: _Running) -> NDArray[np.int64]:
+        """Every body's filter (n, 3) int64: category bits, mask bits (as signed 64-bit
+        integers: -1 is every bit) and group (:meth:`set_filter`). A copy."""
+        return _filters_of(self).copy()
+
     def set_velocities(self: _Running, ids: ArrayLike, velocities: ArrayLike) -> None:
         """Set the velocities (k, d) or (d,) [m/s] of the dynamic bodies ``ids`` (k,); as
         :meth:`apply_impulses` for what is refused."""
@@ -420,6 +525,10 @@ def _index(world: _Running, index: object) -> int:
         raise CaromError(
             f"body {index} is not in the world: its indices run from 0 to {world.n_bodies - 1}"
         )
+    if not _alive_of(world)[int(index)]:
+        raise CaromError(
+            f"body {index} was removed (World.remove_body); World.alive says which are in"
+        )
     return int(index)
 
 
@@ -428,13 +537,7 @@ def _dynamic_rows(
 ) -> tuple[SteppedEngine, NDArray[np.int64]]:
     """The rigid engine and the indices ``ids`` (k,), each a dynamic body (``what``: what is
     given to them, for the message; None: any kind)."""
-    raw = np.asarray(ids)
-    if raw.ndim != 1 or raw.size == 0 or raw.dtype.kind not in "iu":
-        raise CaromError(f"ids must be a 1-D array of body indices; got {ids!r}")
-    rows = raw.astype(np.int64)
-    outside = (rows < 0) | (rows >= world.n_bodies)
-    if outside.any():
-        _index(world, int(rows[outside][0]))  # (names the first one outside)
+    rows = _rows(world, ids)
     engine = world.build()
     if not isinstance(engine, SteppedEngine):
         raise CaromError(_NOT_YET)
@@ -447,6 +550,21 @@ def _dynamic_rows(
                 "bodies only"
             )
     return engine, rows
+
+
+def _rows(world: _Running, ids: ArrayLike) -> NDArray[np.int64]:
+    """``ids`` as a 1-D array of body indices of ``world``, or a CaromError naming the first
+    wrong one."""
+    raw = np.asarray(ids)
+    if raw.ndim != 1 or raw.size == 0 or raw.dtype.kind not in "iu":
+        raise CaromError(f"ids must be a 1-D array of body indices; got {ids!r}")
+    rows = raw.astype(np.int64)
+    wrong = (rows < 0) | (rows >= world.n_bodies)
+    if not wrong.any():
+        wrong = ~_alive_of(world)[rows]
+    if wrong.any():
+        _index(world, int(rows[wrong][0]))  # (names the first one outside or removed)
+    return rows
 
 
 def _vectors(
@@ -468,6 +586,26 @@ def _vectors(
             f"{name} must be finite, within carom's limits (|x| <= {LARGEST:g}); got {values!r}"
         )
     return np.array(array)
+
+
+def _alive_of(world: Any) -> NDArray[np.bool_]:
+    """The world's mask of bodies in it (n,), grown with True to its bodies."""
+    alive: NDArray[np.bool_] = getattr(world, "_alive", np.ones(0, np.bool_))
+    if alive.shape[0] < world.n_bodies:
+        alive = np.concatenate((alive, np.ones(world.n_bodies - alive.shape[0], np.bool_)))
+        world._alive = alive
+    return alive
+
+
+def _filters_of(world: Any) -> NDArray[np.int64]:
+    """The world's filter table (n, 3), grown with the defaults to its bodies."""
+    table: NDArray[np.int64] = getattr(world, "_filter_table", np.zeros((0, 3), np.int64))
+    if table.shape[0] < world.n_bodies:
+        more = np.zeros((world.n_bodies - table.shape[0], 3), np.int64)
+        more[:, 0], more[:, 1] = 1, -1
+        table = np.concatenate((table, more))
+        world._filter_table = table
+    return table
 
 
 def _positive_time(dt: object, name: str = "dt", what: str = "time [s]") -> float:

@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from carom.engines.base import PARTNER_BODY, Engine
 from carom.engines.stepped.driver import SteppedEngine
+from carom.engines.stepped.filters import bits64
 from carom.errors import CaromError
 from carom.limits import LARGEST
 
@@ -68,6 +69,8 @@ class Queries:
         origin: ArrayLike,
         direction: ArrayLike,
         max_distance: float = math.inf,
+        *,
+        mask: int | None = None,
     ) -> RayHit | None:
         """The first body the ray from ``origin`` along ``direction`` meets.
 
@@ -79,6 +82,9 @@ class Queries:
             Its direction (any length but zero; distances are along the unit vector).
         max_distance : float, optional
             How far it reaches [m] (default: without end).
+        mask : int, optional
+            The collision categories it sees (:meth:`carom.World.set_filter`), 0 to
+            2**64 - 1; default: every one.
 
         Returns
         -------
@@ -92,7 +98,7 @@ class Queries:
             A value not finite or beyond carom's limits, a zero direction, a shape that does
             not fit, ``max_distance`` not positive; the event-driven engine.
         """
-        hits = Queries.ray_casts(self, [origin], [direction], max_distance)  # type: ignore[arg-type]
+        hits = Queries.ray_casts(self, [origin], [direction], max_distance, mask=mask)  # type: ignore[arg-type]
         (hit,) = hits
         if hit["body"] == -2:
             return None
@@ -105,6 +111,8 @@ class Queries:
         origins: ArrayLike,
         directions: ArrayLike,
         max_distance: float | ArrayLike = math.inf,
+        *,
+        mask: int | None = None,
     ) -> NDArray[np.void]:
         """Many rays in one compiled call: the first body each meets.
 
@@ -116,6 +124,8 @@ class Queries:
             Their directions (one for all when (d,)); none zero.
         max_distance : float or (R,) array_like, optional
             How far each reaches [m] (default: without end).
+        mask : int, optional
+            As :meth:`ray_cast`'s.
 
         Returns
         -------
@@ -156,8 +166,9 @@ class Queries:
             raise CaromError(
                 f"max_distance must be positive [m] (inf: without end); got {max_distance!r}"
             )
+        seen = -1 if mask is None else bits64("mask", mask)
         distance, row, normal = engine.cast_rays(
-            np.ascontiguousarray(o), np.ascontiguousarray(u), np.array(lengths, dtype=float)
+            np.ascontiguousarray(o), np.ascontiguousarray(u), np.array(lengths, dtype=float), seen
         )
         partners = engine.partners
         hit = row >= 0

@@ -138,7 +138,7 @@ class RigidEngine(SteppedEngine):
         m, s, st, mem = self.model, self.state, self.settings, self.memory
         return int(
             contacts.narrow_phase(
-                self._kept.pairs, n_pairs, s.vertices, s.normals, m.piece_start,
+                self._now, n_pairs, s.vertices, s.normals, m.piece_start,
                 m.piece_count, m.piece_radius, m.piece_reach, m.piece_body, m.material,
                 m.e_table, m.mu_table, s.x, s.v, s.omega, self._dynamic, self._g, self._pull,
                 self.dt, 4.0 * st.linear_slop, st.linear_slop, mem.cache_keys, mem.cache_ids,
@@ -149,7 +149,7 @@ class RigidEngine(SteppedEngine):
     def _impact_kernel(self, todo: Isolated) -> tuple[FloatArray, int]:
         m, s, st = self.model, self.state, self.settings
         log, logged = impacts.exact_impacts(
-            (todo.rows, todo.first, todo.n, self._island_of), self._kept.pairs, self._n_pairs,
+            (todo.rows, todo.first, todo.n, self._island_of), self._now, self._n_pairs,
             self._boxes, self._reach, self._ci, s.x, s.angle, s.v, s.omega, self._accel,
             m.kind, m.inv_mass, m.inv_inertia, m.mass, m.inertia, m.material, m.e_table,
             m.mu_table, m.body_pieces, m.piece_body, m.piece_start, m.piece_count,
@@ -167,12 +167,14 @@ class RigidEngine(SteppedEngine):
             s.angle[free] += 0.5 * alpha * dt * dt
             s.omega[free] += alpha * dt
 
-    def _cast(self, rays: tuple[FloatArray, ...], movers: tuple[Any, ...], hits: Any) -> None:
+    def _cast(
+        self, rays: tuple[FloatArray, ...], movers: tuple[Any, ...], mask: int, hits: Any
+    ) -> None:
         m, s = self.model, self.state
         queries.cast_rays(
             rays[0], rays[1], rays[2], self._reach[0], self._reach[1], movers, s.x, s.angle,
             m.piece_body, m.piece_start, m.piece_count, m.piece_radius, m.local_vertices,
-            m.local_normals, hits[0], hits[1], hits[2],
+            m.local_normals, self.filters[:, 0], mask, hits[0], hits[1], hits[2],
         )  # fmt: skip
 
     def _spin_of(self, torque: FloatArray) -> FloatArray:

@@ -403,6 +403,7 @@ def exact_impacts(
         tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
         np.ndarray,
         np.ndarray,
+        np.ndarray,
     ],
     ci: np.ndarray,
     x: np.ndarray,
@@ -589,7 +590,7 @@ def _reach(
     island_of: np.ndarray, pairs: np.ndarray,
     boxes: np.ndarray, reach: tuple[
         tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-        np.ndarray, np.ndarray,
+        np.ndarray, np.ndarray, np.ndarray,
     ], watch: np.ndarray, watch_first: np.ndarray, body_pieces: np.ndarray,
     piece_body: np.ndarray, x: np.ndarray, angle: np.ndarray, v: np.ndarray,
     omega: np.ndarray, accel: np.ndarray, piece_start: np.ndarray, piece_count: np.ndarray,
@@ -626,7 +627,7 @@ def continuous(
     angle: np.ndarray, v: np.ndarray, omega: np.ndarray, ci: np.ndarray, nc: int,
     closest: np.ndarray, reach: tuple[
         tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-        np.ndarray, np.ndarray,
+        np.ndarray, np.ndarray, np.ndarray,
     ], dynamic: np.ndarray, body_reach: np.ndarray, body_pieces: np.ndarray,
     piece_body: np.ndarray, piece_start: np.ndarray, piece_count: np.ndarray,
     piece_radius: np.ndarray, piece_reach: np.ndarray, local_vertices: np.ndarray,
@@ -642,7 +643,7 @@ def continuous(
     solver's to hold: only sinking ``slop`` [m] deeper into it than at the start counts, and
     puts the body back where it was as deep as at the start. Returns how many bodies were put
     back."""
-    tree, open_statics, _ = reach
+    tree, open_statics, _, filters = reach
     n_pieces = piece_body.shape[0]
     # (made at the first body that moved far: most steps have none)
     keys = np.empty(0, np.int64)
@@ -678,7 +679,7 @@ def continuous(
                 p, vertices, piece_start, piece_count, piece_radius, piece_reach, v[b, 0],
                 v[b, 1], omega[b], 0.0, 0.0, dt, False, 0.0, 0.0, box,
             )  # fmt: skip
-            found, total = statics_in(box, tree, open_statics, found)
+            found, total = statics_in(box, tree, open_statics, found, filters, b, piece_body)
             for j in range(total):
                 q = found[j]
                 # a contact near at the start is the solver's: only sinking into it by

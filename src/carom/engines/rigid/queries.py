@@ -26,7 +26,8 @@ def cast_rays(
     open_statics: np.ndarray, movers: tuple[Any, ...], x: np.ndarray, angle: np.ndarray,
     piece_body: np.ndarray, piece_start: np.ndarray, piece_count: np.ndarray,
     piece_radius: np.ndarray, local_vertices: np.ndarray, local_normals: np.ndarray,
-    distance: np.ndarray, piece: np.ndarray, normal: np.ndarray,
+    categories: np.ndarray, mask: int, distance: np.ndarray, piece: np.ndarray,
+    normal: np.ndarray,
 ) -> None:  # fmt: skip
     """Cast rays ``origins`` (R, 2) [m] along unit ``directions`` (R, 2) up to ``lengths``
     (R,) [m]: each one's ``distance`` [m] (inf: no hit), the ``piece`` hit (-1) and the outward
@@ -35,6 +36,7 @@ def cast_rays(
     ``statics``: the static pieces' tree (node boxes, left, first, count, order) and their
     boxes; ``open_statics`` the static pieces with no finite box; ``movers``: the other pieces'
     tree and boxes (a tree of one empty root: test ``movers[5]``'s pieces one by one).
+    A body whose ``categories`` (N,) bits hold none of ``mask`` is not seen.
     """
     s_box, s_left, s_first, s_count, s_order, s_boxes = statics
     m_box, m_left, m_first, m_count, m_order, m_boxes, m_all = movers
@@ -71,6 +73,8 @@ def cast_rays(
                 if not ray_box(o, inv, m_boxes[p], best):
                     continue
             b = piece_body[p]
+            if categories[b] & mask == 0:
+                continue
             c, s = math.cos(angle[b]), math.sin(angle[b])
             first, count = piece_start[p], piece_count[p]
             for i in range(count):

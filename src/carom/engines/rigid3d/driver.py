@@ -156,7 +156,7 @@ class RigidEngine3D(SteppedEngine):
         kept = (s.manifold_keys, s.manifold_ints, s.manifold_floats, int(s.manifold_count[0]))
         nc = int(
             contacts.narrow_phase(
-                self._kept.pairs, n_pairs, self._ints, m.piece_radius, m.piece_reach,
+                self._now, n_pairs, self._ints, m.piece_radius, m.piece_reach,
                 s.vertices, s.normals, m.face_first, m.face_size, m.corners, m.edges,
                 m.material, m.e_table, m.mu_table, m.rolling_table, s.x, s.q, s.v, s.w,
                 self._dynamic, self._g, self._pull, self.dt, 4.0 * st.linear_slop,
@@ -176,7 +176,7 @@ class RigidEngine3D(SteppedEngine):
     def _impact_kernel(self, todo: Isolated) -> tuple[FloatArray, int]:
         m, s, st = self.model, self.state, self.settings
         log, logged = impacts.exact_impacts(
-            (todo.rows, todo.first, todo.n, self._island_of), self._kept.pairs, self._n_pairs,
+            (todo.rows, todo.first, todo.n, self._island_of), self._now, self._n_pairs,
             self._boxes, self._reach, self._ci, s.x, s.q, s.v, s.w, self._accel, m.kind,
             self._dynamic, m.inv_mass, m.inertia, m.inv_inertia, m.min_moment,
             (m.material, m.e_table, m.mu_table), m.body_pieces, self._ints, m.piece_radius,
@@ -213,13 +213,16 @@ class RigidEngine3D(SteppedEngine):
                 a[i, 2], m.inertia, m.inv_inertia, (t[i, 0], t[i, 1], t[i, 2]),
             )  # fmt: skip
 
-    def _cast(self, rays: tuple[FloatArray, ...], movers: tuple[Any, ...], hits: Any) -> None:
+    def _cast(
+        self, rays: tuple[FloatArray, ...], movers: tuple[Any, ...], mask: int, hits: Any
+    ) -> None:
         m, s = self.model, self.state
         queries.cast_rays(
             rays[0], rays[1], rays[2], self._reach[0], self._reach[1], movers, s.x, s.q,
             (m.piece_body, m.piece_kind, m.piece_vstart, m.piece_vcount, m.piece_fstart,
              m.piece_fcount, m.piece_cstart), m.piece_radius, m.local_vertices,
-            m.local_normals, m.face_first, m.face_size, m.corners, hits[0], hits[1], hits[2],
+            m.local_normals, m.face_first, m.face_size, m.corners, self.filters[:, 0],
+            mask, hits[0], hits[1], hits[2],
         )  # fmt: skip
 
     def _solver_bodies(self) -> NDArray[np.int64]:

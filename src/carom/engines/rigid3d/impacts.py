@@ -407,6 +407,7 @@ def exact_impacts(
         tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
         np.ndarray,
         np.ndarray,
+        np.ndarray,
     ],
     ci: np.ndarray,
     x: np.ndarray,
@@ -631,7 +632,7 @@ def _reach(
     body: int, k: int, now: float, dt: float, cp: np.ndarray, n: int,
     island_of: np.ndarray, pairs: np.ndarray, boxes: np.ndarray, reach: tuple[
         tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-        np.ndarray, np.ndarray,
+        np.ndarray, np.ndarray, np.ndarray,
     ], watch: np.ndarray, watch_first: np.ndarray, body_pieces: np.ndarray,
     model_ints: tuple[
         np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
@@ -711,7 +712,7 @@ def continuous(
     bodies: np.ndarray, x0: np.ndarray, x: np.ndarray, q: np.ndarray, v: np.ndarray,
     w: np.ndarray, ci: np.ndarray, nc: int, closest: np.ndarray, reach: tuple[
         tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-        np.ndarray, np.ndarray,
+        np.ndarray, np.ndarray, np.ndarray,
     ], dynamic: np.ndarray, inertia: np.ndarray, inv_inertia: np.ndarray,
     body_pieces: np.ndarray, model_ints: tuple[
         np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
@@ -728,7 +729,7 @@ def continuous(
     from ``x0`` is swept from there to ``x`` at its orientation now (a turn within the step
     is not swept); at the first touch it is put back there, its velocity kept. Returns how
     many bodies were put back."""
-    tree, open_statics, _ = reach
+    tree, open_statics, _, filters = reach
     piece_body, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount = model_ints[:6]
     n_pieces = piece_body.shape[0]
     # (made at the first body that moved far: most steps have none)
@@ -764,7 +765,7 @@ def continuous(
                 p, b, vertices, normals, piece_kind, piece_vstart, piece_vcount, piece_fstart,
                 piece_radius, piece_reach, v, w, dynamic, still[b], 0.0, dt, 0.0, box,
             )  # fmt: skip
-            found, total = statics_in(box, tree, open_statics, found)
+            found, total = statics_in(box, tree, open_statics, found, filters, b, piece_body)
             for j in range(total):
                 other = found[j]
                 # a contact near at the start is the solver's: only sinking into it by more

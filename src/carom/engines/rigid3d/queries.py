@@ -28,13 +28,15 @@ def cast_rays(
     open_statics: np.ndarray, movers: tuple[Any, ...], x: np.ndarray, q: np.ndarray,
     model_ints: tuple[Any, ...], piece_radius: np.ndarray, local_vertices: np.ndarray,
     local_normals: np.ndarray, face_first: np.ndarray, face_size: np.ndarray,
-    corners: np.ndarray, distance: np.ndarray, piece: np.ndarray, normal: np.ndarray,
+    corners: np.ndarray, categories: np.ndarray, mask: int, distance: np.ndarray,
+    piece: np.ndarray, normal: np.ndarray,
 ) -> None:  # fmt: skip
     """Cast rays ``origins`` (R, 3) [m] along unit ``directions`` (R, 3) up to ``lengths``
     (R,) [m]: each one's ``distance`` [m] (inf: no hit), the ``piece`` hit (-1) and the outward
     ``normal`` (R, 3) there. ``model_ints``: the pieces' body, kind, vertex start and count,
     face start and count, corner start (:class:`.model.Model3D`); ``statics``, ``open_statics``
-    and ``movers`` as in 2D (:func:`carom.engines.rigid.queries.cast_rays`)."""
+    and ``movers`` as in 2D (:func:`carom.engines.rigid.queries.cast_rays`); a body whose
+    ``categories`` (N,) bits hold none of ``mask`` is not seen."""
     piece_body, piece_kind, vstart, vcount, fstart, fcount, cstart = model_ints
     s_box, s_left, s_first, s_count, s_order, s_boxes = statics
     m_box, m_left, m_first, m_count, m_order, m_boxes, m_all = movers
@@ -75,6 +77,8 @@ def cast_rays(
                 if not ray_box(o, inv, m_boxes[p], best):
                     continue
             b = piece_body[p]
+            if categories[b] & mask == 0:
+                continue
             matrix(q, b, rot)
             for i in range(vcount[p]):
                 lv = local_vertices[vstart[p] + i]

@@ -13,6 +13,7 @@ with kernel_cache():
         broadphase,
         contacts,
         events,
+        filters,
         islands,
         solver,
     )

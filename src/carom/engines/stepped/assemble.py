@@ -153,6 +153,10 @@ class _Stepped(Protocol):
 
     def deepest_overlap(self) -> tuple[int, int, float]: ...
 
+    def use_filters(self, table: NDArray[np.int64]) -> None: ...
+
+    def retire(self, ids: NDArray[np.int64]) -> None: ...
+
 
 Built = TypeVar("Built", bound=_Stepped)
 
@@ -160,7 +164,14 @@ Built = TypeVar("Built", bound=_Stepped)
 def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
     """``engine``, once no dynamic body starts overlapping another body, a wall or a plane
     deeper than the linear slop (the solver would throw them apart); else a CaromError
-    naming the two."""
+    naming the two. The world's collision filters (:meth:`carom.World.set_filter`) are the
+    engine's first: a pair they keep apart may start overlapping."""
+    table = getattr(world, "collision_filters", None)
+    if table is not None and len(table):
+        engine.use_filters(np.asarray(table, np.int64))
+    alive = getattr(world, "alive", None)
+    if alive is not None and not np.all(alive):
+        engine.retire(np.flatnonzero(~np.asarray(alive)))
     a, b, depth = engine.deepest_overlap()
     slop = settings_of(world).linear_slop
     if depth > slop:

@@ -39,6 +39,7 @@ from carom.engines.stepped import islands
 from carom.engines.stepped.broadphase import KeptPairs, find_pairs, grid_cell
 from carom.engines.stepped.contacts import extremes, store_points
 from carom.engines.stepped.events import ContactEvents
+from carom.engines.stepped.filters import default_filters, filter_pairs
 from carom.engines.stepped.loads import Loads
 from carom.engines.stepped.memory import StepMemory, new_memory
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT, point_layout
@@ -167,6 +168,9 @@ class SteppedEngine:
         self._movers = np.flatnonzero(self._kinematic)
         self._accel = np.zeros((n, dims))
         self._accel[self._dynamic] = model.gravity
+        #: each body's collision filter (:mod:`.filters`), and whether any is not the default
+        self.filters = default_filters(n)
+        self.filtered = False
         #: the forces and torques given for the next step; during a step, the most they
         #: accelerate each body's points [m/s^2] and each body's angular acceleration
         #: [rad/s^2] in 2D, the torque [N m] in 3D (zeros without loads)
@@ -215,7 +219,9 @@ class SteppedEngine:
             (tree.box, tree.left, tree.first, tree.count, tree.order, self._kept.fat),
             np.flatnonzero(static[model.piece_body] & ~bounded).astype(np.int64),
             np.flatnonzero(~static[model.piece_body]).astype(np.int64),
+            self.filters,
         )
+        self._now = self._kept.pairs  # the pairs this step (filtered: a copy)
 
     def _find(self, boxes: NDArray[np.float64], active: NDArray[np.bool_], out: Any) -> int:
         tree = self._tree
@@ -402,7 +408,14 @@ class SteppedEngine:
     def _contacts(self) -> int:
         """Stages 1 to 3: the contacts at the start of the step, into rows ``_cf``, ``_ci``;
         return how many."""
-        n_pairs = self._n_pairs = self._pairs()
+        n_pairs = self._pairs()
+        self._now = self._kept.pairs
+        if self.filtered:  # the pairs the filters keep, into a copy (the kept ones stay whole)
+            self._now = np.empty_like(self._kept.pairs)
+            n_pairs = filter_pairs(
+                self._kept.pairs, n_pairs, self.model.piece_body, self.filters, self._now
+            )
+        self._n_pairs = n_pairs
         while True:
             nc = self._narrow(n_pairs)
             if nc >= 0:
@@ -633,13 +646,42 @@ class SteppedEngine:
         self._loads.add_torques(ids, torques)
         self._wake_bodies(np.unique(ids))
 
+    def set_filters(
+        self, ids: NDArray[np.int64], category: int | None, mask: int | None, group: int | None
+    ) -> None:
+        """Set the collision filters of bodies ``ids`` (k,): the category and mask bits and
+        the group given (None: kept) (:mod:`.filters`). The bodies wake: a pair they may now
+        touch is found at the next step."""
+        for column, value in enumerate((category, mask, group)):
+            if value is not None:
+                self.filters[ids, column] = value
+        self.filtered = bool(np.any(self.filters != default_filters(1)))
+        self._wake_bodies(np.unique(ids))
+
+    def retire(self, ids: NDArray[np.int64]) -> None:
+        """Take bodies ``ids`` (k,) out of the world for good, their indices kept: they stop
+        (the kinetic energy they had leaves the ledger as work done on them) and never move
+        again; with their filters zeroed (:meth:`use_filters`) nothing touches or sees them."""
+        rows = np.unique(ids)
+        before = self._energy(rows)
+        self.state.v[rows] = 0.0
+        getattr(self.state, self.SPIN)[rows] = 0.0
+        self.memory.awake[rows] = False
+        self._work_done += self._energy(rows) - before
+        self._movers = self._movers[~np.isin(self._movers, rows)]
+
+    def use_filters(self, table: NDArray[np.int64]) -> None:
+        """The caller's bodies' filters, ``table`` (n, 3): category, mask, group each."""
+        self.filters[: table.shape[0]] = table
+        self.filtered = bool(np.any(self.filters != default_filters(1)))
+
     def cast_rays(
-        self, origins: FloatArray, directions: FloatArray, lengths: FloatArray
+        self, origins: FloatArray, directions: FloatArray, lengths: FloatArray, mask: int = -1
     ) -> tuple[FloatArray, NDArray[np.int64], FloatArray]:
         """Rays from ``origins`` (R, d) [m] along unit ``directions`` (R, d) up to ``lengths``
-        (R,) [m] against every body now (:mod:`carom.geometry.rays`): each one's distance [m]
-        (inf: no hit), the engine row of the body hit (-1) and the outward normal there
-        (R, d)."""
+        (R,) [m] against every body now whose category holds a bit of ``mask`` (signed 64-bit:
+        -1 is every bit) (:mod:`carom.geometry.rays`): each one's distance [m] (inf: no hit),
+        the engine row of the body hit (-1) and the outward normal there (R, d)."""
         m, s = self.model, self.state
         rays = origins.shape[0]
         distance = np.empty(rays)
@@ -659,11 +701,13 @@ class SteppedEngine:
         else:
             tree, kept = empty_bvh(self.DIMS), movers
         trees = (tree.box, tree.left, tree.first, tree.count, tree.order, boxes, kept)
-        self._cast((origins, directions, lengths), trees, (distance, piece, normal))
+        self._cast((origins, directions, lengths), trees, mask, (distance, piece, normal))
         body = np.where(piece >= 0, m.piece_body[np.maximum(piece, 0)], -1)
         return distance, body, normal
 
-    def _cast(self, rays: tuple[FloatArray, ...], movers: tuple[Any, ...], hits: Any) -> None:
+    def _cast(
+        self, rays: tuple[FloatArray, ...], movers: tuple[Any, ...], mask: int, hits: Any
+    ) -> None:
         """The dimension's ray kernel (:meth:`cast_rays`)."""
         raise NotImplementedError
 

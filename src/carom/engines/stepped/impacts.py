@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from carom.engines.stepped.filters import collides
 from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
 from carom.geometry.bvh import overlap, query_bvh
 from carom.laws.kinds import KIND_STATIC
@@ -279,6 +280,7 @@ def look_around(
         tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
         np.ndarray,
         np.ndarray,
+        np.ndarray,
     ],
     watching: tuple[np.ndarray, np.ndarray, np.ndarray],
     cp: np.ndarray,
@@ -286,8 +288,9 @@ def look_around(
 ) -> tuple[np.ndarray, int, bool]:
     """Piece ``p`` of a body of island ``k``, turned by an impact, can now reach ``box``
     (2 d,) by the step's end. Beyond its swept box ``boxes[p]``: widen that box to hold it,
-    add the static pieces in it (``reach``: the static tree, its items' boxes, the static
-    pieces it does not hold; :func:`statics_in`) and the island's pieces in it to the
+    add the static pieces in it that its body may touch (``reach``: the static tree, its
+    items' boxes, the static pieces it does not hold, the pieces of bodies that are not
+    static, the collision filters; :func:`statics_in`) and the island's pieces in it to the
     candidates ``cp[:n]``. Returns the candidates, their count, and whether the island must
     stop: a piece moving otherwise lies in reach (``reach``'s pieces of bodies that are not
     static, beyond the swept box; within it, the ``watching`` pairs: the broad phase's pairs
@@ -297,8 +300,10 @@ def look_around(
         for j in range(d):
             boxes[p, j] = min(boxes[p, j], box[j])
             boxes[p, d + j] = max(boxes[p, d + j], box[d + j])
-        tree, open_statics, movers = reach
-        found, total = statics_in(box, tree, open_statics, np.empty(64, np.int64))
+        tree, open_statics, movers, filters = reach
+        found, total = statics_in(
+            box, tree, open_statics, np.empty(64, np.int64), filters, piece_body[p], piece_body
+        )
         for j in range(total):
             cp, n = add_candidate(cp, n, p, found[j])
         body = piece_body[p]
@@ -362,11 +367,13 @@ def started_sunk(
 @njit(cache=True)
 def statics_in(
     box: np.ndarray, tree: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-    np.ndarray], open_statics: np.ndarray, found: np.ndarray,
+    np.ndarray], open_statics: np.ndarray, found: np.ndarray, filters: np.ndarray, body: int,
+    piece_body: np.ndarray,
 ) -> tuple[np.ndarray, int]:  # fmt: skip
-    """The static pieces whose boxes meet ``box`` (2 d,): through the static ``tree`` (node
-    boxes, left, first, count, order, its items' boxes), then the ``open_statics`` it does
-    not hold. Returns ``found`` (grown if need be) and how many it holds."""
+    """The static pieces whose boxes meet ``box`` (2 d,) and that ``body`` may touch under
+    ``filters`` (:mod:`.filters`): through the static ``tree`` (node boxes, left, first,
+    count, order, its items' boxes), then the ``open_statics`` it does not hold. Returns
+    ``found`` (grown if need be) and how many it holds."""
     node_box, left, first, count, order, items = tree
     total = query_bvh(node_box, left, first, count, order, items, box, found)
     if total + open_statics.shape[0] > found.shape[0]:
@@ -376,4 +383,9 @@ def statics_in(
         if overlap(items, q, box):
             found[total] = q
             total += 1
-    return found, total
+    kept = 0
+    for j in range(total):
+        if collides(filters, body, piece_body[found[j]]):
+            found[kept] = found[j]
+            kept += 1
+    return found, kept

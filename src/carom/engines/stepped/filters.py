@@ -1,0 +1,88 @@
+"""Collision filters: which pairs of bodies may touch (Box2D's ``b2Filter``).
+
+Each body has a ``category`` (the bits it is), a ``mask`` (the bits it touches) and a
+``group``. Two bodies of the same nonzero group always touch when it is positive and never
+when it is negative (a ragdoll's limbs, a car's wheels and body); otherwise they touch when
+each one's mask holds a bit of the other's category. By default a body is category 1 and
+touches every category, group 0: everything touches.
+
+A filter removes the pair from the step altogether: the broad phase's pairs are filtered
+before the narrow phase (so no contact, no exact impact), and the static geometry an exact
+impact or a sweep looks through skips the pieces its body does not touch.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from carom.errors import CaromError
+
+__all__ = [
+    "ALL",
+    "F_CATEGORY",
+    "F_GROUP",
+    "F_MASK",
+    "bits64",
+    "collides",
+    "default_filters",
+    "filter_pairs",
+    "whole_number",
+]
+
+#: the columns of a filter row: category bits, mask bits, group
+F_CATEGORY, F_MASK, F_GROUP = 0, 1, 2
+#: every bit (as a signed 64-bit integer)
+ALL = -1
+
+
+def whole_number(name: str, value: object, low: int, high: int) -> int:
+    """``value`` as a whole number in ``[low, high]``, or a CaromError naming it."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise CaromError(f"{name} must be a whole number; got {value!r}")
+    if not low <= int(value) <= high:
+        raise CaromError(f"{name} must lie in [{low}, {high}]; got {value}")
+    return int(value)
+
+
+def bits64(name: str, value: object) -> int:
+    """Bits 0 to 2**64 - 1 (a Python int) as a signed 64-bit integer, or a CaromError."""
+    bits = whole_number(name, value, 0, 2**64 - 1)
+    return bits - 2**64 if bits >= 2**63 else bits
+
+
+def default_filters(n: int) -> np.ndarray:
+    """``n`` bodies' filter rows (n, 3) int64: category 1, every mask bit, group 0."""
+    rows = np.zeros((n, 3), np.int64)
+    rows[:, F_CATEGORY] = 1
+    rows[:, F_MASK] = ALL
+    return rows
+
+
+@njit(cache=True, inline="always")
+def collides(filters: np.ndarray, a: int, b: int) -> bool:
+    """Whether bodies ``a`` and ``b`` may touch under ``filters`` (N, 3)."""
+    ga = filters[a, F_GROUP]
+    if ga != 0 and ga == filters[b, F_GROUP]:
+        grouped: bool = ga > 0
+        return grouped
+    touch: bool = (filters[a, F_MASK] & filters[b, F_CATEGORY]) != 0 and (
+        filters[a, F_CATEGORY] & filters[b, F_MASK]
+    ) != 0
+    return touch
+
+
+@njit(cache=True)
+def filter_pairs(
+    pairs: np.ndarray, n_pairs: int, piece_body: np.ndarray, filters: np.ndarray,
+    out: np.ndarray,
+) -> int:  # fmt: skip
+    """The first ``n_pairs`` rows of ``pairs`` (pieces) whose bodies may touch, into ``out``
+    in order; returns how many."""
+    m = 0
+    for k in range(n_pairs):
+        if collides(filters, piece_body[pairs[k, 0]], piece_body[pairs[k, 1]]):
+            out[m, 0] = pairs[k, 0]
+            out[m, 1] = pairs[k, 1]
+            m += 1
+    return m
