@@ -216,7 +216,15 @@ def test_many_at_once_are_the_bits_of_one_at_a_time() -> None:
     np.testing.assert_array_equal(one.angular_velocities, many.angular_velocities)
 
 
-def test_an_impulse_wakes_a_sleeping_box() -> None:
+@pytest.mark.parametrize(
+    "push",
+    [
+        lambda box: box.apply_impulse([2.0, 0.0]),
+        lambda box: box.apply_force([500.0, 0.0]),  # (a force through the next step)
+    ],
+    ids=["impulse", "force"],
+)
+def test_a_push_wakes_a_sleeping_box(push: object) -> None:
     from carom.shapes import Box
 
     world = carom.World(2, [10.0, 10.0], gravity=[0.0, -G], boundary="open")
@@ -225,7 +233,7 @@ def test_an_impulse_wakes_a_sleeping_box() -> None:
     world.run(until=2.0)
     box = world.body(1)
     assert not box.awake
-    box.apply_impulse([2.0, 0.0])
+    push(box)  # type: ignore[operator]
     assert box.awake
     world.step()
     assert box.position[0] > 5.0

@@ -223,21 +223,6 @@ def test_many_loads_at_once_are_the_bits_of_one_at_a_time() -> None:
     np.testing.assert_array_equal(one.orientations, many.orientations)
 
 
-def test_a_force_wakes_a_sleeping_box() -> None:
-    from carom.shapes import Box
-
-    world = carom.World(2, [10.0, 10.0], gravity=[0.0, -G], boundary="open")
-    world.add_body(Box(10.0, 1.0), [5.0, -0.5], kind="static")
-    world.add_body(Box(1.0, 1.0), [5.0, 0.5])
-    world.run(until=2.0)
-    box = world.body(1)
-    assert not box.awake
-    box.apply_force([500.0, 0.0])
-    assert box.awake
-    world.step()
-    assert box.position[0] > 5.0
-
-
 @pytest.mark.parametrize(
     ("call", "match"),
     [

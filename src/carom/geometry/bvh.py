@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from carom.geometry.rays import ray_box
 
-__all__ = ["LEAF", "Bvh", "build_bvh", "empty_bvh", "query_bvh", "ray_query_bvh"]
+__all__ = ["LEAF", "Bvh", "build_bvh", "empty_bvh", "query_bvh", "ray_candidates", "ray_query_bvh"]
 
 #: boxes in a leaf at most
 LEAF = 4
@@ -233,6 +233,30 @@ def ray_query_bvh(
         stack[top + 1] = left[node]
         top += 2
     return found
+
+
+@njit(cache=True)
+def ray_candidates(
+    statics: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    movers: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                  np.ndarray],
+    o: np.ndarray, inv: np.ndarray, t_max: float, found: np.ndarray,
+) -> tuple[np.ndarray, int]:  # fmt: skip
+    """The pieces whose boxes a ray (``o``, inverse direction ``inv``, up to ``t_max``) meets
+    in two trees: ``statics`` (node boxes, left, first, count, order, the items' boxes) and
+    ``movers`` (the same, and pieces to test one by one, unused here; an empty tree is
+    skipped). Returns ``found`` (grown if need be) and how many it holds."""
+    s_box, s_left, s_first, s_count, s_order, s_boxes = statics
+    m_box, m_left, m_first, m_count, m_order, m_boxes, _ = movers
+    while True:
+        k = ray_query_bvh(s_box, s_left, s_first, s_count, s_order, s_boxes, o, inv, t_max,
+                          found, 0)  # fmt: skip
+        if m_count.shape[0] > 1 or m_count[0] > 0:
+            k = ray_query_bvh(m_box, m_left, m_first, m_count, m_order, m_boxes, o, inv, t_max,
+                              found, k)  # fmt: skip
+        if k <= found.shape[0]:
+            return found, k
+        found = np.empty(2 * k, np.int64)
 
 
 @njit(cache=True, inline="always")

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from carom.geometry.bvh import ray_query_bvh
+from carom.geometry.bvh import ray_candidates
 from carom.geometry.rays import ray_box, ray_rounded_polygon
 
 __all__ = ["cast_rays"]
@@ -38,8 +38,7 @@ def cast_rays(
     tree and boxes (a tree of one empty root: test ``movers[5]``'s pieces one by one).
     A body whose ``categories`` (N,) bits hold none of ``mask`` is not seen.
     """
-    s_box, s_left, s_first, s_count, s_order, s_boxes = statics
-    m_box, m_left, m_first, m_count, m_order, m_boxes, m_all = movers
+    m_boxes, m_all = movers[5], movers[6]
     widest = 1
     for p in range(piece_count.shape[0]):
         widest = max(widest, piece_count[p])
@@ -54,15 +53,7 @@ def cast_rays(
         best = lengths[r]
         distance[r] = math.inf
         piece[r] = -1
-        while True:
-            k = ray_query_bvh(s_box, s_left, s_first, s_count, s_order, s_boxes, o, inv, best,
-                              found, 0)  # fmt: skip
-            if m_count.shape[0] > 1 or m_count[0] > 0:
-                k = ray_query_bvh(m_box, m_left, m_first, m_count, m_order, m_boxes, o, inv,
-                                  best, found, k)  # fmt: skip
-            if k <= found.shape[0]:
-                break
-            found = np.empty(2 * k, np.int64)
+        found, k = ray_candidates(statics, movers, o, inv, best, found)
         for j in range(k + open_statics.shape[0] + m_all.shape[0]):
             if j < k:
                 p = found[j]

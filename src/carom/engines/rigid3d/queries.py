@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 from carom.engines.rigid3d.model import PIECE_PLANE, PIECE_ROUND
-from carom.geometry.bvh import ray_query_bvh
+from carom.geometry.bvh import ray_candidates
 from carom.geometry.rays import ray_box, ray_capsule, ray_plane, ray_polytope, ray_sphere
 from carom.geometry.rotation import matrix
 
@@ -38,8 +38,7 @@ def cast_rays(
     and ``movers`` as in 2D (:func:`carom.engines.rigid.queries.cast_rays`); a body whose
     ``categories`` (N,) bits hold none of ``mask`` is not seen."""
     piece_body, piece_kind, vstart, vcount, fstart, fcount, cstart = model_ints
-    s_box, s_left, s_first, s_count, s_order, s_boxes = statics
-    m_box, m_left, m_first, m_count, m_order, m_boxes, m_all = movers
+    m_boxes, m_all = movers[5], movers[6]
     widest, faces = 1, 1
     for p in range(piece_body.shape[0]):
         widest = max(widest, vcount[p])
@@ -57,15 +56,7 @@ def cast_rays(
         best = lengths[r]
         distance[r] = math.inf
         piece[r] = -1
-        while True:
-            k = ray_query_bvh(s_box, s_left, s_first, s_count, s_order, s_boxes, o, inv, best,
-                              found, 0)  # fmt: skip
-            if m_count.shape[0] > 1 or m_count[0] > 0:
-                k = ray_query_bvh(m_box, m_left, m_first, m_count, m_order, m_boxes, o, inv,
-                                  best, found, k)  # fmt: skip
-            if k <= found.shape[0]:
-                break
-            found = np.empty(2 * k, np.int64)
+        found, k = ray_candidates(statics, movers, o, inv, best, found)
         n_open = open_statics.shape[0]
         for j in range(k + n_open + m_all.shape[0]):
             if j < k:
