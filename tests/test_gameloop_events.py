@@ -138,3 +138,30 @@ def test_events_are_structured_arrays() -> None:
     assert events.end.dtype.names == ("a", "b")
     assert events.hit.dtype.names == ("a", "b", "time", "point", "normal", "speed")
     assert events.hit["point"].shape == (1, 3)
+
+
+def test_the_pairs_compared_step_to_step_are_numpys_set_operations() -> None:
+    from carom.engines.stepped.events import compare
+
+    # the merge of this step's pairs (repeats allowed) against the last step's (sorted),
+    # where a last pair of bodies neither of which moves persists (it sleeps), against
+    # NumPy's unique / setdiff1d on random pairs
+    rng = np.random.default_rng(3)
+    n = 101
+    for _ in range(300):
+        new = rng.integers(0, 60, rng.integers(0, 40)).astype(np.int64)
+        last = np.unique(rng.integers(0, 60, rng.integers(0, 40))).astype(np.int64)
+        moving = rng.random(100) < 0.5
+        now, began, row, ended = compare(new, last, moving, n)
+        asleep = [
+            k for k in last if not ((k // n >= 1 and moving[k // n - 1]) or moving[k % n - 1])
+        ]
+        expected = np.unique(np.concatenate([new, np.array(asleep, np.int64)]))
+        np.testing.assert_array_equal(now, expected)
+        np.testing.assert_array_equal(began, np.setdiff1d(np.unique(new), last))
+        np.testing.assert_array_equal(ended, np.setdiff1d(last, expected))
+        np.testing.assert_array_equal(new[row], began)
+        if began.size:  # each began pair's row is its first in this step's keys
+            assert all(
+                int(np.flatnonzero(new == k)[0]) == r for k, r in zip(began, row, strict=True)
+            )

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_COUNT, PointLayout
 
-__all__ = ["ContactEvents", "EventArrays", "event_dtypes", "touches"]
+__all__ = ["ContactEvents", "EventArrays", "compare", "event_dtypes", "touches"]
 
 
 def event_dtypes(d: int) -> tuple[np.dtype[np.void], np.dtype[np.void], np.dtype[np.void]]:
@@ -137,6 +137,54 @@ def touches(
     return keys[:k], where[:k], pairs[:h], times[:h], values[:h]
 
 
+@njit(cache=True)
+def compare(
+    keys: np.ndarray, last: np.ndarray, moving: np.ndarray, n: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """This step's touching pairs against the last step's.
+
+    ``keys`` (k,): this step's pairs as :func:`touches` gives them (repeats allowed);
+    ``last`` (m,): the last step's, sorted, unique; ``moving`` (N,) the awake dynamic bodies
+    (a last pair of which neither moves still touches: it sleeps); ``n`` the keys' base.
+    Returns this step's pairs sorted and unique, those that began with the row of ``keys``
+    each came from, and those that ended."""
+    order = np.argsort(keys, kind="mergesort")  # (the first row of a pair kept: stable)
+    unique = np.empty(keys.shape[0] + last.shape[0], np.int64)
+    began = np.empty(keys.shape[0], np.int64)
+    row = np.empty(keys.shape[0], np.int64)
+    ended = np.empty(last.shape[0], np.int64)
+    u = b = e = 0
+    i = j = 0
+    while i < order.shape[0] or j < last.shape[0]:
+        new = keys[order[i]] if i < order.shape[0] else -1
+        old = last[j] if j < last.shape[0] else -1
+        if j >= last.shape[0] or (i < order.shape[0] and new < old):
+            if u == 0 or unique[u - 1] != new:
+                unique[u] = new
+                u += 1
+                began[b] = new
+                row[b] = order[i]
+                b += 1
+            i += 1
+        elif i >= order.shape[0] or old < new:
+            lo, hi = old // n - 1, old % n - 1  # (a wall, -1, never moves)
+            if (lo < 0 or not moving[lo]) and not moving[hi]:
+                unique[u] = old  # asleep: still touching
+                u += 1
+            else:
+                ended[e] = old
+                e += 1
+            j += 1
+        else:  # touching then and now
+            if u == 0 or unique[u - 1] != new:
+                unique[u] = new
+                u += 1
+            i += 1
+            if i >= order.shape[0] or keys[order[i]] != new:
+                j += 1
+    return unique[:u], began[:b], row[:b], ended[:e]
+
+
 class ContactEvents:
     """The pairs touching at the last step, and the events of the last step, for an engine of
     ``d`` dimensions whose rows are numbered ``number`` (N,) for the caller (-1: walls).
@@ -177,19 +225,12 @@ class ContactEvents:
             self.threshold, log, log.shape[0], self.number,
         )  # fmt: skip
         n = self.number.shape[0] + 1
-        kept = self.keys
-        if kept.size:
-            a, b = kept // n - 1, kept % n - 1  # (a wall, -1, never moves)
-            still = ~(moving[np.maximum(a, 0)] & (a >= 0)) & ~(moving[np.maximum(b, 0)] & (b >= 0))
-            kept = kept[still]
-        now, first = np.unique(np.concatenate((keys, kept)), return_index=True)
-        began = ~np.isin(now, self.keys, assume_unique=True)
-        ended = self.keys[~np.isin(self.keys, now, assume_unique=True)]
+        now, began, row, ended = compare(keys, self.keys, moving, n)
         d = self.d
         begin_t, end_t, hit_t = self.dtypes
-        begin = np.zeros(int(began.sum()), begin_t)
-        begin["a"], begin["b"] = now[began] // n - 1, now[began] % n - 1
-        chosen = where[first[began]]  # (a pair that began has a row this step)
+        begin = np.zeros(began.size, begin_t)
+        begin["a"], begin["b"] = began // n - 1, began % n - 1
+        chosen = where[row]
         begin["point"], begin["normal"] = chosen[:, :d], chosen[:, d:]
         end = np.zeros(ended.size, end_t)
         end["a"], end["b"] = ended // n - 1, ended % n - 1
