@@ -14,6 +14,7 @@ import pytest
 
 import carom
 from carom.errors import CaromError
+from tests.worlds import rotation
 
 G = 9.81
 
@@ -153,12 +154,7 @@ def test_an_impulse_at_a_point_changes_angular_momentum_by_r_cross_j_in_3d() -> 
     np.testing.assert_allclose(world.masses[0] * body.velocity, j, rtol=1e-15)
     # the angular momentum about the centre, I_world w, is r x J: I_world = R I_body R^T
     # with the box's principal moments m (b^2 + c^2) / 12 ...
-    w_, x_, y_, z_ = body.orientation
-    rot = np.array([
-        [1 - 2 * (y_ * y_ + z_ * z_), 2 * (x_ * y_ - z_ * w_), 2 * (x_ * z_ + y_ * w_)],
-        [2 * (x_ * y_ + z_ * w_), 1 - 2 * (x_ * x_ + z_ * z_), 2 * (y_ * z_ - x_ * w_)],
-        [2 * (x_ * z_ - y_ * w_), 2 * (y_ * z_ + x_ * w_), 1 - 2 * (x_ * x_ + y_ * y_)],
-    ])  # fmt: skip
+    rot = rotation(body.orientation)
     sides = np.array([2.0, 1.0, 0.5])
     moments = world.masses[0] * (np.sum(sides**2) - sides**2) / 12
     momentum = rot @ (moments * (rot.T @ body.angular_velocity))

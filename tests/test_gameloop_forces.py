@@ -15,6 +15,7 @@ import pytest
 
 import carom
 from carom.errors import CaromError
+from tests.worlds import rotation
 
 G = 9.81
 
@@ -86,12 +87,7 @@ def test_a_torque_on_a_tumbling_3d_body_changes_its_angular_momentum_by_t_dt() -
     moments = mass * (np.sum(sides**2) - sides**2) / 12  # a box's principal moments
 
     def momentum() -> np.ndarray:
-        w_, x_, y_, z_ = body.orientation
-        rot = np.array([
-            [1 - 2 * (y_ * y_ + z_ * z_), 2 * (x_ * y_ - z_ * w_), 2 * (x_ * z_ + y_ * w_)],
-            [2 * (x_ * y_ + z_ * w_), 1 - 2 * (x_ * x_ + z_ * z_), 2 * (y_ * z_ - x_ * w_)],
-            [2 * (x_ * z_ - y_ * w_), 2 * (y_ * z_ + x_ * w_), 1 - 2 * (x_ * x_ + y_ * y_)],
-        ])  # fmt: skip
+        rot = rotation(body.orientation)
         return rot @ (moments * (rot.T @ body.angular_velocity))
 
     l0 = momentum()

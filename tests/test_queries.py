@@ -17,6 +17,7 @@ import pytest
 
 import carom
 from carom.errors import CaromError
+from tests.worlds import rotation
 
 REL = 1e-12
 
@@ -174,15 +175,6 @@ def _quat(axis: list[float], angle: float) -> np.ndarray:
     return np.r_[math.cos(angle / 2), math.sin(angle / 2) * u]
 
 
-def _matrix(q: np.ndarray) -> np.ndarray:
-    w, x, y, z = q
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])  # fmt: skip
-
-
 def test_a_sphere_and_a_turned_box_in_3d() -> None:
     from carom.shapes3d import Box, Sphere
 
@@ -204,7 +196,7 @@ def test_a_sphere_and_a_turned_box_in_3d() -> None:
             b, c = f @ d, f @ f - 1.2**2
             t = -b - math.sqrt(b * b - c)
         else:  # the box's slabs, in its own frame
-            rot = _matrix(world.orientations[1])
+            rot = rotation(world.orientations[1])
             t = _slabs(rot.T @ (o - target), rot.T @ d, expected)
         hit = world.ray_cast(o, d)
         assert hit is not None
@@ -216,7 +208,7 @@ def test_a_3d_capsule_side_and_cap() -> None:
 
     turn = _quat([0.3, -1.0, 0.2], 1.1)
     world = _world3((Capsule(2.0, 0.35), [8.0, 8.0, 8.0], turn, "dynamic"))
-    axis = _matrix(world.orientations[0]) @ np.array([0.0, 0.0, 1.0])  # (along z when unturned)
+    axis = rotation(world.orientations[0]) @ np.array([0.0, 0.0, 1.0])  # (along z when unturned)
     side = np.cross(axis, [1.0, 0.0, 0.0])
     side /= np.linalg.norm(side)
     centre = world.positions[0]
@@ -235,7 +227,7 @@ def test_a_turned_hull_along_a_face_normal() -> None:
     points = a * np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
     turn = _quat([1.0, 1.0, 0.0], 0.7)
     world = _world3((Hull(points), [10.0, 9.0, 8.0], turn, "dynamic"))
-    n = _matrix(world.orientations[0]) @ (np.array([1.0, 1.0, 1.0]) / math.sqrt(3))
+    n = rotation(world.orientations[0]) @ (np.array([1.0, 1.0, 1.0]) / math.sqrt(3))
     centre = world.positions[0]
     hit = world.ray_cast(centre + 6.0 * n, -n)
     assert hit is not None

@@ -8,6 +8,17 @@ import carom
 from carom.scene.layouts import lattice_gas
 
 
+def rotation(q: np.ndarray) -> np.ndarray:
+    """The rotation matrix (3, 3) of the unit quaternion ``q`` = (w, x, y, z), written out
+    (not carom's), for tests that check a 3D body's orientation."""
+    w, x, y, z = q
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])  # fmt: skip
+
+
 def gas(
     dim: int, n_side: int, phi: float, seed: int, boundary: str = "periodic", e: float = 1.0
 ) -> carom.World:
