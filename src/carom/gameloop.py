@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from carom.engines.base import Engine
 from carom.engines.stepped.driver import SteppedEngine
 from carom.engines.stepped.events import EventArrays
-from carom.engines.stepped.filters import bits64, whole_number
+from carom.engines.stepped.filters import bits64, default_filters, whole_number
 from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC, KIND_NAMES
 from carom.limits import LARGEST
@@ -296,11 +296,11 @@ class GameLoop:
             if value is not None:
                 table[rows, column] = value
         try:  # (a new engine takes the table: bodies kept apart may overlap at its start)
-            engine, _ = _dynamic_rows(self, rows, None)
+            engine = _rigid(self)
         except CaromError:
             table[:] = kept
             raise
-        engine.set_filters(rows, *values)
+        engine.use_filters(table, rows)
 
     def remove_body(self: _Running, index: int) -> None:
         """Take body ``index`` out of the world; every other body keeps its index.
@@ -317,9 +317,7 @@ class GameLoop:
             changed then.
         """
         i = _index(self, index)
-        engine = self.build()
-        if not isinstance(engine, SteppedEngine):
-            raise CaromError(_NOT_YET)
+        engine = _rigid(self)
         table = _filters_of(self)
         table[i] = 0  # no category, no mask: nothing touches it, no ray sees it
         alive = _alive_of(self)
@@ -398,9 +396,7 @@ class Body:
         return engine
 
     def _read(self, field: str) -> NDArray[np.float64]:
-        engine = self._world.build()
-        if not isinstance(engine, SteppedEngine):
-            raise CaromError(_NOT_YET)
+        engine = _rigid(self._world)
         return np.array(getattr(engine.state, field)[self.index], dtype=np.float64)
 
     def _write(self, field: str, value: ArrayLike, shape: tuple[int, ...], name: str) -> None:
@@ -538,9 +534,7 @@ def _dynamic_rows(
     """The rigid engine and the indices ``ids`` (k,), each a dynamic body (``what``: what is
     given to them, for the message; None: any kind)."""
     rows = _rows(world, ids)
-    engine = world.build()
-    if not isinstance(engine, SteppedEngine):
-        raise CaromError(_NOT_YET)
+    engine = _rigid(world)
     if what is not None:
         kind = engine.model.kind[rows]
         if np.any(kind != KIND_DYNAMIC):
@@ -550,6 +544,14 @@ def _dynamic_rows(
                 "bodies only"
             )
     return engine, rows
+
+
+def _rigid(world: _Running) -> SteppedEngine:
+    """The world's engine, built, when it is a rigid one; else a CaromError."""
+    engine = world.build()
+    if not isinstance(engine, SteppedEngine):
+        raise CaromError(_NOT_YET)
+    return engine
 
 
 def _rows(world: _Running, ids: ArrayLike) -> NDArray[np.int64]:
@@ -599,11 +601,9 @@ def _alive_of(world: Any) -> NDArray[np.bool_]:
 
 def _filters_of(world: Any) -> NDArray[np.int64]:
     """The world's filter table (n, 3), grown with the defaults to its bodies."""
-    table: NDArray[np.int64] = getattr(world, "_filter_table", np.zeros((0, 3), np.int64))
+    table: NDArray[np.int64] = getattr(world, "_filter_table", default_filters(0))
     if table.shape[0] < world.n_bodies:
-        more = np.zeros((world.n_bodies - table.shape[0], 3), np.int64)
-        more[:, 0], more[:, 1] = 1, -1
-        table = np.concatenate((table, more))
+        table = np.concatenate((table, default_filters(world.n_bodies - table.shape[0])))
         world._filter_table = table
     return table
 

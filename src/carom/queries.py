@@ -24,7 +24,7 @@ from typing import Any, NamedTuple, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from carom.engines.base import PARTNER_BODY, Engine
+from carom.engines.base import Engine
 from carom.engines.stepped.driver import SteppedEngine
 from carom.engines.stepped.filters import bits64
 from carom.errors import CaromError
@@ -167,14 +167,10 @@ class Queries:
                 f"max_distance must be positive [m] (inf: without end); got {max_distance!r}"
             )
         seen = -1 if mask is None else bits64("mask", mask)
-        distance, row, normal = engine.cast_rays(
+        distance, body, normal = engine.cast_rays(
             np.ascontiguousarray(o), np.ascontiguousarray(u), np.array(lengths, dtype=float), seen
         )
-        partners = engine.partners
-        hit = row >= 0
-        body = np.full(rays, -2, np.int64)
-        where = row[hit]
-        body[hit] = np.where(partners.kind[where] == PARTNER_BODY, partners.number[where], -1)
+        hit = body > -2
         out = np.zeros(rays, ray_dtype(d))
         out["body"] = body
         out["distance"] = distance

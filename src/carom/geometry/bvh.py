@@ -25,7 +25,16 @@ from numpy.typing import NDArray
 
 from carom.geometry.rays import ray_box
 
-__all__ = ["LEAF", "Bvh", "build_bvh", "empty_bvh", "query_bvh", "ray_candidates", "ray_query_bvh"]
+__all__ = [
+    "LEAF",
+    "Bvh",
+    "build_bvh",
+    "empty_bvh",
+    "is_empty",
+    "query_bvh",
+    "ray_candidates",
+    "ray_query_bvh",
+]
 
 #: boxes in a leaf at most
 LEAF = 4
@@ -216,8 +225,8 @@ def ray_query_bvh(
     while top > 0:
         top -= 1
         node = stack[top]
-        if count[node] == 0 and left[node] == 0:
-            continue  # an empty tree's root
+        if node == 0 and is_empty(count, left):
+            continue
         if not ray_box(o, inv, node_box[node], t_max):
             continue
         if count[node] > 0:
@@ -243,20 +252,31 @@ def ray_candidates(
     o: np.ndarray, inv: np.ndarray, t_max: float, found: np.ndarray,
 ) -> tuple[np.ndarray, int]:  # fmt: skip
     """The pieces whose boxes a ray (``o``, inverse direction ``inv``, up to ``t_max``) meets
-    in two trees: ``statics`` (node boxes, left, first, count, order, the items' boxes) and
-    ``movers`` (the same, and pieces to test one by one, unused here; an empty tree is
-    skipped). Returns ``found`` (grown if need be) and how many it holds."""
+    in two trees: ``statics`` (node boxes, left, first, count, order, the items' boxes, the
+    items being pieces) and ``movers`` (the same over boxes of its own, then the piece of each
+    of those boxes; an empty tree is skipped). Returns ``found`` (grown if need be) and how
+    many pieces it holds."""
     s_box, s_left, s_first, s_count, s_order, s_boxes = statics
-    m_box, m_left, m_first, m_count, m_order, m_boxes, _ = movers
+    m_box, m_left, m_first, m_count, m_order, m_boxes, m_pieces = movers
     while True:
         k = ray_query_bvh(s_box, s_left, s_first, s_count, s_order, s_boxes, o, inv, t_max,
                           found, 0)  # fmt: skip
-        if m_count.shape[0] > 1 or m_count[0] > 0:
-            k = ray_query_bvh(m_box, m_left, m_first, m_count, m_order, m_boxes, o, inv, t_max,
-                              found, k)  # fmt: skip
-        if k <= found.shape[0]:
-            return found, k
-        found = np.empty(2 * k, np.int64)
+        total = k
+        if not is_empty(m_count, m_left):
+            total = ray_query_bvh(m_box, m_left, m_first, m_count, m_order, m_boxes, o, inv,
+                                  t_max, found, k)  # fmt: skip
+        if total <= found.shape[0]:
+            for j in range(k, total):
+                found[j] = m_pieces[found[j]]
+            return found, total
+        found = np.empty(2 * total, np.int64)
+
+
+@njit(cache=True, inline="always")
+def is_empty(count: np.ndarray, left: np.ndarray) -> bool:
+    """Whether a tree (its nodes' ``count`` and ``left``) holds no box."""
+    empty: bool = count[0] == 0 and left[0] == 0
+    return empty
 
 
 @njit(cache=True, inline="always")

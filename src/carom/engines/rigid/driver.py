@@ -95,6 +95,8 @@ class RigidEngine(SteppedEngine):
     def _setup(self) -> None:
         m, s = self.model, self.state
         self._g = float(np.hypot(*m.gravity))
+        #: the most corners a piece has (a ray kernel's room for one placed piece)
+        self._ray_room = (max(1, int(m.piece_count.max(initial=1))), 0)
         # place everything once: static pieces never move again
         motion.place_pieces(
             s.x, s.angle, np.ones(m.kind.shape[0], np.bool_), m.body_pieces, m.piece_start,
@@ -174,7 +176,8 @@ class RigidEngine(SteppedEngine):
         queries.cast_rays(
             rays[0], rays[1], rays[2], self._reach[0], self._reach[1], movers, s.x, s.angle,
             m.piece_body, m.piece_start, m.piece_count, m.piece_radius, m.local_vertices,
-            m.local_normals, self.filters[:, 0], mask, hits[0], hits[1], hits[2],
+            m.local_normals, self.filters[:, 0], mask, self._ray_room, hits[0], hits[1],
+            hits[2],
         )  # fmt: skip
 
     def _spin_of(self, torque: FloatArray) -> FloatArray:

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from carom.geometry.bvh import ray_candidates
+from carom.geometry.bvh import is_empty, ray_candidates
 from carom.geometry.rays import ray_box, ray_rounded_polygon
 
 __all__ = ["cast_rays"]
@@ -26,8 +26,8 @@ def cast_rays(
     open_statics: np.ndarray, movers: tuple[Any, ...], x: np.ndarray, angle: np.ndarray,
     piece_body: np.ndarray, piece_start: np.ndarray, piece_count: np.ndarray,
     piece_radius: np.ndarray, local_vertices: np.ndarray, local_normals: np.ndarray,
-    categories: np.ndarray, mask: int, distance: np.ndarray, piece: np.ndarray,
-    normal: np.ndarray,
+    categories: np.ndarray, mask: int, room: tuple[int, int], distance: np.ndarray,
+    piece: np.ndarray, normal: np.ndarray,
 ) -> None:  # fmt: skip
     """Cast rays ``origins`` (R, 2) [m] along unit ``directions`` (R, 2) up to ``lengths``
     (R,) [m]: each one's ``distance`` [m] (inf: no hit), the ``piece`` hit (-1) and the outward
@@ -35,15 +35,14 @@ def cast_rays(
 
     ``statics``: the static pieces' tree (node boxes, left, first, count, order) and their
     boxes; ``open_statics`` the static pieces with no finite box; ``movers``: the other pieces'
-    tree and boxes (a tree of one empty root: test ``movers[5]``'s pieces one by one).
-    A body whose ``categories`` (N,) bits hold none of ``mask`` is not seen.
+    tree over boxes of its own, then each box's piece (an empty tree: every box tested one
+    by one). A body whose ``categories`` (N,) bits hold none of ``mask`` is not seen.
+    ``room``: the most corners a piece has (and 0).
     """
-    m_boxes, m_all = movers[5], movers[6]
-    widest = 1
-    for p in range(piece_count.shape[0]):
-        widest = max(widest, piece_count[p])
-    v = np.empty((widest, 2))
-    n = np.empty((widest, 2))
+    m_boxes, m_pieces = movers[5], movers[6]
+    alone = m_pieces.shape[0] if is_empty(movers[3], movers[1]) else 0  # tested one by one
+    v = np.empty((room[0], 2))
+    n = np.empty((room[0], 2))
     found = np.empty(64, np.int64)
     inv = np.empty(2)
     out = np.empty(2)
@@ -54,15 +53,16 @@ def cast_rays(
         distance[r] = math.inf
         piece[r] = -1
         found, k = ray_candidates(statics, movers, o, inv, best, found)
-        for j in range(k + open_statics.shape[0] + m_all.shape[0]):
+        n_open = open_statics.shape[0]
+        for j in range(k + n_open + alone):
             if j < k:
                 p = found[j]
-            elif j < k + open_statics.shape[0]:
+            elif j < k + n_open:
                 p = open_statics[j - k]
             else:
-                p = m_all[j - k - open_statics.shape[0]]
-                if not ray_box(o, inv, m_boxes[p], best):
+                if not ray_box(o, inv, m_boxes[j - k - n_open], best):
                     continue
+                p = m_pieces[j - k - n_open]
             b = piece_body[p]
             if categories[b] & mask == 0:
                 continue

@@ -99,6 +99,11 @@ class RigidEngine3D(SteppedEngine):
 
     def _setup(self) -> None:
         m, n = self.model, self.model.kind.shape[0]
+        #: the most corners and faces a piece has (a ray kernel's room for one placed piece)
+        self._ray_room = (
+            int(m.piece_vcount.max(initial=1)),
+            max(1, int(m.piece_fcount.max(initial=1))),
+        )
         self._made = _room(self._ci.shape[0])  # this step's manifolds, kept once it is taken
         self._made_count = 0
         self._ints = (
@@ -222,7 +227,7 @@ class RigidEngine3D(SteppedEngine):
             (m.piece_body, m.piece_kind, m.piece_vstart, m.piece_vcount, m.piece_fstart,
              m.piece_fcount, m.piece_cstart), m.piece_radius, m.local_vertices,
             m.local_normals, m.face_first, m.face_size, m.corners, self.filters[:, 0],
-            mask, hits[0], hits[1], hits[2],
+            mask, self._ray_room, hits[0], hits[1], hits[2],
         )  # fmt: skip
 
     def _solver_bodies(self) -> NDArray[np.int64]:

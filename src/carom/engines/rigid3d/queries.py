@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 from carom.engines.rigid3d.model import PIECE_PLANE, PIECE_ROUND
-from carom.geometry.bvh import ray_candidates
+from carom.geometry.bvh import is_empty, ray_candidates
 from carom.geometry.rays import ray_box, ray_capsule, ray_plane, ray_polytope, ray_sphere
 from carom.geometry.rotation import matrix
 
@@ -28,23 +28,21 @@ def cast_rays(
     open_statics: np.ndarray, movers: tuple[Any, ...], x: np.ndarray, q: np.ndarray,
     model_ints: tuple[Any, ...], piece_radius: np.ndarray, local_vertices: np.ndarray,
     local_normals: np.ndarray, face_first: np.ndarray, face_size: np.ndarray,
-    corners: np.ndarray, categories: np.ndarray, mask: int, distance: np.ndarray,
-    piece: np.ndarray, normal: np.ndarray,
+    corners: np.ndarray, categories: np.ndarray, mask: int, room: tuple[int, int],
+    distance: np.ndarray, piece: np.ndarray, normal: np.ndarray,
 ) -> None:  # fmt: skip
     """Cast rays ``origins`` (R, 3) [m] along unit ``directions`` (R, 3) up to ``lengths``
     (R,) [m]: each one's ``distance`` [m] (inf: no hit), the ``piece`` hit (-1) and the outward
     ``normal`` (R, 3) there. ``model_ints``: the pieces' body, kind, vertex start and count,
     face start and count, corner start (:class:`.model.Model3D`); ``statics``, ``open_statics``
     and ``movers`` as in 2D (:func:`carom.engines.rigid.queries.cast_rays`); a body whose
-    ``categories`` (N,) bits hold none of ``mask`` is not seen."""
+    ``categories`` (N,) bits hold none of ``mask`` is not seen; ``room``: the most corners
+    and faces a piece has."""
     piece_body, piece_kind, vstart, vcount, fstart, fcount, cstart = model_ints
-    m_boxes, m_all = movers[5], movers[6]
-    widest, faces = 1, 1
-    for p in range(piece_body.shape[0]):
-        widest = max(widest, vcount[p])
-        faces = max(faces, fcount[p])
-    v = np.empty((widest, 3))
-    n = np.empty((faces, 3))
+    m_boxes, m_pieces = movers[5], movers[6]
+    alone = m_pieces.shape[0] if is_empty(movers[3], movers[1]) else 0  # tested one by one
+    v = np.empty((room[0], 3))
+    n = np.empty((room[1], 3))
     rot = np.empty(9)
     found = np.empty(64, np.int64)
     inv = np.empty(3)
@@ -58,15 +56,15 @@ def cast_rays(
         piece[r] = -1
         found, k = ray_candidates(statics, movers, o, inv, best, found)
         n_open = open_statics.shape[0]
-        for j in range(k + n_open + m_all.shape[0]):
+        for j in range(k + n_open + alone):
             if j < k:
                 p = found[j]
             elif j < k + n_open:
                 p = open_statics[j - k]
             else:
-                p = m_all[j - k - n_open]
-                if not ray_box(o, inv, m_boxes[p], best):
+                if not ray_box(o, inv, m_boxes[j - k - n_open], best):
                     continue
+                p = m_pieces[j - k - n_open]
             b = piece_body[p]
             if categories[b] & mask == 0:
                 continue

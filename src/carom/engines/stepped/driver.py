@@ -40,7 +40,7 @@ from carom.engines.stepped.broadphase import KeptPairs, find_pairs, grid_cell
 from carom.engines.stepped.contacts import extremes, store_points
 from carom.engines.stepped.events import ContactEvents
 from carom.engines.stepped.filters import default_filters, filter_pairs
-from carom.engines.stepped.loads import Loads
+from carom.engines.stepped.loads import Loaded, Loads
 from carom.engines.stepped.memory import StepMemory, new_memory
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT, point_layout
 from carom.engines.stepped.settings import RigidSettings
@@ -139,20 +139,18 @@ class SteppedEngine:
         self.state = state
         self.settings = settings
         self._start_totals(time)
+        #: the step [s]: the settings' own, another during a step of another length
         self.dt = settings.dt
-        #: the engine's whole step [s] (``dt`` is another during a step of another length)
-        self._whole = settings.dt
         n = model.kind.shape[0]
         if partners is None:
             partners = Partners(np.zeros(n, np.int8), np.arange(n, dtype=np.int64))
         self.partners = partners
         #: the caller's bodies: the first ``n_bodies``
         self.n_bodies = int(np.count_nonzero(partners.kind == PARTNER_BODY))
+        #: each row's body number for the caller (-1: a wall or plane of the scenery)
+        self.callers = np.where(partners.kind == PARTNER_BODY, partners.number, -1)
         #: the contact events of the last step (:mod:`.events`)
-        self.events = ContactEvents(
-            self.DIMS, np.where(partners.kind == PARTNER_BODY, partners.number, -1),
-            point_layout(self.DIMS),
-        )  # fmt: skip
+        self.events = ContactEvents(self.DIMS, self.callers, point_layout(self.DIMS))
         self.cell = grid_cell(model.kind, model.piece_body, model.piece_reach)
         rows, dims = self.ROWS, self.DIMS
         self._cf = np.zeros((max(64, 2 * n), rows.CONTACT_FLOATS))
@@ -297,7 +295,7 @@ class SteppedEngine:
         n_iso = islands.plan(
             self._ci, nc, closest, closing, m.kind, mem.awake, st.exact_impacts,
             0.1 * st.linear_slop, self._closing_fast, self._leaving,
-            self._loads.none_torqued if loaded is None else loaded[2], self._parent,
+            self._loads.none_torqued if loaded is None else loaded.torqued, self._parent,
             self._role, isolated, island_first, self._island_of,
         )  # fmt: skip
         met = self._no_impacts
@@ -311,7 +309,7 @@ class SteppedEngine:
         if loaded is None:
             self._fly(free)
         else:  # a free body's load does all the work on it
-            pushed = free[loaded[0][free]]
+            pushed = free[loaded.on[free]]
             before = self._energy(pushed)
             self._fly(free)
             self._work_done += self._energy(pushed) - before
@@ -361,7 +359,7 @@ class SteppedEngine:
         self.n_contacts = nc
         self.steps += 1
 
-    def _load(self) -> tuple[NDArray[np.bool_], FloatArray, NDArray[np.bool_], FloatArray]:
+    def _load(self) -> Loaded:
         """Take the loads given for this step (:mod:`.loads`): each dynamic body's acceleration
         gains ``F / m``, its points' reach the load's pull, its spin the torque; return the
         bodies loaded, their positions now, those torqued, and their orientations now (2D:
@@ -373,18 +371,14 @@ class SteppedEngine:
         self._pull = loads.pull(m.inv_mass, m.inv_inertia, m.reach)
         self._spin_load = self._spin_of(loads.torque)
         turn = self.state.angle.copy() if self.DIMS == 2 else np.zeros(0)
-        return on, self.state.x.copy(), loads.torqued(), turn
+        return Loaded(on, self.state.x.copy(), loads.torqued(), turn)
 
     def _spin_of(self, torque: FloatArray) -> FloatArray:
         """What the solver and free flight take of the torques (N,) or (N, 3) [N m]: 2D, the
         angular accelerations [rad/s^2]; 3D, the torques themselves."""
         return torque
 
-    def _load_work(
-        self,
-        rows: NDArray[np.int64],
-        loaded: tuple[NDArray[np.bool_], FloatArray, NDArray[np.bool_], FloatArray],
-    ) -> float:
+    def _load_work(self, rows: NDArray[np.int64], loaded: Loaded) -> float:
         """The work [J] the loads did on the bodies ``rows`` over the step: ``F . dx`` (exact
         for a force constant through the step), and in 2D ``T dtheta`` (3D: the solver books
         its torques' work, and the torques' islands are never solved exactly)."""
@@ -584,7 +578,7 @@ class SteppedEngine:
     @property
     def time(self) -> float:
         """The clock [s]: its origin plus whole steps since."""
-        return self.start + self._since * self._whole
+        return self.start + self._since * self.settings.dt
 
     def advance(
         self,
@@ -646,18 +640,6 @@ class SteppedEngine:
         self._loads.add_torques(ids, torques)
         self._wake_bodies(np.unique(ids))
 
-    def set_filters(
-        self, ids: NDArray[np.int64], category: int | None, mask: int | None, group: int | None
-    ) -> None:
-        """Set the collision filters of bodies ``ids`` (k,): the category and mask bits and
-        the group given (None: kept) (:mod:`.filters`). The bodies wake: a pair they may now
-        touch is found at the next step."""
-        for column, value in enumerate((category, mask, group)):
-            if value is not None:
-                self.filters[ids, column] = value
-        self.filtered = bool(np.any(self.filters != default_filters(1)))
-        self._wake_bodies(np.unique(ids))
-
     def retire(self, ids: NDArray[np.int64]) -> None:
         """Take bodies ``ids`` (k,) out of the world for good, their indices kept: they stop
         (the kinetic energy they had leaves the ledger as work done on them) and never move
@@ -670,10 +652,16 @@ class SteppedEngine:
         self._work_done += self._energy(rows) - before
         self._movers = self._movers[~np.isin(self._movers, rows)]
 
-    def use_filters(self, table: NDArray[np.int64]) -> None:
-        """The caller's bodies' filters, ``table`` (n, 3): category, mask, group each."""
+    def use_filters(
+        self, table: NDArray[np.int64], changed: NDArray[np.int64] | None = None
+    ) -> None:
+        """The caller's bodies' filters, ``table`` (n, 3): category, mask, group each
+        (:mod:`.filters`). The bodies ``changed`` (k,) wake: a pair they may now touch is
+        found at the next step."""
         self.filters[: table.shape[0]] = table
         self.filtered = bool(np.any(self.filters != default_filters(1)))
+        if changed is not None:
+            self._wake_bodies(np.unique(changed))
 
     def cast_rays(
         self, origins: FloatArray, directions: FloatArray, lengths: FloatArray, mask: int = -1
@@ -681,28 +669,23 @@ class SteppedEngine:
         """Rays from ``origins`` (R, d) [m] along unit ``directions`` (R, d) up to ``lengths``
         (R,) [m] against every body now whose category holds a bit of ``mask`` (signed 64-bit:
         -1 is every bit) (:mod:`carom.geometry.rays`): each one's distance [m] (inf: no hit),
-        the engine row of the body hit (-1) and the outward normal there (R, d)."""
+        the caller's number of the body hit (:attr:`callers`; -2: none) and the outward normal
+        there (R, d)."""
         m, s = self.model, self.state
         rays = origins.shape[0]
         distance = np.empty(rays)
         piece = np.empty(rays, np.int64)
         normal = np.zeros((rays, self.DIMS))
         movers = self._reach[2]
-        # the moving bodies' pieces within their reach of their centres now: a tree over those
-        # boxes for many rays, one by one for a few
-        boxes = np.zeros((m.piece_body.shape[0], 2 * self.DIMS))
-        if movers.size:
-            centre = s.x[m.piece_body[movers]]
-            reach = (m.piece_reach[movers] + m.piece_radius[movers])[:, None]
-            boxes[movers] = np.hstack((centre - reach, centre + reach))
-        if rays >= 8 and movers.size:
-            tree = build_bvh(boxes, movers)
-            kept = movers[:0]
-        else:
-            tree, kept = empty_bvh(self.DIMS), movers
-        trees = (tree.box, tree.left, tree.first, tree.count, tree.order, boxes, kept)
+        # the moving bodies' pieces within their reach of their centres now, one box each: a
+        # tree over them for many rays, one by one for a few
+        centre = s.x[m.piece_body[movers]]
+        reach = (m.piece_reach[movers] + m.piece_radius[movers])[:, None]
+        boxes = np.hstack((centre - reach, centre + reach))
+        tree = build_bvh(boxes) if rays >= 8 and movers.size else empty_bvh(self.DIMS)
+        trees = (tree.box, tree.left, tree.first, tree.count, tree.order, boxes, movers)
         self._cast((origins, directions, lengths), trees, mask, (distance, piece, normal))
-        body = np.where(piece >= 0, m.piece_body[np.maximum(piece, 0)], -1)
+        body = np.where(piece >= 0, self.callers[m.piece_body[np.maximum(piece, 0)]], -2)
         return distance, body, normal
 
     def _cast(

@@ -24,12 +24,27 @@ and the energy a free body gains in 3D (nothing else acts on it), so that
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Loads"]
+__all__ = ["Loaded", "Loads"]
 
 FloatArray = NDArray[np.float64]
+
+
+class Loaded(NamedTuple):
+    """A step's loads as it began, for booking their work at its end."""
+
+    #: bodies with a force or a torque (N,)
+    on: NDArray[np.bool_]
+    #: every body's position at the step's start (N, d) [m]
+    x0: FloatArray
+    #: bodies with a torque (N,)
+    torqued: NDArray[np.bool_]
+    #: every body's angle at the step's start (N,) [rad] in 2D; empty in 3D
+    turn0: FloatArray
 
 
 class Loads:
