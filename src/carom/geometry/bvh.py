@@ -273,6 +273,28 @@ def ray_candidates(
 
 
 @njit(cache=True, inline="always")
+def ray_candidate(
+    j: int, found: np.ndarray, k: int, open_pieces: np.ndarray, boxes: np.ndarray,
+    pieces: np.ndarray, o: np.ndarray, inv: np.ndarray, t_max: float,
+) -> int:  # fmt: skip
+    """Candidate ``j`` of a ray: the ``k`` pieces :func:`ray_candidates` ``found``, then the
+    ``open_pieces`` (no finite box), then ``pieces`` one by one whose ``boxes`` the ray meets
+    within ``t_max`` (-1 for one it misses)."""
+    if j < k:
+        piece: int = found[j]
+        return piece
+    j -= k
+    if j < open_pieces.shape[0]:
+        piece = open_pieces[j]
+        return piece
+    j -= open_pieces.shape[0]
+    if not ray_box(o, inv, boxes[j], t_max):
+        return -1
+    piece = pieces[j]
+    return piece
+
+
+@njit(cache=True, inline="always")
 def is_empty(count: np.ndarray, left: np.ndarray) -> bool:
     """Whether a tree (its nodes' ``count`` and ``left``) holds no box."""
     empty: bool = count[0] == 0 and left[0] == 0

@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from carom.geometry.bvh import is_empty, ray_candidates
-from carom.geometry.rays import ray_box, ray_rounded_polygon
+from carom.geometry.bvh import is_empty, ray_candidate, ray_candidates
+from carom.geometry.rays import ray_rounded_polygon
 
 __all__ = ["cast_rays"]
 
@@ -53,16 +53,10 @@ def cast_rays(
         distance[r] = math.inf
         piece[r] = -1
         found, k = ray_candidates(statics, movers, o, inv, best, found)
-        n_open = open_statics.shape[0]
-        for j in range(k + n_open + alone):
-            if j < k:
-                p = found[j]
-            elif j < k + n_open:
-                p = open_statics[j - k]
-            else:
-                if not ray_box(o, inv, m_boxes[j - k - n_open], best):
-                    continue
-                p = m_pieces[j - k - n_open]
+        for j in range(k + open_statics.shape[0] + alone):
+            p = ray_candidate(j, found, k, open_statics, m_boxes, m_pieces, o, inv, best)
+            if p < 0:
+                continue
             b = piece_body[p]
             if categories[b] & mask == 0:
                 continue

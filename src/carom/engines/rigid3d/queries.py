@@ -15,8 +15,8 @@ import numpy as np
 from numba import njit
 
 from carom.engines.rigid3d.model import PIECE_PLANE, PIECE_ROUND
-from carom.geometry.bvh import is_empty, ray_candidates
-from carom.geometry.rays import ray_box, ray_capsule, ray_plane, ray_polytope, ray_sphere
+from carom.geometry.bvh import is_empty, ray_candidate, ray_candidates
+from carom.geometry.rays import ray_capsule, ray_plane, ray_polytope, ray_sphere
 from carom.geometry.rotation import matrix
 
 __all__ = ["cast_rays"]
@@ -55,16 +55,10 @@ def cast_rays(
         distance[r] = math.inf
         piece[r] = -1
         found, k = ray_candidates(statics, movers, o, inv, best, found)
-        n_open = open_statics.shape[0]
-        for j in range(k + n_open + alone):
-            if j < k:
-                p = found[j]
-            elif j < k + n_open:
-                p = open_statics[j - k]
-            else:
-                if not ray_box(o, inv, m_boxes[j - k - n_open], best):
-                    continue
-                p = m_pieces[j - k - n_open]
+        for j in range(k + open_statics.shape[0] + alone):
+            p = ray_candidate(j, found, k, open_statics, m_boxes, m_pieces, o, inv, best)
+            if p < 0:
+                continue
             b = piece_body[p]
             if categories[b] & mask == 0:
                 continue
