@@ -35,7 +35,7 @@ LAYERS = [
     {"body_input"},
     {"engines"},
     # the facade and what it is made of
-    {"scenery", "recording", "collision_log", "checkpoint", "gameloop", "queries"},
+    {"scenery", "recording", "collision_log", "checkpoint", "gameloop", "queries", "joints"},
     {"observables"},
     {"world"},
     # the edges

@@ -38,6 +38,7 @@ from carom.engines.base import Counters, Engine, FrameArrays, describe_partner
 from carom.engines.registry import AUTO, EngineEntry
 from carom.errors import CaromError
 from carom.gameloop import GameLoop
+from carom.joints import Joints
 from carom.limits import check_body_count
 from carom.materials import Material
 from carom.observables import Stats
@@ -62,7 +63,7 @@ __all__ = ["LOG_LIMIT", "RECORD_BYTES", "Frame", "Material", "Recording", "World
 FloatArray = NDArray[np.float64]
 
 
-class World(Scenery, GameLoop, Queries):
+class World(Scenery, GameLoop, Queries, Joints):
     """Bodies in a box, advanced by an engine: spheres (3D) or disks (2D) simulated exactly,
     event by event, or rigid bodies of any shape in 2D and 3D, step by step.
 

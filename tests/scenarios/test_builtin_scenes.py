@@ -56,8 +56,12 @@ RIGID3D = {
 }
 
 
+#: the scenes with joints (tests/scene/test_joint_scenes.py runs them)
+JOINTED = {"car", "chain-bridge", "cradle-on-strings", "pendulums", "ragdoll-pile"}
+
+
 def test_the_built_in_scenes_are_all_there() -> None:
-    assert set(builtin_scenes()) == EXPECTED | RIGID | RIGID3D
+    assert set(builtin_scenes()) == EXPECTED | RIGID | RIGID3D | JOINTED
 
 
 @pytest.mark.parametrize("name", sorted(EXPECTED))

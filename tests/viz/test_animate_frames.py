@@ -64,3 +64,32 @@ def test_a_blitted_frame_is_the_full_redraw(dim: int) -> None:
         assert np.count_nonzero(np.any(blitted != np.asarray(painter.still)[..., :3], axis=2))
     finally:
         painter.close()
+
+
+def test_joints_are_drawn_from_each_centre_through_the_anchors() -> None:
+    # (Box2D's debug draw of a joint: A's centre, A's anchor, B's anchor, B's centre)
+    pytest.importorskip("matplotlib", reason="the viz extra is missing")
+    from carom.joints import joint_lines
+
+    ints = np.array([[0, -1, 0, 0], [0, 0, 1, 0], [-1, 0, 1, 0]])  # the last one removed
+    local = np.array([[1.0, 1.5, -0.2, 0.0], [0.2, 0.0, -0.1, 0.0], [9.0, 9.0, 9.0, 9.0]])
+    x = np.array([[1.2, 1.5], [1.0, 1.0]])
+    angle = np.array([0.0, math.pi / 2])
+    lines = joint_lines(ints, local, x, angle)
+    assert lines.shape == (2, 4, 2)
+    assert np.allclose(lines[0], [[1.0, 1.5], [1.0, 1.5], [1.0, 1.5], [1.2, 1.5]], atol=1e-15)
+    # body 1 turned a quarter: its anchor (-0.1, 0) in its frame is (0, -0.1) in the world
+    assert np.allclose(lines[1], [[1.2, 1.5], [1.4, 1.5], [1.0, 0.9], [1.0, 1.0]], atol=1e-15)
+    scene = _scene(2)
+    scene.joints = (ints, local)
+    painter = _Painter(scene, "joints", (320, 240))
+    try:
+        painter.draw(
+            0.0,
+            np.array([[1.2, 1.5], [1.0, 1.0], [0.5, 0.5]]),
+            np.zeros((3, 2)),
+            np.array([0.0, math.pi / 2, 0.0]),
+        )
+        assert len(painter.joints.get_segments()) == 2
+    finally:
+        painter.close()

@@ -14,6 +14,10 @@ Layout written (de Buyl et al., Comput. Phys. Commun. 185, 1546, 2014; nongnu.or
     /particles/all/pieces     the rigid bodies' rounded convex pieces, time-independent:
                               owner (P,) body, radius (P,) [m], corners (P,), vertices
                               (V, 2) [m] in the body's frame about its centre of mass
+    /particles/all/joints     the joints (when there are any), time-independent: kind (J,)
+                              strings ("revolute", ...; "removed"), bodies (J, 2) (-1: the
+                              world), anchors (J, 2, 2) [m] in each body's frame about its
+                              centre of mass (a world point for the world)
     /particles/all/radius     (N,) [m]    time-independent
     /particles/all/mass       (N,) [kg]   (inf for static bodies)
     /observables/kinetic_energy      step, time, value (F,) [J]
@@ -219,6 +223,8 @@ class H5MDWriter:
         for name, value in pieces_to_arrays(world.bodies.pieces, self.dim).items():
             pieces.create_dataset(name, data=value)
         pieces["radius"].attrs["unit"] = pieces["vertices"].attrs["unit"] = "m"
+        if getattr(world, "n_joints", 0):
+            _write_joints(particles.create_group("joints"), world, h5py)
         orientation = (self.n,) if self.dim == 2 else (self.n, 4)
         observables = self.file.require_group("observables")
         self.groups = {
@@ -395,6 +401,22 @@ class H5MDWriter:
         traceback: TracebackType | None,
     ) -> None:
         self.close()
+
+
+def _write_joints(group: Any, world: World, h5py: Any) -> None:
+    """The world's joints into ``group`` (the module docstring's layout)."""
+    from carom.engines.rigid import joints as rows2
+    from carom.engines.stepped import joints as shared
+
+    ints, floats = world.joint_rows
+    names = [
+        "removed" if k == shared.REMOVED else shared.KIND_NAMES[int(k)]
+        for k in ints[:, shared.J_KIND]
+    ]
+    group.create_dataset("kind", data=np.array(names, dtype=h5py.string_dtype()))
+    group.create_dataset("bodies", data=ints[:, [shared.J_A, shared.J_B]])
+    anchors = floats[:, rows2.LAX : rows2.LBY + 1].reshape(-1, 2, 2)
+    group.create_dataset("anchors", data=anchors).attrs["unit"] = "m"
 
 
 @contextmanager

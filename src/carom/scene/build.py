@@ -13,6 +13,7 @@ import numpy as np
 
 from carom import shapes, shapes3d
 from carom.errors import CaromError
+from carom.joints import Distance, Joint, Prismatic, Revolute, Target, Weld, Wheel
 from carom.limits import check_body_count
 from carom.materials import Material
 from carom.meshes import Mesh, decompose, load_mesh
@@ -42,6 +43,7 @@ class Scene(Protocol):
     pegs: list[dict[str, Any]]
     pyramid: list[dict[str, Any]]
     gas: list[dict[str, Any]]
+    joints: list[dict[str, Any]]
     settings: dict[str, Any]
     source: str
     text: str
@@ -121,6 +123,12 @@ def build_world(scene: Scene, *, engine: bool = True) -> World:
             "the scene has no bodies",
             "add [[bodies]], [[gas]] or generator ([[row]], [[rack]], ...) tables",
         )
+    for index, j in enumerate(scene.joints):
+        try:
+            for joint in joints_of(j, world.dim):
+                world.add_joint(joint)
+        except CaromError as exc:
+            raise where.error(["joints"], str(exc), "", index) from None
     if not engine:
         return world
     try:
@@ -191,6 +199,103 @@ _READERS: dict[tuple[str, int], Callable[[_Entry], Any]] = {
 #: a compound's piece placed: each dimension's keys and defaults for its offset and turn
 _PLACING = {2: (("offset", [0.0, 0.0]), ("angle", 0.0)),
             3: (("offset", [0.0, 0.0, 0.0]), ("orientation", [1.0, 0, 0, 0]))}  # fmt: skip
+
+
+def joints_of(entry: Mapping[str, Any], dim: int) -> list[Joint]:
+    """The joints a ``[[joints]]`` table describes (:mod:`carom.joints`): one per pair of
+    ``bodies``, each taking its own row of ``anchor``, ``anchors``, ``axis`` or ``target``
+    when those are given one per joint."""
+    raw = entry["bodies"]
+    pairs = raw if isinstance(raw[0], list) else [raw]
+    n = len(pairs)
+
+    def each(key: str, width: int) -> list[Any]:
+        value = entry[key]
+        if value is None:
+            return [None] * n
+        if width == 2:  # rows of two points (a distance joint's anchors)
+            if isinstance(value[0][0], list):
+                return list(value) if len(value) == n else _count(key, len(value), n)
+            return [value] * n
+        if isinstance(value[0], list):
+            return list(value) if len(value) == n else _count(key, len(value), n)
+        return [value] * n
+
+    kind = entry["type"]
+    anchor, anchors = each("anchor", 1), each("anchors", 2)
+    axis, target = each("axis", 1), each("target", 1)
+    body = [None if a == -1 else a for a, _ in pairs], [None if b == -1 else b for _, b in pairs]
+    common = {"collide": entry["collide"]}
+    made: list[Joint] = []
+    for k in range(n):
+        a, b = body[0][k], body[1][k]
+        if kind in ("revolute", "weld", "prismatic", "wheel") and anchor[k] is None:
+            raise CaromError(f"anchor is required for a {kind} joint: the point [m]")
+        if kind in ("prismatic", "wheel") and axis[k] is None:
+            raise CaromError(f"axis is required for a {kind} joint: its direction")
+        if kind == "revolute":
+            made.append(
+                Revolute(
+                    a, b, anchor[k], entry["limits"], entry["motor"], entry["spring"], **common
+                )
+            )
+        elif kind == "prismatic":
+            made.append(
+                Prismatic(
+                    a,
+                    b,
+                    anchor[k],
+                    axis[k],
+                    entry["limits"],
+                    entry["motor"],
+                    entry["spring"],
+                    **common,
+                )
+            )
+        elif kind == "wheel":
+            made.append(
+                Wheel(
+                    a,
+                    b,
+                    anchor[k],
+                    axis[k],
+                    entry["spring"],
+                    entry["motor"],
+                    entry["limits"],
+                    **common,
+                )
+            )
+        elif kind == "weld":
+            made.append(Weld(a, b, anchor[k], entry["spring"], entry["angular_spring"], **common))
+        elif kind == "distance":
+            if anchors[k] is None or len(anchors[k]) != 2:
+                raise CaromError(
+                    "anchors is required for a distance joint: [[xa, ya], [xb, yb]] [m]"
+                )
+            made.append(
+                Distance(
+                    a, b, anchors[k][0], anchors[k][1], entry["length"], entry["min_length"],
+                    entry["max_length"], entry["spring"], **common,
+                )
+            )  # fmt: skip
+        else:
+            if target[k] is None or b is None:
+                raise CaromError("a target joint needs target = [x, y] and bodies = [-1, b]")
+            made.append(
+                Target(
+                    b,
+                    target[k],
+                    anchor[k],
+                    entry["hertz"],
+                    entry["damping_ratio"],
+                    entry["max_force"],
+                )
+            )
+    return made
+
+
+def _count(key: str, got: int, n: int) -> list[Any]:
+    raise CaromError(f"{key} has {got} rows for {n} joints: give one, or one per joint")
 
 
 def _box(e: _Entry, size: list[Any]) -> shapes.Box:

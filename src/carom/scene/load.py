@@ -44,6 +44,9 @@ class Scene:
         The ``[[materials]]``, ``[[bodies]]``, generator (``[[row]]``, ``[[rack]]``,
         ``[[lattice]]``, ``[[pegs]]``, ``[[pyramid]]``) and ``[[gas]]`` tables, defaults
         filled in.
+    joints : list of dict
+        The ``[[joints]]`` tables (:mod:`carom.joints`), defaults filled in; each joins
+        bodies by their index in the order the scene places them.
     settings : dict of str to settings
         Each engine's settings (its dataclass, made from the table named as the engine:
         ``[rigid]``, ``[edmd]``; the dataclass's defaults for what the file leaves out).
@@ -65,6 +68,7 @@ class Scene:
     pegs: list[dict[str, Any]] = field(default_factory=list)
     pyramid: list[dict[str, Any]] = field(default_factory=list)
     gas: list[dict[str, Any]] = field(default_factory=list)
+    joints: list[dict[str, Any]] = field(default_factory=list)
     run: dict[str, Any] = field(default_factory=dict)
     settings: dict[str, Any] = field(default_factory=dict)
     outputs: dict[str, Any] = field(default_factory=dict)

@@ -266,6 +266,37 @@ def _turns(value: Any) -> str | None:
     return None
 
 
+def _pairs(value: Any) -> str | None:
+    """One pair of body indices [a, b] (-1: the world), or a list of them."""
+    rows = value if isinstance(value, list) and value and isinstance(value[0], list) else [value]
+    for row in rows:
+        if (
+            not isinstance(row, list)
+            or len(row) != 2
+            or any(isinstance(i, bool) or not isinstance(i, int) for i in row)
+        ):
+            return (
+                "must be a pair of body indices [a, b] (-1: the world) or a list of them, "
+                f"got {_show(value)}"
+            )
+    return None
+
+
+def _vector_or_rows(value: Any) -> str | None:
+    """One vector, or one per joint."""
+    if isinstance(value, list) and value and isinstance(value[0], list):
+        return _rows(value)
+    return _vector(value)
+
+
+def _two(value: Any) -> str | None:
+    """Two numbers [x, y]: a range, a motor (speed, most), a spring (hertz, ratio)."""
+    problem = _vector(value)
+    if problem is None and len(value) != 2:
+        return f"must be two numbers, got {len(value)}"
+    return problem
+
+
 def _region(value: Any) -> str | None:
     if not isinstance(value, list) or len(value) != 2 or any(_vector(c) for c in value):
         return f"must be [[low corner], [high corner]], got {_show(value)}"
@@ -391,6 +422,29 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "region": (_region, False, None),
         "drift": (_vector, False, None),
     },
+    "joints": {
+        "type": (
+            _choice("revolute", "prismatic", "distance", "weld", "wheel", "target"),
+            True,
+            None,
+        ),
+        "bodies": (_pairs, True, None),
+        "anchor": (_vector_or_rows, False, None),
+        "anchors": (_vector_or_rows, False, None),
+        "axis": (_vector_or_rows, False, None),
+        "target": (_vector_or_rows, False, None),
+        "length": (_not_negative, False, None),
+        "min_length": (_not_negative, False, None),
+        "max_length": (_not_negative, False, None),
+        "limits": (_two, False, None),
+        "motor": (_two, False, None),
+        "spring": (_two, False, None),
+        "angular_spring": (_two, False, None),
+        "hertz": (_positive, False, 5.0),
+        "damping_ratio": (_not_negative, False, 0.7),
+        "max_force": (_positive, False, None),
+        "collide": (_boolean, False, False),
+    },
     "run": {
         "until": (_positive, True, None),
         "frame_interval": (_positive, False, None),
@@ -407,7 +461,7 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
 GENERATORS = ("row", "rack", "lattice", "pegs", "pyramid")
 #: keys that carom once read under another name: table -> old key -> new key
 RENAMED = {"world": {"wall_restitution": "walls", "tc": "t_c"}}
-ARRAYS = ("materials", "bodies", *GENERATORS, "gas")
+ARRAYS = ("materials", "bodies", *GENERATORS, "gas", "joints")
 
 
 class Locator:

@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from carom.bodies import PIECE_ARRAYS, Pieces, pieces_from_arrays
 from carom.errors import CaromError
 from carom.geometry.rotation import rotation_matrices
+from carom.joints import joint_lines
 from carom.shapes import ConvexPiece
 from carom.shapes3d import ConvexPiece3D
 from carom.viz import require_matplotlib
@@ -196,8 +197,12 @@ class TrajectoryScene:
         radius: FloatArray,
         mass: FloatArray,
         pieces: Sequence[Pieces] | None = None,
+        joints: tuple[NDArray[np.int64], FloatArray] | None = None,
     ) -> None:
         self.dim, self.box, self.periodic = dim, box, periodic
+        #: the joints, drawn as lines (:func:`carom.joints.joint_lines`): their rows (J, 4)
+        #: and local anchors (J, 4), or None
+        self.joints = joints
         self.radius = radius
         self.moving = np.isfinite(mass)
         self.speed_scale = 1.0
@@ -224,6 +229,17 @@ class TrajectoryScene:
                 {k: stored[k][:] for k in PIECE_ARRAYS if k in stored}, len(radius)
             )
         )
+        stored_joints = f["particles/all"].get("joints")
+        joints = None
+        if stored_joints is not None:
+            kinds = [
+                str(k, "utf-8") if isinstance(k, bytes) else str(k)
+                for k in stored_joints["kind"][:]
+            ]
+            ints = np.zeros((len(kinds), 4), np.int64)
+            ints[:, 0] = [0 if k != "removed" else -1 for k in kinds]
+            ints[:, 1:3] = stored_joints["bodies"][:]
+            joints = (ints, np.asarray(stored_joints["anchors"][:], dtype=float).reshape(-1, 4))
         return cls(
             int(box.attrs["dimension"]),
             np.asarray(box["edges"][:], dtype=float),
@@ -231,6 +247,7 @@ class TrajectoryScene:
             radius,
             np.asarray(f["particles/all/mass"][:], dtype=float),
             pieces,
+            joints,
         )
 
 
@@ -246,6 +263,8 @@ class Outlines:
         Each point's body.
     inset : (M, 2) float64
         The points of the lighter inset (towards the piece's middle) [m].
+    size : (M,) float64
+        The size of each point's piece: its farthest point from its middle [m].
     body : (K,) int64
         Each polygon's body.
     splits : (K - 1,) int64
@@ -257,6 +276,7 @@ class Outlines:
     def __init__(self, pieces: list[tuple[ConvexPiece, ...]]) -> None:
         points: list[FloatArray] = [np.zeros((0, 2))]
         insets: list[FloatArray] = [np.zeros((0, 2))]
+        size: list[FloatArray] = [np.zeros(0)]
         body: list[int] = []
         circle: list[bool] = []
         for i, shapes in enumerate(pieces):
@@ -265,10 +285,12 @@ class Outlines:
                 middle = ring.mean(axis=0)
                 points.append(ring)
                 insets.append(middle + 0.72 * (ring - middle))
+                size.append(np.full(len(ring), np.max(np.hypot(*(ring - middle).T))))
                 body.append(i)
                 circle.append(len(piece.vertices) == 1)
         self.points = np.concatenate(points)
         self.inset = np.concatenate(insets)
+        self.size = np.concatenate(size)
         self.body = np.array(body, np.int64)
         self.circle = np.array(circle, bool)
         sizes = [len(ring) for ring in points[1:]]
@@ -548,7 +570,9 @@ class _Painter:
         # its frame: each frame moves them (as matplotlib's per-path transforms) rather than
         # building them anew
         outlines = scene.outlines
-        shift = 0.04 * float(np.median(scene.radius[outlines.body])) if len(outlines.body) else 0
+        # (each piece's inset shifted by a share of its own size: a long static chain's
+        # would otherwise carry the small bodies' insets off them)
+        shift = 0.04 * outlines.size[:, None]
         placed = _placed_polygons()
         self.shapes: Any = placed(outlines.polygons(outlines.points), linewidths=0.4, zorder=2)
         self.insets: Any = placed(
@@ -556,6 +580,9 @@ class _Painter:
         )
         self.ax.add_collection(self.shapes)
         self.ax.add_collection(self.insets)
+        # the joints (2D): a line from each body's centre to its anchor, anchor to anchor
+        self.joints: Any = LineCollection([], colors="#2a9d8f", linewidths=1.1, zorder=4)
+        self.ax.add_collection(self.joints)
         self.fig.text(0.04, 0.965, title, fontsize=13, weight="bold")
         self.stamp = self.fig.text(0.04, 0.93, "", family="monospace", fontsize=13)
         bar_ax = self.fig.add_axes((0.88, 0.15, 0.025, 0.6))
@@ -567,7 +594,7 @@ class _Painter:
         # what moves is drawn every frame over a picture of what does not (blitting): the
         # colour bar, the title, the box's back edges are drawn once; the box's front edges
         # go over the bodies
-        self.moving_parts = [self.disks, self.faces, self.shapes, self.insets]
+        self.moving_parts = [self.disks, self.faces, self.shapes, self.insets, self.joints]
         self.moving_parts += [self.front] if self.front is not None else []
         for artist in [*self.moving_parts, self.stamp]:
             artist.set_animated(True)
@@ -593,6 +620,9 @@ class _Painter:
             self.shapes.set_facecolor(colour * 0.72)
             self.shapes.set_edgecolor(colour * 0.45)
             self.insets.set_facecolor(colour + (1.0 - colour) * 0.12)
+        if scene.joints is not None and scene.dim == 2:
+            turn = np.zeros(len(positions)) if angles is None else np.asarray(angles, float)
+            self.joints.set_segments(list(joint_lines(*scene.joints, positions, turn)))
         if self.camera is not None and len(scene.facets.body):
             turns = np.zeros((len(positions), 4)) if angles is None else np.asarray(angles)
             self._draw_faces(positions, turns, every)

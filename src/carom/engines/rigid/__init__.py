@@ -11,4 +11,12 @@ World's bodies, walls and planes as its arrays; its plug).
 from carom.jit import kernel_cache
 
 with kernel_cache():
-    from carom.engines.rigid import broadphase, contacts, impacts, motion, queries, solver  # noqa: F401
+    from carom.engines.rigid import (  # noqa: F401
+        broadphase,
+        contacts,
+        impacts,
+        joints,
+        motion,
+        queries,
+        solver,
+    )

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.rigid import broadphase, contacts, impacts, motion, queries, solver
+from carom.engines.rigid import broadphase, contacts, impacts, joints, motion, queries, solver
 from carom.engines.rigid.model import RigidModel, RigidState
 from carom.engines.stepped.driver import Isolated, SteppedEngine
 from carom.engines.stepped.settings import RigidSettings
@@ -83,6 +83,7 @@ class RigidEngine(SteppedEngine):
     with the 2D kernels."""
 
     DIMS = 2
+    JOINT_FLOATS = joints.JOINT_FLOATS
     ROWS = contacts
     IMPACTS = impacts
     SPIN = "omega"
@@ -186,9 +187,11 @@ class RigidEngine(SteppedEngine):
 
     def _solve(self, nc: int, bodies: NDArray[np.int64], work: FloatArray) -> None:
         m, s = self.model, self.state
+        active, jointed = self._joints_now()
         solver.solve_step(
             self._cf, self._ci, nc, bodies, m.inv_mass, m.inv_inertia, self._accel,
             self._spin_load, s.x, s.angle, s.v, s.omega, self._knobs(), work,
+            self.joint_floats, self.joint_ints, active, jointed, self._closing_fast,
         )  # fmt: skip
 
     def _poses(self) -> tuple[FloatArray, FloatArray]:

@@ -42,6 +42,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from carom.engines.rigid import joints
 from carom.engines.rigid.contacts import (
     F_E,
     F_MU,
@@ -64,7 +65,8 @@ from carom.engines.rigid.contacts import (
 )
 from carom.engines.rigid.motion import apply_impulse, fixed_work, relative_velocity
 from carom.engines.stepped import solver as shared
-from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
+from carom.engines.stepped.joints import joint_softness
+from carom.engines.stepped.rows import FLAG_EXACT, FLAG_STRUCK, I_BODY_A, I_BODY_B, I_COUNT
 from carom.engines.stepped.solver import LANE_MATH, LANES, soft_bias
 from carom.geometry.rotation import cos_sin
 
@@ -116,6 +118,7 @@ S_DX = 3  # move since the step began [m]
 S_DY = 4
 S_COS = 5  # cos and sin of the turn since the step began
 S_SIN = 6
+S_TURN = 7  # the turn since the step began [rad] (for the joints' relative angles)
 STATE_COLS = 8
 
 
@@ -438,6 +441,208 @@ def _restitution(
 
 
 @njit(cache=True)
+def _impacts_first(
+    cf: np.ndarray,
+    ci: np.ndarray,
+    rows: np.ndarray,
+    inv_mass: np.ndarray,
+    inv_inertia: np.ndarray,
+    state: np.ndarray,
+    h: float,
+    threshold: float,
+    shift: np.ndarray,
+    struck: np.ndarray,
+    work: np.ndarray,
+    held: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """Take the impacts of the contact ``rows`` (those of islands with joints) in this
+    substep, each at its own time, before the soft step sees them, where no joint holds
+    their bodies along the impact (``held``: the joints' rows, the active ones, their
+    prepared rows and bodies, and each body's, :func:`.joints.resists`).
+
+    A point closing faster than ``threshold`` [m/s] (or at all, once one of its bodies was
+    struck in this substep: an impact is one event) whose gap closes within the substep gets
+    Newton's impulse between its two bodies alone (``-(1 + e)`` times its approach speed
+    over its effective mass; a joint's impulse along the impact is nil when the joint is
+    across it, as a pendulum's string at the bottom of its swing) at the fraction ``tau``
+    of the substep where the gap closes, in row order, sweep after sweep until none closes
+    (256 sweeps at the most).
+    So an impact passes along a row of touching bodies one pair at a time, as the exact path
+    and the event-driven engine pass it (Newton's cradle), where the soft step would share
+    it among them all. A body's velocity changes at ``tau``: ``shift`` (N+1, 3) gains what
+    its move and turn over the substep lose to the change (``(v_before - v_after) tau h``),
+    added when the positions are integrated, and the gap of a later impact is measured with
+    it. Such points are flagged :data:`FLAG_STRUCK` (the restitution pass leaves them) and
+    their impulses added to ``struck`` (nc, 2) [N s]; ``work[0]`` gains what kinematic
+    bodies did."""
+    hit = np.zeros(state.shape[0], np.bool_)
+    for _ in range(256):
+        fired = False
+        for m in rows:
+            a, b = ci[m, I_BODY_A], ci[m, I_BODY_B]
+            nx, ny = cf[m, F_NX], cf[m, F_NY]
+            # an impact starts closing faster than the threshold; once a body is struck, its
+            # contacts pass the impact on at any speed (an impact is one event)
+            least = 0.0 if hit[a] or hit[b] else threshold
+            for p in range(ci[m, I_COUNT]):
+                vn, gap, rax, ray, rbx, rby = _closing(cf, m, point_offset(p), a, b, state, shift)
+                if vn >= -least:
+                    continue
+                tau = -gap / (vn * h)
+                if tau > 1.0:
+                    continue
+                tau = max(tau, 0.0)
+                if _held(held, state, a, b, nx, ny):
+                    continue  # the soft step solves it with the joints
+                rna = rax * ny - ray * nx
+                rnb = rbx * ny - rby * nx
+                ma, mb = inv_mass[a], inv_mass[b]
+                ia, ib = inv_inertia[a], inv_inertia[b]
+                k = ma + mb + ia * rna * rna + ib * rnb * rnb
+                if k <= 0.0:
+                    continue
+                dj = -(1.0 + cf[m, F_E]) * vn / k
+                px, py = dj * nx, dj * ny
+                for body, sign, rx, ry, im, ii in (
+                    (a, 1.0, rax, ray, ma, ia),
+                    (b, -1.0, rbx, rby, mb, ib),
+                ):
+                    dvx, dvy = sign * im * px, sign * im * py
+                    dw = sign * ii * (rx * py - ry * px)
+                    if im == 0.0:  # a kinematic body's work: its velocity at the point
+                        vx = state[body, S_VX] - state[body, S_W] * ry
+                        vy = state[body, S_VY] + state[body, S_W] * rx
+                        work[0] -= sign * (px * vx + py * vy)
+                    state[body, S_VX] += dvx
+                    state[body, S_VY] += dvy
+                    state[body, S_W] += dw
+                    shift[body, 0] -= dvx * tau * h
+                    shift[body, 1] -= dvy * tau * h
+                    shift[body, 2] -= dw * tau * h
+                struck[m, p] += dj
+                ci[m, I_FLAGS] |= FLAG_STRUCK
+                hit[a] = True
+                hit[b] = True
+                fired = True
+        if not fired:
+            return
+
+
+@njit(cache=True, inline="always")
+def _closing(
+    cf: np.ndarray, m: int, o: int, a: int, b: int, state: np.ndarray, shift: np.ndarray
+) -> tuple[float, float, float, float, float, float]:
+    """Point ``o`` of contact ``m`` (bodies ``a``, ``b``) now: its normal relative speed
+    [m/s], its gap [m] (with what ``shift`` (N+1, 3) holds of the moves still to come), and
+    its anchors turned with their bodies (as the soft step turns them)."""
+    nx, ny = cf[m, F_NX], cf[m, F_NY]
+    ca, sa, cb, sb = state[a, S_COS], state[a, S_SIN], state[b, S_COS], state[b, S_SIN]
+    rax = ca * cf[m, o + P_RAX] - sa * cf[m, o + P_RAY]
+    ray = sa * cf[m, o + P_RAX] + ca * cf[m, o + P_RAY]
+    rbx = cb * cf[m, o + P_RBX] - sb * cf[m, o + P_RBY]
+    rby = sb * cf[m, o + P_RBX] + cb * cf[m, o + P_RBY]
+    ux = (state[a, S_VX] - state[a, S_W] * ray) - (state[b, S_VX] - state[b, S_W] * rby)
+    uy = (state[a, S_VY] + state[a, S_W] * rax) - (state[b, S_VY] + state[b, S_W] * rbx)
+    gx = state[a, S_DX] - state[b, S_DX] + rax - rbx
+    gy = state[a, S_DY] - state[b, S_DY] + ray - rby
+    gx += (shift[a, 0] - shift[a, 2] * ray) - (shift[b, 0] - shift[b, 2] * rby)
+    gy += (shift[a, 1] + shift[a, 2] * rax) - (shift[b, 1] + shift[b, 2] * rbx)
+    gap = cf[m, o + P_BASE] + gx * nx + gy * ny
+    return ux * nx + uy * ny, gap, rax, ray, rbx, rby
+
+
+@njit(cache=True, inline="always")
+def _held(
+    held: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                np.ndarray],
+    state: np.ndarray, a: int, b: int, nx: float, ny: float,
+) -> bool:  # fmt: skip
+    """Whether a joint holds body ``a`` or ``b`` along ``(nx, ny)`` (:func:`.joints.resists`;
+    ``held`` as :func:`_impacts_first` takes it)."""
+    jf, ji, active, prep, jrows, start, members = held
+    return joints.resists(
+        jf, ji, active, prep, jrows, start, members, state, a, nx, ny
+    ) or joints.resists(jf, ji, active, prep, jrows, start, members, state, b, nx, ny)
+
+
+@njit(cache=True)
+def _slots(lanes: np.ndarray, nc: int) -> np.ndarray:
+    """Each contact's place in the groups, ``g * LANES + lane`` (nc,)."""
+    slots = np.full(max(nc, 1), -1, np.int64)
+    for g in range(lanes.shape[0]):
+        for lane in range(LANES):
+            if lanes[g, lane] >= 0:
+                slots[lanes[g, lane]] = g * LANES + lane
+    return slots
+
+
+@njit(cache=True)
+def _hold_back(
+    cf: np.ndarray, ci: np.ndarray, first: np.ndarray, slots: np.ndarray, group: np.ndarray,
+    state: np.ndarray, shift: np.ndarray, h: float, threshold: float, held: np.ndarray,
+    joined: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                  np.ndarray],
+) -> int:  # fmt: skip
+    """Before a relax pass: leave out of it the points of the contacts ``first`` that close
+    faster than ``threshold`` and would touch within the next substep (their base in the
+    groups set to ``ABSENT_BASE``, the old one kept in ``held`` (K, 2): where, what), so that
+    the next substep takes their impacts first instead of the relax pass slowing the
+    approach (those no joint holds: ``joined``, :func:`_held`); return how many.
+    :func:`_give_back` puts them back."""
+    k = 0
+    for m in first:
+        slot = slots[m]
+        if slot < 0:
+            continue
+        g, lane = slot // LANES, slot % LANES
+        a, b = ci[m, I_BODY_A], ci[m, I_BODY_B]
+        for p in range(ci[m, I_COUNT]):
+            vn, gap, _, _, _, _ = _closing(cf, m, point_offset(p), a, b, state, shift)
+            if (
+                vn < -threshold
+                and gap + vn * h < 0.0
+                and not _held(joined, state, a, b, cf[m, F_NX], cf[m, F_NY])
+            ):
+                at = (R_POINT + p * POINT_ROWS + Q_BASE) * LANES + lane
+                held[k, 0] = g * group.shape[1] + at
+                held[k, 1] = group[g, at]
+                group[g, at] = shared.ABSENT_BASE
+                k += 1
+    return k
+
+
+@njit(cache=True)
+def _give_back(group: np.ndarray, held: np.ndarray, k: int) -> None:
+    """The bases :func:`_hold_back` took, back in the groups."""
+    flat = group.reshape(-1)
+    for i in range(k):
+        flat[int(held[i, 0])] = held[i, 1]
+
+
+@njit(cache=True)
+def _jointed_rows(ci: np.ndarray, nc: int, jointed: np.ndarray) -> np.ndarray:
+    """The contacts (rows) not solved exactly with a body ``jointed`` (N,) bool."""
+    out = np.empty(nc, np.int64)
+    k = 0
+    for m in range(nc):
+        if not ci[m, I_FLAGS] & FLAG_EXACT and (
+            jointed[ci[m, I_BODY_A]] or jointed[ci[m, I_BODY_B]]
+        ):
+            out[k] = m
+            k += 1
+    return out[:k]
+
+
+@njit(cache=True)
+def _unshift(shift: np.ndarray, bodies: np.ndarray) -> None:
+    """Nothing shifted for the next substep (the bodies' rows only: others never are)."""
+    for i in bodies:
+        shift[i, 0] = 0.0
+        shift[i, 1] = 0.0
+        shift[i, 2] = 0.0
+
+
+@njit(cache=True)
 def solve_step(
     cf: np.ndarray,
     ci: np.ndarray,
@@ -453,8 +658,13 @@ def solve_step(
     omega: np.ndarray,
     knobs: tuple[float, int, float, float, float, float],
     work: np.ndarray,
+    jf: np.ndarray,
+    ji: np.ndarray,
+    active: np.ndarray,
+    jointed: np.ndarray,
+    impact_speed: float,
 ) -> None:
-    """Advance the ``bodies`` (indices) and their contacts by one step.
+    """Advance the ``bodies`` (indices), their contacts and joints by one step.
 
     ``knobs``: the step ``dt`` [s], the substeps, the contact stiffness [Hz] and damping
     ratio [-], the most a pass pushes overlapping bodies apart [m/s], and the restitution
@@ -466,10 +676,24 @@ def solve_step(
     this step over the mass), ``alpha`` (N,) [rad/s^2] its angular acceleration (the torques
     given over the moment of inertia); both enter the velocities each substep, as in Box2D.
     ``work[0]`` gains the work kinematic bodies did on the others [J].
+
+    The joints ``active`` (k,) of the rows ``jf``, ``ji`` (:mod:`.joints`) join bodies of
+    ``bodies`` or bodies that do not move under impulses; they are solved before the contacts
+    in each pass (Box2D v3's order), and their reactions written after the last substep. The
+    contacts of bodies ``jointed`` (N,) bool (in an island with a joint) take their impacts
+    first (:func:`_impacts_first`): those closing faster than ``impact_speed`` [m/s].
     """
     dt, substeps, contact_hertz, damping_ratio, push_speed, restitution_threshold = knobs
     h, soft_moving, soft_fixed = shared.substep_softness(dt, substeps, contact_hertz, damping_ratio)
     n = x.shape[0]
+    struck = np.zeros((max(nc, 1), 2))
+    shift = np.zeros((n + 1, 3))
+    first = np.zeros(0, np.int64)
+    if active.shape[0]:
+        first = _jointed_rows(ci, nc, jointed)
+    soft_joint = joint_softness(h, contact_hertz)
+    prep, rows = joints.prepare(jf, ji, active, x, angle, inv_mass, inv_inertia, h)
+    start, members = joints.by_body(rows, n)
     # every body's row, and a last one for the padding lanes' dummy (at rest, infinite mass)
     state = np.zeros((n + 1, STATE_COLS))
     state[:n, S_VX] = v[:, 0]
@@ -480,27 +704,52 @@ def solve_step(
     _pack(
         cf, ci, lanes, inv_mass, inv_inertia, state, soft_moving, soft_fixed, group, pair, kinematic
     )
+    slots = _slots(lanes, nc)
+    spared = np.empty((2 * first.shape[0], 2))
     for _ in range(substeps):
         for i in bodies:
             state[i, S_VX] += h * accel[i, 0]
             state[i, S_VY] += h * accel[i, 1]
             state[i, S_W] += h * alpha[i]
+        if first.shape[0]:
+            _impacts_first(
+                cf, ci, first, inv_mass, inv_inertia, state, h, impact_speed, shift, struck, work,
+                (jf, ji, active, prep, rows, start, members),
+            )  # fmt: skip
+        joints.warm_start(jf, ji, active, prep, rows, state)
         _warm_start(group, pair, kinematic, state, work)
+        joints.solve(jf, ji, active, prep, rows, state, h, soft_joint, True)
         _solve(group, pair, kinematic, state, 1.0 / h, True, push_speed, work)
         for i in bodies:
-            x[i, 0] += h * state[i, S_VX]
-            x[i, 1] += h * state[i, S_VY]
-            angle[i] += h * state[i, S_W]
-            state[i, S_DX] += h * state[i, S_VX]
-            state[i, S_DY] += h * state[i, S_VY]
+            # (shift: what an impact taken first within the substep took from the move)
+            mx = h * state[i, S_VX] + shift[i, 0]
+            my = h * state[i, S_VY] + shift[i, 1]
+            turn = h * state[i, S_W] + shift[i, 2]
+            x[i, 0] += mx
+            x[i, 1] += my
+            angle[i] += turn
+            state[i, S_DX] += mx
+            state[i, S_DY] += my
+            state[i, S_TURN] += turn
             # each body's turn since the step began, once per substep (not per contact):
             # the last turn composed with this substep's
-            c, s = cos_sin(h * state[i, S_W])
+            c, s = cos_sin(turn)
             cos0 = state[i, S_COS]
             sin0 = state[i, S_SIN]
             state[i, S_COS] = cos0 * c - sin0 * s
             state[i, S_SIN] = sin0 * c + cos0 * s
+        held = 0
+        if first.shape[0]:
+            _unshift(shift, bodies)
+            held = _hold_back(
+                cf, ci, first, slots, group, state, shift, h, impact_speed, spared,
+                (jf, ji, active, prep, rows, start, members),
+            )  # fmt: skip
+        joints.solve(jf, ji, active, prep, rows, state, h, soft_joint, False)
         _solve(group, pair, kinematic, state, 1.0 / h, False, push_speed, work)
+        if held:
+            _give_back(group, spared, held)
+    joints.reactions(jf, ji, active, prep, rows, state, h)
     for i in bodies:
         v[i, 0] = state[i, S_VX]
         v[i, 1] = state[i, S_VY]
@@ -509,4 +758,9 @@ def solve_step(
         group, lanes, ci, cf, (R_POINT, POINT_ROWS, POINT0, POINT_FLOATS, 2),
         (P_JN, P_JT, P_TOTAL, P_NMASS), (Q_JN, Q_JT, Q_TOTAL, Q_NMASS), True,
     )  # fmt: skip
+    if active.shape[0]:  # the impacts taken first count in the points' impulse of the step
+        for m in range(nc):
+            if ci[m, I_FLAGS] & FLAG_STRUCK:
+                for p in range(ci[m, I_COUNT]):
+                    cf[m, point_offset(p) + P_TOTAL] += struck[m, p]
     _restitution(cf, ci, nc, restitution_threshold, inv_mass, inv_inertia, v, omega, work)

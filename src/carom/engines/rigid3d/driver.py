@@ -88,6 +88,7 @@ class RigidEngine3D(SteppedEngine):
     each step's manifolds are kept for the next (:mod:`.contacts`)."""
 
     DIMS = 3
+    JOINT_FLOATS = 0  # (3D joints: not yet)
     ROWS = contacts
     IMPACTS = impacts
     SPIN = "w"

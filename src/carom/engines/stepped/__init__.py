@@ -15,5 +15,6 @@ with kernel_cache():
         events,
         filters,
         islands,
+        joints,
         solver,
     )

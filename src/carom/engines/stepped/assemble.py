@@ -157,6 +157,10 @@ class _Stepped(Protocol):
 
     def retire(self, ids: NDArray[np.int64]) -> None: ...
 
+    def use_joints(
+        self, ints: NDArray[np.int64], floats: NDArray[np.float64], wake: bool = True
+    ) -> None: ...
+
 
 Built = TypeVar("Built", bound=_Stepped)
 
@@ -164,11 +168,15 @@ Built = TypeVar("Built", bound=_Stepped)
 def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
     """``engine``, once no dynamic body starts overlapping another body, a wall or a plane
     deeper than the linear slop (the solver would throw them apart); else a CaromError
-    naming the two. The world's collision filters (:meth:`carom.World.set_filter`) are the
-    engine's first: a pair they keep apart may start overlapping."""
+    naming the two. The world's collision filters (:meth:`carom.World.set_filter`) and
+    joints (:meth:`carom.World.add_joint`) are the engine's first: a pair they keep apart may
+    start overlapping."""
     table = getattr(world, "collision_filters", None)
     if table is not None and len(table):
         engine.use_filters(np.asarray(table, np.int64))
+    ints = getattr(world, "_joint_ints", None)
+    if ints is not None and len(ints):
+        engine.use_joints(ints, world._joint_floats, wake=False)  # type: ignore[attr-defined]
     alive = getattr(world, "alive", None)
     if alive is not None and not np.all(alive):
         engine.retire(np.flatnonzero(~np.asarray(alive)))

@@ -40,6 +40,15 @@ from carom.engines.stepped.broadphase import KeptPairs, find_pairs, grid_cell
 from carom.engines.stepped.contacts import extremes, store_points
 from carom.engines.stepped.events import ContactEvents
 from carom.engines.stepped.filters import default_filters, filter_pairs
+from carom.engines.stepped.joints import (
+    J_A,
+    J_B,
+    J_KIND,
+    JOINT_INTS,
+    REMOVED,
+    joined_keys,
+    links,
+)
 from carom.engines.stepped.loads import Loaded, Loads
 from carom.engines.stepped.memory import StepMemory, new_memory
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT, point_layout
@@ -110,6 +119,8 @@ class SteppedEngine:
 
     name = "rigid"
     DIMS: int
+    #: the float columns of a joint row (the dimension's joints module)
+    JOINT_FLOATS: int
     ROWS: Any
     IMPACTS: Any
     SPIN: str
@@ -169,6 +180,13 @@ class SteppedEngine:
         #: each body's collision filter (:mod:`.filters`), and whether any is not the default
         self.filters = default_filters(n)
         self.filtered = False
+        #: the joints (:mod:`.joints`): integer and float rows (the world's own arrays,
+        #: shared: the solver writes their impulses and reactions in place), the bodies they
+        #: join (-1: the world) and the pairs they keep from touching
+        self.joint_ints = np.zeros((0, JOINT_INTS), np.int64)
+        self.joint_floats = np.zeros((0, self.JOINT_FLOATS))
+        self._links = np.zeros((0, 2), np.int64)
+        self._joined = np.zeros(0, np.int64)
         #: the forces and torques given for the next step; during a step, the most they
         #: accelerate each body's points [m/s^2] and each body's angular acceleration
         #: [rad/s^2] in 2D, the torque [N m] in 3D (zeros without loads)
@@ -285,7 +303,7 @@ class SteppedEngine:
         loaded = self._load() if self._loads.on else None
         nc = self._contacts()
         if st.sleep and islands.wake(
-            self._ci, nc, m.kind, mem.awake, self._moving(), mem.clock, mem.island
+            self._ci, nc, m.kind, mem.awake, self._moving(), mem.clock, mem.island, self._links
         ):
             nc = self._contacts()
         n = m.kind.shape[0]
@@ -295,7 +313,8 @@ class SteppedEngine:
         n_iso = islands.plan(
             self._ci, nc, closest, closing, m.kind, mem.awake, st.exact_impacts,
             0.1 * st.linear_slop, self._closing_fast, self._leaving,
-            self._loads.none_torqued if loaded is None else loaded.torqued, self._parent,
+            self._loads.none_torqued if loaded is None else loaded.torqued, self._links,
+            self._parent,
             self._role, isolated, island_first, self._island_of,
         )  # fmt: skip
         met = self._no_impacts
@@ -404,10 +423,16 @@ class SteppedEngine:
         return how many."""
         n_pairs = self._pairs()
         self._now = self._kept.pairs
-        if self.filtered:  # the pairs the filters keep, into a copy (the kept ones stay whole)
+        if self.filtered or self._joined.size:
+            # the pairs the filters and joints keep, into a copy (the kept ones stay whole)
             self._now = np.empty_like(self._kept.pairs)
             n_pairs = filter_pairs(
-                self._kept.pairs, n_pairs, self.model.piece_body, self.filters, self._now
+                self._kept.pairs,
+                n_pairs,
+                self.model.piece_body,
+                self.filters,
+                self._joined,
+                self._now,
             )
         self._n_pairs = n_pairs
         while True:
@@ -444,6 +469,37 @@ class SteppedEngine:
     def _solver_bodies(self) -> NDArray[np.int64]:
         """The bodies stage 7 solves."""
         return np.flatnonzero(self._role == islands.ROLE_SOLVER)
+
+    def _joints_now(self) -> tuple[NDArray[np.int64], NDArray[np.bool_]]:
+        """The joints stage 7 solves (those of a body it solves), and the bodies of their
+        islands (N,) bool (their contacts take their impacts first)."""
+        n = self.model.kind.shape[0]
+        jointed = np.zeros(n, np.bool_)
+        if self._links.shape[0] == 0:
+            return np.zeros(0, np.int64), jointed
+        ji = self.joint_ints
+        solved = np.append(self._role == islands.ROLE_SOLVER, False) & np.append(
+            self._dynamic, False
+        )
+        live = ji[:, J_KIND] != REMOVED
+        active = np.flatnonzero(live & (solved[ji[:, J_A]] | solved[ji[:, J_B]]))
+        if active.size:
+            bodies = ji[active][:, [J_A, J_B]].ravel()
+            roots = np.unique(self._parent[bodies[bodies >= 0]])
+            jointed = np.isin(self._parent, roots) & self._dynamic
+        return active.astype(np.int64), jointed
+
+    def use_joints(self, ints: NDArray[np.int64], floats: FloatArray, wake: bool = True) -> None:
+        """The joints' rows (:mod:`.joints`), taken as they are (the solver writes their
+        impulses and reactions into ``floats``); the bodies of every joint wake if
+        ``wake`` (not when an engine is built or restored: it goes on as it was)."""
+        self.joint_ints = ints
+        self.joint_floats = floats
+        self._links = links(ints)
+        self._joined = joined_keys(ints, self.model.kind.shape[0])
+        if wake:
+            ends = self._links.ravel()
+            self._wake_bodies(np.unique(ends[ends >= 0]))
 
     def _solve(self, nc: int, bodies: NDArray[np.int64], work: FloatArray) -> None:
         """Stage 7: the soft step over the contacts left to the solver; the work of kinematic

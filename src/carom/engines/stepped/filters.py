@@ -6,6 +6,7 @@ when it is negative (a ragdoll's limbs, a car's wheels and body); otherwise they
 each one's mask holds a bit of the other's category. By default a body is category 1 and
 touches every category, group 0: everything touches.
 
+Joined bodies do not touch either, unless their joint says so (Box2D's ``collideConnected``).
 A filter removes the pair from the step altogether: the broad phase's pairs are filtered
 before the narrow phase (so no contact, no exact impact), and the static geometry an exact
 impact or a sweep looks through skips the pieces its body does not touch.
@@ -16,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from carom.engines.stepped.joints import joined
 from carom.errors import CaromError
 
 __all__ = [
@@ -75,13 +77,17 @@ def collides(filters: np.ndarray, a: int, b: int) -> bool:
 @njit(cache=True)
 def filter_pairs(
     pairs: np.ndarray, n_pairs: int, piece_body: np.ndarray, filters: np.ndarray,
-    out: np.ndarray,
+    joints: np.ndarray, out: np.ndarray,
 ) -> int:  # fmt: skip
     """The first ``n_pairs`` rows of ``pairs`` (pieces) whose bodies may touch, into ``out``
-    in order; returns how many."""
+    in order; returns how many. Bodies that a joint keeps apart (``joints``, sorted keys of
+    :func:`carom.engines.stepped.joints.joined_keys`) do not touch either."""
     m = 0
+    n = filters.shape[0]
     for k in range(n_pairs):
-        if collides(filters, piece_body[pairs[k, 0]], piece_body[pairs[k, 1]]):
+        a = piece_body[pairs[k, 0]]
+        b = piece_body[pairs[k, 1]]
+        if collides(filters, a, b) and not joined(joints, a, b, n):
             out[m, 0] = pairs[k, 0]
             out[m, 1] = pairs[k, 1]
             m += 1

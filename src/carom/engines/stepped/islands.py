@@ -62,6 +62,7 @@ def plan(
     fast: float,
     leaving: float,
     torqued: np.ndarray,
+    links: np.ndarray,
     parent: np.ndarray,
     role: np.ndarray,
     isolated: np.ndarray,
@@ -95,6 +96,9 @@ def plan(
     torqued : (N,) bool
         Bodies given a torque for this step: an island with one is the solver's (the exact
         impacts move bodies at a constant spin between impacts).
+    links : (L, 2) int64
+        The bodies joints join (-1: the world): they join islands as contacts do, and an
+        island with a joint is the solver's (a joint holds its bodies out of free flight).
     parent : (N,) int64
         Written: each body's island root (itself for non-dynamic bodies).
     role : (N,) int64
@@ -122,9 +126,26 @@ def plan(
                     parent[rb] = ra
                 else:
                     parent[ra] = rb
+    for m in range(links.shape[0]):
+        a = links[m, 0]
+        b = links[m, 1]
+        if a >= 0 and b >= 0 and kind[a] == KIND_DYNAMIC and kind[b] == KIND_DYNAMIC:
+            ra = _root(parent, a)
+            rb = _root(parent, b)
+            if ra != rb:
+                if ra < rb:
+                    parent[rb] = ra
+                else:
+                    parent[ra] = rb
     contacts = np.zeros(n, np.int64)
-    # an island with a resting contact or a kinematic body is the solver's
+    # an island with a resting contact, a kinematic body or a joint is the solver's
     solver_only = np.zeros(n, np.bool_)
+    for m in range(links.shape[0]):
+        for body in (links[m, 0], links[m, 1]):
+            if body >= 0 and kind[body] == KIND_DYNAMIC:
+                r = _root(parent, body)
+                contacts[r] += 1
+                solver_only[r] = True
     for m in range(nc):
         a = ci[m, I_BODY_A]
         b = ci[m, I_BODY_B]
@@ -231,16 +252,26 @@ def wake(
     moving: np.ndarray,
     clock: np.ndarray,
     island: np.ndarray,
+    links: np.ndarray,
 ) -> int:
-    """Wake every sleeping island that a contact joins to an awake body or a moving
-    kinematic one (``moving``, (N,) bool); return how many bodies woke (the caller then finds
-    contacts again)."""
+    """Wake every sleeping island that a contact or a joint (``links``, (L, 2) bodies, -1
+    the world) joins to an awake body or a moving kinematic one (``moving``, (N,) bool);
+    return how many bodies woke (the caller then finds contacts again)."""
     n = kind.shape[0]
     rouse = np.zeros(n, np.bool_)
     any_island = False
+    pairs = np.empty((nc + links.shape[0], 2), np.int64)
     for m in range(nc):
-        a = ci[m, I_BODY_A]
-        b = ci[m, I_BODY_B]
+        pairs[m, 0] = ci[m, I_BODY_A]
+        pairs[m, 1] = ci[m, I_BODY_B]
+    for m in range(links.shape[0]):
+        pairs[nc + m, 0] = links[m, 0]
+        pairs[nc + m, 1] = links[m, 1]
+    for m in range(pairs.shape[0]):
+        a = pairs[m, 0]
+        b = pairs[m, 1]
+        if a < 0 or b < 0:
+            continue
         for body, other in ((a, b), (b, a)):
             if kind[body] != KIND_DYNAMIC or awake[body]:
                 continue

@@ -14,6 +14,7 @@ from typing import NamedTuple
 
 __all__ = [
     "FLAG_EXACT",
+    "FLAG_STRUCK",
     "I_BODY_A",
     "I_BODY_B",
     "I_COUNT",
@@ -33,6 +34,9 @@ I_COUNT = 4  # points in the manifold
 I_ID0 = 5  # the points' feature ids: I_ID0 + j
 #: bit of the flags: the contact was solved exactly this step (an island solved exactly)
 FLAG_EXACT = 1
+#: bit of the flags: its impact was taken before the soft step (an island with joints), so
+#: the restitution pass leaves it alone
+FLAG_STRUCK = 2
 
 
 def flags_column(max_points: int) -> int:

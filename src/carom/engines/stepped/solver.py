@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_COUNT
+from carom.engines.stepped.rows import FLAG_EXACT, FLAG_STRUCK, I_BODY_A, I_BODY_B, I_COUNT
 
 __all__ = [
     "ABSENT_BASE",
@@ -299,7 +299,8 @@ def bouncing(
     layout: tuple[int, int, int, int],
 ) -> np.ndarray:  # fmt: skip
     """The points the restitution pass bounces, in order, as rows (contact, point offset),
-    (K, 2) int64: those of contacts not solved exactly and not plastic (column
+    (K, 2) int64: those of contacts not solved exactly, not struck before the soft step and
+    not plastic (column
     ``restitution``) that approached faster than ``threshold`` [m/s] and were pushed.
     ``layout``: a row's first point column, columns per point, and a point's normal relative
     speed and total impulse columns."""
@@ -310,7 +311,7 @@ def bouncing(
     todo = np.empty((count, 2), np.int64)
     k = 0
     for m in range(nc):
-        if ci[m, flags] & FLAG_EXACT or cf[m, restitution] == 0.0:
+        if ci[m, flags] & (FLAG_EXACT | FLAG_STRUCK) or cf[m, restitution] == 0.0:
             continue
         for j in range(ci[m, I_COUNT]):
             o = point0 + point_floats * j
