@@ -132,10 +132,12 @@ def chain_bridge() -> None:
         ends.append((ends[-1][0] + width * math.cos(turn), ends[-1][1] + width * math.sin(turn)))
     planks = [
         s.body(
-            shape="box", size=[width, 0.1],
+            shape="box",
+            size=[width, 0.1],
             positions=[[(ends[k][0] + ends[k + 1][0]) / 2, (ends[k][1] + ends[k + 1][1]) / 2]],
-            angles=slope if k < half else -slope, material="wood",
-        )  # fmt: skip
+            angles=slope if k < half else -slope,
+            material="wood",
+        )
         for k in range(links)
     ]
     for k, x in enumerate((8.0, 10.5, 14.0)):
@@ -202,7 +204,9 @@ def ragdoll_pile() -> None:
     for x in (0.25, 7.75):
         s.body(shape="box", size=[0.5, 6.0], positions=[[x, 3.5]], kind="static", material="cloth")
     for k in range(12):
-        ragdoll(s, 2.2 + 1.8 * (k % 3) + 0.1 * (k % 2), 1.0 + 2.2 * (k // 3) + 0.3 * (k % 3), "cloth")
+        ragdoll(
+            s, 2.2 + 1.8 * (k % 3) + 0.1 * (k % 2), 1.0 + 2.2 * (k // 3) + 0.3 * (k % 3), "cloth"
+        )
     s.write("ragdoll-pile")
 
 
