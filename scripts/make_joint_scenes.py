@@ -259,9 +259,45 @@ def cradle_on_strings() -> None:
     s.write("cradle-on-strings")
 
 
+def rope_3d() -> None:
+    s = Scene(
+        "Rope in 3D",
+        "A rope of 30 balls on spherical joints hung from one end and let go sideways; a "
+        "hinged door swings beside it on a revolute joint about z, and a ball on a fixed "
+        "joint rides a bar that slides on a prismatic joint (3D joints).",
+        {"dimension": 3, "box": [6.0, 4.0, 5.0], "boundary": "open", "gravity": [0.0, 0.0, -9.81]},
+    )
+    s.tail = {"run": {"until": 6.0, "frame_interval": 1 / 30}}
+    links, step = 30, 0.1
+    balls = [
+        s.body(shape="ball", radius=0.045, positions=[[1.0 + step * (k + 1), 2.0, 4.5]])
+        for k in range(links)
+    ]
+    s.joint(type="spherical", bodies=[-1, balls[0]], anchor=[1.0 + step / 2, 2.0, 4.5])
+    for k in range(links - 1):
+        s.joint(
+            type="spherical", bodies=[balls[k], balls[k + 1]],
+            anchor=[1.0 + step * (k + 1.5), 2.0, 4.5],
+        )  # fmt: skip
+    door = s.body(shape="box", size=[1.0, 0.05, 1.6], positions=[[4.6, 1.0, 1.0]])
+    s.joint(
+        type="revolute", bodies=[-1, door], anchor=[4.1, 1.0, 1.0], axis=[0.0, 0.0, 1.0],
+        motor=[1.5, 20.0], limits=[-2.0, 2.0],
+    )  # fmt: skip
+    bar = s.body(shape="box", size=[0.6, 0.1, 0.1], positions=[[3.0, 3.0, 2.0]])
+    s.joint(
+        type="prismatic", bodies=[-1, bar], anchor=[3.0, 3.0, 2.0], axis=[1.0, 0.0, 0.0],
+        limits=[-1.5, 1.5], motor=[0.8, 10.0],
+    )  # fmt: skip
+    ball = s.body(shape="ball", radius=0.15, positions=[[3.0, 3.0, 2.25]])
+    s.joint(type="fixed", bodies=[bar, ball], anchor=[3.0, 3.0, 2.1])
+    s.write("rope-3d")
+
+
 if __name__ == "__main__":
     pendulums()
     chain_bridge()
     ragdoll_pile()
     car()
     cradle_on_strings()
+    rope_3d()

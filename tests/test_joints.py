@@ -430,9 +430,10 @@ def test_joints_are_refused_where_they_are_not_solved() -> None:
     gas.add_spheres([[2.0, 2.0], [5.0, 5.0]], [[1.0, 0.0], [0.0, 0.0]], radius=0.1)
     with pytest.raises(CaromError, match="event-driven engine"):
         gas.add_joint(Distance(0, 1, [2.0, 2.0], [5.0, 5.0]))
-    space = carom.World(3, [10.0, 10.0, 10.0], boundary="open")
-    with pytest.raises(CaromError, match="2D rigid engine so far"):
-        space.add_joint(Distance(None, 0, [0.0, 0.0, 0.0], [1.0, 1.0, 1.0]))
+    loose = world()
+    loose.add_body(Box(0.2, 0.2), [10.0, 10.0])
+    with pytest.raises(CaromError, match="2 numbers"):
+        loose.add_joint(Distance(None, 0, [0.0, 0.0, 0.0], [10.0, 10.0]))
 
 
 def ragdoll(w: carom.World, x: float, y: float) -> list[int]:

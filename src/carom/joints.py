@@ -48,18 +48,22 @@ from numpy.typing import ArrayLike, NDArray
 
 from carom.engines.base import Engine
 from carom.engines.rigid import joints as rows2
+from carom.engines.rigid3d import joints as rows3
 from carom.engines.stepped import joints as shared
 from carom.engines.stepped.driver import SteppedEngine
 from carom.errors import CaromError
+from carom.geometry.rotation import matrix_quaternion, rotation_matrices
 from carom.laws.kinds import KIND_DYNAMIC
 from carom.limits import LARGEST
 
 __all__ = [
     "Distance",
+    "Fixed",
     "Joint",
     "Joints",
     "Prismatic",
     "Revolute",
+    "Spherical",
     "Target",
     "Weld",
     "Wheel",
@@ -83,9 +87,11 @@ class Revolute:
         The bodies (``None``: the world).
     anchor : (d,) array_like
         The pin, a world point now [m].
+    axis : (3,) array_like, optional
+        The hinge's axis now, in 3D (required there; 2D joints turn about z).
     limits : (float, float), optional
-        The least and the most relative angle [rad] from the angle now (any span: angles are
-        counted in whole turns).
+        The least and the most relative angle [rad] from the angle now (2D: any span, angles
+        are counted in whole turns; 3D: within (-pi, pi)).
     motor : (float, float), optional
         The speed B turns at relative to A [rad/s], and the largest torque the motor gives
         [N m].
@@ -101,6 +107,27 @@ class Revolute:
     limits: tuple[float, float] | None = None
     motor: tuple[float, float] | None = None
     spring: tuple[float, float] | None = None
+    collide: bool = False
+    axis: ArrayLike | None = None
+
+
+@dataclass(frozen=True)
+class Spherical:
+    """A ball and socket (3D): B turns freely about one point of A.
+
+    Parameters
+    ----------
+    a, b : int or None
+        The bodies (``None``: the world).
+    anchor : (3,) array_like
+        The socket, a world point now [m].
+    collide : bool
+        Whether a and b may touch.
+    """
+
+    a: int | None
+    b: int | None
+    anchor: ArrayLike
     collide: bool = False
 
 
@@ -255,7 +282,10 @@ class Target:
     max_force: float | None = None
 
 
-Joint = Revolute | Prismatic | Distance | Weld | Wheel | Target
+#: Rapier's and Jolt's name for a weld
+Fixed = Weld
+
+Joint = Revolute | Prismatic | Distance | Weld | Wheel | Target | Spherical
 
 
 class _World(Protocol):
@@ -322,16 +352,18 @@ class Joints:
         -------
         force : (J, d) float64
             The force [N] on B (on A: the opposite).
-        torque : (J,) float64
+        torque : (J,) float64 in 2D, (J, 3) in 3D
             The couple [N m] on B beyond the force's moment (motors, limits, springs,
-            welds, prismatic joints' hold on the angle). Zeros for a removed joint, or one
-            not solved in the last step (its bodies asleep).
+            welds, prismatic joints' and hinges' hold on the orientation). Zeros for a
+            removed joint, or one not solved in the last step (its bodies asleep).
         """
         _engine(self)
         _, floats = _tables(self)
+        if self.dim == 2:
+            return floats[:, [rows2.FX, rows2.FY]].copy(), floats[:, rows2.TORQUE].copy()
         return (
-            floats[:, [rows2.FX, rows2.FY]].copy(),
-            floats[:, rows2.TORQUE].copy(),
+            floats[:, rows3.FORCE : rows3.FORCE + 3].copy(),
+            floats[:, rows3.TORQUE : rows3.TORQUE + 3].copy(),
         )
 
     def joint_anchors(self: _World) -> FloatArray:
@@ -339,9 +371,9 @@ class Joints:
         joint): where to draw it."""
         engine = _engine(self)
         ints, floats = _tables(self)
-        return anchors_now(
-            ints, floats[:, rows2.LAX : rows2.LBY + 1], engine.state.x, engine.state.angle
-        )
+        rows, d = _rows(self.dim), self.dim
+        turn = engine.state.angle if d == 2 else engine.state.q
+        return anchors_now(ints, floats[:, rows.LA : rows.LB + d], engine.state.x, turn)
 
     def set_joint_target(self: _World, index: int, target: ArrayLike) -> None:
         """Move target joint ``index``'s point to ``target`` (d,) [m]; its body wakes."""
@@ -350,7 +382,8 @@ class Joints:
         ints, floats = _tables(self)
         if ints[j, shared.J_KIND] != shared.TARGET:
             raise CaromError(f"joint {j} is a {_kind_name(ints, j)} joint, not a target joint")
-        floats[j, rows2.LAX : rows2.LAX + 2] = _point(self, "target", target)
+        rows = _rows(self.dim)
+        floats[j, rows.LA : rows.LA + self.dim] = _point(self, "target", target)
         engine.use_joints(ints, floats)
 
     def set_joint_motor(self: _World, index: int, speed: float, most: float) -> None:
@@ -365,8 +398,9 @@ class Joints:
             raise CaromError(f"joint {j} is a {_kind_name(ints, j)} joint: it has no motor")
         speed_value = _finite("motor speed", speed)
         most_value = _at_least_zero("motor's largest force or torque", most)
-        floats[j, rows2.MOTOR_SPEED] = speed_value
-        floats[j, rows2.MAX_MOTOR] = most_value
+        rows = _rows(self.dim)
+        floats[j, rows.MOTOR_SPEED] = speed_value
+        floats[j, rows.MAX_MOTOR] = most_value
         ints[j, shared.J_FLAGS] |= shared.FLAG_MOTOR
         engine.use_joints(ints, floats)
 
@@ -376,7 +410,8 @@ class Joints:
         float rows (J, F) (:mod:`carom.engines.rigid.joints`; their impulses too), for a
         checkpoint. Copies."""
         ints: NDArray[np.int64] = getattr(self, "_joint_ints", np.zeros((0, 4), np.int64))
-        floats: FloatArray = getattr(self, "_joint_floats", np.zeros((0, rows2.JOINT_FLOATS)))
+        width = _rows(self.dim).JOINT_FLOATS
+        floats: FloatArray = getattr(self, "_joint_floats", np.zeros((0, width)))
         return ints.copy(), floats.copy()
 
     def restore_joints(self: _World, ints: ArrayLike, floats: ArrayLike) -> None:
@@ -386,36 +421,45 @@ class Joints:
 
 
 def anchors_now(
-    ints: NDArray[np.int64], local: FloatArray, x: FloatArray, angle: FloatArray
+    ints: NDArray[np.int64], local: FloatArray, x: FloatArray, turn: FloatArray
 ) -> FloatArray:
-    """The joints' anchors in the world (J, 2, 2) [m], A's then B's (NaN for a removed
-    joint), from their rows ``ints`` (J, 4) and local anchors ``local`` (J, 4) (A's x, y, B's
-    x, y, in each body's frame; a world point for body -1) and the bodies' centres of mass
-    ``x`` (N, 2) [m] and angles ``angle`` (N,) [rad]."""
-    out = np.full((ints.shape[0], 2, 2), np.nan)
+    """The joints' anchors in the world (J, 2, d) [m], A's then B's (NaN for a removed
+    joint), from their rows ``ints`` (J, 4) and local anchors ``local`` (J, 2 d) (A's, then
+    B's, in each body's frame; a world point for body -1) and the bodies' centres of mass
+    ``x`` (N, d) [m] and orientations ``turn``: angles (N,) [rad] in 2D, unit quaternions
+    (N, 4) in 3D."""
+    d = x.shape[1]
+    out = np.full((ints.shape[0], 2, d), np.nan)
     live = ints[:, shared.J_KIND] != shared.REMOVED
+    if d == 2:
+        c, s = np.cos(turn), np.sin(turn)
+        rotations = np.stack((np.stack((c, -s), -1), np.stack((s, c), -1)), -2)
+    else:
+        rotations = rotation_matrices(turn) if len(turn) else np.zeros((0, 3, 3))
     for side, col in enumerate((shared.J_A, shared.J_B)):
         body = ints[:, col]
         world = body < 0
         at = np.maximum(body, 0)
-        c = np.where(world, 1.0, np.cos(angle[at]))
-        s = np.where(world, 0.0, np.sin(angle[at]))
+        r = (
+            np.where(world[:, None, None], np.eye(d), rotations[at])
+            if len(at)
+            else np.zeros((0, d, d))
+        )
         centre = np.where(world[:, None], 0.0, x[at])
-        lx, ly = local[:, 2 * side], local[:, 2 * side + 1]
-        point = centre + np.stack((c * lx - s * ly, s * lx + c * ly), axis=1)
+        point = centre + np.einsum("jab,jb->ja", r, local[:, side * d : (side + 1) * d])
         out[live, side] = point[live]
     return out
 
 
 def joint_lines(
-    ints: NDArray[np.int64], local: FloatArray, x: FloatArray, angle: FloatArray
+    ints: NDArray[np.int64], local: FloatArray, x: FloatArray, turn: FloatArray
 ) -> FloatArray:
     """How to draw the joints (as Box2D's debug draw does): for each live joint a line from
-    A's centre to its anchor, on to B's anchor and to B's centre (K, 4, 2) [m] (the world's
+    A's centre to its anchor, on to B's anchor and to B's centre (K, 4, d) [m] (the world's
     end starts or ends at its anchor). Arguments as :func:`anchors_now`."""
-    anchors = anchors_now(ints, local, x, angle)
+    anchors = anchors_now(ints, local, x, turn)
     live = ints[:, shared.J_KIND] != shared.REMOVED
-    lines = np.empty((int(np.count_nonzero(live)), 4, 2))
+    lines = np.empty((int(np.count_nonzero(live)), 4, x.shape[1]))
     a, b = ints[live, shared.J_A], ints[live, shared.J_B]
     lines[:, 1:3] = anchors[live]
     lines[:, 0] = np.where((a < 0)[:, None], anchors[live, 0], x[np.maximum(a, 0)])
@@ -439,12 +483,7 @@ _NOT_RIGID = (
 
 
 def _refuse_elsewhere(world: Any) -> None:
-    """A CaromError unless ``world`` runs the 2D rigid engine (built or not)."""
-    if world.dim != 2:
-        raise CaromError(
-            "joints are built for the 2D rigid engine so far; the 3D ones (spherical, "
-            "revolute, prismatic, distance, fixed, target) are still to come"
-        )
+    """A CaromError unless ``world`` runs a rigid engine (built or not)."""
     engine = world.engine
     if engine is not None and not isinstance(engine, SteppedEngine):
         raise CaromError(_NOT_RIGID)
@@ -453,12 +492,12 @@ def _refuse_elsewhere(world: Any) -> None:
 
 
 class _Poses(NamedTuple):
-    """What a new joint reads of its bodies now: centres of mass (n, 2) [m], angles (n,)
-    [rad], kinds (n,), masses (n,) [kg], reaches (n,) [m] (from the centre to the farthest
-    point), gravity (2,) [m/s^2]."""
+    """What a new joint reads of its bodies now: centres of mass (n, d) [m], orientations
+    (angles (n,) [rad] in 2D, quaternions (n, 4) in 3D), kinds (n,), masses (n,) [kg],
+    reaches (n,) [m] (from the centre to the farthest point), gravity (d,) [m/s^2]."""
 
     x: FloatArray
-    angle: FloatArray
+    turn: FloatArray
     kind: NDArray[np.int64]
     mass: FloatArray
     reach: FloatArray
@@ -471,14 +510,28 @@ def _poses(world: Any) -> _Poses:
     engine = world.engine
     if isinstance(engine, SteppedEngine):
         m, st = engine.model, engine.state
-        return _Poses(st.x, st.angle, m.kind, m.mass, m.reach, m.gravity)
+        turn = st.angle if world.dim == 2 else st.q
+        return _Poses(st.x, turn, m.kind, m.mass, m.reach, m.gravity)
     bodies = world.bodies
     reach = np.array([max((p.reach for p in pieces), default=0.0) for pieces in bodies.pieces])
-    angle = np.asarray(world.orientations, np.float64).reshape(-1)
+    turn = np.asarray(world.orientations, np.float64)
+    if world.dim == 2:
+        turn = turn.reshape(-1)
     return _Poses(
-        np.asarray(world.positions), angle, np.asarray(bodies.kind), np.asarray(bodies.mass),
+        np.asarray(world.positions), turn, np.asarray(bodies.kind), np.asarray(bodies.mass),
         reach, np.asarray(world.gravity, np.float64),
     )  # fmt: skip
+
+
+def _rotation(poses: _Poses, body: int, dim: int) -> FloatArray:
+    """Body ``body``'s rotation matrix now (d, d) (the world's: the identity)."""
+    if body < 0:
+        return np.eye(dim)
+    if dim == 2:
+        c, s = math.cos(float(poses.turn[body])), math.sin(float(poses.turn[body]))
+        return np.array([[c, -s], [s, c]])
+    turned: FloatArray = rotation_matrices(poses.turn[body][None, :])[0]
+    return turned
 
 
 def _store(world: Any, ints: NDArray[np.int64], floats: FloatArray, wake: bool = True) -> None:
@@ -496,7 +549,7 @@ def _tables(world: Any) -> tuple[NDArray[np.int64], FloatArray]:
     ints = getattr(world, "_joint_ints", None)
     if ints is None:
         world._joint_ints = np.zeros((0, shared.JOINT_INTS), np.int64)
-        world._joint_floats = np.zeros((0, rows2.JOINT_FLOATS))
+        world._joint_floats = np.zeros((0, _rows(world.dim).JOINT_FLOATS))
     return world._joint_ints, world._joint_floats
 
 
@@ -584,23 +637,27 @@ def _body(world: _World, name: str, value: object) -> int:
     return i
 
 
+def _rows(dim: int) -> Any:
+    """The dimension's joint rows' module (its column names)."""
+    return rows2 if dim == 2 else rows3
+
+
 def _local(poses: _Poses, body: int, name: str, point: FloatArray) -> FloatArray:
     """World ``point`` in ``body``'s frame (from its centre of mass), refused when farther
     from the body than :data:`ARM_REACH` times its reach."""
     if body < 0:
         return point
-    x = poses.x[body]
-    th = float(poses.angle[body])
-    r = point - x
+    r = point - poses.x[body]
     reach = max(float(poses.reach[body]), 1e-300)
-    if float(np.hypot(*r)) > ARM_REACH * reach:
+    far = float(np.linalg.norm(r))
+    if far > ARM_REACH * reach:
         raise CaromError(
-            f"{name} {point.tolist()} is {float(np.hypot(*r)):.3g} m from body {body}'s "
-            f"centre, more than {ARM_REACH:g} times its reach ({reach:.3g} m): give a point "
-            "on or near the body, in metres"
+            f"{name} {point.tolist()} is {far:.3g} m from body {body}'s centre, more than "
+            f"{ARM_REACH:g} times its reach ({reach:.3g} m): give a point on or near the body, "
+            "in metres"
         )
-    c, s = math.cos(th), math.sin(th)
-    return np.array([c * r[0] + s * r[1], -s * r[0] + c * r[1]])
+    local: FloatArray = _rotation(poses, body, point.shape[0]).T @ r
+    return local
 
 
 def _spring_of(name: str, value: object) -> tuple[float, float]:
@@ -614,15 +671,26 @@ def _row_of(world: _World, poses: _Poses, joint: object) -> tuple[
     NDArray[np.int64], FloatArray
 ]:  # fmt: skip
     """The rows of ``joint``, every value checked; nothing is changed."""
+    dim = world.dim
+    rows = _rows(dim)
     ints = np.zeros(shared.JOINT_INTS, np.int64)
-    f = np.zeros(rows2.JOINT_FLOATS)
+    f = np.zeros(rows.JOINT_FLOATS)
     flags = 0
+    kinds = {
+        Revolute: shared.REVOLUTE,
+        Prismatic: shared.PRISMATIC,
+        Distance: shared.DISTANCE,
+        Weld: shared.WELD,
+        Wheel: shared.WHEEL,
+        Spherical: shared.SPHERICAL,
+    }
     if isinstance(joint, Target):
         a, b = -1, _body(world, "b", joint.b)
         if b < 0:
             raise CaromError("a target joint pulls a body: give its index as b")
         kind = shared.TARGET
-    elif isinstance(joint, Revolute | Prismatic | Distance | Weld | Wheel):
+    elif type(joint) in kinds:
+        assert isinstance(joint, Revolute | Prismatic | Distance | Weld | Wheel | Spherical)
         a = _body(world, "a", joint.a)
         b = _body(world, "b", joint.b)
         if a == b:
@@ -630,31 +698,32 @@ def _row_of(world: _World, poses: _Poses, joint: object) -> tuple[
                 f"a joint joins two different bodies; a and b are both "
                 f"{'the world' if a < 0 else f'body {a}'}"
             )
-        kind = {
-            Revolute: shared.REVOLUTE,
-            Prismatic: shared.PRISMATIC,
-            Distance: shared.DISTANCE,
-            Weld: shared.WELD,
-            Wheel: shared.WHEEL,
-        }[type(joint)]
+        kind = kinds[type(joint)]
         if joint.collide:
             flags |= shared.FLAG_COLLIDE
     else:
         raise CaromError(
             f"add_joint takes a joint of carom.joints (Revolute, Prismatic, Distance, Weld, "
-            f"Wheel, Target); got {joint!r}"
+            f"Wheel, Spherical, Target); got {joint!r}"
         )
-    kinds = poses.kind
-    if not any(i >= 0 and kinds[i] == KIND_DYNAMIC for i in (a, b)):
+    if kind == shared.WHEEL and dim == 3:
+        raise CaromError("a wheel joint is 2D; in 3D join a wheel with a Revolute about its axle")
+    if kind == shared.SPHERICAL and dim == 2:
+        raise CaromError("a spherical joint is 3D; in 2D a Revolute pins two bodies at a point")
+    if not any(i >= 0 and poses.kind[i] == KIND_DYNAMIC for i in (a, b)):
         raise CaromError("a joint needs a dynamic body to move: neither of its bodies is dynamic")
-    angle = poses.angle
-    ref = (float(angle[b]) if b >= 0 else 0.0) - (float(angle[a]) if a >= 0 else 0.0)
-    f[rows2.REF] = ref
+    ra, rb = _rotation(poses, a, dim), _rotation(poses, b, dim)
+    la, lb = slice(rows.LA, rows.LA + dim), slice(rows.LB, rows.LB + dim)
+    if dim == 2:
+        turn = poses.turn
+        f[rows2.REF] = (float(turn[b]) if b >= 0 else 0.0) - (float(turn[a]) if a >= 0 else 0.0)
+    else:  # B's orientation in A's frame (w, x, y, z)
+        f[rows3.QREF : rows3.QREF + 4] = matrix_quaternion(ra.T @ rb)
     if isinstance(joint, Target):
         target = _point(world, "target", joint.target)
         anchor = poses.x[b] if joint.anchor is None else _point(world, "anchor", joint.anchor)
-        f[rows2.LAX : rows2.LAX + 2] = target
-        f[rows2.LBX : rows2.LBX + 2] = _local(poses, b, "anchor", anchor)
+        f[la] = target
+        f[lb] = _local(poses, b, "anchor", anchor)
         hertz = _finite("hertz", joint.hertz)
         ratio = _at_least_zero("damping_ratio", joint.damping_ratio)
         if hertz <= 0.0:
@@ -666,18 +735,18 @@ def _row_of(world: _World, poses: _Poses, joint: object) -> tuple[
             most = _finite("max_force", joint.max_force)
             if most <= 0.0:
                 raise CaromError(f"max_force must be > 0 [N]; got {most!r}")
-        f[rows2.HERTZ], f[rows2.DAMPING], f[rows2.MAX_FORCE] = hertz, ratio, most
+        f[rows.HERTZ], f[rows.DAMPING], f[rows.MAX_FORCE] = hertz, ratio, most
     elif isinstance(joint, Distance):
         pa = _point(world, "anchor_a", joint.anchor_a)
         pb = _point(world, "anchor_b", joint.anchor_b)
-        f[rows2.LAX : rows2.LAX + 2] = _local(poses, a, "anchor_a", pa)
-        f[rows2.LBX : rows2.LBX + 2] = _local(poses, b, "anchor_b", pb)
-        now = float(np.hypot(*(pb - pa)))
+        f[la] = _local(poses, a, "anchor_a", pa)
+        f[lb] = _local(poses, b, "anchor_b", pb)
+        now = float(np.linalg.norm(pb - pa))
         length = now if joint.length is None else _at_least_zero("length", joint.length)
         spring = None if joint.spring is None else _spring_of("spring", joint.spring)
         if spring is not None and spring[0] > 0.0:
             flags |= shared.FLAG_SPRING
-            f[rows2.HERTZ], f[rows2.DAMPING] = spring
+            f[rows.HERTZ], f[rows.DAMPING] = spring
             low, high = 0.0, math.inf
         else:
             low = high = length
@@ -689,29 +758,47 @@ def _row_of(world: _World, poses: _Poses, joint: object) -> tuple[
             raise CaromError(f"min_length ({low:g} m) is more than max_length ({high:g} m)")
         if joint.min_length is not None or joint.max_length is not None:
             length = min(max(length, low), high)
-        f[rows2.LENGTH], f[rows2.LOWER], f[rows2.UPPER] = length, low, high
+        f[rows.LENGTH], f[rows.LOWER], f[rows.UPPER] = length, low, high
     else:
         anchor = _point(world, "anchor", joint.anchor)
-        f[rows2.LAX : rows2.LAX + 2] = _local(poses, a, "anchor", anchor)
-        f[rows2.LBX : rows2.LBX + 2] = _local(poses, b, "anchor", anchor)
-        if isinstance(joint, Prismatic | Wheel):
-            u = _axis(world, joint.axis)
-            th = float(angle[a]) if a >= 0 else 0.0
-            c, s = math.cos(th), math.sin(th)
-            f[rows2.AXX], f[rows2.AXY] = c * u[0] + s * u[1], -s * u[0] + c * u[1]
+        f[la] = _local(poses, a, "anchor", anchor)
+        f[lb] = _local(poses, b, "anchor", anchor)
+        axis = getattr(joint, "axis", None)
+        if isinstance(joint, Revolute) and dim == 2 and axis is not None:
+            raise CaromError("a 2D revolute joint turns about z: leave its axis out")
+        if isinstance(joint, Revolute) and dim == 3 and axis is None:
+            raise CaromError("a 3D revolute joint needs its axis: Revolute(a, b, anchor, axis=...)")
+        if axis is not None:
+            u = _axis(world, axis)
+            f[rows.AXA : rows.AXA + dim] = ra.T @ u
+            if dim == 3:  # the hinge's axis in B, and a direction square to it in each body
+                f[rows3.AXB : rows3.AXB + 3] = rb.T @ u
+                square = np.cross(u, [1.0, 0.0, 0.0] if abs(u[0]) < 0.57735 else [0.0, 1.0, 0.0])
+                square /= np.linalg.norm(square)
+                f[rows3.PA : rows3.PA + 3] = ra.T @ square
+                f[rows3.PB : rows3.PB + 3] = rb.T @ square
         if isinstance(joint, Weld):
             for name, value, cols in (
-                ("spring", joint.spring, (rows2.HERTZ, rows2.DAMPING)),
-                ("angular_spring", joint.angular_spring, (rows2.ANG_HERTZ, rows2.ANG_DAMPING)),
+                ("spring", joint.spring, (rows.HERTZ, rows.DAMPING)),
+                ("angular_spring", joint.angular_spring, (rows.ANG_HERTZ, rows.ANG_DAMPING)),
             ):
                 if value is not None:
                     f[cols[0]], f[cols[1]] = _spring_of(name, value)
-        else:
+        elif not isinstance(joint, Spherical):
             if joint.limits is not None:
-                f[rows2.LOWER], f[rows2.UPPER] = _pair("limits", joint.limits, "least", "most")
-                if f[rows2.LOWER] > f[rows2.UPPER]:
+                f[rows.LOWER], f[rows.UPPER] = _pair("limits", joint.limits, "least", "most")
+                if f[rows.LOWER] > f[rows.UPPER]:
                     raise CaromError(
                         f"limits must be (least, most) with least <= most; got {joint.limits!r}"
+                    )
+                if (
+                    dim == 3
+                    and isinstance(joint, Revolute)
+                    and (f[rows.LOWER] <= -math.pi or f[rows.UPPER] >= math.pi)
+                ):
+                    raise CaromError(
+                        "a 3D revolute joint's limits lie within a turn, (-pi, pi) [rad]; got "
+                        f"{joint.limits!r}"
                     )
                 flags |= shared.FLAG_LIMIT
             if joint.motor is not None:
@@ -720,11 +807,11 @@ def _row_of(world: _World, poses: _Poses, joint: object) -> tuple[
                     raise CaromError(
                         f"the motor's largest force or torque must be >= 0; got {most!r}"
                     )
-                f[rows2.MOTOR_SPEED], f[rows2.MAX_MOTOR] = speed, most
+                f[rows.MOTOR_SPEED], f[rows.MAX_MOTOR] = speed, most
                 flags |= shared.FLAG_MOTOR
             if joint.spring is not None:
-                f[rows2.HERTZ], f[rows2.DAMPING] = _spring_of("spring", joint.spring)
-                if f[rows2.HERTZ] > 0.0:
+                f[rows.HERTZ], f[rows.DAMPING] = _spring_of("spring", joint.spring)
+                if f[rows.HERTZ] > 0.0:
                     flags |= shared.FLAG_SPRING
     ints[shared.J_KIND], ints[shared.J_A], ints[shared.J_B] = kind, a, b
     ints[shared.J_FLAGS] = flags

@@ -57,7 +57,7 @@ RIGID3D = {
 
 
 #: the scenes with joints (tests/scene/test_joint_scenes.py runs them)
-JOINTED = {"car", "chain-bridge", "cradle-on-strings", "pendulums", "ragdoll-pile"}
+JOINTED = {"car", "chain-bridge", "cradle-on-strings", "pendulums", "ragdoll-pile", "rope-3d"}
 
 
 def test_the_built_in_scenes_are_all_there() -> None:

@@ -13,7 +13,7 @@ import numpy as np
 
 from carom import shapes, shapes3d
 from carom.errors import CaromError
-from carom.joints import Distance, Joint, Prismatic, Revolute, Target, Weld, Wheel
+from carom.joints import Distance, Joint, Prismatic, Revolute, Spherical, Target, Weld, Wheel
 from carom.limits import check_body_count
 from carom.materials import Material
 from carom.meshes import Mesh, decompose, load_mesh
@@ -221,7 +221,7 @@ def joints_of(entry: Mapping[str, Any], dim: int) -> list[Joint]:
             return list(value) if len(value) == n else _count(key, len(value), n)
         return [value] * n
 
-    kind = entry["type"]
+    kind = "weld" if entry["type"] == "fixed" else entry["type"]
     anchor, anchors = each("anchor", 1), each("anchors", 2)
     axis, target = each("axis", 1), each("target", 1)
     body = [None if a == -1 else a for a, _ in pairs], [None if b == -1 else b for _, b in pairs]
@@ -229,16 +229,19 @@ def joints_of(entry: Mapping[str, Any], dim: int) -> list[Joint]:
     made: list[Joint] = []
     for k in range(n):
         a, b = body[0][k], body[1][k]
-        if kind in ("revolute", "weld", "prismatic", "wheel") and anchor[k] is None:
+        if kind in ("revolute", "weld", "prismatic", "wheel", "spherical") and anchor[k] is None:
             raise CaromError(f"anchor is required for a {kind} joint: the point [m]")
         if kind in ("prismatic", "wheel") and axis[k] is None:
             raise CaromError(f"axis is required for a {kind} joint: its direction")
         if kind == "revolute":
             made.append(
                 Revolute(
-                    a, b, anchor[k], entry["limits"], entry["motor"], entry["spring"], **common
+                    a, b, anchor[k], entry["limits"], entry["motor"], entry["spring"],
+                    entry["collide"], axis[k],
                 )
-            )
+            )  # fmt: skip
+        elif kind == "spherical":
+            made.append(Spherical(a, b, anchor[k], **common))
         elif kind == "prismatic":
             made.append(
                 Prismatic(

@@ -424,7 +424,16 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
     },
     "joints": {
         "type": (
-            _choice("revolute", "prismatic", "distance", "weld", "wheel", "target"),
+            _choice(
+                "revolute",
+                "prismatic",
+                "distance",
+                "weld",
+                "fixed",
+                "wheel",
+                "spherical",
+                "target",
+            ),
             True,
             None,
         ),

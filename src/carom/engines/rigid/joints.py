@@ -79,6 +79,8 @@ JLOWER, JUPPER, JMOTOR, JSPRING = 21, 22, 23, 24
 FX, FY = 25, 26  # force [N]
 TORQUE = 27  # couple [N m]
 JOINT_FLOATS = 28
+#: the names the 3D rows use too (:mod:`carom.engines.rigid3d.joints`)
+LA, LB, AXA = LAX, LBX, AXX
 
 # the columns of the state the solver keeps for each body (:mod:`.solver`)
 S_VX, S_VY, S_W, S_DX, S_DY, S_COS, S_SIN, S_TURN = 0, 1, 2, 3, 4, 5, 6, 7

@@ -14,6 +14,7 @@ with kernel_cache():
         broadphase,
         contacts,
         impacts,
+        joints,
         motion,
         queries,
         solver,

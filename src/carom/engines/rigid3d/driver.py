@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.rigid3d import broadphase, contacts, impacts, motion, queries, solver
+from carom.engines.rigid3d import broadphase, contacts, impacts, joints, motion, queries, solver
 from carom.engines.rigid3d.model import Model3D, State3D, empty_manifolds
 from carom.engines.stepped import islands
 from carom.engines.stepped.driver import Isolated, SteppedEngine
@@ -88,7 +88,7 @@ class RigidEngine3D(SteppedEngine):
     each step's manifolds are kept for the next (:mod:`.contacts`)."""
 
     DIMS = 3
-    JOINT_FLOATS = 0  # (3D joints: not yet)
+    JOINT_FLOATS = joints.JOINT_FLOATS
     ROWS = contacts
     IMPACTS = impacts
     SPIN = "w"
@@ -236,10 +236,11 @@ class RigidEngine3D(SteppedEngine):
 
     def _solve(self, nc: int, bodies: NDArray[np.int64], work: FloatArray) -> None:
         m, s, dt = self.model, self.state, self.dt
+        active, _ = self._joints_now()
         solver.solve_step(
             self._cf, self._ci, nc, bodies, m.inv_mass, m.inertia, m.inv_inertia,
             self._accel, self._spin_load, self._movers, s.x, s.q, s.v, s.w, self._knobs(),
-            work,
+            work, self.joint_floats, self.joint_ints, active,
         )  # fmt: skip
         for i in self._movers.tolist():  # kinematic bodies: their own steady motion
             s.x[i] += dt * s.v[i]

@@ -50,6 +50,7 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.engines.rigid3d import joints
 from carom.engines.rigid3d.contacts import (
     F_E,
     F_JR1,
@@ -89,6 +90,7 @@ from carom.engines.rigid3d.motion import (
     world_inverse_inertia,
 )
 from carom.engines.stepped import solver as shared
+from carom.engines.stepped.joints import joint_softness
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
 from carom.engines.stepped.solver import LANE_MATH, LANES, soft_bias
 from carom.geometry.manifold3d import MAX_POINTS
@@ -663,10 +665,13 @@ def solve_step(
     cf: np.ndarray, ci: np.ndarray, nc: int, bodies: np.ndarray, inv_mass: np.ndarray,
     inertia: np.ndarray, inv_inertia: np.ndarray, accel: np.ndarray, torque: np.ndarray,
     movers: np.ndarray, x: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray,
-    knobs: tuple[float, int, float, float, float, float], work: np.ndarray,
+    knobs: tuple[float, int, float, float, float, float], work: np.ndarray, jf: np.ndarray,
+    ji: np.ndarray, active: np.ndarray,
 ) -> None:  # fmt: skip
-    """Advance the ``bodies`` (indices) and their contacts by one step, with ``knobs`` as in
-    2D (:func:`carom.engines.rigid.solver.solve_step`).
+    """Advance the ``bodies`` (indices), their contacts and the joints ``active`` (rows of
+    ``jf``, ``ji``: :mod:`.joints`) by one step, with ``knobs`` as in 2D
+    (:func:`carom.engines.rigid.solver.solve_step`; the joints before the contacts in each
+    pass, their reactions written after the last substep).
 
     Contacts flagged exact are skipped; every other contact must join bodies of ``bodies`` or
     a body that impulses do not move (static, kinematic: infinite mass); the kinematic ones
@@ -705,13 +710,17 @@ def solve_step(
     turned = np.empty(9)
     elapsed = 0.0
     torqued = np.any(torque != 0.0)
+    soft_joint = joint_softness(h, contact_hertz)
+    prep, jrows = joints.prepare(jf, ji, active, x, q, inv_mass, iw, h)
     for _ in range(substeps):
         for i in bodies:
             for k in range(3):
                 state[i, S_V + k] += h * accel[i, k]
             if torqued:
                 _spin_up(state, i, iw[i], torque[i], h)
+        joints.warm_start(jf, ji, active, prep, jrows, state)
         _warm_start(group, pair, kinematic, rolling, state, work)
+        joints.solve(jf, ji, active, prep, jrows, state, h, soft_joint, True)
         _solve(group, pair, kinematic, rolling, state, 1.0 / h, True, push_speed, work)
         for i in bodies:
             for k in range(3):
@@ -742,7 +751,9 @@ def solve_step(
             axis_angle_matrix(w[i, 0] * elapsed, w[i, 1] * elapsed, w[i, 2] * elapsed, turned)
             for k in range(9):
                 state[i, S_T + k] = turned[k]
+        joints.solve(jf, ji, active, prep, jrows, state, h, soft_joint, False)
         _solve(group, pair, kinematic, rolling, state, 1.0 / h, False, push_speed, work)
+    joints.reactions(jf, ji, active, prep, jrows, state, h)
     for i in bodies:
         for k in range(3):
             v[i, k] = state[i, S_V + k]
