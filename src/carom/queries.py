@@ -1,11 +1,13 @@
-"""Asking a world about its bodies now: rays (issue 43, item 4).
+"""Asking a world about its bodies now: rays and overlaps (issue 43, item 4).
 
 :class:`Queries` is the part of :class:`carom.World` that casts rays: ``world.ray_cast`` for
 one (the first body a line of sight meets), ``world.ray_casts`` for many in one compiled call
 (a lidar, a line of sight for every unit). Every shape kind is met exactly, at its closed form
 (:mod:`carom.geometry.rays`): circles, capsules, boxes, polygons, compounds, segments and
 chains in 2D; spheres, capsules, boxes, hulls, compounds, meshes and planes in 3D. A ray that
-starts inside a body does not hit that body. The rigid engines.
+starts inside a body does not hit that body. ``world.overlap_point`` and ``world.overlap_box``
+say which bodies hold a point or meet a box (:mod:`carom.geometry.overlaps`). The rigid
+engines.
 
 >>> import carom
 >>> from carom.shapes import Circle
@@ -178,6 +180,85 @@ class Queries:
         out["point"][hit] = o[hit] + distance[hit, None] * u[hit]
         out["normal"][hit] = normal[hit]
         return out
+
+    def overlap_point(
+        self: _World, point: ArrayLike, *, mask: int | None = None
+    ) -> NDArray[np.int64]:
+        """The bodies that hold ``point`` now (a mouse pick), exactly for every shape kind.
+
+        Parameters
+        ----------
+        point : (d,) array_like
+            [m].
+        mask : int, optional
+            The collision categories seen (:meth:`carom.World.set_filter`); default every one.
+
+        Returns
+        -------
+        (k,) int64
+            Their indices, sorted (-1 once for the walls and planes of the scenery). A point
+            on a body's boundary is in it; a mesh, a surface, holds no point; a plane's solid
+            is the half-space under it.
+
+        Raises
+        ------
+        CaromError
+            A point not finite, within carom's limits or of the world's dimension; the
+            event-driven engine.
+        """
+        engine = _rigid_queries(self)
+        p = _finite("point", point, self.dim)
+        if p.shape != (self.dim,):
+            raise CaromError(f"point must be {self.dim} numbers [m]; got shape {p.shape}")
+        seen = -1 if mask is None else bits64("mask", mask)
+        return engine.overlaps(p, p, True, seen)
+
+    def overlap_box(
+        self: _World, low: ArrayLike, high: ArrayLike, *, mask: int | None = None
+    ) -> NDArray[np.int64]:
+        """The bodies that meet the axis-aligned box ``[low, high]`` now, exactly for every
+        shape kind (not their bounding boxes: a disc beside the box's corner is out).
+
+        Parameters
+        ----------
+        low, high : (d,) array_like
+            The box's least and greatest corners [m], ``low <= high``.
+        mask : int, optional
+            As :meth:`overlap_point`'s.
+
+        Returns
+        -------
+        (k,) int64
+            Their indices, sorted (-1 once for the walls and planes of the scenery). Touching
+            counts.
+
+        Raises
+        ------
+        CaromError
+            Corners not finite, within carom's limits or of the world's dimension, or
+            ``low`` above ``high``; the event-driven engine.
+        """
+        engine = _rigid_queries(self)
+        lo = _finite("low", low, self.dim)
+        hi = _finite("high", high, self.dim)
+        for name, corner in (("low", lo), ("high", hi)):
+            if corner.shape != (self.dim,):
+                raise CaromError(f"{name} must be {self.dim} numbers [m]; got shape {corner.shape}")
+        if np.any(lo > hi):
+            raise CaromError(f"low {lo.tolist()} must lie below high {hi.tolist()} on every axis")
+        seen = -1 if mask is None else bits64("mask", mask)
+        return engine.overlaps(lo, hi, False, seen)
+
+
+def _rigid_queries(world: _World) -> SteppedEngine:
+    """The world's rigid engine, built; else a CaromError."""
+    engine = world.build()
+    if not isinstance(engine, SteppedEngine):
+        raise CaromError(
+            "overlap queries are the rigid engines' so far; the event-driven engine's spheres "
+            "are in World.positions"
+        )
+    return engine
 
 
 def _finite(name: str, values: Any, d: int) -> NDArray[np.float64]:

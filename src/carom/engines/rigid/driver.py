@@ -181,6 +181,17 @@ class RigidEngine(SteppedEngine):
             hits[2],
         )  # fmt: skip
 
+    def _overlap(
+        self, candidates: NDArray[np.int64], low: FloatArray, high: FloatArray, point: bool,
+        mask: int, hit: NDArray[np.bool_],
+    ) -> None:  # fmt: skip
+        m, s = self.model, self.state
+        queries.overlap_pieces(
+            candidates, low, high, point, s.x, s.angle, m.piece_body, m.piece_start,
+            m.piece_count, m.piece_radius, m.local_vertices, m.local_normals,
+            self.filters[:, 0], mask, self._ray_room[0], hit,
+        )  # fmt: skip
+
     def _spin_of(self, torque: FloatArray) -> FloatArray:
         spin: FloatArray = torque * self.model.inv_inertia
         return spin

@@ -1,4 +1,5 @@
-"""Rays cast into a 2D rigid world, many in one compiled call (:mod:`carom.geometry.rays`).
+"""Rays cast into a 2D rigid world, many in one compiled call (:mod:`carom.geometry.rays`),
+and the pieces a point or a box overlaps (:mod:`carom.geometry.overlaps`).
 
 A ray meets the pieces whose boxes it crosses: the static pieces through the engine's tree
 over them (built once), the pieces of the bodies that move through a tree over their reach
@@ -15,9 +16,10 @@ import numpy as np
 from numba import njit
 
 from carom.geometry.bvh import is_empty, ray_candidate, ray_candidates
+from carom.geometry.overlaps import box_meets_polygon, point_in_polygon
 from carom.geometry.rays import ray_rounded_polygon
 
-__all__ = ["cast_rays"]
+__all__ = ["cast_rays", "overlap_pieces"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -75,3 +77,36 @@ def cast_rays(
                 distance[r] = t
                 piece[r] = p
                 normal[r, 0], normal[r, 1] = out[0], out[1]
+
+
+@njit(cache=True)
+def overlap_pieces(
+    candidates: np.ndarray, low: np.ndarray, high: np.ndarray, point: bool, x: np.ndarray,
+    angle: np.ndarray, piece_body: np.ndarray, piece_start: np.ndarray,
+    piece_count: np.ndarray, piece_radius: np.ndarray, local_vertices: np.ndarray,
+    local_normals: np.ndarray, categories: np.ndarray, mask: int, room: int, hit: np.ndarray,
+) -> None:  # fmt: skip
+    """Which of the pieces ``candidates`` (K,) hold the point ``low`` (``point``) or meet the
+    box ``[low, high]`` (2,) now, exactly (:mod:`carom.geometry.overlaps`), into ``hit``
+    (K,) bool; a body whose ``categories`` bits hold none of ``mask`` is not seen."""
+    v = np.empty((room, 2))
+    n = np.empty((room, 2))
+    for j in range(candidates.shape[0]):
+        p = candidates[j]
+        b = piece_body[p]
+        hit[j] = False
+        if categories[b] & mask == 0:
+            continue
+        c, s = math.cos(angle[b]), math.sin(angle[b])
+        first, count = piece_start[p], piece_count[p]
+        for i in range(count):
+            lx, ly = local_vertices[first + i, 0], local_vertices[first + i, 1]
+            v[i, 0] = x[b, 0] + (c * lx - s * ly)
+            v[i, 1] = x[b, 1] + (s * lx + c * ly)
+            nx, ny = local_normals[first + i, 0], local_normals[first + i, 1]
+            n[i, 0] = c * nx - s * ny
+            n[i, 1] = s * nx + c * ny
+        if point:
+            hit[j] = point_in_polygon(low, v, n, count, piece_radius[p])
+        else:
+            hit[j] = box_meets_polygon(low, high, v, n, count, piece_radius[p])

@@ -231,6 +231,19 @@ class RigidEngine3D(SteppedEngine):
             mask, self._ray_room, hits[0], hits[1], hits[2],
         )  # fmt: skip
 
+    def _overlap(
+        self, candidates: NDArray[np.int64], low: FloatArray, high: FloatArray, point: bool,
+        mask: int, hit: NDArray[np.bool_],
+    ) -> None:  # fmt: skip
+        m, s = self.model, self.state
+        queries.overlap_pieces(
+            candidates, low, high, point, s.x, s.q,
+            (m.piece_body, m.piece_kind, m.piece_vstart, m.piece_vcount, m.piece_fstart,
+             m.piece_fcount, m.piece_cstart, m.piece_estart, m.piece_ecount), m.piece_radius,
+            m.local_vertices, m.local_normals, m.face_first, m.corners, m.edges,
+            self.filters[:, 0], mask, self._ray_room, hit,
+        )  # fmt: skip
+
     def _solver_bodies(self) -> NDArray[np.int64]:
         return np.flatnonzero((self._role == islands.ROLE_SOLVER) & self._dynamic)
 

@@ -16,10 +16,11 @@ from numba import njit
 
 from carom.engines.rigid3d.model import PIECE_PLANE, PIECE_ROUND
 from carom.geometry.bvh import is_empty, ray_candidate, ray_candidates
+from carom.geometry.overlaps import box_meets_piece_3d, point_in_piece_3d
 from carom.geometry.rays import ray_capsule, ray_plane, ray_polytope, ray_sphere
 from carom.geometry.rotation import matrix
 
-__all__ = ["cast_rays"]
+__all__ = ["cast_rays", "overlap_pieces"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -98,3 +99,50 @@ def cast_rays(
                 distance[r] = t
                 piece[r] = p
                 normal[r, 0], normal[r, 1], normal[r, 2] = out[0], out[1], out[2]
+
+
+@njit(cache=True)
+def overlap_pieces(
+    candidates: np.ndarray, low: np.ndarray, high: np.ndarray, point: bool, x: np.ndarray,
+    q: np.ndarray, model_ints: tuple[Any, ...], piece_radius: np.ndarray,
+    local_vertices: np.ndarray, local_normals: np.ndarray, face_first: np.ndarray,
+    corners: np.ndarray, edges: np.ndarray, categories: np.ndarray, mask: int,
+    room: tuple[int, int], hit: np.ndarray,
+) -> None:  # fmt: skip
+    """Which of the pieces ``candidates`` (K,) hold the point ``low`` (``point``) or meet the
+    box ``[low, high]`` (3,) now, exactly (:mod:`carom.geometry.overlaps`), into ``hit``
+    (K,) bool. ``model_ints``: the pieces' body, kind, vertex start and count, face start and
+    count, corner start, edge start and count; a body whose ``categories`` bits hold none of
+    ``mask`` is not seen; ``room``: the most corners and faces a piece has."""
+    piece_body, piece_kind, vstart, vcount, fstart, fcount, cstart, estart, ecount = model_ints
+    v = np.empty((room[0], 3))
+    n = np.empty((room[1], 3))
+    rot = np.empty(9)
+    for j in range(candidates.shape[0]):
+        p = candidates[j]
+        b = piece_body[p]
+        hit[j] = False
+        if categories[b] & mask == 0:
+            continue
+        matrix(q, b, rot)
+        for i in range(vcount[p]):
+            lv = local_vertices[vstart[p] + i]
+            for a in range(3):
+                v[i, a] = (
+                    x[b, a] + rot[3 * a] * lv[0] + rot[3 * a + 1] * lv[1] + (rot[3 * a + 2] * lv[2])
+                )
+        for f in range(fcount[p]):
+            ln = local_normals[fstart[p] + f]
+            for a in range(3):
+                n[f, a] = rot[3 * a] * ln[0] + rot[3 * a + 1] * ln[1] + rot[3 * a + 2] * ln[2]
+        fs, fc = fstart[p], fcount[p]
+        if point:
+            hit[j] = point_in_piece_3d(
+                low, piece_kind[p], v, vcount[p], n, fc, face_first[fs : fs + fc],
+                corners[cstart[p] :], piece_radius[p],
+            )  # fmt: skip
+        else:
+            hit[j] = box_meets_piece_3d(
+                low, high, piece_kind[p], v, vcount[p], n, fc,
+                edges[estart[p] : estart[p] + ecount[p]], piece_radius[p],
+            )  # fmt: skip

@@ -750,6 +750,36 @@ class SteppedEngine:
         """The dimension's ray kernel (:meth:`cast_rays`)."""
         raise NotImplementedError
 
+    def overlaps(
+        self, low: FloatArray, high: FloatArray, point: bool, mask: int = -1
+    ) -> NDArray[np.int64]:
+        """The caller's numbers of the bodies (sorted, each once; -1 for a wall or plane)
+        that hold the point ``low`` (``point``) or meet the box ``[low, high]`` (d,) [m] now,
+        exactly (:mod:`carom.geometry.overlaps`), among those whose category holds a bit of
+        ``mask``. Candidates are the pieces whose boxes meet the query's: the static pieces'
+        boxes of the broad phase, the moving bodies' pieces within their reach of their
+        centres now, and every unbounded static piece (a plane)."""
+        m, s = self.model, self.state
+        fat, open_statics, movers = self._reach[0][5], self._reach[1], self._reach[2]
+        boxes = fat.copy()
+        centre = s.x[m.piece_body[movers]]
+        reach = (m.piece_reach[movers] + m.piece_radius[movers])[:, None]
+        boxes[movers] = np.hstack((centre - reach, centre + reach))
+        d = self.DIMS
+        near = np.all(boxes[:, :d] <= high, axis=1) & np.all(boxes[:, d:] >= low, axis=1)
+        near[open_statics] = True
+        candidates = np.flatnonzero(near).astype(np.int64)
+        hit = np.zeros(candidates.shape[0], np.bool_)
+        self._overlap(candidates, low, high, point, mask, hit)
+        return np.unique(self.callers[m.piece_body[candidates[hit]]])
+
+    def _overlap(
+        self, candidates: NDArray[np.int64], low: FloatArray, high: FloatArray, point: bool,
+        mask: int, hit: NDArray[np.bool_],
+    ) -> None:  # fmt: skip
+        """The dimension's overlap kernel (:meth:`overlaps`)."""
+        raise NotImplementedError
+
     def set_motion(self, ids: NDArray[np.int64], field: str, values: FloatArray) -> None:
         """Set the state column ``field`` ("x", "v", the dimension's orientation or spin) of
         bodies ``ids`` (k,) to ``values`` (k, ...); they wake, and the change of energy is
