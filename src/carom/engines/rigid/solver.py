@@ -686,8 +686,9 @@ def solve_step(
     dt, substeps, contact_hertz, damping_ratio, push_speed, restitution_threshold = knobs
     h, soft_moving, soft_fixed = shared.substep_softness(dt, substeps, contact_hertz, damping_ratio)
     n = x.shape[0]
-    struck = np.zeros((max(nc, 1), 2))
-    shift = np.zeros((n + 1, 3))
+    jointed_step = active.shape[0] > 0  # (what the joints need, made only when there are any)
+    struck = np.zeros((max(nc, 1) if jointed_step else 1, 2))
+    shift = np.zeros((n + 1, 3))  # (read for every body as the positions are integrated)
     first = np.zeros(0, np.int64)
     if active.shape[0]:
         first = _jointed_rows(ci, nc, jointed)
@@ -704,7 +705,7 @@ def solve_step(
     _pack(
         cf, ci, lanes, inv_mass, inv_inertia, state, soft_moving, soft_fixed, group, pair, kinematic
     )
-    slots = _slots(lanes, nc)
+    slots = _slots(lanes, nc) if first.shape[0] else np.zeros(1, np.int64)
     spared = np.empty((2 * first.shape[0], 2))
     for _ in range(substeps):
         for i in bodies:
