@@ -485,3 +485,24 @@ def test_a_ragdoll_holds_together_under_a_falling_weight() -> None:
         a, b = (int(v) for v in w.joint_rows[0][j, 1:3])
         bend = w.orientations[b] - w.orientations[a]  # (thigh and shin start at one angle)
         assert -2.5 - 0.05 <= bend <= 0.05
+
+
+def test_a_motor_can_be_driven_and_let_go_between_steps() -> None:
+    w = world(gravity=0.0)
+    wheel = w.add_body(Circle(0.5), [10.0, 10.0])
+    axle = w.add_joint(Revolute(None, wheel, [10.0, 10.0]))
+    rod = w.add_joint(Distance(None, wheel, [12.0, 10.0], [10.0, 10.0]))
+    w.step()
+    assert w.angular_velocities[wheel, 2] == 0.0
+    w.set_joint_motor(axle, 3.0, 100.0)
+    for _ in range(5):
+        w.step()
+    assert w.angular_velocities[wheel, 2] == pytest.approx(3.0, abs=1e-12)
+    w.set_joint_motor(axle, -3.0, 0.0)  # off: nothing holds or drives it, it keeps turning
+    for _ in range(5):
+        w.step()
+    assert w.angular_velocities[wheel, 2] == pytest.approx(3.0, abs=1e-12)
+    with pytest.raises(CaromError, match="distance joint: it has no motor"):
+        w.set_joint_motor(rod, 1.0, 1.0)
+    with pytest.raises(CaromError, match="must be >= 0"):
+        w.set_joint_motor(axle, 1.0, -1.0)

@@ -331,7 +331,18 @@ class Joints:
 
     def remove_joint(self: _World, index: int) -> None:
         """Take joint ``index`` out; the others keep their indices, and its index is refused
-        from then on. Its bodies wake."""
+        from then on. Its bodies wake.
+
+        Parameters
+        ----------
+        index : int
+            As :meth:`add_joint` returned it.
+
+        Raises
+        ------
+        CaromError
+            An index out of range or already removed; the event-driven engine.
+        """
         engine = _engine(self)
         j = _joint_index(self, index)
         ints, floats = _tables(self)
@@ -376,7 +387,22 @@ class Joints:
         return anchors_now(ints, floats[:, rows.LA : rows.LB + d], engine.state.x, turn)
 
     def set_joint_target(self: _World, index: int, target: ArrayLike) -> None:
-        """Move target joint ``index``'s point to ``target`` (d,) [m]; its body wakes."""
+        """Move a target joint's point (dragging its body: call it every frame with the
+        pointer's position); its body wakes.
+
+        Parameters
+        ----------
+        index : int
+            A target joint's index.
+        target : (d,) array_like
+            The new point [m].
+
+        Raises
+        ------
+        CaromError
+            Not a target joint, removed, out of range; a point not finite or of another
+            dimension. Nothing has changed then.
+        """
         engine = _engine(self)
         j = _joint_index(self, index)
         ints, floats = _tables(self)
@@ -387,9 +413,24 @@ class Joints:
         engine.use_joints(ints, floats)
 
     def set_joint_motor(self: _World, index: int, speed: float, most: float) -> None:
-        """Drive joint ``index``'s motor (a revolute, prismatic or wheel joint) at ``speed``
-        [rad/s or m/s] with at most ``most`` [N m or N]; ``most = 0`` turns it off. Its
-        bodies wake."""
+        """Drive a joint's motor (a revolute, prismatic or wheel joint); its bodies wake.
+
+        Parameters
+        ----------
+        index : int
+            The joint's index.
+        speed : float
+            The relative speed the motor drives: [rad/s] for a revolute or wheel joint,
+            [m/s] for a prismatic one.
+        most : float
+            Its largest torque [N m] or force [N], >= 0; 0 turns it off.
+
+        Raises
+        ------
+        CaromError
+            A joint without a motor, removed, out of range; a value not finite or negative.
+            Nothing has changed then.
+        """
         engine = _engine(self)
         j = _joint_index(self, index)
         ints, floats = _tables(self)
