@@ -22,6 +22,26 @@ from carom.geometry.rays import ray_rounded_polygon
 __all__ = ["cast_rays", "overlap_pieces"]
 
 
+@njit(cache=True, inline="always")
+def _place(
+    p: int, b: int, x: np.ndarray, angle: np.ndarray, piece_start: np.ndarray,
+    piece_count: np.ndarray, local_vertices: np.ndarray, local_normals: np.ndarray,
+    v: np.ndarray, n: np.ndarray,
+) -> int:  # fmt: skip
+    """Piece ``p`` of body ``b`` at the body's pose now: its corners into ``v`` and its edge
+    normals into ``n`` (k, 2); returns its corner count."""
+    c, s = math.cos(angle[b]), math.sin(angle[b])
+    first, count = piece_start[p], piece_count[p]
+    for i in range(count):
+        lx, ly = local_vertices[first + i, 0], local_vertices[first + i, 1]
+        v[i, 0] = x[b, 0] + (c * lx - s * ly)
+        v[i, 1] = x[b, 1] + (s * lx + c * ly)
+        nx, ny = local_normals[first + i, 0], local_normals[first + i, 1]
+        n[i, 0] = c * nx - s * ny
+        n[i, 1] = s * nx + c * ny
+    return int(count)
+
+
 @njit(cache=True, error_model="numpy")
 def cast_rays(
     origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray, statics: tuple[Any, ...],
@@ -62,15 +82,9 @@ def cast_rays(
             b = piece_body[p]
             if categories[b] & mask == 0:
                 continue
-            c, s = math.cos(angle[b]), math.sin(angle[b])
-            first, count = piece_start[p], piece_count[p]
-            for i in range(count):
-                lx, ly = local_vertices[first + i, 0], local_vertices[first + i, 1]
-                v[i, 0] = x[b, 0] + (c * lx - s * ly)
-                v[i, 1] = x[b, 1] + (s * lx + c * ly)
-                nx, ny = local_normals[first + i, 0], local_normals[first + i, 1]
-                n[i, 0] = c * nx - s * ny
-                n[i, 1] = s * nx + c * ny
+            count = _place(
+                p, b, x, angle, piece_start, piece_count, local_vertices, local_normals, v, n
+            )
             t = ray_rounded_polygon(o, d, v, n, count, piece_radius[p], out)
             if t <= best and t < distance[r]:
                 best = t
@@ -97,15 +111,9 @@ def overlap_pieces(
         hit[j] = False
         if categories[b] & mask == 0:
             continue
-        c, s = math.cos(angle[b]), math.sin(angle[b])
-        first, count = piece_start[p], piece_count[p]
-        for i in range(count):
-            lx, ly = local_vertices[first + i, 0], local_vertices[first + i, 1]
-            v[i, 0] = x[b, 0] + (c * lx - s * ly)
-            v[i, 1] = x[b, 1] + (s * lx + c * ly)
-            nx, ny = local_normals[first + i, 0], local_normals[first + i, 1]
-            n[i, 0] = c * nx - s * ny
-            n[i, 1] = s * nx + c * ny
+        count = _place(
+            p, b, x, angle, piece_start, piece_count, local_vertices, local_normals, v, n
+        )
         if point:
             hit[j] = point_in_polygon(low, v, n, count, piece_radius[p])
         else:

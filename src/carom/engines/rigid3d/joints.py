@@ -422,6 +422,50 @@ def _lock(
 
 
 @njit(cache=True)
+def _drive(
+    jf: np.ndarray, j: int, flags: int, prep: np.ndarray, k: int, state: np.ndarray, a: int,
+    b: int, line: tuple[Vec3, Vec3, Vec3], value: float, steps: tuple[float, float],
+    use_bias: bool, soft: tuple[float, float, float],
+) -> None:  # fmt: skip
+    """A hinge's or a slider's own rows along ``line`` (``u``, ``s_A``, ``s_B``) at ``value``
+    (its angle or travel), in Box2D's order: its spring toward 0, its motor, its limits
+    (``flags``: which it has); ``steps``: the substep ``h`` and ``1 / h``."""
+    inf = math.inf
+    u, sa, sb = line
+    h, inv_h = steps
+    if flags & FLAG_SPRING and jf[j, HERTZ] > 0.0:
+        rate, ms, iscale = prep[k, W_SOFT], prep[k, W_SOFT + 1], prep[k, W_SOFT + 2]
+        _row(
+            jf,
+            j,
+            JSPRING,
+            prep,
+            k,
+            state,
+            a,
+            b,
+            u,
+            sa,
+            sb,
+            rate * value,
+            ms,
+            iscale,
+            1.0,
+            -inf,
+            inf,
+        )
+    if flags & FLAG_MOTOR:
+        most = jf[j, MAX_MOTOR] * h
+        speed = -jf[j, MOTOR_SPEED]
+        _row(jf, j, JMOTOR, prep, k, state, a, b, u, sa, sb, speed, 1.0, 0.0, 1.0, -most, most)
+    if flags & FLAG_LIMIT:
+        bias, ms, iscale = _limit(value - jf[j, LOWER], inv_h, use_bias, soft)
+        _row(jf, j, JLOWER, prep, k, state, a, b, u, sa, sb, bias, ms, iscale, 1.0, 0.0, inf)
+        bias, ms, iscale = _limit(jf[j, UPPER] - value, inv_h, use_bias, soft)
+        _row(jf, j, JUPPER, prep, k, state, a, b, u, sa, sb, bias, ms, iscale, -1.0, 0.0, inf)
+
+
+@njit(cache=True)
 def solve(
     jf: np.ndarray, ji: np.ndarray, active: np.ndarray, prep: np.ndarray, rows: np.ndarray,
     state: np.ndarray, h: float, soft: tuple[float, float, float], use_bias: bool,
@@ -446,88 +490,21 @@ def solve(
         elif kind == REVOLUTE:
             # the angle about the hinge, from A's reference direction to B's
             angle = math.atan2(_dot(_cross(pa, pb), aa), _dot(pa, pb))
-            if flags & FLAG_SPRING and jf[j, HERTZ] > 0.0:
-                _row(
-                    jf,
-                    j,
-                    JSPRING,
-                    prep,
-                    k,
-                    state,
-                    a,
-                    b,
-                    zero,
-                    aa,
-                    aa,
-                    own[0] * angle,
-                    own[1],
-                    own[2],
-                    1.0,
-                    -inf,
-                    inf,
-                )
-            if flags & FLAG_MOTOR:
-                most = jf[j, MAX_MOTOR] * h
-                _row(
-                    jf,
-                    j,
-                    JMOTOR,
-                    prep,
-                    k,
-                    state,
-                    a,
-                    b,
-                    zero,
-                    aa,
-                    aa,
-                    -jf[j, MOTOR_SPEED],
-                    1.0,
-                    0.0,
-                    1.0,
-                    -most,
-                    most,
-                )
-            if flags & FLAG_LIMIT:
-                bias, ms, iscale = _limit(angle - jf[j, LOWER], inv_h, use_bias, soft)
-                _row(
-                    jf,
-                    j,
-                    JLOWER,
-                    prep,
-                    k,
-                    state,
-                    a,
-                    b,
-                    zero,
-                    aa,
-                    aa,
-                    bias,
-                    ms,
-                    iscale,
-                    1.0,
-                    0.0,
-                    inf,
-                )
-                bias, ms, iscale = _limit(jf[j, UPPER] - angle, inv_h, use_bias, soft)
-                _row(
-                    jf,
-                    j,
-                    JUPPER,
-                    prep,
-                    k,
-                    state,
-                    a,
-                    b,
-                    zero,
-                    aa,
-                    aa,
-                    bias,
-                    ms,
-                    iscale,
-                    -1.0,
-                    0.0,
-                    inf,
-                )
+            _drive(
+                jf,
+                j,
+                flags,
+                prep,
+                k,
+                state,
+                a,
+                b,
+                (zero, aa, aa),
+                angle,
+                (h, inv_h),
+                use_bias,
+                soft,
+            )
             # B's axis along A's: two rows about a_B x b and a_B x c
             sq1, sq2 = _square(aa)
             for c, sq in enumerate((sq1, sq2)):
@@ -629,73 +606,8 @@ def solve(
         else:  # PRISMATIC: B's anchor on A's axis, no relative turn
             lever = (d[0] + ra[0], d[1] + ra[1], d[2] + ra[2])
             along = _dot(aa, d)
-            sa, sb = _cross(lever, aa), _cross(rb, aa)
-            if flags & FLAG_SPRING and jf[j, HERTZ] > 0.0:
-                _row(
-                    jf,
-                    j,
-                    JSPRING,
-                    prep,
-                    k,
-                    state,
-                    a,
-                    b,
-                    aa,
-                    sa,
-                    sb,
-                    own[0] * along,
-                    own[1],
-                    own[2],
-                    1.0,
-                    -inf,
-                    inf,
-                )
-            if flags & FLAG_MOTOR:
-                most = jf[j, MAX_MOTOR] * h
-                _row(
-                    jf,
-                    j,
-                    JMOTOR,
-                    prep,
-                    k,
-                    state,
-                    a,
-                    b,
-                    aa,
-                    sa,
-                    sb,
-                    -jf[j, MOTOR_SPEED],
-                    1.0,
-                    0.0,
-                    1.0,
-                    -most,
-                    most,
-                )
-            if flags & FLAG_LIMIT:
-                bias, ms, iscale = _limit(along - jf[j, LOWER], inv_h, use_bias, soft)
-                _row(
-                    jf, j, JLOWER, prep, k, state, a, b, aa, sa, sb, bias, ms, iscale, 1.0, 0.0, inf
-                )
-                bias, ms, iscale = _limit(jf[j, UPPER] - along, inv_h, use_bias, soft)
-                _row(
-                    jf,
-                    j,
-                    JUPPER,
-                    prep,
-                    k,
-                    state,
-                    a,
-                    b,
-                    aa,
-                    sa,
-                    sb,
-                    bias,
-                    ms,
-                    iscale,
-                    -1.0,
-                    0.0,
-                    inf,
-                )
+            line = (aa, _cross(lever, aa), _cross(rb, aa))
+            _drive(jf, j, flags, prep, k, state, a, b, line, along, (h, inv_h), use_bias, soft)
             _lock(jf, j, prep, k, state, a, b, use_bias, soft, False)
             sq1, sq2 = _square(aa)
             for c, sq in enumerate((sq1, sq2)):

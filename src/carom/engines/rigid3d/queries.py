@@ -23,6 +23,27 @@ from carom.geometry.rotation import matrix
 __all__ = ["cast_rays", "overlap_pieces"]
 
 
+@njit(cache=True, inline="always")
+def _place(
+    p: int, b: int, x: np.ndarray, q: np.ndarray, vstart: np.ndarray, vcount: np.ndarray,
+    fstart: np.ndarray, fcount: np.ndarray, local_vertices: np.ndarray,
+    local_normals: np.ndarray, rot: np.ndarray, v: np.ndarray, n: np.ndarray,
+) -> None:  # fmt: skip
+    """Piece ``p`` of body ``b`` at the body's pose now: its corners into ``v`` (k, 3) and its
+    face normals into ``n`` (f, 3) (``rot`` (9,): room for the body's rotation)."""
+    matrix(q, b, rot)
+    for i in range(vcount[p]):
+        lv = local_vertices[vstart[p] + i]
+        for a in range(3):
+            v[i, a] = (
+                x[b, a] + rot[3 * a] * lv[0] + rot[3 * a + 1] * lv[1] + (rot[3 * a + 2] * lv[2])
+            )
+    for f in range(fcount[p]):
+        ln = local_normals[fstart[p] + f]
+        for a in range(3):
+            n[f, a] = rot[3 * a] * ln[0] + rot[3 * a + 1] * ln[1] + rot[3 * a + 2] * ln[2]
+
+
 @njit(cache=True, error_model="numpy")
 def cast_rays(
     origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray, statics: tuple[Any, ...],
@@ -63,20 +84,9 @@ def cast_rays(
             b = piece_body[p]
             if categories[b] & mask == 0:
                 continue
-            matrix(q, b, rot)
-            for i in range(vcount[p]):
-                lv = local_vertices[vstart[p] + i]
-                for a in range(3):
-                    v[i, a] = (
-                        x[b, a]
-                        + rot[3 * a] * lv[0]
-                        + rot[3 * a + 1] * lv[1]
-                        + (rot[3 * a + 2] * lv[2])
-                    )
-            for f in range(fcount[p]):
-                ln = local_normals[fstart[p] + f]
-                for a in range(3):
-                    n[f, a] = rot[3 * a] * ln[0] + rot[3 * a + 1] * ln[1] + rot[3 * a + 2] * ln[2]
+            _place(
+                p, b, x, q, vstart, vcount, fstart, fcount, local_vertices, local_normals, rot, v, n
+            )
             kind = piece_kind[p]
             if kind == PIECE_PLANE:
                 t = ray_plane(o, d, v[0], n[0])
@@ -124,17 +134,7 @@ def overlap_pieces(
         hit[j] = False
         if categories[b] & mask == 0:
             continue
-        matrix(q, b, rot)
-        for i in range(vcount[p]):
-            lv = local_vertices[vstart[p] + i]
-            for a in range(3):
-                v[i, a] = (
-                    x[b, a] + rot[3 * a] * lv[0] + rot[3 * a + 1] * lv[1] + (rot[3 * a + 2] * lv[2])
-                )
-        for f in range(fcount[p]):
-            ln = local_normals[fstart[p] + f]
-            for a in range(3):
-                n[f, a] = rot[3 * a] * ln[0] + rot[3 * a + 1] * ln[1] + rot[3 * a + 2] * ln[2]
+        _place(p, b, x, q, vstart, vcount, fstart, fcount, local_vertices, local_normals, rot, v, n)
         fs, fc = fstart[p], fcount[p]
         if point:
             hit[j] = point_in_piece_3d(
