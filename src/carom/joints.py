@@ -304,7 +304,8 @@ class _World(Protocol):
 
 
 class Joints:
-    """Joints of a :class:`carom.World` (the 2D rigid engine): add, remove, read, drive."""
+    """Joints of a :class:`carom.World` (the rigid engines, 2D and 3D): add, remove, read,
+    drive."""
 
     def add_joint(self: _World, joint: Joint) -> int:
         """Add ``joint`` (one of this module's classes, its anchors world points now) and
@@ -315,8 +316,8 @@ class Joints:
         CaromError
             A body out of range, removed, or joined to itself; no dynamic body; a value not
             finite or out of range; an anchor farther from its body than a million times
-            the body's reach; a zero axis; the event-driven engine or a 3D world. Nothing
-            has changed then.
+            the body's reach; a zero axis; a joint of the other dimension (a wheel in 3D,
+            a spherical joint in 2D); the event-driven engine. Nothing has changed then.
         """
         _refuse_elsewhere(self)
         ints, floats = _row_of(self, _poses(self), joint)
@@ -343,18 +344,17 @@ class Joints:
         CaromError
             An index out of range or already removed; the event-driven engine.
         """
-        engine = _engine(self)
+        _engine(self)
         j = _joint_index(self, index)
         ints, floats = _tables(self)
         ints[j, shared.J_KIND] = shared.REMOVED
         floats[j] = 0.0
-        engine.use_joints(ints, floats)
+        _store(self, ints, floats)
 
     @property
     def n_joints(self: _World) -> int:
         """Joints added so far, removed ones counted (indices run from 0 to this less 1)."""
-        ints: NDArray[np.int64] = getattr(self, "_joint_ints", np.zeros((0, 4), np.int64))
-        return int(ints.shape[0])
+        return int(_tables(self)[0].shape[0])
 
     def joint_reactions(self: _World) -> tuple[FloatArray, FloatArray]:
         """What every joint did on its body B over the last substep of the last step.
@@ -403,14 +403,14 @@ class Joints:
             Not a target joint, removed, out of range; a point not finite or of another
             dimension. Nothing has changed then.
         """
-        engine = _engine(self)
+        _engine(self)
         j = _joint_index(self, index)
         ints, floats = _tables(self)
         if ints[j, shared.J_KIND] != shared.TARGET:
             raise CaromError(f"joint {j} is a {_kind_name(ints, j)} joint, not a target joint")
         rows = _rows(self.dim)
         floats[j, rows.LA : rows.LA + self.dim] = _point(self, "target", target)
-        engine.use_joints(ints, floats)
+        _store(self, ints, floats)
 
     def set_joint_motor(self: _World, index: int, speed: float, most: float) -> None:
         """Drive a joint's motor (a revolute, prismatic or wheel joint); its bodies wake.
@@ -431,7 +431,7 @@ class Joints:
             A joint without a motor, removed, out of range; a value not finite or negative.
             Nothing has changed then.
         """
-        engine = _engine(self)
+        _engine(self)
         j = _joint_index(self, index)
         ints, floats = _tables(self)
         kind = int(ints[j, shared.J_KIND])
@@ -443,17 +443,23 @@ class Joints:
         floats[j, rows.MOTOR_SPEED] = speed_value
         floats[j, rows.MAX_MOTOR] = most_value
         ints[j, shared.J_FLAGS] |= shared.FLAG_MOTOR
-        engine.use_joints(ints, floats)
+        _store(self, ints, floats)
 
     @property
     def joint_rows(self: _World) -> tuple[NDArray[np.int64], FloatArray]:
         """Every joint as the engine keeps it: integer rows (J, 4) (kind, bodies, flags) and
         float rows (J, F) (:mod:`carom.engines.rigid.joints`; their impulses too), for a
         checkpoint. Copies."""
-        ints: NDArray[np.int64] = getattr(self, "_joint_ints", np.zeros((0, 4), np.int64))
-        width = _rows(self.dim).JOINT_FLOATS
-        floats: FloatArray = getattr(self, "_joint_floats", np.zeros((0, width)))
+        ints, floats = _tables(self)
         return ints.copy(), floats.copy()
+
+    def share_joints(self: _World, engine: SteppedEngine) -> None:
+        """Hand a newly built rigid ``engine`` the world's joints, their arrays shared (its
+        solver writes their impulses and reactions into them, which checkpoints keep); their
+        bodies are not woken: the engine starts as the world stands."""
+        ints, floats = _tables(self)
+        if len(ints):
+            engine.use_joints(ints, floats, wake=False)
 
     def restore_joints(self: _World, ints: ArrayLike, floats: ArrayLike) -> None:
         """Take every joint from rows as :attr:`joint_rows` gave them (a checkpoint's); the
@@ -601,7 +607,7 @@ def _kind_name(ints: NDArray[np.int64], j: int) -> str:
 
 def _joint_index(world: Any, index: object) -> int:
     """``index`` as a live joint's index, or a CaromError naming it."""
-    ints = getattr(world, "_joint_ints", np.zeros((0, 4), np.int64))
+    ints = _tables(world)[0]
     if isinstance(index, bool) or not isinstance(index, int | np.integer):
         raise CaromError(f"a joint index is a whole number; got {index!r}")
     if not 0 <= int(index) < ints.shape[0]:

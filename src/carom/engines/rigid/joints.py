@@ -333,6 +333,18 @@ def _point(
 
 
 @njit(cache=True, inline="always")
+def _line(
+    g: tuple[float, float, float, float, float, float, float, float, float],
+) -> tuple[float, float, float]:
+    """A distance joint's length ``|d|`` [m] and the unit direction from A's anchor to B's
+    (x along when the anchors meet)."""
+    length = math.hypot(g[4], g[5])
+    if length > 0.0:
+        return length, g[4] / length, g[5] / length
+    return length, 1.0, 0.0
+
+
+@njit(cache=True, inline="always")
 def _levers(
     g: tuple[float, float, float, float, float, float, float, float, float], ux: float, uy: float
 ) -> tuple[float, float, float, float]:
@@ -396,12 +408,7 @@ def solve(
                 linear = (prep[k, W_RATE], prep[k, W_MSCALE], prep[k, W_ISCALE])
                 _point(jf, j, prep, k, state, a, b, g, linear, jf[j, MAX_FORCE] * h)
         elif kind == DISTANCE:
-            dx, dy = g[4], g[5]
-            length = math.hypot(dx, dy)
-            if length > 0.0:
-                ux, uy = dx / length, dy / length
-            else:
-                ux, uy = 1.0, 0.0
+            length, ux, uy = _line(g)
             line = (ux, uy, g[0] * uy - g[1] * ux, g[2] * uy - g[3] * ux)
             mass = _axial_mass(prep, k, line[2], line[3])
             if jf[j, LOWER] < jf[j, UPPER]:
@@ -489,8 +496,7 @@ def _impulses(
     if kind in (WELD, TARGET):
         return jf[j, JX], jf[j, JY], rax, ray, jf[j, JANG], 0.0
     if kind == DISTANCE:
-        length = math.hypot(g[4], g[5])
-        ux, uy = (g[4] / length, g[5] / length) if length > 0.0 else (1.0, 0.0)
+        _, ux, uy = _line(g)
         lam = axial + jf[j, JAXIAL]
         return lam * ux, lam * uy, rax, ray, 0.0, 0.0
     ux, uy = g[6], g[7]
@@ -581,12 +587,11 @@ def resists(
             return True
         g = _geometry(prep, k, state, rows[k, 0], rows[k, 1])
         if kind == DISTANCE:
-            length = math.hypot(g[4], g[5])
+            length, ux, uy = _line(g)
             if ji[j, J_FLAGS] & FLAG_SPRING and jf[j, HERTZ] > 0.0:
                 continue
             if jf[j, LOWER] < length < (1.0 - SLACK) * jf[j, UPPER]:
                 continue  # a slack rope
-            ux, uy = (g[4] / length, g[5] / length) if length > 0.0 else (1.0, 0.0)
         else:  # PRISMATIC, WHEEL: held square to the axis
             ux, uy = -g[7], g[6]
         c = ux * nx + uy * ny

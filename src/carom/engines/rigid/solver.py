@@ -453,11 +453,13 @@ def _impacts_first(
     shift: np.ndarray,
     struck: np.ndarray,
     work: np.ndarray,
-    held: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    joined: tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray
+    ],
 ) -> None:
     """Take the impacts of the contact ``rows`` (those of islands with joints) in this
     substep, each at its own time, before the soft step sees them, where no joint holds
-    their bodies along the impact (``held``: the joints' rows, the active ones, their
+    their bodies along the impact (``joined``: the joints' rows, the active ones, their
     prepared rows and bodies, and each body's, :func:`.joints.resists`).
 
     A point closing faster than ``threshold`` [m/s] (or at all, once one of its bodies was
@@ -492,7 +494,7 @@ def _impacts_first(
                 if tau > 1.0:
                     continue
                 tau = max(tau, 0.0)
-                if _held(held, state, a, b, nx, ny):
+                if _held(joined, state, a, b, nx, ny):
                     continue  # the soft step solves it with the joints
                 rna = rax * ny - ray * nx
                 rnb = rbx * ny - rby * nx
@@ -553,13 +555,13 @@ def _closing(
 
 @njit(cache=True, inline="always")
 def _held(
-    held: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                np.ndarray],
+    joined: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                  np.ndarray],
     state: np.ndarray, a: int, b: int, nx: float, ny: float,
 ) -> bool:  # fmt: skip
     """Whether a joint holds body ``a`` or ``b`` along ``(nx, ny)`` (:func:`.joints.resists`;
-    ``held`` as :func:`_impacts_first` takes it)."""
-    jf, ji, active, prep, jrows, start, members = held
+    ``joined`` as :func:`_impacts_first` takes it)."""
+    jf, ji, active, prep, jrows, start, members = joined
     return joints.resists(
         jf, ji, active, prep, jrows, start, members, state, a, nx, ny
     ) or joints.resists(jf, ji, active, prep, jrows, start, members, state, b, nx, ny)
@@ -689,12 +691,11 @@ def solve_step(
     jointed_step = active.shape[0] > 0  # (what the joints need, made only when there are any)
     struck = np.zeros((max(nc, 1) if jointed_step else 1, 2))
     shift = np.zeros((n + 1, 3))  # (read for every body as the positions are integrated)
-    first = np.zeros(0, np.int64)
-    if active.shape[0]:
-        first = _jointed_rows(ci, nc, jointed)
+    first = _jointed_rows(ci, nc, jointed) if jointed_step else np.zeros(0, np.int64)
     soft_joint = joint_softness(h, contact_hertz)
     prep, rows = joints.prepare(jf, ji, active, x, angle, inv_mass, inv_inertia, h)
     start, members = joints.by_body(rows, n)
+    joined = (jf, ji, active, prep, rows, start, members)
     # every body's row, and a last one for the padding lanes' dummy (at rest, infinite mass)
     state = np.zeros((n + 1, STATE_COLS))
     state[:n, S_VX] = v[:, 0]
@@ -715,7 +716,7 @@ def solve_step(
         if first.shape[0]:
             _impacts_first(
                 cf, ci, first, inv_mass, inv_inertia, state, h, impact_speed, shift, struck, work,
-                (jf, ji, active, prep, rows, start, members),
+                joined,
             )  # fmt: skip
         joints.warm_start(jf, ji, active, prep, rows, state)
         _warm_start(group, pair, kinematic, state, work)
@@ -743,9 +744,8 @@ def solve_step(
         if first.shape[0]:
             _unshift(shift, bodies)
             held = _hold_back(
-                cf, ci, first, slots, group, state, shift, h, impact_speed, spared,
-                (jf, ji, active, prep, rows, start, members),
-            )  # fmt: skip
+                cf, ci, first, slots, group, state, shift, h, impact_speed, spared, joined
+            )
         joints.solve(jf, ji, active, prep, rows, state, h, soft_joint, False)
         _solve(group, pair, kinematic, state, 1.0 / h, False, push_speed, work)
         if held:
@@ -759,7 +759,7 @@ def solve_step(
         group, lanes, ci, cf, (R_POINT, POINT_ROWS, POINT0, POINT_FLOATS, 2),
         (P_JN, P_JT, P_TOTAL, P_NMASS), (Q_JN, Q_JT, Q_TOTAL, Q_NMASS), True,
     )  # fmt: skip
-    if active.shape[0]:  # the impacts taken first count in the points' impulse of the step
+    if jointed_step:  # the impacts taken first count in the points' impulse of the step
         for m in range(nc):
             if ci[m, I_FLAGS] & FLAG_STRUCK:
                 for p in range(ci[m, I_COUNT]):

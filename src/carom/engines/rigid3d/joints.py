@@ -401,68 +401,47 @@ def _lock(
         else:
             bias, ms, iscale = _rigid(err[c], bias_on, soft)
         _row(
-            jf,
-            j,
-            JANG + c,
-            prep,
-            k,
-            state,
-            a,
-            b,
-            zero,
-            axis,
-            axis,
-            bias,
-            ms,
-            iscale,
-            1.0,
-            -inf,
-            inf,
-        )
+            jf, j, JANG + c, prep, k, state, a, b, zero, axis, axis, bias, ms, iscale, 1.0,
+            -inf, inf,
+        )  # fmt: skip
 
 
 @njit(cache=True)
 def _drive(
     jf: np.ndarray, j: int, flags: int, prep: np.ndarray, k: int, state: np.ndarray, a: int,
-    b: int, line: tuple[Vec3, Vec3, Vec3], value: float, steps: tuple[float, float],
-    use_bias: bool, soft: tuple[float, float, float],
+    b: int, line: tuple[Vec3, Vec3, Vec3], value: float, stretch: float, lower: bool,
+    steps: tuple[float, float], use_bias: bool, soft: tuple[float, float, float],
 ) -> None:  # fmt: skip
-    """A hinge's or a slider's own rows along ``line`` (``u``, ``s_A``, ``s_B``) at ``value``
-    (its angle or travel), in Box2D's order: its spring toward 0, its motor, its limits
-    (``flags``: which it has); ``steps``: the substep ``h`` and ``1 / h``."""
+    """A joint's own rows along ``line`` (``u``, ``s_A``, ``s_B``) at ``value`` (a hinge's
+    angle, a slider's travel, a rod's length), in Box2D's order: its spring at error
+    ``stretch``, its motor, its limits (``flags``: which it has; ``lower``: whether the lower
+    limit is one); ``steps``: the substep ``h`` and ``1 / h``."""
     inf = math.inf
     u, sa, sb = line
     h, inv_h = steps
     if flags & FLAG_SPRING and jf[j, HERTZ] > 0.0:
-        rate, ms, iscale = prep[k, W_SOFT], prep[k, W_SOFT + 1], prep[k, W_SOFT + 2]
-        _row(
-            jf,
-            j,
-            JSPRING,
-            prep,
-            k,
-            state,
-            a,
-            b,
-            u,
-            sa,
-            sb,
-            rate * value,
-            ms,
-            iscale,
-            1.0,
-            -inf,
-            inf,
-        )
+        bias, ms, iscale = prep[k, W_SOFT] * stretch, prep[k, W_SOFT + 1], prep[k, W_SOFT + 2]
+        _row(jf, j, JSPRING, prep, k, state, a, b, u, sa, sb, bias, ms, iscale, 1.0, -inf, inf)
     if flags & FLAG_MOTOR:
         most = jf[j, MAX_MOTOR] * h
         speed = -jf[j, MOTOR_SPEED]
         _row(jf, j, JMOTOR, prep, k, state, a, b, u, sa, sb, speed, 1.0, 0.0, 1.0, -most, most)
     if flags & FLAG_LIMIT:
-        bias, ms, iscale = _limit(value - jf[j, LOWER], inv_h, use_bias, soft)
-        _row(jf, j, JLOWER, prep, k, state, a, b, u, sa, sb, bias, ms, iscale, 1.0, 0.0, inf)
+        if lower:
+            bias, ms, iscale = _limit(value - jf[j, LOWER], inv_h, use_bias, soft)
+            _row(jf, j, JLOWER, prep, k, state, a, b, u, sa, sb, bias, ms, iscale, 1.0, 0.0, inf)
         bias, ms, iscale = _limit(jf[j, UPPER] - value, inv_h, use_bias, soft)
         _row(jf, j, JUPPER, prep, k, state, a, b, u, sa, sb, bias, ms, iscale, -1.0, 0.0, inf)
+
+
+@njit(cache=True, inline="always")
+def _unit(d: Vec3) -> tuple[float, Vec3]:
+    """A rod's length ``|d|`` [m] and its direction from A's anchor to B's (x when they
+    meet)."""
+    length = math.sqrt(_dot(d, d))
+    if length > 0.0:
+        return length, (d[0] / length, d[1] / length, d[2] / length)
+    return length, (1.0, 0.0, 0.0)
 
 
 @njit(cache=True)
@@ -472,7 +451,7 @@ def solve(
 ) -> None:  # fmt: skip
     """One Gauss-Seidel pass over the joints ``active`` (k,), as in 2D
     (:func:`carom.engines.rigid.joints.solve`)."""
-    inv_h = 1.0 / h
+    steps = (h, 1.0 / h)
     inf = math.inf
     zero = (0.0, 0.0, 0.0)
     for k in range(active.shape[0]):
@@ -481,133 +460,64 @@ def solve(
         kind = ji[j, J_KIND]
         flags = ji[j, J_FLAGS]
         ra, rb, d, aa, ab, pa, pb = _geometry(prep, k, state, a, b)
-        own = (prep[k, W_SOFT], prep[k, W_SOFT + 1], prep[k, W_SOFT + 2])
-        if kind in (SPHERICAL, TARGET):
-            if kind == TARGET:
-                _point(jf, j, prep, k, state, a, b, ra, rb, d, own, jf[j, MAX_FORCE] * h)
-            else:
-                _point(jf, j, prep, k, state, a, b, ra, rb, d, _scales(use_bias, soft), inf)
+        rigid = _scales(use_bias, soft)
+        if kind == TARGET:
+            own = (prep[k, W_SOFT], prep[k, W_SOFT + 1], prep[k, W_SOFT + 2])
+            _point(jf, j, prep, k, state, a, b, ra, rb, d, own, jf[j, MAX_FORCE] * h)
+        elif kind == SPHERICAL:
+            _point(jf, j, prep, k, state, a, b, ra, rb, d, rigid, inf)
         elif kind == REVOLUTE:
             # the angle about the hinge, from A's reference direction to B's
             angle = math.atan2(_dot(_cross(pa, pb), aa), _dot(pa, pb))
+            hinge = (zero, aa, aa)
             _drive(
-                jf,
-                j,
-                flags,
-                prep,
-                k,
-                state,
-                a,
-                b,
-                (zero, aa, aa),
-                angle,
-                (h, inv_h),
-                use_bias,
+                jf, j, flags, prep, k, state, a, b, hinge, angle, angle, True, steps, use_bias,
                 soft,
-            )
+            )  # fmt: skip
             # B's axis along A's: two rows about a_B x b and a_B x c
             sq1, sq2 = _square(aa)
             for c, sq in enumerate((sq1, sq2)):
                 u = _cross(ab, sq)
                 bias, ms, iscale = _rigid(_dot(ab, sq), use_bias, soft)
                 _row(
-                    jf,
-                    j,
-                    JANG + c,
-                    prep,
-                    k,
-                    state,
-                    a,
-                    b,
-                    zero,
-                    u,
-                    u,
-                    bias,
-                    ms,
-                    iscale,
-                    1.0,
-                    -inf,
-                    inf,
-                )
-            _point(jf, j, prep, k, state, a, b, ra, rb, d, _scales(use_bias, soft), inf)
+                    jf, j, JANG + c, prep, k, state, a, b, zero, u, u, bias, ms, iscale, 1.0,
+                    -inf, inf,
+                )  # fmt: skip
+            _point(jf, j, prep, k, state, a, b, ra, rb, d, rigid, inf)
         elif kind == WELD:
-            angular_spring = jf[j, ANG_HERTZ] > 0.0
-            asoft = (prep[k, W_ASOFT], prep[k, W_ASOFT + 1], prep[k, W_ASOFT + 2])
-            _lock(
-                jf,
-                j,
-                prep,
-                k,
-                state,
-                a,
-                b,
-                use_bias,
-                asoft if angular_spring else soft,
-                angular_spring,
-            )
-            linear = own if jf[j, HERTZ] > 0.0 else _scales(use_bias, soft)
+            if jf[j, ANG_HERTZ] > 0.0:
+                angular = (prep[k, W_ASOFT], prep[k, W_ASOFT + 1], prep[k, W_ASOFT + 2])
+                _lock(jf, j, prep, k, state, a, b, use_bias, angular, True)
+            else:
+                _lock(jf, j, prep, k, state, a, b, use_bias, soft, False)
+            if jf[j, HERTZ] > 0.0:
+                linear = (prep[k, W_SOFT], prep[k, W_SOFT + 1], prep[k, W_SOFT + 2])
+            else:
+                linear = rigid
             _point(jf, j, prep, k, state, a, b, ra, rb, d, linear, inf)
         elif kind == DISTANCE:
-            length = math.sqrt(_dot(d, d))
-            u = (d[0] / length, d[1] / length, d[2] / length) if length > 0.0 else (1.0, 0.0, 0.0)
-            sa, sb = _cross(ra, u), _cross(rb, u)
-            if jf[j, LOWER] < jf[j, UPPER]:
-                if flags & FLAG_SPRING and jf[j, HERTZ] > 0.0:
-                    c = length - jf[j, LENGTH]
-                    _row(
-                        jf,
-                        j,
-                        JSPRING,
-                        prep,
-                        k,
-                        state,
-                        a,
-                        b,
-                        u,
-                        sa,
-                        sb,
-                        own[0] * c,
-                        own[1],
-                        own[2],
-                        1.0,
-                        -inf,
-                        inf,
-                    )
-                if jf[j, LOWER] > 0.0:  # (a rope's least length 0 is no limit)
-                    bias, ms, iscale = _limit(length - jf[j, LOWER], inv_h, use_bias, soft)
-                    _row(
-                        jf,
-                        j,
-                        JLOWER,
-                        prep,
-                        k,
-                        state,
-                        a,
-                        b,
-                        u,
-                        sa,
-                        sb,
-                        bias,
-                        ms,
-                        iscale,
-                        1.0,
-                        0.0,
-                        inf,
-                    )
-                bias, ms, iscale = _limit(jf[j, UPPER] - length, inv_h, use_bias, soft)
-                _row(
-                    jf, j, JUPPER, prep, k, state, a, b, u, sa, sb, bias, ms, iscale, -1.0, 0.0, inf
-                )
+            length, u = _unit(d)
+            rod = (u, _cross(ra, u), _cross(rb, u))
+            if jf[j, LOWER] < jf[j, UPPER]:  # a spring or a rope: a range (a least length 0
+                # is no limit: a length is never less)
+                _drive(
+                    jf, j, flags | FLAG_LIMIT, prep, k, state, a, b, rod, length,
+                    length - jf[j, LENGTH], jf[j, LOWER] > 0.0, steps, use_bias, soft,
+                )  # fmt: skip
             else:
                 bias, ms, iscale = _rigid(length - jf[j, LENGTH], use_bias, soft)
                 _row(
-                    jf, j, JAXIAL, prep, k, state, a, b, u, sa, sb, bias, ms, iscale, 1.0, -inf, inf
-                )
+                    jf, j, JAXIAL, prep, k, state, a, b, rod[0], rod[1], rod[2], bias, ms,
+                    iscale, 1.0, -inf, inf,
+                )  # fmt: skip
         else:  # PRISMATIC: B's anchor on A's axis, no relative turn
             lever = (d[0] + ra[0], d[1] + ra[1], d[2] + ra[2])
             along = _dot(aa, d)
-            line = (aa, _cross(lever, aa), _cross(rb, aa))
-            _drive(jf, j, flags, prep, k, state, a, b, line, along, (h, inv_h), use_bias, soft)
+            slide = (aa, _cross(lever, aa), _cross(rb, aa))
+            _drive(
+                jf, j, flags, prep, k, state, a, b, slide, along, along, True, steps, use_bias,
+                soft,
+            )  # fmt: skip
             _lock(jf, j, prep, k, state, a, b, use_bias, soft, False)
             sq1, sq2 = _square(aa)
             for c, sq in enumerate((sq1, sq2)):
@@ -639,7 +549,7 @@ def _impulses(
         spin = jf[j, JSPRING] + jf[j, JMOTOR] + jf[j, JLOWER] - jf[j, JUPPER]
         sq1, sq2 = _square(aa)
         u1, u2 = _cross(ab, sq1), _cross(ab, sq2)
-        couple = tuple_sum3(
+        couple = _sum3(
             (spin * aa[0], spin * aa[1], spin * aa[2]),
             (jf[j, JANG] * u1[0], jf[j, JANG] * u1[1], jf[j, JANG] * u1[2]),
             (jf[j, JANG + 1] * u2[0], jf[j, JANG + 1] * u2[1], jf[j, JANG + 1] * u2[2]),
@@ -647,14 +557,13 @@ def _impulses(
     elif kind == WELD:
         couple = (jf[j, JANG], jf[j, JANG + 1], jf[j, JANG + 2])
     elif kind == DISTANCE:
-        length = math.sqrt(_dot(d, d))
-        u = (d[0] / length, d[1] / length, d[2] / length) if length > 0.0 else (1.0, 0.0, 0.0)
+        _, u = _unit(d)
         lam = jf[j, JAXIAL] + jf[j, JSPRING] + jf[j, JLOWER] - jf[j, JUPPER]
         p = (lam * u[0], lam * u[1], lam * u[2])
     elif kind == PRISMATIC:
         lam = jf[j, JSPRING] + jf[j, JMOTOR] + jf[j, JLOWER] - jf[j, JUPPER]
         sq1, sq2 = _square(aa)
-        p = tuple_sum3(
+        p = _sum3(
             (lam * aa[0], lam * aa[1], lam * aa[2]),
             (jf[j, JSIDE] * sq1[0], jf[j, JSIDE] * sq1[1], jf[j, JSIDE] * sq1[2]),
             (jf[j, JSIDE + 1] * sq2[0], jf[j, JSIDE + 1] * sq2[1], jf[j, JSIDE + 1] * sq2[2]),
@@ -665,7 +574,7 @@ def _impulses(
 
 
 @njit(cache=True, inline="always")
-def tuple_sum3(
+def _sum3(
     a: tuple[float, float, float], b: tuple[float, float, float], c: tuple[float, float, float]
 ) -> tuple[float, float, float]:
     return a[0] + b[0] + c[0], a[1] + b[1] + c[1], a[2] + b[2] + c[2]
@@ -682,8 +591,8 @@ def warm_start(
         a, b = rows[k, 0], rows[k, 1]
         g = _geometry(prep, k, state, a, b)
         p, arm, couple = _impulses(jf, j, ji[j, J_KIND], g)
-        la = tuple_sum3(_cross(arm, p), couple, (0.0, 0.0, 0.0))
-        lb = tuple_sum3(_cross(g[1], p), couple, (0.0, 0.0, 0.0))
+        la = _sum3(_cross(arm, p), couple, (0.0, 0.0, 0.0))
+        lb = _sum3(_cross(g[1], p), couple, (0.0, 0.0, 0.0))
         _push(state, prep, k, a, b, p, la, lb)
 
 

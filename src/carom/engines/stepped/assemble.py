@@ -157,10 +157,6 @@ class _Stepped(Protocol):
 
     def retire(self, ids: NDArray[np.int64]) -> None: ...
 
-    def use_joints(
-        self, ints: NDArray[np.int64], floats: NDArray[np.float64], wake: bool = True
-    ) -> None: ...
-
 
 Built = TypeVar("Built", bound=_Stepped)
 
@@ -174,9 +170,9 @@ def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
     table = getattr(world, "collision_filters", None)
     if table is not None and len(table):
         engine.use_filters(np.asarray(table, np.int64))
-    ints = getattr(world, "_joint_ints", None)
-    if ints is not None and len(ints):
-        engine.use_joints(ints, world._joint_floats, wake=False)  # type: ignore[attr-defined]
+    share_joints = getattr(world, "share_joints", None)  # (a World's, issue 43)
+    if share_joints is not None:
+        share_joints(engine)
     alive = getattr(world, "alive", None)
     if alive is not None and not np.all(alive):
         engine.retire(np.flatnonzero(~np.asarray(alive)))

@@ -727,22 +727,29 @@ class SteppedEngine:
         -1 is every bit) (:mod:`carom.geometry.rays`): each one's distance [m] (inf: no hit),
         the caller's number of the body hit (:attr:`callers`; -2: none) and the outward normal
         there (R, d)."""
-        m, s = self.model, self.state
+        m = self.model
         rays = origins.shape[0]
         distance = np.empty(rays)
         piece = np.empty(rays, np.int64)
         normal = np.zeros((rays, self.DIMS))
         movers = self._reach[2]
-        # the moving bodies' pieces within their reach of their centres now, one box each: a
-        # tree over them for many rays, one by one for a few
-        centre = s.x[m.piece_body[movers]]
-        reach = (m.piece_reach[movers] + m.piece_radius[movers])[:, None]
-        boxes = np.hstack((centre - reach, centre + reach))
+        # the moving bodies' pieces, one box each: a tree over them for many rays, one by one
+        # for a few
+        boxes = self._mover_boxes()
         tree = build_bvh(boxes) if rays >= 8 and movers.size else empty_bvh(self.DIMS)
         trees = (tree.box, tree.left, tree.first, tree.count, tree.order, boxes, movers)
         self._cast((origins, directions, lengths), trees, mask, (distance, piece, normal))
         body = np.where(piece >= 0, self.callers[m.piece_body[np.maximum(piece, 0)]], -2)
         return distance, body, normal
+
+    def _mover_boxes(self) -> FloatArray:
+        """The boxes (k, 2 d) of the moving bodies' pieces (``_reach[2]``), each within its
+        reach of its body's centre now, for the queries."""
+        m, movers = self.model, self._reach[2]
+        centre = self.state.x[m.piece_body[movers]]
+        reach = (m.piece_reach[movers] + m.piece_radius[movers])[:, None]
+        boxes: FloatArray = np.hstack((centre - reach, centre + reach))
+        return boxes
 
     def _cast(
         self, rays: tuple[FloatArray, ...], movers: tuple[Any, ...], mask: int, hits: Any
@@ -759,12 +766,10 @@ class SteppedEngine:
         ``mask``. Candidates are the pieces whose boxes meet the query's: the static pieces'
         boxes of the broad phase, the moving bodies' pieces within their reach of their
         centres now, and every unbounded static piece (a plane)."""
-        m, s = self.model, self.state
+        m = self.model
         fat, open_statics, movers = self._reach[0][5], self._reach[1], self._reach[2]
         boxes = fat.copy()
-        centre = s.x[m.piece_body[movers]]
-        reach = (m.piece_reach[movers] + m.piece_radius[movers])[:, None]
-        boxes[movers] = np.hstack((centre - reach, centre + reach))
+        boxes[movers] = self._mover_boxes()
         d = self.DIMS
         near = np.all(boxes[:, :d] <= high, axis=1) & np.all(boxes[:, d:] >= low, axis=1)
         near[open_statics] = True

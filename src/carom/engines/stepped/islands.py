@@ -49,6 +49,20 @@ def _root(parent: np.ndarray, i: int) -> int:
     return i
 
 
+@njit(cache=True, inline="always")
+def _union(parent: np.ndarray, kind: np.ndarray, a: int, b: int) -> None:
+    """Join the islands of ``a`` and ``b`` when both are dynamic (-1, the world, joins
+    nothing); the smaller root becomes the root: the same islands every run."""
+    if a < 0 or b < 0 or kind[a] != KIND_DYNAMIC or kind[b] != KIND_DYNAMIC:
+        return
+    ra = _root(parent, a)
+    rb = _root(parent, b)
+    if ra < rb:
+        parent[rb] = ra
+    elif rb < ra:
+        parent[ra] = rb
+
+
 @njit(cache=True)
 def plan(
     ci: np.ndarray,
@@ -117,26 +131,9 @@ def plan(
     for m in range(nc):
         a = ci[m, I_BODY_A]
         b = ci[m, I_BODY_B]
-        if kind[a] == KIND_DYNAMIC and kind[b] == KIND_DYNAMIC:
-            ra = _root(parent, a)
-            rb = _root(parent, b)
-            if ra != rb:
-                # the smaller index becomes the root: the same islands every run
-                if ra < rb:
-                    parent[rb] = ra
-                else:
-                    parent[ra] = rb
+        _union(parent, kind, a, b)
     for m in range(links.shape[0]):
-        a = links[m, 0]
-        b = links[m, 1]
-        if a >= 0 and b >= 0 and kind[a] == KIND_DYNAMIC and kind[b] == KIND_DYNAMIC:
-            ra = _root(parent, a)
-            rb = _root(parent, b)
-            if ra != rb:
-                if ra < rb:
-                    parent[rb] = ra
-                else:
-                    parent[ra] = rb
+        _union(parent, kind, links[m, 0], links[m, 1])
     contacts = np.zeros(n, np.int64)
     # an island with a resting contact, a kinematic body or a joint is the solver's
     solver_only = np.zeros(n, np.bool_)
@@ -243,6 +240,27 @@ def settle(
             island[i] = parent[i]
 
 
+@njit(cache=True, inline="always")
+def _rouse(
+    a: int, b: int, kind: np.ndarray, awake: np.ndarray, moving: np.ndarray,
+    island: np.ndarray, rouse: np.ndarray,
+) -> bool:  # fmt: skip
+    """Mark for waking the sleeping island of ``a`` or ``b`` that the pair joins to an awake
+    body or a moving kinematic one (-1, the world, wakes nothing); whether it marked one."""
+    if a < 0 or b < 0:
+        return False
+    marked = False
+    for body, other in ((a, b), (b, a)):
+        if kind[body] != KIND_DYNAMIC or awake[body]:
+            continue
+        if (kind[other] == KIND_DYNAMIC and awake[other]) or (
+            kind[other] == KIND_KINEMATIC and moving[other]
+        ):
+            rouse[island[body]] = True
+            marked = True
+    return marked
+
+
 @njit(cache=True)
 def wake(
     ci: np.ndarray,
@@ -260,26 +278,10 @@ def wake(
     n = kind.shape[0]
     rouse = np.zeros(n, np.bool_)
     any_island = False
-    pairs = np.empty((nc + links.shape[0], 2), np.int64)
     for m in range(nc):
-        pairs[m, 0] = ci[m, I_BODY_A]
-        pairs[m, 1] = ci[m, I_BODY_B]
+        any_island |= _rouse(ci[m, I_BODY_A], ci[m, I_BODY_B], kind, awake, moving, island, rouse)
     for m in range(links.shape[0]):
-        pairs[nc + m, 0] = links[m, 0]
-        pairs[nc + m, 1] = links[m, 1]
-    for m in range(pairs.shape[0]):
-        a = pairs[m, 0]
-        b = pairs[m, 1]
-        if a < 0 or b < 0:
-            continue
-        for body, other in ((a, b), (b, a)):
-            if kind[body] != KIND_DYNAMIC or awake[body]:
-                continue
-            if (kind[other] == KIND_DYNAMIC and awake[other]) or (
-                kind[other] == KIND_KINEMATIC and moving[other]
-            ):
-                rouse[island[body]] = True
-                any_island = True
+        any_island |= _rouse(links[m, 0], links[m, 1], kind, awake, moving, island, rouse)
     if not any_island:
         return 0
     woke = 0
