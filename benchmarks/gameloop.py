@@ -46,13 +46,18 @@ class Carom:
 
     def __init__(self, n: int) -> None:
         import carom
+        from carom.materials import Material
         from carom.shapes import Box
 
         at, width = _grid(n)
         height = float(at[-1, 1]) + 2.0
-        world = carom.World(2, [width, height], gravity=[0.0, -9.81], boundary="walls")
-        for p in at:
-            world.add_body(Box(2 * HALF, 2 * HALF), p, restitution=0.0)
+        # the peers' surfaces: friction 0.6, no bounce (pymunk's and Box2D's default
+        # restitution is 0, walls included)
+        surface = Material(restitution=0.0, friction=0.6)
+        world = carom.World(
+            2, [width, height], gravity=[0.0, -9.81], boundary="walls", walls=surface
+        )
+        world.add_bodies(Box(2 * HALF, 2 * HALF), at, material=surface)
         world.prepare()
         self.world, self.n, self.inside = world, n, 0.0
         engine = world.build()

@@ -158,6 +158,7 @@ class RigidEngine(SteppedEngine):
             m.mu_table, m.body_pieces, m.piece_body, m.piece_start, m.piece_count,
             m.piece_radius, m.piece_reach, m.local_vertices, m.local_normals, s.vertices,
             s.normals, self.dt, 1e-3 * st.linear_slop, 4.0 * st.linear_slop,
+            self._closing_fast,
         )  # fmt: skip
         return log, int(logged)
 

@@ -42,12 +42,15 @@ from carom.engines.rigid.motion import (
     relative_velocity,
 )
 from carom.engines.stepped.impacts import (
+    PAIR_LOOKS,
     advance,
     approaching,
     earliest,
     gather,
+    give_back,
     impact_cap,
     island_candidates,
+    keep_island,
     logged_row,
     look_around,
     near_keys,
@@ -186,6 +189,19 @@ def time_of_impact(
             return t
 
 
+@njit(cache=True, inline="always")
+def _point_speeds(
+    a: int, b: int, rax: float, ray: float, rbx: float, rby: float, v: np.ndarray,
+    omega: np.ndarray,
+) -> float:  # fmt: skip
+    """A bound on the sizes of both bodies' velocities at a contact point, ``|v| +
+    |omega| |r|`` each [m/s]: the scale of the relative velocity's round-off."""
+    return (
+        math.hypot(v[a, 0], v[a, 1]) + abs(omega[a]) * math.hypot(rax, ray)
+        + math.hypot(v[b, 0], v[b, 1]) + abs(omega[b]) * math.hypot(rbx, rby)
+    )  # fmt: skip
+
+
 @njit(cache=True)
 def _solve_two(k11: float, k12: float, k22: float, b1: float, b2: float) -> tuple[float, float]:
     """Impulses ``l >= 0`` with ``w = K l - b >= 0`` and ``l . w = 0`` (2x2 LCP, by cases)."""
@@ -299,6 +315,7 @@ def _impact(
     un = np.empty(2)
     ut = np.empty(2)
     used = 0
+    scale = 0.0  # the largest sum of the two bodies' point speeds [m/s]
     for j in range(count):
         if out[4 + 3 * j] > deepest + touch:
             continue
@@ -314,8 +331,11 @@ def _impact(
         ux, uy = relative_velocity(a, b, rax[used], ray[used], rbx[used], rby[used], v, omega)
         un[used] = ux * nx + uy * ny
         ut[used] = ux * tx + uy * ty
+        scale = max(
+            scale, _point_speeds(a, b, rax[used], ray[used], rbx[used], rby[used], v, omega)
+        )
         used += 1
-    if not approaching(un, used):
+    if not approaching(un, used, scale):
         return False
     ma = inv_mass[a]
     mb = inv_mass[b]
@@ -432,6 +452,7 @@ def exact_impacts(
     dt: float,
     touch: float,
     margin: float,
+    slow: float,
 ) -> tuple[np.ndarray, int]:
     """Advance each island solved exactly through the step, its impacts taken in the order
     they happen (:mod:`carom.engines.stepped.impacts`).
@@ -444,8 +465,11 @@ def exact_impacts(
     count, order, its items' boxes), the static pieces it does not hold, and the pieces of
     bodies that are not static; ``accel`` (N, 2) each body's free acceleration;
     ``material``, ``e_table``, ``mu_table`` the coefficients; ``margin`` [m] the broad
-    phase's. Returns the impacts' log (rows of :data:`IMPACT_FIELDS`) and how many rows it
-    holds.
+    phase's; ``slow`` [m/s] the restitution threshold: a pair that meets no impact, or one
+    slower than this, more than :data:`~carom.engines.stepped.impacts.PAIR_LOOKS` times in
+    the step is held in contact, and its island stops there (given back to the solver for
+    the whole step if it took no impact yet). Returns the impacts' log (rows of
+    :data:`IMPACT_FIELDS`) and how many rows it holds.
     """
     isolated, island_first, n_islands, island_of = islands
     out = np.empty(8)
@@ -457,14 +481,19 @@ def exact_impacts(
     log = np.zeros((max(16, 2 * island_first[n_islands]), IMPACT_FIELDS))
     logged = 0
     for k in range(n_islands):
-        for r in range(island_first[k], island_first[k + 1]):
+        lo, hi = island_first[k], island_first[k + 1]
+        for r in range(lo, hi):
             take_isolated(ci, isolated[r], I_FLAGS)
+        kept = keep_island(ci, isolated, lo, hi, island_of, x, angle, v, omega)
+        logged_before = logged
         cp, n = island_candidates(cand, cand_first[k], cand_first[k + 1], pairs)
         hit = np.empty(cp.shape[0])  # each candidate's time of impact into the step [s]
         parting = np.zeros(cp.shape[0], np.bool_)
         # how deep a pair that stopped approaching while overlapping already was [m]: only
         # sinking deeper is an impact (a pair met late by a search, or left by the solver)
         sunk = np.zeros(cp.shape[0])
+        # each candidate's turns as the earliest that met no impact or a slow one
+        looks = np.zeros(cp.shape[0], np.int64)
         for c in range(n):
             hit[c] = _next_impact(
                 cp[c, 0], cp[c, 1], 0.0, dt, False, clock, island_of, x, angle, v, omega,
@@ -480,6 +509,9 @@ def exact_impacts(
             if c < 0:
                 break
             now = hit[c]
+            if looks[c] == PAIR_LOOKS:  # a pair held in contact, not meeting in impacts
+                stopped = True
+                break
             pa, pb = cp[c, 0], cp[c, 1]
             a, b = piece_body[pa], piece_body[pb]
             for body, piece in ((a, pa), (b, pb)):
@@ -502,6 +534,7 @@ def exact_impacts(
                 inv_mass, inv_inertia, mass, inertia, log[logged],
             ):  # fmt: skip
                 # touching, not approaching: wait for the gap to open (or close past touch)
+                looks[c] += 1
                 for j in range(count):
                     sunk[c] = max(sunk[c], -out[4 + 3 * j])
                 hit[c] = _next_impact(
@@ -511,6 +544,8 @@ def exact_impacts(
                 )  # fmt: skip
                 continue
             sunk[c] = 0.0
+            if -log[logged, 5] < slow:  # met again slowly: perhaps held in contact
+                looks[c] += 1
             log[logged, 0] = now
             logged += 1
             taken += 1
@@ -530,6 +565,7 @@ def exact_impacts(
                 hit = np.concatenate((hit, np.empty(more)))
                 parting = np.concatenate((parting, np.zeros(more, np.bool_)))
                 sunk = np.concatenate((sunk, np.zeros(more)))
+                looks = np.concatenate((looks, np.zeros(more, np.int64)))
             for d in range(n):
                 da, db = piece_body[cp[d, 0]], piece_body[cp[d, 1]]
                 if da in (a, b) or db in (a, b):
@@ -541,9 +577,13 @@ def exact_impacts(
                     )  # fmt: skip
         else:
             stopped = True  # (as many looks as impacts allowed, twice over)
-        # the island's bodies to the end of the step, or to its last impact
+        if stopped and logged == logged_before:  # no impact yet: the solver's whole step
+            give_back(kept, ci, isolated, lo, hi, I_FLAGS, island_of, x, angle, v, omega)
+            continue
+        # the island's bodies to the end of the step, or to its last impact (the solver
+        # takes them from there in the next step: they lose the rest of this one)
         end = now if stopped else dt
-        for r in range(island_first[k], island_first[k + 1]):
+        for r in range(lo, hi):
             for body in (ci[isolated[r], I_BODY_A], ci[isolated[r], I_BODY_B]):
                 _sync(body, end, clock, island_of, x, angle, v, omega, accel)
     return log, logged

@@ -189,6 +189,7 @@ class RigidEngine3D(SteppedEngine):
             m.piece_reach, m.local_vertices, m.local_normals, m.face_first, m.face_size,
             m.corners, m.edges, s.vertices, s.normals, self.dt, st.substeps,
             1e-3 * st.linear_slop, 4.0 * st.linear_slop,
+            self._closing_fast,
         )  # fmt: skip
         return log, int(logged)
 

@@ -45,12 +45,15 @@ from carom.engines.rigid3d.motion import (
     world_inverse_row,
 )
 from carom.engines.stepped.impacts import (
+    PAIR_LOOKS,
     advance,
     approaching,
     earliest,
     gather,
+    give_back,
     impact_cap,
     island_candidates,
+    keep_island,
     logged_row,
     look_around,
     near_keys,
@@ -165,6 +168,18 @@ def normal_lcp(k: np.ndarray, b: np.ndarray, count: int, out: np.ndarray) -> boo
     return False
 
 
+@njit(cache=True, inline="always")
+def _point_speeds(
+    a: int, b: int, ra: np.ndarray, rb: np.ndarray, v: np.ndarray, w: np.ndarray
+) -> float:
+    """A bound on the sizes of both bodies' velocities at a contact point, ``|v| +
+    |omega| |r|`` each [m/s]: the scale of the relative velocity's round-off."""
+    return float(
+        np.linalg.norm(v[a]) + np.linalg.norm(w[a]) * np.linalg.norm(ra)
+        + np.linalg.norm(v[b]) + np.linalg.norm(w[b]) * np.linalg.norm(rb)
+    )  # fmt: skip
+
+
 @njit(cache=True)
 def _impact(
     a: int, b: int, count: int, out: np.ndarray, touch: float, e: float, mu: float,
@@ -184,6 +199,7 @@ def _impact(
     u = np.empty((MAX_POINTS, 3))
     un = np.empty(MAX_POINTS)
     used = 0
+    scale = 0.0  # the largest sum of the two bodies' point speeds [m/s]
     for j in range(count):
         sep = out[6 + 4 * j]
         if sep > deepest + touch:
@@ -198,8 +214,9 @@ def _impact(
         ux, uy, uz = relative_velocity(a, b, ra[used], rb[used], v, w)
         u[used, 0], u[used, 1], u[used, 2] = ux, uy, uz
         un[used] = ux * n[0] + uy * n[1] + uz * n[2]
+        scale = max(scale, _point_speeds(a, b, ra[used], rb[used], v, w))
         used += 1
-    if not approaching(un, used):
+    if not approaching(un, used, scale):
         return False
     ia = iw[a].reshape(3, 3)
     ib = iw[b].reshape(3, 3)
@@ -441,11 +458,12 @@ def exact_impacts(
     substeps: int,
     touch: float,
     margin: float,
+    slow: float,
 ) -> tuple[np.ndarray, int]:  # fmt: skip
     """Advance each island solved exactly through the step, its impacts taken in the order
     they happen (:mod:`carom.engines.stepped.impacts`), as the 2D engine's
     (:func:`carom.engines.rigid.impacts.exact_impacts`: ``islands``, ``pairs``, ``boxes``,
-    ``reach``, ``margin`` alike); ``coefficients``: each body's material, the restitution
+    ``reach``, ``margin``, ``slow`` alike); ``coefficients``: each body's material, the restitution
     and friction tables. Free flight goes in substeps of at most ``dt / substeps``. Returns
     the impacts' log (rows of :data:`IMPACT_FIELDS`) and how many rows it holds.
     """
@@ -463,14 +481,19 @@ def exact_impacts(
     log = np.zeros((max(16, 2 * island_first[n_islands]), IMPACT_FIELDS))
     logged = 0
     for k in range(n_islands):
-        for r in range(island_first[k], island_first[k + 1]):
+        lo, hi = island_first[k], island_first[k + 1]
+        for r in range(lo, hi):
             take_isolated(ci, isolated[r], I_FLAGS)
+        kept = keep_island(ci, isolated, lo, hi, island_of, x, q, v, w)
+        logged_before = logged
         cp, n = island_candidates(cand, cand_first[k], cand_first[k + 1], pairs)
         hit = np.empty(cp.shape[0])  # each candidate's time of impact into the step [s]
         parting = np.zeros(cp.shape[0], np.bool_)
         # how deep a pair that stopped approaching while overlapping already was [m]: only
         # sinking deeper is an impact (a pair met late by a search, or left by the solver)
         sunk = np.zeros(cp.shape[0])
+        # each candidate's turns as the earliest that met no impact or a slow one
+        looks = np.zeros(cp.shape[0], np.int64)
         for c in range(n):
             hit[c] = _next_impact(
                 cp[c, 0], cp[c, 1], 0.0, dt, False, h, clock, island_of, x, q, v, w, accel,
@@ -487,6 +510,9 @@ def exact_impacts(
             if c < 0:
                 break
             now = hit[c]
+            if looks[c] == PAIR_LOOKS:  # a pair held in contact, not meeting in impacts
+                stopped = True
+                break
             pa, pb = cp[c, 0], cp[c, 1]
             a, b = piece_body[pa], piece_body[pb]
             _sync(a, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia)
@@ -517,6 +543,7 @@ def exact_impacts(
                 inv_mass, iw, log[logged],
             ):  # fmt: skip
                 # touching, not approaching: wait for the gap to open (or close past touch)
+                looks[c] += 1
                 sunk[c] = max(sunk[c], -gap[0])
                 hit[c] = _next_impact(
                     pa, pb, now, dt, True, h, clock, island_of, x, q, v, w, accel, inv_mass,
@@ -526,6 +553,8 @@ def exact_impacts(
                 )  # fmt: skip
                 continue
             sunk[c] = 0.0
+            if -log[logged, 6] < slow:  # met again slowly: perhaps held in contact
+                looks[c] += 1
             log[logged, 0] = now
             logged += 1
             taken += 1
@@ -545,6 +574,7 @@ def exact_impacts(
                 hit = np.concatenate((hit, np.empty(more)))
                 parting = np.concatenate((parting, np.zeros(more, np.bool_)))
                 sunk = np.concatenate((sunk, np.zeros(more)))
+                looks = np.concatenate((looks, np.zeros(more, np.int64)))
             for d in range(n):
                 da, db = piece_body[cp[d, 0]], piece_body[cp[d, 1]]
                 if da in (a, b) or db in (a, b):
@@ -557,9 +587,13 @@ def exact_impacts(
                     )  # fmt: skip
         else:
             stopped = True  # (as many looks as impacts allowed, twice over)
-        # the island's bodies to the end of the step, or to its last impact
+        if stopped and logged == logged_before:  # no impact yet: the solver's whole step
+            give_back(kept, ci, isolated, lo, hi, I_FLAGS, island_of, x, q, v, w)
+            continue
+        # the island's bodies to the end of the step, or to its last impact (the solver
+        # takes them from there in the next step: they lose the rest of this one)
         end = now if stopped else dt
-        for r in range(island_first[k], island_first[k + 1]):
+        for r in range(lo, hi):
             for body in (ci[isolated[r], I_BODY_A], ci[isolated[r], I_BODY_B]):
                 _sync(body, end, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia)
     return log, logged

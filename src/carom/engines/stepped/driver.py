@@ -321,6 +321,10 @@ class SteppedEngine:
         if n_iso:
             todo = Isolated(isolated, island_first, n_iso)
             log, logged = self._impact_kernel(todo)
+            # the islands it handed back (island -1) are the solver's, the whole step
+            self._role[(self._role == islands.ROLE_EXACT) & (self._island_of < 0)] = (
+                islands.ROLE_SOLVER
+            )
             if logged:
                 met = log[:logged]
                 self._book(met, sink)

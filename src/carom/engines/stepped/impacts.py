@@ -39,14 +39,17 @@ __all__ = [
     "BISECTIONS",
     "MAX_IMPACTS",
     "MAX_ITERATIONS",
+    "PAIR_LOOKS",
     "Search",
     "add_candidate",
     "advance",
     "approaching",
     "earliest",
     "gather",
+    "give_back",
     "impact_cap",
     "island_candidates",
+    "keep_island",
     "logged_row",
     "look_around",
     "near_keys",
@@ -60,12 +63,21 @@ __all__ = [
 #: to be safe, where the caller finds no contact and searches on from there (a search never
 #: gives up with the pieces run into each other)
 MAX_ITERATIONS = 200
+#: gaps a search waits, still touching, for a pair just hit to part: a pair that parts
+#: (restitution, or a turn) leaves the touching distance within a few
+PARTING_GAPS = 16
 #: halvings of an overshot interval before settling on its safe end
 BISECTIONS = 60
 #: impacts of an island within one step: this many per candidate pair, and
 #: :data:`ISLAND_IMPACTS` more
 MAX_IMPACTS = 8
 ISLAND_IMPACTS = 256
+#: turns one pair may take as an island's next impact in one step: more is a pair held in
+#: contact (plastic, or turning against each other), a sequence of ever smaller impacts
+#: without end (inelastic collapse), and the island goes back to the solver
+PAIR_LOOKS = 4
+#: relative round-off of a normal speed: 64 ulps of the point speeds it is computed from
+ROUND_OFF = 64.0 * np.finfo(np.float64).eps
 
 #: a search's state: the last safe time, the bisected interval (lo, hi), whether it is
 #: bisecting, how many gaps it has taken in its phase, and whether it still waits for a pair
@@ -109,6 +121,8 @@ def advance(
         return True, t, state
     if d > tol:
         parting = False
+    elif taken == PARTING_GAPS:  # still touching: held in contact, the caller looks again
+        return True, t, state
     if closing <= 0.0:
         return True, -1.0, state
     later = t + max(d, tol) / closing
@@ -129,10 +143,15 @@ def take_isolated(ci: np.ndarray, m: int, flags: int) -> tuple[int, int, int, in
 
 
 @njit(cache=True, inline="always")
-def approaching(un: np.ndarray, used: int) -> bool:
-    """Whether any of the first ``used`` normal relative speeds ``un`` [m/s] approaches."""
+def approaching(un: np.ndarray, used: int, scale: float) -> bool:
+    """Whether any of the first ``used`` normal relative speeds ``un`` [m/s] approaches by
+    more than its round-off: ``un`` is a difference of the two bodies' point velocities, whose
+    sizes add up to at most ``scale`` [m/s], so it carries an error of a few ulps of
+    ``scale``; a slower approach is a resting touch (an impulse for it would leave it as
+    slow, and the pair would be met again at the same instant, without end)."""
+    floor = ROUND_OFF * scale
     for j in range(used):  # noqa: SIM110 (a loop Numba compiles, not a generator)
-        if un[j] < 0.0:
+        if un[j] < -floor:
             return True
     return False
 
@@ -389,3 +408,45 @@ def statics_in(
             found[kept] = found[j]
             kept += 1
     return found, kept
+
+
+@njit(cache=True)
+def keep_island(
+    ci: np.ndarray, isolated: np.ndarray, lo: int, hi: int, island_of: np.ndarray,
+    x: np.ndarray, turn: np.ndarray, v: np.ndarray, spin: np.ndarray,
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:  # fmt: skip
+    """The bodies of an island (the moving ends of its rows ``isolated[lo:hi]``, a body
+    once per row it is in) and copies of their state at the start of the step (position,
+    angle or orientation, velocity, angular velocity), for :func:`give_back`."""
+    bodies = np.empty(2 * (hi - lo), np.int64)
+    n = 0
+    for r in range(lo, hi):
+        for body in (ci[isolated[r], I_BODY_A], ci[isolated[r], I_BODY_B]):
+            if island_of[body] >= 0:
+                bodies[n] = body
+                n += 1
+    bodies = bodies[:n]
+    return bodies, (x[bodies], turn[bodies], v[bodies], spin[bodies])
+
+
+@njit(cache=True)
+def give_back(
+    kept: tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
+    ci: np.ndarray, isolated: np.ndarray, lo: int, hi: int, flags: int,
+    island_of: np.ndarray, x: np.ndarray, turn: np.ndarray, v: np.ndarray, spin: np.ndarray,
+) -> None:  # fmt: skip
+    """Hand an island that cannot be finished exactly (a pair held in contact, the impacts'
+    cap, a body moving otherwise in reach) back to the solver for the whole step: its bodies
+    at their state of the step's start (:func:`keep_island`), out of the exact islands
+    (``island_of`` -1), its rows no longer flagged exact (column ``flags``). The caller
+    drops the island's logged impacts."""
+    bodies, (x0, turn0, v0, spin0) = kept
+    for j in range(bodies.shape[0]):
+        i = bodies[j]
+        x[i] = x0[j]
+        turn[i] = turn0[j]
+        v[i] = v0[j]
+        spin[i] = spin0[j]
+        island_of[i] = -1
+    for r in range(lo, hi):
+        ci[isolated[r], flags] &= ~FLAG_EXACT
