@@ -116,7 +116,10 @@ def test_filters_outlive_a_rebuild_and_new_bodies_start_with_the_defaults() -> N
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"category": -1}, r"category must lie in \[0, 18446744073709551615\]"),
+        (
+            {"category": -(2**63) - 1},
+            r"category must lie in \[-9223372036854775808, 18446744073709551615\]",
+        ),
         ({"mask": 2**64}, "mask must lie in"),
         ({"group": True}, "group must be a whole number"),
         ({"category": 1.5}, "category must be a whole number"),

@@ -113,5 +113,23 @@ def test_a_ray_sees_only_the_categories_in_its_mask() -> None:
     assert hit.body == 1
     hits = world.ray_casts([origin] * 3, down, mask=0b100)
     assert hits["body"].tolist() == [2, 2, 2]
+    everything = world.ray_cast(origin, down, mask=-1)  # (two's complement: every bit)
+    assert everything is not None
+    assert everything.body == 2
     with pytest.raises(CaromError, match="mask must lie in"):
-        world.ray_cast(origin, down, mask=-1)
+        world.ray_cast(origin, down, mask=2**64)
+
+
+def test_a_removed_body_ends_its_contacts_at_the_next_step() -> None:
+    # the stack sleeps after a while; a removed body moves no more, so a pair of it would
+    # otherwise count as a sleeping pair, touching for ever
+    world = _stack()
+    for _ in range(60):
+        world.step()
+    assert not world.body(2).awake
+    world.remove_body(2)
+    world.step()
+    ended = {(int(e["a"]), int(e["b"])) for e in world.contact_events().end}
+    assert ended == {(1, 2)}
+    world.step()
+    assert world.contact_events().end.size == 0

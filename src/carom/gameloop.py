@@ -264,7 +264,8 @@ class GameLoop:
         ids : int or (k,) array_like of int
             Body indices (any kind).
         category : int, optional
-            The bits the bodies are, 0 to 2**64 - 1 (default for every body: 1).
+            The bits the bodies are, 0 to 2**64 - 1, or a signed 64-bit integer (two's
+            complement: -1 is every bit, ``~0b10`` all but bit 1) (default for every body: 1).
         mask : int, optional
             The bits they touch (default: all).
         group : int, optional
@@ -276,7 +277,8 @@ class GameLoop:
         Two bodies touch when each one's mask holds a bit of the other's category. A pair
         kept apart has no contact, no impact and no sweep against the other: it passes
         through. Filters hold from the next step, through rebuilds and runs; bodies added
-        later start with the defaults. The rigid engines.
+        later start with the defaults. Set before the engine is built, they are its from the
+        start (bodies kept apart may start overlapping). The rigid engines.
 
         Raises
         ------
@@ -290,17 +292,13 @@ class GameLoop:
             None if mask is None else bits64("mask", mask),
             None if group is None else whole_number("group", group, -(2**63), 2**63 - 1),
         ]
+        engine = rigid_if_built(self)
         table = _filters_of(self)
-        kept = table.copy()
         for column, value in enumerate(values):
             if value is not None:
                 table[rows, column] = value
-        try:  # (a new engine takes the table: bodies kept apart may overlap at its start)
-            engine = _rigid(self)
-        except CaromError:
-            table[:] = kept
-            raise
-        engine.use_filters(table, rows)
+        if engine is not None:
+            engine.use_filters(table, rows)
 
     def remove_body(self: _Running, index: int) -> None:
         """Take body ``index`` out of the world; every other body keeps its index.
@@ -552,6 +550,15 @@ def _rigid(world: _Running) -> SteppedEngine:
     if not isinstance(engine, SteppedEngine):
         raise CaromError(_NOT_YET)
     return engine
+
+
+def rigid_if_built(world: Any) -> SteppedEngine | None:
+    """The world's engine when it is built, None while it is not and will be a rigid one
+    (what is set now, it takes when built); else a CaromError."""
+    engine = world.engine
+    if engine is None and world.engine_entry.stepped:
+        return None
+    return _rigid(world)
 
 
 def _rows(world: _Running, ids: ArrayLike) -> NDArray[np.int64]:

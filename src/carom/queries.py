@@ -86,7 +86,7 @@ class Queries:
             How far it reaches [m] (default: without end).
         mask : int, optional
             The collision categories it sees (:meth:`carom.World.set_filter`), 0 to
-            2**64 - 1; default: every one.
+            2**64 - 1 or a signed 64-bit integer (-1: every one); default: every one.
 
         Returns
         -------

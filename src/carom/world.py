@@ -35,7 +35,6 @@ from carom.bodies import Bodies
 from carom.collision_log import LOG_LIMIT, CollisionLog
 from carom.engines import registry
 from carom.engines.base import Counters, Engine, FrameArrays, describe_partner
-from carom.engines.registry import AUTO, EngineEntry
 from carom.errors import CaromError
 from carom.gameloop import GameLoop
 from carom.joints import Joints
@@ -55,6 +54,7 @@ from carom.recording import (
     frame_grid,
 )
 from carom.scenery import Scenery
+from carom.sensing import Sensing
 from carom.shapes import Shape2D, check_inertia_factor, default_inertia_factor
 from carom.shapes3d import Shape3D
 
@@ -63,7 +63,7 @@ __all__ = ["LOG_LIMIT", "RECORD_BYTES", "Frame", "Material", "Recording", "World
 FloatArray = NDArray[np.float64]
 
 
-class World(Scenery, GameLoop, Queries, Joints):
+class World(Scenery, GameLoop, Queries, Joints, Sensing):
     """Bodies in a box, advanced by an engine: spheres (3D) or disks (2D) simulated exactly,
     event by event, or rigid bodies of any shape in 2D and 3D, step by step.
 
@@ -285,14 +285,14 @@ class World(Scenery, GameLoop, Queries, Joints):
     # -- the engine -------------------------------------------------------------------------
 
     @property
-    def engine_entry(self) -> EngineEntry:
+    def engine_entry(self) -> registry.EngineEntry:
         """The engine this world runs (:mod:`carom.engines.registry`): the one built, else the
         one chosen, or with ``engine="auto"`` the first that takes the world."""
         if self._engine is not None:
             return registry.find(self._engine.name)
-        if self.engine_choice != AUTO:
+        if self.engine_choice != registry.AUTO:
             return registry.find(self.engine_choice)
-        return registry.pick(AUTO, self)
+        return registry.pick(registry.AUTO, self)
 
     @property
     def engine_name(self) -> str:

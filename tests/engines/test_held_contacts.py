@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 import carom
+from carom.engines.stepped.driver import SteppedEngine
 from carom.engines.stepped.impacts import PAIR_LOOKS
 from carom.materials import Material
 from carom.shapes import Box
@@ -38,6 +39,7 @@ def test_boxes_kicked_into_each_other_meet_no_endless_impacts(dim: int) -> None:
         at = np.column_stack((at, np.full(9, 1.2)))
     world.add_bodies(Box(0.5, 0.5) if dim == 2 else Box3([0.5, 0.5, 0.5]), at, material=surface)
     engine = world.build()
+    assert isinstance(engine, SteppedEngine)
     for _ in range(60):
         engine.step()
     rng = np.random.default_rng(0)
@@ -52,7 +54,8 @@ def test_boxes_kicked_into_each_other_meet_no_endless_impacts(dim: int) -> None:
         if records:
             log = np.concatenate(records)
             impulses.append(np.linalg.norm(log["impulse"], axis=1))
-            met = collections.Counter(zip(log["body"].tolist(), log["partner"].tolist()))
+            pairs = zip(log["body"].tolist(), log["partner"].tolist(), strict=True)
+            met = collections.Counter(pairs)
             worst = max(worst, *met.values())
     assert impulses, "no impact was solved exactly: the test no longer tests the exact path"
     # every impact logged changed something: the smallest real one here is 2e-8 N s; one

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any, Literal, Protocol, cast
 
 import numpy as np
+from numpy.typing import NDArray
 
 from carom import shapes, shapes3d
 from carom.errors import CaromError
@@ -92,8 +93,10 @@ def build_world(scene: Scene, *, engine: bool = True) -> World:
         )
     except CaromError as exc:
         raise where.error(["world"], str(exc), "") from None
+    touching = []  # (table, index, entry, its bodies) of entries with a filter or a sensor
     for table, index, b in _placed_bodies(scene):
         material = materials.get(b["material"]) if b["material"] else None
+        first = world.n_bodies
         try:
             if b.get("shape", "sphere") != "sphere":
                 _add_shaped(world, _with_file(b, scene.source), material)
@@ -112,6 +115,8 @@ def build_world(scene: Scene, *, engine: bool = True) -> World:
                 )
         except CaromError as exc:
             raise where.error([table], str(exc), "", index) from None
+        if b.get("sensor") or any(b.get(key) is not None for key in _FILTER_KEYS):
+            touching.append((table, index, b, np.arange(first, world.n_bodies)))
     for index, g in enumerate(scene.gas):
         try:
             _add_gas(world, g, materials.get(g["material"]) if g["material"] else None)
@@ -123,6 +128,11 @@ def build_world(scene: Scene, *, engine: bool = True) -> World:
             "the scene has no bodies",
             "add [[bodies]], [[gas]] or generator ([[row]], [[rack]], ...) tables",
         )
+    for table, index, b, ids in touching:  # (once the bodies are in: the engine is known)
+        try:
+            _filter_and_sense(world, b, ids)
+        except CaromError as exc:
+            raise where.error([table], str(exc), "", index) from None
     for index, j in enumerate(scene.joints):
         try:
             for joint in joints_of(j, world.dim):
@@ -136,6 +146,20 @@ def build_world(scene: Scene, *, engine: bool = True) -> World:
     except CaromError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
     return world
+
+
+#: a body entry's collision filter keys (:meth:`carom.World.set_filter`)
+_FILTER_KEYS = ("category", "mask", "group")
+
+
+def _filter_and_sense(world: World, b: Mapping[str, Any], ids: NDArray[np.int64]) -> None:
+    """Give bodies ``ids`` of entry ``b`` its collision filter and make them sensors if it
+    says so."""
+    given = {key: b[key] for key in _FILTER_KEYS if b.get(key) is not None}
+    if given:
+        world.set_filter(ids, **given)
+    if b.get("sensor"):
+        world.set_sensor(ids)
 
 
 class _Entry:

@@ -358,6 +358,10 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "orientations": (_turns, False, None),
         "file": (_text, False, None),
         "angular_velocities": (_spins, False, 0.0),
+        "sensor": (_boolean, False, False),
+        "category": (_integer, False, None),
+        "mask": (_integer, False, None),
+        "group": (_integer, False, None),
     },
     "row": {
         "count": (_count, True, None),

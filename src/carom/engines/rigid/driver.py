@@ -193,6 +193,15 @@ class RigidEngine(SteppedEngine):
             self.filters[:, 0], mask, self._ray_room[0], hit,
         )  # fmt: skip
 
+    def _sensed(self) -> NDArray[np.int64]:
+        m, s = self.model, self.state
+        keys: NDArray[np.int64] = queries.sensed(
+            self._kept.pairs, self._n_found, self.sensors.mask, self.sensors.filters,
+            self.callers, s.x, s.angle, m.piece_body, m.piece_start, m.piece_count,
+            m.piece_radius, m.local_vertices, m.local_normals, s.vertices, s.normals,
+        )  # fmt: skip
+        return keys
+
     def _spin_of(self, torque: FloatArray) -> FloatArray:
         spin: FloatArray = torque * self.model.inv_inertia
         return spin

@@ -196,10 +196,11 @@ def _point_speeds(
 ) -> float:  # fmt: skip
     """A bound on the sizes of both bodies' velocities at a contact point, ``|v| +
     |omega| |r|`` each [m/s]: the scale of the relative velocity's round-off."""
-    return (
+    speeds: float = (
         math.hypot(v[a, 0], v[a, 1]) + abs(omega[a]) * math.hypot(rax, ray)
         + math.hypot(v[b, 0], v[b, 1]) + abs(omega[b]) * math.hypot(rbx, rby)
     )  # fmt: skip
+    return speeds
 
 
 @njit(cache=True)

@@ -1,5 +1,6 @@
 """Rays cast into a 2D rigid world, many in one compiled call (:mod:`carom.geometry.rays`),
-and the pieces a point or a box overlaps (:mod:`carom.geometry.overlaps`).
+the pieces a point or a box overlaps (:mod:`carom.geometry.overlaps`), and the bodies
+overlapping sensors (:mod:`carom.engines.stepped.sensors`).
 
 A ray meets the pieces whose boxes it crosses: the static pieces through the engine's tree
 over them (built once), the pieces of the bodies that move through a tree over their reach
@@ -15,11 +16,14 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from carom.engines.rigid.motion import place_piece
+from carom.engines.stepped.sensors import sensor_pair
 from carom.geometry.bvh import is_empty, ray_candidate, ray_candidates
+from carom.geometry.manifold2d import collide
 from carom.geometry.overlaps import box_meets_polygon, point_in_polygon
 from carom.geometry.rays import ray_rounded_polygon
 
-__all__ = ["cast_rays", "overlap_pieces"]
+__all__ = ["cast_rays", "overlap_pieces", "sensed"]
 
 
 @njit(cache=True, inline="always")
@@ -118,3 +122,39 @@ def overlap_pieces(
             hit[j] = point_in_polygon(low, v, n, count, piece_radius[p])
         else:
             hit[j] = box_meets_polygon(low, high, v, n, count, piece_radius[p])
+
+
+@njit(cache=True)
+def sensed(
+    pairs: np.ndarray, n_pairs: int, sensor: np.ndarray, filters: np.ndarray,
+    number: np.ndarray, x: np.ndarray, angle: np.ndarray, piece_body: np.ndarray,
+    piece_start: np.ndarray, piece_count: np.ndarray, piece_radius: np.ndarray,
+    local_vertices: np.ndarray, local_normals: np.ndarray, vertices: np.ndarray,
+    normals: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """The sensor pairs among the broad phase's piece ``pairs[:n_pairs]`` that overlap or
+    touch now (the pieces placed at their bodies' poses into ``vertices``, ``normals``; a
+    separation <= 0 [m]), as keys ``(sensor + 1) * (M + 1) + (visitor + 1)`` in the caller's
+    ``number`` (M,) (:mod:`carom.engines.stepped.sensors`), a pair once per pair of pieces.
+    ``sensor`` (N,) marks the sensors, ``filters`` (N, 3) whom they see."""
+    keys = np.empty(n_pairs, np.int64)
+    base = number.shape[0] + 1
+    out = np.empty(8)
+    ids = np.empty(2, np.int64)
+    k = 0
+    for j in range(n_pairs):
+        s, o, ps, po = sensor_pair(pairs[j, 0], pairs[j, 1], piece_body, sensor, filters, number)
+        if s < 0:
+            continue
+        for p, b in ((ps, s), (po, o)):
+            place_piece(
+                p, x[b, 0], x[b, 1], angle[b], piece_start, piece_count, local_vertices,
+                local_normals, vertices, normals,
+            )  # fmt: skip
+        if collide(
+            vertices, normals, piece_start[ps], piece_count[ps], piece_radius[ps],
+            piece_start[po], piece_count[po], piece_radius[po], 0.0, 0.0, out, ids,
+        ):  # fmt: skip
+            keys[k] = (number[s] + 1) * base + number[o] + 1
+            k += 1
+    return keys[:k]

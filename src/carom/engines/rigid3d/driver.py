@@ -232,6 +232,16 @@ class RigidEngine3D(SteppedEngine):
             mask, self._ray_room, hits[0], hits[1], hits[2],
         )  # fmt: skip
 
+    def _sensed(self) -> NDArray[np.int64]:
+        m, s = self.model, self.state
+        keys: NDArray[np.int64] = queries.sensed(
+            self._kept.pairs, self._n_found, self.sensors.mask, self.sensors.filters,
+            self.callers, s.x, s.q, self._ints, m.piece_radius, m.local_vertices,
+            m.local_normals, m.face_first, m.face_size, m.corners, m.edges, s.vertices,
+            s.normals,
+        )  # fmt: skip
+        return keys
+
     def _overlap(
         self, candidates: NDArray[np.int64], low: FloatArray, high: FloatArray, point: bool,
         mask: int, hit: NDArray[np.bool_],

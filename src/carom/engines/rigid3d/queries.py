@@ -14,13 +14,17 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from carom.engines.rigid3d.contacts import collide_pieces
 from carom.engines.rigid3d.model import PIECE_PLANE, PIECE_ROUND
+from carom.engines.rigid3d.motion import place_piece
+from carom.engines.stepped.sensors import sensor_pair
 from carom.geometry.bvh import is_empty, ray_candidate, ray_candidates
+from carom.geometry.manifold3d import MAX_POINTS, OUT_SIZE
 from carom.geometry.overlaps import box_meets_piece_3d, point_in_piece_3d
 from carom.geometry.rays import ray_capsule, ray_plane, ray_polytope, ray_sphere
 from carom.geometry.rotation import matrix
 
-__all__ = ["cast_rays", "overlap_pieces"]
+__all__ = ["cast_rays", "overlap_pieces", "sensed"]
 
 
 @njit(cache=True, inline="always")
@@ -146,3 +150,44 @@ def overlap_pieces(
                 low, high, piece_kind[p], v, vcount[p], n, fc,
                 edges[estart[p] : estart[p] + ecount[p]], piece_radius[p],
             )  # fmt: skip
+
+
+@njit(cache=True)
+def sensed(
+    pairs: np.ndarray, n_pairs: int, sensor: np.ndarray, filters: np.ndarray,
+    number: np.ndarray, x: np.ndarray, q: np.ndarray, model_ints: tuple[Any, ...],
+    piece_radius: np.ndarray, local_vertices: np.ndarray, local_normals: np.ndarray,
+    face_first: np.ndarray, face_size: np.ndarray, corners: np.ndarray, edges: np.ndarray,
+    vertices: np.ndarray, normals: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """The sensor pairs among the broad phase's piece ``pairs[:n_pairs]`` that overlap or
+    touch now, as keys in the caller's ``number``: the 2D engine's
+    (:func:`carom.engines.rigid.queries.sensed`), the pieces placed into ``vertices``,
+    ``normals`` and met by the narrow phase's kernels (:func:`.contacts.collide_pieces`).
+    ``model_ints``: the pieces' body, kind, vertex start and count, face start and count,
+    corner start and count, edge start and count."""
+    (
+        piece_body, piece_kind, vstart, vcount, fstart, fcount, cstart, ccount, estart, ecount,
+    ) = model_ints  # fmt: skip
+    keys = np.empty(n_pairs, np.int64)
+    base = number.shape[0] + 1
+    out = np.empty(OUT_SIZE)
+    ids = np.empty(MAX_POINTS, np.int64)
+    k = 0
+    for j in range(n_pairs):
+        s, o, ps, po = sensor_pair(pairs[j, 0], pairs[j, 1], piece_body, sensor, filters, number)
+        if s < 0:
+            continue
+        for p, b in ((ps, s), (po, o)):
+            place_piece(
+                p, x, q, b, vstart, vcount, fstart, fcount, local_vertices, local_normals,
+                vertices, normals,
+            )  # fmt: skip
+        if collide_pieces(
+            ps, po, piece_kind, piece_radius, vstart, vcount, fstart, fcount, cstart, ccount,
+            estart, ecount, vertices, normals, face_first, face_size, corners, edges, 0.0, 0.0,
+            out, ids,
+        ):  # fmt: skip
+            keys[k] = (number[s] + 1) * base + number[o] + 1
+            k += 1
+    return keys[:k]

@@ -16,5 +16,6 @@ with kernel_cache():
         filters,
         islands,
         joints,
+        sensors,
         solver,
     )

@@ -155,6 +155,8 @@ class _Stepped(Protocol):
 
     def use_filters(self, table: NDArray[np.int64]) -> None: ...
 
+    def use_sensors(self, sensor: NDArray[np.bool_], changed: NDArray[np.int64]) -> None: ...
+
     def retire(self, ids: NDArray[np.int64]) -> None: ...
 
 
@@ -164,12 +166,15 @@ Built = TypeVar("Built", bound=_Stepped)
 def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
     """``engine``, once no dynamic body starts overlapping another body, a wall or a plane
     deeper than the linear slop (the solver would throw them apart); else a CaromError
-    naming the two. The world's collision filters (:meth:`carom.World.set_filter`) and
-    joints (:meth:`carom.World.add_joint`) are the engine's first: a pair they keep apart may
-    start overlapping."""
+    naming the two. The world's collision filters (:meth:`carom.World.set_filter`), sensors
+    (:meth:`carom.World.set_sensor`) and joints (:meth:`carom.World.add_joint`) are the
+    engine's first: a pair they keep apart may start overlapping."""
     table = getattr(world, "collision_filters", None)
     if table is not None and len(table):
         engine.use_filters(np.asarray(table, np.int64))
+    sensors = getattr(world, "sensors", None)
+    if sensors is not None and np.any(sensors):
+        engine.use_sensors(np.asarray(sensors, np.bool_), np.zeros(0, np.int64))
     share_joints = getattr(world, "share_joints", None)  # (a World's, issue 43)
     if share_joints is not None:
         share_joints(engine)

@@ -52,6 +52,7 @@ from carom.engines.stepped.joints import (
 from carom.engines.stepped.loads import Loaded, Loads
 from carom.engines.stepped.memory import StepMemory, new_memory
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT, point_layout
+from carom.engines.stepped.sensors import Sensors
 from carom.engines.stepped.settings import RigidSettings
 from carom.geometry.bvh import build_bvh, empty_bvh
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
@@ -162,6 +163,7 @@ class SteppedEngine:
         self.callers = np.where(partners.kind == PARTNER_BODY, partners.number, -1)
         #: the contact events of the last step (:mod:`.events`)
         self.events = ContactEvents(self.DIMS, self.callers, point_layout(self.DIMS))
+        self.sensors = Sensors(self.callers)
         self.cell = grid_cell(model.kind, model.piece_body, model.piece_reach)
         rows, dims = self.ROWS, self.DIMS
         self._cf = np.zeros((max(64, 2 * n), rows.CONTACT_FLOATS))
@@ -196,7 +198,8 @@ class SteppedEngine:
         self._no_impacts = np.zeros((0, self.IMPACTS.IMPACT_FIELDS))
         self._g = float(np.linalg.norm(model.gravity))
         self.n_contacts = 0
-        self._n_pairs = 0  # the broad phase's pairs at the last step
+        self._n_pairs = 0  # the broad phase's pairs at the last step, the filters' kept
+        self._n_found = 0  # (and all it found: sensors look through them)
         # what every step reads the same way: the rows' columns the shared kernels take, a
         # cached contact's values per point, the leaving speed (inf: never)
         self._extremes_layout = (rows.POINT0, rows.POINT_FLOATS, rows.P_SEP, rows.P_VREL)
@@ -372,6 +375,8 @@ class SteppedEngine:
                 (self._cf, self._ci, nc), (rows.POINT0, rows.POINT_FLOATS, rows.I_FLAGS),
                 st.linear_slop, met, self.time, self._dynamic & mem.awake,
             )  # fmt: skip
+            if self.sensors.on:
+                self.sensors.update(self._sensed(), self._dynamic & mem.awake)
         if loaded is not None:
             self._work_done += self._load_work(
                 np.flatnonzero(self._role == islands.ROLE_EXACT), loaded
@@ -425,7 +430,7 @@ class SteppedEngine:
     def _contacts(self) -> int:
         """Stages 1 to 3: the contacts at the start of the step, into rows ``_cf``, ``_ci``;
         return how many."""
-        n_pairs = self._pairs()
+        n_pairs = self._n_found = self._pairs()
         self._now = self._kept.pairs
         if self.filtered or self._joined.size:
             # the pairs the filters and joints keep, into a copy (the kept ones stay whole)
@@ -711,6 +716,9 @@ class SteppedEngine:
         self.memory.awake[rows] = False
         self._work_done += self._energy(rows) - before
         self._movers = self._movers[~np.isin(self._movers, rows)]
+        gone = self.callers[rows]
+        self.events.forget(gone)
+        self.sensors.forget(gone)
 
     def use_filters(
         self, table: NDArray[np.int64], changed: NDArray[np.int64] | None = None
@@ -718,10 +726,23 @@ class SteppedEngine:
         """The caller's bodies' filters, ``table`` (n, 3): category, mask, group each
         (:mod:`.filters`). The bodies ``changed`` (k,) wake: a pair they may now touch is
         found at the next step."""
-        self.filters[: table.shape[0]] = table
+        full = self.sensors.filters.copy()
+        full[: table.shape[0]] = table
+        self.filters[:] = self.sensors.solid(full)
         self.filtered = bool(np.any(self.filters != default_filters(1)))
         if changed is not None:
             self._wake_bodies(np.unique(changed))
+
+    def use_sensors(self, sensor: NDArray[np.bool_], changed: NDArray[np.int64]) -> None:
+        """Which of the caller's bodies are sensors, ``sensor`` (n,) (:mod:`.sensors`): they
+        touch nothing and report the bodies overlapping them after each step that gathers
+        events. The bodies ``changed`` (k,) wake."""
+        self.sensors.mask[: sensor.shape[0]] = sensor
+        self.use_filters(self.sensors.filters, changed)
+
+    def _sensed(self) -> NDArray[np.int64]:
+        """The sensor pairs overlapping now, as keys (:mod:`.sensors`)."""
+        raise NotImplementedError
 
     def cast_rays(
         self, origins: FloatArray, directions: FloatArray, lengths: FloatArray, mask: int = -1

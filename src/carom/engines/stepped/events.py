@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_COUNT, PointLayout
 
-__all__ = ["ContactEvents", "EventArrays", "compare", "event_dtypes", "touches"]
+__all__ = ["ContactEvents", "EventArrays", "compare", "event_dtypes", "split_off", "touches"]
 
 
 def event_dtypes(d: int) -> tuple[np.dtype[np.void], np.dtype[np.void], np.dtype[np.void]]:
@@ -185,6 +185,15 @@ def compare(
     return unique[:u], began[:b], row[:b], ended[:e]
 
 
+def split_off(
+    keys: NDArray[np.int64], gone: NDArray[np.int64], n: int
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Pairs ``keys`` (keys of base ``n``, as :func:`compare` takes them) split into those of
+    no body in ``gone`` (the caller's numbers) and those of one: ``(kept, dropped)``."""
+    out = np.isin(keys // n - 1, gone) | np.isin(keys % n - 1, gone)
+    return keys[~out], keys[out]
+
+
 class ContactEvents:
     """The pairs touching at the last step, and the events of the last step, for an engine of
     ``d`` dimensions whose rows are numbered ``number`` (N,) for the caller (-1: walls).
@@ -203,6 +212,14 @@ class ContactEvents:
         #: whether steps gather events (a game loop's steps do; a run's need not pay for them)
         self.on = False
         self.last = EventArrays(*(np.zeros(0, t) for t in self.dtypes))
+        #: pairs of bodies taken out of the world since the last step: they end in the next
+        self.ending = np.zeros(0, np.int64)
+
+    def forget(self, gone: NDArray[np.int64]) -> None:
+        """Bodies ``gone`` (the caller's numbers) left the world: their pairs end at the next
+        step (a removed body does not move, and would otherwise touch for ever)."""
+        self.keys, dropped = split_off(self.keys, gone, self.number.shape[0] + 1)
+        self.ending = np.concatenate((self.ending, dropped))
 
     def update(
         self,
@@ -226,6 +243,8 @@ class ContactEvents:
         )  # fmt: skip
         n = self.number.shape[0] + 1
         now, began, row, ended = compare(keys, self.keys, moving, n)
+        ended = np.concatenate((self.ending, ended))
+        self.ending = np.zeros(0, np.int64)
         d = self.d
         begin_t, end_t, hit_t = self.dtypes
         begin = np.zeros(began.size, begin_t)

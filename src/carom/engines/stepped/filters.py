@@ -48,8 +48,10 @@ def whole_number(name: str, value: object, low: int, high: int) -> int:
 
 
 def bits64(name: str, value: object) -> int:
-    """Bits 0 to 2**64 - 1 (a Python int) as a signed 64-bit integer, or a CaromError."""
-    bits = whole_number(name, value, 0, 2**64 - 1)
+    """Bits as a Python int, 0 to 2**64 - 1 or as a signed 64-bit integer (-2**63 to -1:
+    two's complement, so -1 is every bit and ``~0b10`` all but bit 1), as a signed 64-bit
+    integer; or a CaromError."""
+    bits = whole_number(name, value, -(2**63), 2**64 - 1)
     return bits - 2**64 if bits >= 2**63 else bits
 
 
