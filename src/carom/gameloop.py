@@ -204,6 +204,11 @@ class GameLoop:
             limits, a shape that does not fit; nothing has changed then. The event-driven
             engine does not take impulses yet.
         """
+        engine = _rigid(self)
+        given = _plain(self, ids, impulses, points)
+        if given is not None and engine.apply_impulses(*given, _alive_of(self)):
+            return
+        # something is wrong (or given in an unusual form): the checks that say what
         engine, rows = _dynamic_rows(self, ids, "impulses")
         j = _vectors(self, "impulses", impulses, rows.size)
         at = None if points is None else _vectors(self, "points", points, rows.size)
@@ -524,6 +529,31 @@ def _index(world: _Running, index: object) -> int:
             f"body {index} was removed (World.remove_body); World.alive says which are in"
         )
     return int(index)
+
+
+def _plain(
+    world: _Running, ids: ArrayLike, values: ArrayLike, points: ArrayLike | None
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64] | None] | None:
+    """``ids`` (k,), ``values`` (k, d) or (1, d) and ``points`` (the same, or None) as the
+    engine takes them when they have the plain forms (the game loop's fast path, checked in
+    the engine's compiled call); None otherwise."""
+    d = world.dim
+    rows = np.asarray(ids)
+    if rows.ndim != 1 or rows.size == 0 or rows.dtype.kind not in "iu":
+        return None
+    try:
+        j = np.asarray(values, dtype=np.float64)
+        at = None if points is None else np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError):
+        return None
+    shapes = ((d,), (rows.size, d))
+    if j.shape not in shapes or (at is not None and at.shape not in shapes):
+        return None
+    return (
+        rows.astype(np.int64, copy=False),
+        j.reshape(-1, d),
+        None if at is None else at.reshape(-1, d),
+    )
 
 
 def _dynamic_rows(

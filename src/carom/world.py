@@ -492,8 +492,7 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing):
         return self.bodies.n
 
     def _motion_now(self) -> tuple[FloatArray, FloatArray]:
-        """Positions and velocities now: :meth:`_state_now`'s first two, without its
-        orientations and spins."""
+        """Positions and velocities now: :meth:`_state_now`'s first two, alone."""
         if self._engine is None:
             return self.bodies.position.copy(), self.bodies.velocity.copy()
         return self._engine.sample_motion()
@@ -516,7 +515,8 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing):
     @property
     def orientations(self) -> FloatArray:
         """Orientations now: (N,) angles [rad] in 2D, (N, 4) unit quaternions in 3D."""
-        return self.frame().orientations
+        turns = getattr(self._engine, "sample_turns", None)  # (a rigid engine's: one copy)
+        return self.frame().orientations if turns is None else turns()
 
     @property
     def resting(self) -> NDArray[np.int64]:

@@ -20,6 +20,7 @@ from carom.engines.rigid.model import RigidModel, RigidState
 from carom.engines.stepped.driver import Isolated, SteppedEngine
 from carom.engines.stepped.settings import RigidSettings
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
+from carom.limits import LARGEST
 
 __all__ = ["RigidEngine"]
 
@@ -87,6 +88,7 @@ class RigidEngine(SteppedEngine):
     ROWS = contacts
     IMPACTS = impacts
     SPIN = "omega"
+    TURN = "angle"
 
     model: RigidModel
     state: RigidState
@@ -251,18 +253,15 @@ class RigidEngine(SteppedEngine):
         return taken
 
     def _kick(
-        self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray | None
-    ) -> None:
-        m, s = self.model, self.state
-        # (np.add.at adds in order, a body named twice takes both)
-        np.add.at(s.v, ids, m.inv_mass[ids, None] * impulses)
-        if points is not None:
-            r = points - s.x[ids]
-            np.add.at(
-                s.omega,
-                ids,
-                m.inv_inertia[ids] * (r[:, 0] * impulses[:, 1] - r[:, 1] * impulses[:, 0]),
-            )
+        self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray,
+        alive: NDArray[np.bool_],
+    ) -> tuple[bool, float]:  # fmt: skip
+        m, s, mem = self.model, self.state, self.memory
+        done, work = motion.kick(
+            ids, impulses, points, s.x, s.v, s.omega, m.inv_mass, m.inv_inertia, m.mass,
+            m.inertia, (alive, self._dynamic, LARGEST), (mem.awake, mem.clock),
+        )  # fmt: skip
+        return bool(done), float(work)
 
     def _energy(self, rows: NDArray[np.int64]) -> float:
         m, s = self.model, self.state

@@ -13,9 +13,12 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.engines.stepped.loads import fit_to_move
+
 __all__ = [
     "apply_impulse",
     "fly",
+    "kick",
     "mechanical_energy",
     "place_piece",
     "place_pieces",
@@ -203,3 +206,40 @@ def mechanical_energy(
             kinetic += inertia[i] * omega[i] * omega[i]
             total += 0.5 * kinetic - mass[i] * (x[i, 0] * gx + x[i, 1] * gy)
     return total
+
+
+@njit(cache=True)
+def kick(
+    ids: np.ndarray, impulses: np.ndarray, points: np.ndarray, x: np.ndarray, v: np.ndarray,
+    omega: np.ndarray, inv_mass: np.ndarray, inv_inertia: np.ndarray, mass: np.ndarray,
+    inertia: np.ndarray, checks: tuple[np.ndarray, np.ndarray, float],
+    sleep: tuple[np.ndarray, np.ndarray],
+) -> tuple[bool, float]:  # fmt: skip
+    """Impulses on bodies ``ids`` (k,), in order (a body named twice takes both): impulse j
+    [N s] is row j of ``impulses`` (k, 2), or its only row (1, 2); it acts at the world point
+    row j (or the only row) of ``points`` [m], or at the centre of mass when ``points`` has
+    no rows. The bodies wake (``sleep``: awake flags and sleep clocks). First, ``checks``
+    (alive, dynamic, largest: :func:`carom.engines.stepped.loads.fit_to_move`): when one
+    fails nothing is done. Returns whether it was done and the kinetic energy the impulses
+    gave [J] (their work)."""
+    alive, dynamic, largest = checks
+    if not fit_to_move(ids, alive, dynamic, impulses, points, largest):
+        return False, 0.0
+    work = 0.0
+    last_j = impulses.shape[0] - 1
+    last_p = points.shape[0] - 1
+    for k in range(ids.shape[0]):
+        i = ids[k]
+        jx, jy = impulses[min(k, last_j), 0], impulses[min(k, last_j), 1]
+        before = mass[i] * (v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1]) + inertia[i] * omega[i] ** 2
+        v[i, 0] += inv_mass[i] * jx
+        v[i, 1] += inv_mass[i] * jy
+        if last_p >= 0:
+            rx = points[min(k, last_p), 0] - x[i, 0]
+            ry = points[min(k, last_p), 1] - x[i, 1]
+            omega[i] += inv_inertia[i] * (rx * jy - ry * jx)
+        after = mass[i] * (v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1]) + inertia[i] * omega[i] ** 2
+        work += 0.5 * (after - before)
+        sleep[0][i] = True
+        sleep[1][i] = 0.0
+    return True, work

@@ -24,6 +24,7 @@ from carom.engines.stepped.driver import Isolated, SteppedEngine
 from carom.engines.stepped.settings import RigidSettings
 from carom.geometry.rotation import turn
 from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
+from carom.limits import LARGEST
 
 __all__ = ["RigidEngine3D"]
 
@@ -92,6 +93,7 @@ class RigidEngine3D(SteppedEngine):
     ROWS = contacts
     IMPACTS = impacts
     SPIN = "w"
+    TURN = "q"
 
     model: Model3D
     state: State3D
@@ -299,17 +301,15 @@ class RigidEngine3D(SteppedEngine):
         return float(-np.sum(m.mass[rows] * (s.x[rows] @ m.gravity)))
 
     def _kick(
-        self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray | None
-    ) -> None:
-        m, s = self.model, self.state
-        np.add.at(s.v, ids, m.inv_mass[ids, None] * impulses)  # in order, as 2D
-        if points is None:
-            return
-        inverse = np.empty((1, 9))
-        for k, i in enumerate(ids.tolist()):
-            motion.world_inverse_row(0, s.q[i : i + 1], m.inv_inertia[i : i + 1], inverse)
-            moment = np.cross(points[k] - s.x[i], impulses[k])
-            s.w[i] += inverse.reshape(3, 3) @ moment
+        self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray,
+        alive: NDArray[np.bool_],
+    ) -> tuple[bool, float]:  # fmt: skip
+        m, s, mem = self.model, self.state, self.memory
+        done, work = motion.kick(
+            ids, impulses, points, s.x, s.v, s.q, s.w, m.inv_mass, m.inv_inertia, m.mass,
+            m.inertia, (alive, self._dynamic, LARGEST), (mem.awake, mem.clock),
+        )  # fmt: skip
+        return bool(done), float(work)
 
     def _energy(self, rows: NDArray[np.int64]) -> float:
         m, s = self.model, self.state

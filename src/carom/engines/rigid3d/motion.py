@@ -24,12 +24,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from carom.engines.stepped.loads import fit_to_move
 from carom.geometry.rotation import matrix, turn
 
 __all__ = [
     "apply_impulse",
     "fly",
     "free_turn",
+    "kick",
     "mechanical_energy",
     "place_piece",
     "place_pieces",
@@ -367,3 +369,48 @@ def mechanical_energy(
         total += 0.5 * mass[i] * speed2 + 0.5 * spin
         total -= mass[i] * (gx * x[i, 0] + gy * x[i, 1] + gz * x[i, 2])
     return total
+
+
+@njit(cache=True)
+def kick(
+    ids: np.ndarray, impulses: np.ndarray, points: np.ndarray, x: np.ndarray, v: np.ndarray,
+    q: np.ndarray, w: np.ndarray, inv_mass: np.ndarray, inv_inertia: np.ndarray,
+    mass: np.ndarray, inertia: np.ndarray, checks: tuple[np.ndarray, np.ndarray, float],
+    sleep: tuple[np.ndarray, np.ndarray],
+) -> tuple[bool, float]:  # fmt: skip
+    """Impulses on the dynamic bodies ``ids`` (k,), in order, checked first and waking the
+    bodies, as the 2D kernel (:func:`carom.engines.rigid.motion.kick`), rows of 3; an impulse
+    at a point turns the body by its world inverse inertia ``R I^-1 R^T (r x J)``. Returns
+    whether it was done and the kinetic energy they gave [J]."""
+    alive, dynamic, largest = checks
+    if not fit_to_move(ids, alive, dynamic, impulses, points, largest):
+        return False, 0.0
+    work = 0.0
+    last_j = impulses.shape[0] - 1
+    last_p = points.shape[0] - 1
+    inverse = np.empty((1, 9))
+    moment = np.empty(3)
+    for k in range(ids.shape[0]):
+        i = ids[k]
+        jj = impulses[min(k, last_j)]
+        one = ids[k : k + 1]
+        before = mechanical_energy(one, dynamic, mass, inertia, x, v, q, w, 0.0, 0.0, 0.0)
+        for c in range(3):
+            v[i, c] += inv_mass[i] * jj[c]
+        if last_p >= 0:
+            p = points[min(k, last_p)]
+            rx, ry, rz = p[0] - x[i, 0], p[1] - x[i, 1], p[2] - x[i, 2]
+            moment[0] = ry * jj[2] - rz * jj[1]
+            moment[1] = rz * jj[0] - rx * jj[2]
+            moment[2] = rx * jj[1] - ry * jj[0]
+            world_inverse_row(0, q[i : i + 1], inv_inertia[i : i + 1], inverse)
+            for a in range(3):
+                w[i, a] += (
+                    inverse[0, 3 * a] * moment[0]
+                    + inverse[0, 3 * a + 1] * moment[1]
+                    + inverse[0, 3 * a + 2] * moment[2]
+                )
+        work += mechanical_energy(one, dynamic, mass, inertia, x, v, q, w, 0.0, 0.0, 0.0) - before
+        sleep[0][i] = True
+        sleep[1][i] = 0.0
+    return True, work

@@ -16,6 +16,7 @@ with kernel_cache():
         filters,
         islands,
         joints,
+        loads,
         sensors,
         solver,
     )

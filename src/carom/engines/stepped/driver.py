@@ -124,6 +124,8 @@ class SteppedEngine:
     JOINT_FLOATS: int
     ROWS: Any
     IMPACTS: Any
+    #: the state's fields of the bodies' turn and spin
+    TURN: str
     SPIN: str
     #: a touching pair whose every point separates faster than this fraction of the
     #: restitution threshold has just bounced: it flies apart on the exact path (free flight
@@ -196,6 +198,7 @@ class SteppedEngine:
         self._pull = loads.no_pull
         self._spin_load = np.zeros_like(loads.torque)
         self._no_impacts = np.zeros((0, self.IMPACTS.IMPACT_FIELDS))
+        self._nowhere = np.zeros((0, dims))  # no points: impulses at the centres
         self._g = float(np.linalg.norm(model.gravity))
         self.n_contacts = 0
         self._n_pairs = 0  # the broad phase's pairs at the last step, the filters' kept
@@ -676,18 +679,22 @@ class SteppedEngine:
     # -- reaching a body between steps (issue 43) --------------------------------------------
 
     def apply_impulses(
-        self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray | None
-    ) -> None:
-        """Impulses ``impulses`` (k, d) [N s] on the dynamic bodies ``ids`` (k,), each at the
-        world point ``points[j]`` (k, d) [m] (None: at the centre of mass), in order: the
-        velocity changes by ``J / m`` and the spin by ``I^-1 (r x J)`` at once, an impulse's
-        exact effect. The bodies wake; the energy they gain or lose is booked as work done on
-        them (:attr:`Counters.work_done`)."""
-        rows = np.unique(ids)
-        before = self._energy(rows)
-        self._kick(ids, impulses, points)
-        self._wake_bodies(rows)
-        self._work_done += self._energy(rows) - before
+        self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray | None,
+        alive: NDArray[np.bool_] | None = None,
+    ) -> bool:  # fmt: skip
+        """Impulses ``impulses`` (k, d) or (1, d) (one for all) [N s] on the dynamic bodies
+        ``ids`` (k,), each at the world point ``points[j]`` (k, d) or (1, d) [m] (None: at the
+        centre of mass), in order: the velocity changes by ``J / m`` and the spin by
+        ``I^-1 (r x J)`` at once, an impulse's exact effect. The bodies wake; the kinetic
+        energy they gain or lose is booked as work done on them
+        (:attr:`Counters.work_done`). Checked first in the same compiled call (every id
+        ``alive`` (n,) (None: every body) and dynamic, every number finite and within
+        carom's limits): False, and nothing done, when a check fails."""
+        at = self._nowhere if points is None else points
+        everyone = np.ones(self.n_bodies, np.bool_) if alive is None else alive
+        done, work = self._kick(ids, impulses, at, everyone)
+        self._work_done += work
+        return done
 
     def apply_forces(
         self, ids: NDArray[np.int64], forces: FloatArray, points: FloatArray | None
@@ -821,9 +828,11 @@ class SteppedEngine:
         self._work_done += self._energy(rows) - before
 
     def _kick(
-        self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray | None
-    ) -> None:
-        """The dimension's own part of :meth:`apply_impulses`."""
+        self, ids: NDArray[np.int64], impulses: FloatArray, points: FloatArray,
+        alive: NDArray[np.bool_],
+    ) -> tuple[bool, float]:  # fmt: skip
+        """The dimension's kernel of :meth:`apply_impulses` (``points`` with no rows: at the
+        centres); returns whether it passed its checks and the kinetic energy given [J]."""
         raise NotImplementedError
 
     def _wake_bodies(self, rows: NDArray[np.int64]) -> None:
@@ -863,9 +872,15 @@ class SteppedEngine:
         raise NotImplementedError
 
     def sample_motion(self) -> tuple[FloatArray, FloatArray]:
-        """:meth:`sample`'s positions and velocities (a stepped engine's bodies are few)."""
-        x, v, _, _ = self.sample()
-        return x, v
+        """:meth:`sample`'s positions and velocities, copies."""
+        s, n = self.state, self.n_bodies
+        return s.x[:n].copy(), s.v[:n].copy()
+
+    def sample_turns(self) -> FloatArray:
+        """The caller's bodies' orientations now: (n,) angles [rad] in 2D, (n, 4) unit
+        quaternions in 3D; a copy."""
+        turns: FloatArray = getattr(self.state, self.TURN)[: self.n_bodies].copy()
+        return turns
 
     def advance_frames(
         self,

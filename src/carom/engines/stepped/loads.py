@@ -27,9 +27,10 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
-__all__ = ["Loaded", "Loads"]
+__all__ = ["Loaded", "Loads", "fit_to_move"]
 
 FloatArray = NDArray[np.float64]
 
@@ -120,3 +121,25 @@ class Loads:
             self.force[:] = 0.0
             self.torque[:] = 0.0
             self.on = False
+
+
+@njit(cache=True)
+def fit_to_move(
+    ids: np.ndarray, alive: np.ndarray, dynamic: np.ndarray, values: np.ndarray,
+    points: np.ndarray, largest: float,
+) -> bool:  # fmt: skip
+    """Whether every one of ``ids`` (k,) is a body in the world (``alive`` (n,)) and dynamic
+    (``dynamic``, the engine's rows), and every number of ``values`` and ``points`` is
+    finite and within ``largest``: the game loop's checks in one compiled pass (the caller
+    says what is wrong when one fails)."""
+    n = alive.shape[0]
+    for k in range(ids.shape[0]):
+        i = ids[k]
+        if i < 0 or i >= n or not alive[i] or not dynamic[i]:
+            return False
+    for array in (values, points):
+        for r in range(array.shape[0]):
+            for c in range(array.shape[1]):
+                if not abs(array[r, c]) <= largest:  # (NaN too)
+                    return False
+    return True
