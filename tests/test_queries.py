@@ -320,3 +320,100 @@ def test_the_event_driven_engine_says_it_does_not_cast_rays_yet() -> None:
     world.add_spheres(np.array([[5.0, 5.0, 5.0]]), np.zeros((1, 3)), radius=0.5)
     with pytest.raises(CaromError, match="ray casts are the rigid engines'"):
         world.ray_cast([0.0, 5.0, 5.0], [1.0, 0.0, 0.0])
+
+
+# -- shape casts (issue 43, item 4) ----------------------------------------------------------
+
+
+def _cast_world() -> carom.World:
+    """A 2x2 m static box at (10, 10) (body 0) and a disc of radius 1 at (15, 10) (body 1)."""
+    from carom.shapes import Box, Circle
+
+    world = carom.World(2, [20.0, 20.0], boundary="open")
+    world.add_body(Box(2.0, 2.0), [10.0, 10.0], kind="static")
+    world.add_body(Circle(1.0), [15.0, 10.0])
+    return world
+
+
+def test_a_disc_cast_head_on_at_a_box_touches_its_face() -> None:
+    from carom.shapes import Circle
+
+    world = _cast_world()
+    hit = world.shape_cast(Circle(0.5), [0.0, 10.0], [20.0, 0.0])
+    assert hit is not None
+    # the disc's centre stops 0.5 m before the face x = 9: fraction 8.5 / 20, in one step of
+    # conservative advancement (the gap is measured along the move): round-off
+    assert hit.body == 0
+    assert abs(hit.fraction - 8.5 / 20.0) < REL
+    np.testing.assert_allclose(hit.point, [9.0, 10.0], atol=1e-12)
+    np.testing.assert_allclose(hit.normal, [-1.0, 0.0], atol=1e-12)
+
+
+def test_a_disc_cast_obliquely_at_a_disc_meets_the_closed_form() -> None:
+    from carom.shapes import Box, Circle
+
+    world = _cast_world()
+    start, move = np.array([11.0, 13.0]), np.array([8.0, -4.0])
+    hit = world.shape_cast(Circle(0.5), start, move, mask=0b1)
+    # |start + t move - c| = 1.5: the smaller root of a t^2 + b t + c0 = 0
+    rel = start - np.array([15.0, 10.0])
+    a, b, c0 = move @ move, 2.0 * rel @ move, rel @ rel - 1.5**2
+    t = (-b - math.sqrt(b * b - 4.0 * a * c0)) / (2.0 * a)
+    assert hit is not None
+    assert hit.body == 1
+    # conservative advancement stops within 1e-9 of the pieces' reach (2.5 m) of touching:
+    # the fraction within that over the closing speed along the normal (cos ~ 0.9 here)
+    assert abs(hit.fraction - t) * math.hypot(*move) < 5e-9
+    centre = start + t * move
+    normal = (centre - [15.0, 10.0]) / 1.5
+    np.testing.assert_allclose(hit.normal, normal, atol=1e-8)
+    np.testing.assert_allclose(hit.point, [15.0, 10.0] + 1.0 * normal, atol=1e-8)
+    # a path above both bodies (their tops at y = 11) meets nothing
+    assert world.shape_cast(Box(0.2, 0.2), [0.0, 15.0], [20.0, 0.0]) is None
+
+
+def test_a_turned_box_cast_up_at_a_box_touches_at_its_reach() -> None:
+    from carom.shapes import Box
+
+    world = _cast_world()
+    theta = 0.3
+    hit = world.shape_cast(Box(1.0, 1.0), [10.0, 0.0], [0.0, 20.0], angle=theta)
+    # a unit box turned by theta reaches 0.5 (cos + sin) above its centre; the face is y = 9
+    reach = 0.5 * (math.cos(theta) + math.sin(theta))
+    assert hit is not None
+    assert hit.body == 0
+    assert abs(hit.fraction - (9.0 - reach) / 20.0) < 1e-11
+    np.testing.assert_allclose(hit.normal, [0.0, -1.0], atol=1e-12)
+
+
+def test_a_cast_starting_inside_hits_at_once_and_masks_and_sensors_hide() -> None:
+    from carom.shapes import Circle
+
+    world = _cast_world()
+    hit = world.shape_cast(Circle(0.5), [10.0, 10.5], [5.0, 0.0])
+    assert hit is not None
+    assert hit.body == 0
+    assert hit.fraction == 0.0
+    world.set_filter(0, category=0b10)
+    hit = world.shape_cast(Circle(0.5), [0.0, 10.0], [20.0, 0.0], mask=0b1)
+    assert hit is not None
+    assert hit.body == 1  # past the box, now category 2, to the disc
+    world.set_sensor(1)
+    assert world.shape_cast(Circle(0.5), [0.0, 10.0], [20.0, 0.0], mask=0b1) is None
+
+
+def test_bad_shape_casts_are_refused() -> None:
+    from carom.shapes import Circle, Segment
+    from carom.shapes3d import Sphere
+
+    world = _cast_world()
+    with pytest.raises(CaromError, match="translation is zero"):
+        world.shape_cast(Circle(0.5), [0.0, 0.0], [0.0, 0.0])
+    with pytest.raises(CaromError, match="2D body's shape"):
+        world.shape_cast(Segment([0.0, 0.0], [1.0, 0.0]), [0.0, 0.0], [1.0, 0.0])
+    with pytest.raises(CaromError, match="translation must be finite"):
+        world.shape_cast(Circle(0.5), [0.0, 0.0], [np.nan, 0.0])
+    space = carom.World(3, [10.0] * 3, boundary="open")
+    space.add_body(Sphere(1.0), [5.0, 5.0, 5.0])
+    with pytest.raises(CaromError, match="2D rigid engine's so far"):
+        space.shape_cast(Sphere(0.5), [0.0, 5.0, 5.0], [10.0, 0.0, 0.0])

@@ -32,7 +32,7 @@ from carom.engines.stepped.filters import bits64
 from carom.errors import CaromError
 from carom.limits import LARGEST
 
-__all__ = ["Queries", "RayHit", "ray_dtype"]
+__all__ = ["Queries", "RayHit", "ShapeHit", "ray_dtype"]
 
 
 class _World(Protocol):
@@ -248,6 +248,110 @@ class Queries:
             raise CaromError(f"low {lo.tolist()} must lie below high {hi.tolist()} on every axis")
         seen = -1 if mask is None else bits64("mask", mask)
         return engine.overlaps(lo, hi, False, seen)
+
+    def shape_cast(
+        self: _World, shape: Any, position: ArrayLike, translation: ArrayLike, *,
+        angle: float = 0.0, mask: int | None = None,
+    ) -> ShapeHit | None:  # fmt: skip
+        """The first body a shape moved along a straight line would touch, and when: Box2D's
+        ``b2World_CastShape``, Rapier's ``cast_shape`` (the 2D rigid engine so far).
+
+        Parameters
+        ----------
+        shape : Shape2D
+            Any shape of :mod:`carom.shapes` a body may have (a circle, capsule, box,
+            polygon or compound), placed by its own origin.
+        position : (2,) array_like
+            Where its origin starts [m].
+        translation : (2,) array_like
+            The straight move [m], not zero; the shape does not turn.
+        angle : float, default 0
+            Its turn [rad], anticlockwise.
+        mask : int, optional
+            As :meth:`ray_cast`'s.
+
+        Returns
+        -------
+        ShapeHit or None
+            ``body``, ``fraction`` of the translation travelled when they touch, ``point``
+            and the body's outward ``normal`` there; None when the whole move touches
+            nothing. Sensors and removed bodies are not seen.
+
+        Notes
+        -----
+        Conservative advancement against each piece near the swept path: from an exact gap
+        ``d`` the shape cannot touch before travelling ``d``, so it moves on by that much
+        until the gap is under a billionth of the two pieces' size (tested against the
+        closed forms of a disc cast at a box and at a disc, tests/test_queries.py).
+
+        Raises
+        ------
+        CaromError
+            A 3D world or the event-driven engine; a shape that is not a 2D body's; a
+            position or translation not finite, beyond carom's limits or not two numbers; a
+            zero translation. Nothing has changed then.
+        """
+        from carom.shapes import Segment, Shape2D
+
+        engine = _rigid_queries(self)
+        if self.dim != 2:
+            raise CaromError("shape_cast is the 2D rigid engine's so far (issue 43)")
+        if not isinstance(shape, Shape2D) or isinstance(shape, Segment):
+            raise CaromError(
+                f"shape must be a 2D body's shape (carom.shapes: Circle, Capsule, Box, "
+                f"Polygon, Compound); got {shape!r}"
+            )
+        origin = _finite("position", position, 2)
+        move = _finite("translation", translation, 2)
+        for name, value in (("position", origin), ("translation", move)):
+            if value.shape != (2,):
+                raise CaromError(f"{name} must be 2 numbers [m]; got shape {value.shape}")
+        if not np.any(move != 0.0):
+            raise CaromError("translation is zero; give the shape a move to cast along [m]")
+        turn = _finite("angle", angle, 2)
+        if turn.shape != ():
+            raise CaromError(f"angle must be one number [rad]; got {angle!r}")
+        seen = -1 if mask is None else bits64("mask", mask)
+        pieces = shape.pieces()
+        corners = [np.asarray(p.vertices, np.float64) for p in pieces]
+        counts = np.array([len(c) for c in corners], np.int64)
+        # (a circle's one corner has no edge: a row of zeros, as the engine's model keeps)
+        edges = [
+            p.normals if len(c) > 1 else np.zeros((1, 2))
+            for p, c in zip(pieces, corners, strict=True)
+        ]
+        cast = (
+            np.concatenate(corners),
+            np.concatenate(edges),
+            np.concatenate(([0], np.cumsum(counts)[:-1])).astype(np.int64),
+            counts,
+            np.array([p.radius for p in pieces], np.float64),
+            np.array([p.reach for p in pieces], np.float64),
+        )
+        c, s = math.cos(float(turn)), math.sin(float(turn))
+        placed = cast[0] @ np.array([[c, s], [-s, c]]) + origin
+        rim = float(cast[4].max())
+        low = np.minimum(placed.min(axis=0), (placed + move).min(axis=0)) - rim
+        high = np.maximum(placed.max(axis=0), (placed + move).max(axis=0)) + rim
+        pose = np.array([origin[0], origin[1], float(turn)])
+        body, hit = engine.cast_shape(cast, pose, move, (low, high), seen)
+        if body == -2:
+            return None
+        return ShapeHit(body, float(hit[0]), hit[1:3].copy(), hit[3:5].copy())
+
+
+class ShapeHit(NamedTuple):
+    """The first body a moving shape would touch (:meth:`Queries.shape_cast`)."""
+
+    #: the body's index (-1: a wall or plane of the world's scenery)
+    body: int
+    #: the fraction of the translation travelled when it touches, 0 to 1 (0: it starts
+    #: touching or overlapping)
+    fraction: float
+    #: where they touch (d,) [m]
+    point: NDArray[np.float64]
+    #: the body's outward unit normal there (d,), toward the shape
+    normal: NDArray[np.float64]
 
 
 def _rigid_queries(world: _World) -> SteppedEngine:

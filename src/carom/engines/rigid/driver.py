@@ -184,6 +184,19 @@ class RigidEngine(SteppedEngine):
             hits[2],
         )  # fmt: skip
 
+    def _cast_shape(
+        self, cast: tuple[Any, ...], pose: FloatArray, move: FloatArray,
+        candidates: NDArray[np.int64], mask: int, hit: FloatArray,
+    ) -> int:  # fmt: skip
+        m, s = self.model, self.state
+        return int(
+            queries.cast_shape(
+                cast, pose, move, candidates, s.x, s.angle, m.piece_body, m.piece_start,
+                m.piece_count, m.piece_radius, m.piece_reach, m.local_vertices,
+                m.local_normals, self.filters[:, 0], mask, self._ray_room[0], hit,
+            )
+        )  # fmt: skip
+
     def _overlap(
         self, candidates: NDArray[np.int64], low: FloatArray, high: FloatArray, point: bool,
         mask: int, hit: NDArray[np.bool_],

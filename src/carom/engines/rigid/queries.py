@@ -19,11 +19,15 @@ from numba import njit
 from carom.engines.rigid.motion import place_piece
 from carom.engines.stepped.sensors import sensor_pair
 from carom.geometry.bvh import is_empty, ray_candidate, ray_candidates
-from carom.geometry.manifold2d import collide
+from carom.geometry.manifold2d import collide, core_witness
 from carom.geometry.overlaps import box_meets_polygon, point_in_polygon
 from carom.geometry.rays import ray_rounded_polygon
 
-__all__ = ["cast_rays", "overlap_pieces", "sensed"]
+__all__ = ["CAST_ITERATIONS", "cast_rays", "cast_shape", "overlap_pieces", "sensed"]
+
+#: conservative-advancement steps of a shape cast against one piece, at the most (each step
+#: closes the gap by at least its share of the translation: a grazing pass takes the most)
+CAST_ITERATIONS = 500
 
 
 @njit(cache=True, inline="always")
@@ -158,3 +162,80 @@ def sensed(
             keys[k] = (number[s] + 1) * base + number[o] + 1
             k += 1
     return keys[:k]
+
+
+@njit(cache=True)
+def cast_shape(
+    cast: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    pose: np.ndarray, move: np.ndarray, candidates: np.ndarray, x: np.ndarray,
+    angle: np.ndarray, piece_body: np.ndarray, piece_start: np.ndarray,
+    piece_count: np.ndarray, piece_radius: np.ndarray, piece_reach: np.ndarray,
+    local_vertices: np.ndarray, local_normals: np.ndarray, categories: np.ndarray, mask: int,
+    room: int, hit: np.ndarray,
+) -> int:  # fmt: skip
+    """The first piece of ``candidates`` (K,) that a shape moved from ``pose`` (x, y, angle)
+    along ``move`` (2,) [m] (turning not) would touch, and when: returns the piece (-1: none)
+    and writes ``hit``: the fraction of ``move`` travelled, the point (2) and the piece's
+    outward normal there (2).
+
+    ``cast``: the shape's pieces in its own frame (corners, edge normals, each piece's first
+    corner, corner count, rounding radius and reach). Per candidate piece and cast piece,
+    conservative advancement along the translation: from a gap ``d`` (the exact distance of
+    the cores less the radii, :func:`carom.geometry.manifold2d.core_witness`) the shape
+    cannot touch before travelling ``d``, so the fraction moves on by ``d / |move|`` until
+    the gap is within a billionth of the pieces' reach; a shape that starts touching or
+    overlapping hits at 0. A body whose ``categories`` bits hold none of ``mask`` is not seen.
+    """
+    c_vertices, c_normals, c_start, c_count, c_radius, c_reach = cast
+    length = math.hypot(move[0], move[1])
+    most = int(c_count.max()) if c_count.shape[0] else 1
+    v = np.empty((room + most, 2))
+    n = np.empty((room + most, 2))
+    out = np.empty(8)
+    ids = np.empty(2, np.int64)
+    best = 1.0
+    found = -1
+    cs, sn = math.cos(pose[2]), math.sin(pose[2])
+    for j in range(candidates.shape[0]):
+        p = candidates[j]
+        b = piece_body[p]
+        if categories[b] & mask == 0:
+            continue
+        kb = _place(p, b, x, angle, piece_start, piece_count, local_vertices, local_normals, v, n)
+        for q in range(c_start.shape[0]):
+            ka = c_count[q]
+            tol = 1e-9 * (c_reach[q] + piece_reach[p])
+            t = 0.0
+            for _ in range(CAST_ITERATIONS):
+                ox, oy = pose[0] + t * move[0], pose[1] + t * move[1]
+                for i in range(ka):
+                    lx, ly = c_vertices[c_start[q] + i, 0], c_vertices[c_start[q] + i, 1]
+                    v[room + i, 0] = ox + cs * lx - sn * ly
+                    v[room + i, 1] = oy + sn * lx + cs * ly
+                    nx, ny = c_normals[c_start[q] + i, 0], c_normals[c_start[q] + i, 1]
+                    n[room + i, 0] = cs * nx - sn * ny
+                    n[room + i, 1] = sn * nx + cs * ny
+                d, _, _ = core_witness(v, n, room, ka, 0, kb)
+                gap = d - c_radius[q] - piece_radius[p] if d > 0.0 else -1.0
+                if gap <= tol:
+                    if t < best or found < 0:
+                        count = collide(
+                            v, n, room, ka, c_radius[q], 0, kb, piece_radius[p], np.inf, 0.0,
+                            out, ids,
+                        )  # fmt: skip
+                        best = t
+                        found = p
+                        hit[0] = t
+                        deepest = 0
+                        for k in range(1, count):
+                            if out[4 + 3 * k] < out[4 + 3 * deepest]:
+                                deepest = k
+                        hit[1] = out[2 + 3 * deepest]
+                        hit[2] = out[3 + 3 * deepest]
+                        hit[3] = out[0]
+                        hit[4] = out[1]
+                    break
+                t += gap / length
+                if t > best:
+                    break
+    return found

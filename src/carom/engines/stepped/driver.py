@@ -795,20 +795,47 @@ class SteppedEngine:
         """The caller's numbers of the bodies (sorted, each once; -1 for a wall or plane)
         that hold the point ``low`` (``point``) or meet the box ``[low, high]`` (d,) [m] now,
         exactly (:mod:`carom.geometry.overlaps`), among those whose category holds a bit of
-        ``mask``. Candidates are the pieces whose boxes meet the query's: the static pieces'
+        ``mask``. Candidates are the pieces whose boxes meet the query's (:meth:`_near`)."""
+        m = self.model
+        candidates = self._near(low, high)
+        hit = np.zeros(candidates.shape[0], np.bool_)
+        self._overlap(candidates, low, high, point, mask, hit)
+        return np.unique(self.callers[m.piece_body[candidates[hit]]])
+
+    def _near(self, low: FloatArray, high: FloatArray) -> NDArray[np.int64]:
+        """The pieces whose boxes meet the box ``[low, high]`` (d,) [m]: the static pieces'
         boxes of the broad phase, the moving bodies' pieces within their reach of their
         centres now, and every unbounded static piece (a plane)."""
-        m = self.model
         fat, open_statics, movers = self._reach[0][5], self._reach[1], self._reach[2]
         boxes = fat.copy()
         boxes[movers] = self._mover_boxes()
         d = self.DIMS
         near = np.all(boxes[:, :d] <= high, axis=1) & np.all(boxes[:, d:] >= low, axis=1)
         near[open_statics] = True
-        candidates = np.flatnonzero(near).astype(np.int64)
-        hit = np.zeros(candidates.shape[0], np.bool_)
-        self._overlap(candidates, low, high, point, mask, hit)
-        return np.unique(self.callers[m.piece_body[candidates[hit]]])
+        return np.flatnonzero(near).astype(np.int64)
+
+    def cast_shape(
+        self, cast: tuple[FloatArray | NDArray[np.int64], ...], pose: FloatArray,
+        move: FloatArray, swept: tuple[FloatArray, FloatArray], mask: int = -1,
+    ) -> tuple[int, FloatArray]:  # fmt: skip
+        """The first body a shape moved from ``pose`` along ``move`` (d,) [m] would touch:
+        the caller's number of the body (-1: a wall or plane; -2: none) and the hit (the
+        fraction of ``move``, the point (d,), the body's outward normal there (d,)).
+        ``cast``: the shape's pieces (the dimension's arrays); ``swept`` the box (low, high)
+        the shape sweeps, where the candidates lie; ``mask`` as :meth:`cast_rays`'."""
+        candidates = self._near(*swept)
+        hit = np.full(1 + 2 * self.DIMS, np.nan)
+        piece = self._cast_shape(cast, pose, move, candidates, mask, hit)
+        if piece < 0:
+            return -2, hit
+        return int(self.callers[self.model.piece_body[piece]]), hit
+
+    def _cast_shape(
+        self, cast: tuple[Any, ...], pose: FloatArray, move: FloatArray,
+        candidates: NDArray[np.int64], mask: int, hit: FloatArray,
+    ) -> int:  # fmt: skip
+        """The dimension's shape-cast kernel (:meth:`cast_shape`): the piece hit or -1."""
+        raise NotImplementedError
 
     def _overlap(
         self, candidates: NDArray[np.int64], low: FloatArray, high: FloatArray, point: bool,
