@@ -627,22 +627,24 @@ def _vectors(
     return np.array(array)
 
 
+def per_body(world: Any, name: str, fill: Callable[[int], NDArray[Any]]) -> NDArray[Any]:
+    """The world's per-body array kept as attribute ``name``, grown with ``fill(k)`` (k
+    rows of its default) to the world's bodies (bodies added since it was set)."""
+    array: NDArray[Any] = getattr(world, name, fill(0))
+    if array.shape[0] < world.n_bodies:
+        array = np.concatenate((array, fill(world.n_bodies - array.shape[0])))
+        setattr(world, name, array)
+    return array
+
+
 def _alive_of(world: Any) -> NDArray[np.bool_]:
     """The world's mask of bodies in it (n,), grown with True to its bodies."""
-    alive: NDArray[np.bool_] = getattr(world, "_alive", np.ones(0, np.bool_))
-    if alive.shape[0] < world.n_bodies:
-        alive = np.concatenate((alive, np.ones(world.n_bodies - alive.shape[0], np.bool_)))
-        world._alive = alive
-    return alive
+    return per_body(world, "_alive", lambda k: np.ones(k, np.bool_))
 
 
 def _filters_of(world: Any) -> NDArray[np.int64]:
     """The world's filter table (n, 3), grown with the defaults to its bodies."""
-    table: NDArray[np.int64] = getattr(world, "_filter_table", default_filters(0))
-    if table.shape[0] < world.n_bodies:
-        table = np.concatenate((table, default_filters(world.n_bodies - table.shape[0])))
-        world._filter_table = table
-    return table
+    return per_body(world, "_filter_table", default_filters)
 
 
 def _positive_time(dt: object, name: str = "dt", what: str = "time [s]") -> float:

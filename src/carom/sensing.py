@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from carom.engines.stepped.driver import SteppedEngine
 from carom.engines.stepped.sensors import SensorArrays
 from carom.errors import CaromError
-from carom.gameloop import _index, _rows, _Running, rigid_if_built
+from carom.gameloop import _index, _rows, _Running, per_body, rigid_if_built
 
 __all__ = ["Sensing", "SensorArrays", "sensors_of"]
 
@@ -128,8 +128,4 @@ class Sensing:
 
 def sensors_of(world: Any) -> NDArray[np.bool_]:
     """The world's sensor mask (n,), grown with False to its bodies."""
-    mask: NDArray[np.bool_] = getattr(world, "_sensors", np.zeros(0, np.bool_))
-    if mask.shape[0] < world.n_bodies:
-        mask = np.concatenate((mask, np.zeros(world.n_bodies - mask.shape[0], np.bool_)))
-        world._sensors = mask
-    return mask
+    return per_body(world, "_sensors", lambda k: np.zeros(k, np.bool_))
