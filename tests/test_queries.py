@@ -413,7 +413,51 @@ def test_bad_shape_casts_are_refused() -> None:
         world.shape_cast(Segment([0.0, 0.0], [1.0, 0.0]), [0.0, 0.0], [1.0, 0.0])
     with pytest.raises(CaromError, match="translation must be finite"):
         world.shape_cast(Circle(0.5), [0.0, 0.0], [np.nan, 0.0])
+    with pytest.raises(CaromError, match="orientation is a 3D turn"):
+        world.shape_cast(Circle(0.5), [0.0, 0.0], [1.0, 0.0], orientation=[1, 0, 0, 0])
     space = carom.World(3, [10.0] * 3, boundary="open")
     space.add_body(Sphere(1.0), [5.0, 5.0, 5.0])
-    with pytest.raises(CaromError, match="2D rigid engine's so far"):
-        space.shape_cast(Sphere(0.5), [0.0, 5.0, 5.0], [10.0, 0.0, 0.0])
+    with pytest.raises(CaromError, match="3D body's shape"):
+        space.shape_cast(Circle(0.5), [0.0, 5.0, 5.0], [10.0, 0.0, 0.0])
+    with pytest.raises(CaromError, match="not zero"):
+        space.shape_cast(Sphere(0.5), [0.0, 5.0, 5.0], [10.0, 0.0, 0.0], orientation=[0] * 4)
+    with pytest.raises(CaromError, match="position must be 3 numbers"):
+        space.shape_cast(Sphere(0.5), [0.0, 5.0], [10.0, 0.0, 0.0])
+
+
+def test_shapes_cast_in_3d_meet_the_closed_forms() -> None:
+    from carom.shapes3d import Box as Box3D
+    from carom.shapes3d import Sphere
+
+    # the 2D scene in the z = 10 plane: a 2 m static cube at (10, 10, 10), a unit ball at
+    # (15, 10, 10)
+    world = carom.World(3, [20.0] * 3, boundary="open")
+    world.add_body(Box3D([2.0, 2.0, 2.0]), [10.0, 10.0, 10.0], kind="static")
+    world.add_body(Sphere(1.0), [15.0, 10.0, 10.0])
+    hit = world.shape_cast(Sphere(0.5), [0.0, 10.0, 10.0], [20.0, 0.0, 0.0])
+    assert hit is not None
+    assert hit.body == 0
+    assert abs(hit.fraction - 8.5 / 20.0) < REL  # head-on at the face x = 9
+    np.testing.assert_allclose(hit.point, [9.0, 10.0, 10.0], atol=1e-12)
+    np.testing.assert_allclose(hit.normal, [-1.0, 0.0, 0.0], atol=1e-12)
+    start, move = np.array([11.0, 13.0, 10.0]), np.array([8.0, -4.0, 0.0])
+    hit = world.shape_cast(Sphere(0.5), start, move)
+    rel = start - [15.0, 10.0, 10.0]
+    a, b, c0 = move @ move, 2.0 * rel @ move, rel @ rel - 1.5**2
+    t = (-b - math.sqrt(b * b - 4.0 * a * c0)) / (2.0 * a)
+    assert hit is not None
+    assert hit.body == 1
+    assert abs(hit.fraction - t) * math.hypot(*move) < 5e-9  # as the 2D oblique cast
+    normal = (start + t * move - [15.0, 10.0, 10.0]) / 1.5
+    np.testing.assert_allclose(hit.normal, normal, atol=1e-8)
+    # a cube turned by 0.3 rad about z, cast up (+y) at the cube's face y = 9: it reaches
+    # 0.5 (cos + sin) above its centre
+    turn = [math.cos(0.15), 0.0, 0.0, math.sin(0.15)]
+    hit = world.shape_cast(Box3D([1.0, 1.0, 1.0]), [10.0, 0.0, 10.0], [0.0, 20.0, 0.0],
+                           orientation=turn)  # fmt: skip
+    assert hit is not None
+    assert hit.body == 0
+    reach = 0.5 * (math.cos(0.3) + math.sin(0.3))
+    assert abs(hit.fraction - (9.0 - reach) / 20.0) < 1e-10
+    np.testing.assert_allclose(hit.normal, [0.0, -1.0, 0.0], atol=1e-9)
+    assert world.shape_cast(Sphere(0.5), [0.0, 2.0, 2.0], [20.0, 0.0, 0.0]) is None

@@ -251,22 +251,25 @@ class Queries:
 
     def shape_cast(
         self: _World, shape: Any, position: ArrayLike, translation: ArrayLike, *,
-        angle: float = 0.0, mask: int | None = None,
+        angle: float = 0.0, orientation: ArrayLike | None = None, mask: int | None = None,
     ) -> ShapeHit | None:  # fmt: skip
         """The first body a shape moved along a straight line would touch, and when: Box2D's
-        ``b2World_CastShape``, Rapier's ``cast_shape`` (the 2D rigid engine so far).
+        ``b2World_CastShape``, Rapier's ``cast_shape``.
 
         Parameters
         ----------
-        shape : Shape2D
-            Any shape of :mod:`carom.shapes` a body may have (a circle, capsule, box,
-            polygon or compound), placed by its own origin.
-        position : (2,) array_like
+        shape : Shape2D or Shape3D
+            Any shape a body of the world's dimension may have, placed by its own origin: a
+            circle, capsule, box, polygon or compound (2D); a sphere, capsule, box, hull or
+            compound (3D).
+        position : (d,) array_like
             Where its origin starts [m].
-        translation : (2,) array_like
+        translation : (d,) array_like
             The straight move [m], not zero; the shape does not turn.
         angle : float, default 0
-            Its turn [rad], anticlockwise.
+            2D: its turn [rad], anticlockwise.
+        orientation : (4,) array_like, optional
+            3D: its turn as a unit quaternion ``[w, x, y, z]`` (default: none).
         mask : int, optional
             As :meth:`ray_cast`'s.
 
@@ -281,63 +284,114 @@ class Queries:
         -----
         Conservative advancement against each piece near the swept path: from an exact gap
         ``d`` the shape cannot touch before travelling ``d``, so it moves on by that much
-        until the gap is under a billionth of the two pieces' size (tested against the
-        closed forms of a disc cast at a box and at a disc, tests/test_queries.py).
+        until the gap is under a billionth of the two pieces' size (tested against closed
+        forms in 2D and 3D, tests/test_queries.py).
 
         Raises
         ------
         CaromError
-            A 3D world or the event-driven engine; a shape that is not a 2D body's; a
-            position or translation not finite, beyond carom's limits or not two numbers; a
-            zero translation. Nothing has changed then.
+            The event-driven engine; a shape that is not a body's of the world's dimension
+            (or a static-only one: a segment, chain, mesh or plane); a position, translation
+            or turn not finite, beyond carom's limits or of the wrong size; a zero
+            translation. Nothing has changed then.
         """
-        from carom.shapes import Segment, Shape2D
-
         engine = _rigid_queries(self)
-        if self.dim != 2:
-            raise CaromError("shape_cast is the 2D rigid engine's so far (issue 43)")
-        if not isinstance(shape, Shape2D) or isinstance(shape, Segment):
-            raise CaromError(
-                f"shape must be a 2D body's shape (carom.shapes: Circle, Capsule, Box, "
-                f"Polygon, Compound); got {shape!r}"
-            )
-        origin = _finite("position", position, 2)
-        move = _finite("translation", translation, 2)
+        d = self.dim
+        origin = _finite("position", position, d)
+        move = _finite("translation", translation, d)
         for name, value in (("position", origin), ("translation", move)):
-            if value.shape != (2,):
-                raise CaromError(f"{name} must be 2 numbers [m]; got shape {value.shape}")
+            if value.shape != (d,):
+                raise CaromError(f"{name} must be {d} numbers [m]; got shape {value.shape}")
         if not np.any(move != 0.0):
             raise CaromError("translation is zero; give the shape a move to cast along [m]")
-        turn = _finite("angle", angle, 2)
-        if turn.shape != ():
-            raise CaromError(f"angle must be one number [rad]; got {angle!r}")
         seen = -1 if mask is None else bits64("mask", mask)
-        pieces = shape.pieces()
-        corners = [np.asarray(p.vertices, np.float64) for p in pieces]
-        counts = np.array([len(c) for c in corners], np.int64)
-        # (a circle's one corner has no edge: a row of zeros, as the engine's model keeps)
-        edges = [
-            p.normals if len(c) > 1 else np.zeros((1, 2))
-            for p, c in zip(pieces, corners, strict=True)
-        ]
-        cast = (
-            np.concatenate(corners),
-            np.concatenate(edges),
-            np.concatenate(([0], np.cumsum(counts)[:-1])).astype(np.int64),
-            counts,
-            np.array([p.radius for p in pieces], np.float64),
-            np.array([p.reach for p in pieces], np.float64),
-        )
-        c, s = math.cos(float(turn)), math.sin(float(turn))
-        placed = cast[0] @ np.array([[c, s], [-s, c]]) + origin
-        rim = float(cast[4].max())
-        low = np.minimum(placed.min(axis=0), (placed + move).min(axis=0)) - rim
-        high = np.maximum(placed.max(axis=0), (placed + move).max(axis=0)) + rim
-        pose = np.array([origin[0], origin[1], float(turn)])
+        if d == 2:
+            cast, corners, rim, pose = _cast_2d(shape, origin, angle, orientation)
+        else:
+            cast, corners, rim, pose = _cast_3d(shape, origin, angle, orientation)
+        low = np.minimum(corners.min(axis=0), (corners + move).min(axis=0)) - rim
+        high = np.maximum(corners.max(axis=0), (corners + move).max(axis=0)) + rim
         body, hit = engine.cast_shape(cast, pose, move, (low, high), seen)
         if body == -2:
             return None
-        return ShapeHit(body, float(hit[0]), hit[1:3].copy(), hit[3:5].copy())
+        return ShapeHit(body, float(hit[0]), hit[1 : 1 + d].copy(), hit[1 + d :].copy())
+
+
+def _cast_2d(
+    shape: Any, origin: NDArray[np.float64], angle: float, orientation: ArrayLike | None
+) -> tuple[tuple[NDArray[Any], ...], NDArray[np.float64], float, NDArray[np.float64]]:
+    """A 2D shape to cast: its pieces' arrays (the 2D kernel's), its corners placed, its
+    largest rounding radius [m], and its pose (x, y, angle)."""
+    from carom.shapes import Segment, Shape2D
+
+    if not isinstance(shape, Shape2D) or isinstance(shape, Segment):
+        raise CaromError(
+            f"shape must be a 2D body's shape (carom.shapes: Circle, Capsule, Box, Polygon, "
+            f"Compound); got {shape!r}"
+        )
+    if orientation is not None:
+        raise CaromError("orientation is a 3D turn; a 2D shape turns by angle [rad]")
+    turn = _finite("angle", angle, 2)
+    if turn.shape != ():
+        raise CaromError(f"angle must be one number [rad]; got {angle!r}")
+    pieces = shape.pieces()
+    corners = [np.asarray(p.vertices, np.float64) for p in pieces]
+    counts = np.array([len(c) for c in corners], np.int64)
+    # (a circle's one corner has no edge: a row of zeros, as the engine's model keeps)
+    edges = [
+        p.normals if len(c) > 1 else np.zeros((1, 2)) for p, c in zip(pieces, corners, strict=True)
+    ]
+    cast = (
+        np.concatenate(corners),
+        np.concatenate(edges),
+        np.concatenate(([0], np.cumsum(counts)[:-1])).astype(np.int64),
+        counts,
+        np.array([p.radius for p in pieces], np.float64),
+        np.array([p.reach for p in pieces], np.float64),
+    )
+    c, s = math.cos(float(turn)), math.sin(float(turn))
+    placed = cast[0] @ np.array([[c, s], [-s, c]]) + origin
+    return cast, placed, float(cast[4].max()), np.array([origin[0], origin[1], float(turn)])
+
+
+def _cast_3d(
+    shape: Any, origin: NDArray[np.float64], angle: float, orientation: ArrayLike | None
+) -> tuple[tuple[Any, ...], NDArray[np.float64], float, NDArray[np.float64]]:
+    """A 3D shape to cast: its one-body model (pieces in its origin's frame), its corners
+    placed, its largest rounding radius [m], and its pose (x, y, z, quaternion)."""
+    from carom.engines.rigid3d.model import build_model, piece_of
+    from carom.geometry.rotation import matrix
+    from carom.laws.kinds import KIND_DYNAMIC
+    from carom.shapes3d import Plane, Shape3D
+
+    if not isinstance(shape, Shape3D) or isinstance(shape, Plane):
+        raise CaromError(
+            f"shape must be a 3D body's shape (carom.shapes3d: Sphere, Capsule, Box, Hull, "
+            f"Compound); got {shape!r}"
+        )
+    if angle != 0.0:
+        raise CaromError("angle is a 2D turn; a 3D shape turns by orientation [w, x, y, z]")
+    q = (
+        np.array([1.0, 0.0, 0.0, 0.0])
+        if orientation is None
+        else _finite("orientation", orientation, 4)
+    )
+    size = float(np.linalg.norm(q)) if q.shape == (4,) else 0.0
+    if size == 0.0:
+        raise CaromError(
+            f"orientation must be a quaternion [w, x, y, z], not zero; got {orientation!r}"
+        )
+    q = q / size
+    pieces = [piece_of(p, np.zeros(3)) for p in shape.pieces()]
+    none = np.zeros((1, 1))
+    model = build_model(
+        [pieces], np.array([KIND_DYNAMIC]), np.ones(1), np.eye(3)[None], np.zeros(1, np.int64),
+        none, none, none, np.zeros(3),
+    )  # fmt: skip
+    turn = np.empty(9)
+    matrix(q[None, :], 0, turn)
+    placed = model.local_vertices @ turn.reshape(3, 3).T + origin
+    return (model,), placed, float(model.piece_radius.max()), np.concatenate((origin, q))
 
 
 class ShapeHit(NamedTuple):

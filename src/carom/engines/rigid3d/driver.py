@@ -234,6 +234,42 @@ class RigidEngine3D(SteppedEngine):
             mask, self._ray_room, hits[0], hits[1], hits[2],
         )  # fmt: skip
 
+    def _cast_shape(
+        self, cast: tuple[Any, ...], pose: FloatArray, move: FloatArray,
+        candidates: NDArray[np.int64], mask: int, hit: FloatArray,
+    ) -> int:  # fmt: skip
+        # the shape as one more body (its model ``cast[0]``, pieces in its origin's frame)
+        # after the world's, its pieces' starts moved past the world's rows; every body still
+        m, s, c = self.model, self.state, cast[0]
+        n, pieces = m.kind.shape[0], m.piece_body.shape[0]
+        shift = (0, 0, m.local_vertices.shape[0], 0, m.local_normals.shape[0], 0,
+                 m.corners.shape[0], 0, m.edges.shape[0], 0)  # fmt: skip
+        theirs = (np.full(c.piece_body.shape[0], n), c.piece_kind, c.piece_vstart,
+                  c.piece_vcount, c.piece_fstart, c.piece_fcount, c.piece_cstart,
+                  c.piece_ccount, c.piece_estart, c.piece_ecount)  # fmt: skip
+        ints: Any = tuple(
+            np.concatenate((mine, other + k)).astype(np.int64)
+            for mine, other, k in zip(self._ints, theirs, shift, strict=True)
+        )
+
+        def both(name: str) -> NDArray[Any]:
+            return np.concatenate((getattr(m, name), getattr(c, name)))
+
+        v = np.zeros((n + 1, 3))
+        v[n] = move
+        still = np.zeros((n + 1, 3))
+        corners, faces = both("local_vertices"), both("local_normals")
+        return int(
+            impacts.cast_shape(
+                candidates, np.arange(pieces, pieces + c.piece_body.shape[0]),
+                np.vstack((s.x, pose[:3])), np.vstack((s.q, pose[3:])), v, still, still,
+                both("inertia"), both("inv_inertia"), ints, both("piece_radius"),
+                both("piece_reach"), corners, faces, both("face_first"), both("face_size"),
+                both("corners"), both("edges"), np.empty_like(corners), np.empty_like(faces),
+                self.filters[:, 0], mask, hit,
+            )
+        )  # fmt: skip
+
     def _sensed(self) -> NDArray[np.int64]:
         m, s = self.model, self.state
         keys: NDArray[np.int64] = queries.sensed(

@@ -66,12 +66,15 @@ from carom.engines.stepped.rows import I_BODY_A, I_BODY_B
 from carom.geometry.manifold3d import MAX_POINTS, OUT_SIZE, closest_hulls
 from carom.laws.rigid_impact import collision_matrix, point_impulse
 
-__all__ = ["IMPACT_FIELDS", "continuous", "exact_impacts", "normal_lcp"]
+__all__ = ["IMPACT_FIELDS", "cast_shape", "continuous", "exact_impacts", "normal_lcp"]
 
 #: columns of a logged impact: time into the step, body A, body B, impulse on A (x, y, z),
 #: normal speeds before and after (the first touching point), the point (x, y, z), energy
 #: lost, work done by a kinematic partner, the normal (x, y, z; from B to A)
 IMPACT_FIELDS = 16
+#: rounds of a shape cast's advancement against one piece (each up to the search's own
+#: many steps, then on from the furthest time known safe)
+CAST_ROUNDS = 16
 
 
 @njit(cache=True, inline="always")
@@ -828,3 +831,80 @@ def continuous(
         v[b] = vel
         w[b] = spin
     return put_back
+
+
+@njit(cache=True)
+def cast_shape(
+    candidates: np.ndarray, cast_pieces: np.ndarray, x: np.ndarray, q: np.ndarray,
+    v: np.ndarray, w: np.ndarray, accel: np.ndarray, inertia: np.ndarray,
+    inv_inertia: np.ndarray, model_ints: tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+    ],
+    piece_radius: np.ndarray, piece_reach: np.ndarray, local_vertices: np.ndarray,
+    local_normals: np.ndarray, face_first: np.ndarray, face_size: np.ndarray,
+    corners: np.ndarray, edges: np.ndarray, vertices: np.ndarray, normals: np.ndarray,
+    categories: np.ndarray, mask: int, hit: np.ndarray,
+) -> int:  # fmt: skip
+    """The first of the pieces ``candidates`` (K,) that a shape moving without turning
+    would touch: the shape is the body of ``cast_pieces`` (its last row in ``x``, ``q``; its
+    velocity ``v`` the whole move [m], so time is the fraction of the move), every other body
+    held still (zero ``v``, ``w``, ``accel``). By the exact path's conservative advancement
+    (:func:`_time_of_impact`, in rounds from where the last stopped safe), to a billionth of
+    the two pieces' reach. Returns the piece hit (-1: none) and writes ``hit``: the fraction,
+    the point (3) and the piece's outward normal there (3). A body whose ``categories`` bits
+    hold none of ``mask`` is not seen."""
+    piece_body = model_ints[0]
+    out = np.empty(OUT_SIZE)
+    ids = np.empty(MAX_POINTS, np.int64)
+    cb = piece_body[cast_pieces[0]]
+    start = x[cb].copy()
+    best = 1.0
+    found = -1
+    for j in range(candidates.shape[0]):
+        p = candidates[j]
+        b = piece_body[p]
+        if categories[b] & mask == 0:
+            continue
+        for c in cast_pieces:
+            tol = _tolerance(c, p, piece_reach)
+            done = 0.0
+            x[cb] = start
+            for _ in range(CAST_ROUNDS):
+                t = _time_of_impact(
+                    c, p, cb, b, best - done, tol, False, 0.0, 1.0, x, q, v, w, accel,
+                    inertia, inv_inertia, model_ints, piece_radius, local_vertices,
+                    local_normals, face_first, face_size, corners, edges, vertices, normals,
+                    out, ids,
+                )  # fmt: skip
+                if t < 0.0:
+                    break
+                d, nx, ny, nz = _gap(
+                    c, p, cb, b, t, 1.0, x, q, v, w, accel, inertia, inv_inertia, model_ints,
+                    piece_radius, local_vertices, local_normals, face_first, face_size,
+                    corners, edges, vertices, normals, out, ids,
+                )  # fmt: skip
+                if d <= tol:
+                    if done + t < best or found < 0:
+                        best = done + t
+                        found = p
+                        hit[0] = best
+                        count = collide_pieces(
+                            c, p, model_ints[1], piece_radius, model_ints[2], model_ints[3],
+                            model_ints[4], model_ints[5], model_ints[6], model_ints[7],
+                            model_ints[8], model_ints[9], vertices, normals, face_first,
+                            face_size, corners, edges, np.inf, 0.0, out, ids,
+                        )  # fmt: skip
+                        deepest = 0
+                        for k in range(1, count):
+                            if out[6 + 4 * k] < out[6 + 4 * deepest]:
+                                deepest = k
+                        for a in range(3):
+                            hit[1 + a] = out[3 + 4 * deepest + a]
+                        hit[4], hit[5], hit[6] = nx, ny, nz
+                    break
+                done += t  # safe so far: on from there
+                for a in range(3):
+                    x[cb, a] = start[a] + done * v[cb, a]
+    x[cb] = start
+    return found
