@@ -63,9 +63,9 @@ __all__ = [
 #: to be safe, where the caller finds no contact and searches on from there (a search never
 #: gives up with the pieces run into each other)
 MAX_ITERATIONS = 200
-#: gaps a search waits, still touching, for a pair just hit to part before it asks whether
-#: the gap opens at all: a pair that parts (restitution, or a turn) opens it at every gap,
-#: however slowly; one whose gap stops opening is held in contact
+#: gaps a search waits, still touching, for a pair just hit to part: a pair that parts
+#: (restitution, or a turn) leaves the touching distance within them (a rod struck at one
+#: end, e = 0.5, needs more than 16), one held in contact never does
 PARTING_GAPS = 32
 #: halvings of an overshot interval before settling on its safe end
 BISECTIONS = 60
@@ -80,10 +80,9 @@ PAIR_LOOKS = 4
 #: relative round-off of a normal speed: 64 ulps of the point speeds it is computed from
 ROUND_OFF = 64.0 * np.finfo(np.float64).eps
 
-#: a search's state: the last safe time, the bisected interval (lo, hi; while waiting for a
-#: pair to part, lo is the last gap), whether it is bisecting, how many gaps it has taken in
-#: its phase, and whether it still waits for a pair just hit apart to part (then touching is
-#: not a new impact)
+#: a search's state: the last safe time, the bisected interval (lo, hi), whether it is
+#: bisecting, how many gaps it has taken in its phase, and whether it still waits for a pair
+#: just hit apart to part (then touching is not a new impact)
 Search = tuple[float, float, float, bool, int, bool]
 
 
@@ -123,9 +122,7 @@ def advance(
         return True, t, state
     if d > tol:
         parting = False
-    elif taken >= PARTING_GAPS:
-        # still touching and not opening since the last gap (``lo`` keeps it while parting):
-        # held in contact, the caller looks again
+    elif taken >= PARTING_GAPS:  # still touching: held in contact, the caller looks again
         return True, t, state
     if closing <= 0.0:
         return True, -1.0, state
@@ -135,7 +132,7 @@ def advance(
         return True, -1.0, state
     if taken == MAX_ITERATIONS:
         return True, later, state  # (safe: the pieces cannot touch before it)
-    return False, later, (t, d if parting else lo, hi, False, taken, parting)
+    return False, later, (t, lo, hi, False, taken, parting)
 
 
 @njit(cache=True, inline="always")
