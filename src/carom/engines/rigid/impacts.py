@@ -42,6 +42,9 @@ from carom.engines.rigid.motion import (
     relative_velocity,
 )
 from carom.engines.stepped.impacts import (
+    BOUNCED,
+    HELD,
+    NEW,
     PAIR_LOOKS,
     advance,
     approaching,
@@ -145,7 +148,7 @@ def time_of_impact(
     b: int,
     horizon: float,
     tol: float,
-    parting: bool,
+    parting: int,
     x: np.ndarray,
     angle: np.ndarray,
     v: np.ndarray,
@@ -167,8 +170,9 @@ def time_of_impact(
     touching (of overlapping by ``allow`` [m], if given), by conservative advancement; -1 if
     they do not (after many steps, the furthest time known safe: the caller looks again).
 
-    ``parting``: the pair has just been hit apart; the contact it starts in is not a new
-    impact, so the search first lets the gap open beyond ``tol``."""
+    ``parting``: how the pair was left at its last meeting (``NEW``, ``HELD`` or ``BOUNCED``
+    of :mod:`carom.engines.stepped.impacts`); unless ``NEW``, the contact it starts in is not
+    a new impact, and the search first lets the gap open beyond ``tol``."""
     spin = abs(omega[a]) * piece_reach[pa] + abs(omega[b]) * piece_reach[pb]
     gx = accel[a, 0] - accel[b, 0]
     gy = accel[a, 1] - accel[b, 1]
@@ -489,7 +493,7 @@ def exact_impacts(
         logged_before = logged
         cp, n = island_candidates(cand, cand_first[k], cand_first[k + 1], pairs)
         hit = np.empty(cp.shape[0])  # each candidate's time of impact into the step [s]
-        parting = np.zeros(cp.shape[0], np.bool_)
+        parting = np.full(cp.shape[0], NEW)
         # how deep a pair that stopped approaching while overlapping already was [m]: only
         # sinking deeper is an impact (a pair met late by a search, or left by the solver)
         sunk = np.zeros(cp.shape[0])
@@ -497,7 +501,7 @@ def exact_impacts(
         looks = np.zeros(cp.shape[0], np.int64)
         for c in range(n):
             hit[c] = _next_impact(
-                cp[c, 0], cp[c, 1], 0.0, dt, False, clock, island_of, x, angle, v, omega,
+                cp[c, 0], cp[c, 1], 0.0, dt, NEW, clock, island_of, x, angle, v, omega,
                 accel, piece_body, piece_start, piece_count, piece_radius, piece_reach,
                 local_vertices, local_normals, vertices, normals, out, ids,
             )  # fmt: skip
@@ -529,7 +533,7 @@ def exact_impacts(
             )  # fmt: skip
             log = logged_row(log, logged)
             ma, mb = material[a], material[b]
-            parting[c] = True
+            parting[c] = HELD
             if count == 0 or not _impact(
                 a, b, count, out, touch, e_table[ma, mb], mu_table[ma, mb], x, v, omega,
                 inv_mass, inv_inertia, mass, inertia, log[logged],
@@ -539,7 +543,7 @@ def exact_impacts(
                 for j in range(count):
                     sunk[c] = max(sunk[c], -out[4 + 3 * j])
                 hit[c] = _next_impact(
-                    pa, pb, now, dt, True, clock, island_of, x, angle, v, omega, accel,
+                    pa, pb, now, dt, HELD, clock, island_of, x, angle, v, omega, accel,
                     piece_body, piece_start, piece_count, piece_radius, piece_reach,
                     local_vertices, local_normals, vertices, normals, out, ids, sunk[c],
                 )  # fmt: skip
@@ -547,6 +551,8 @@ def exact_impacts(
             sunk[c] = 0.0
             if -log[logged, 5] < slow:  # met again slowly: perhaps held in contact
                 looks[c] += 1
+            elif e_table[ma, mb] > 0.0:  # hit apart at speed: the search waits for it to part
+                parting[c] = BOUNCED
             log[logged, 0] = now
             logged += 1
             taken += 1
@@ -564,7 +570,7 @@ def exact_impacts(
             if hit.shape[0] < cp.shape[0]:  # candidates were added: room for their times
                 more = cp.shape[0] - hit.shape[0]
                 hit = np.concatenate((hit, np.empty(more)))
-                parting = np.concatenate((parting, np.zeros(more, np.bool_)))
+                parting = np.concatenate((parting, np.full(more, NEW)))
                 sunk = np.concatenate((sunk, np.zeros(more)))
                 looks = np.concatenate((looks, np.zeros(more, np.int64)))
             for d in range(n):
@@ -604,7 +610,7 @@ def _sync(
 
 @njit(cache=True)
 def _next_impact(
-    pa: int, pb: int, now: float, dt: float, parting: bool, clock: np.ndarray,
+    pa: int, pb: int, now: float, dt: float, parting: int, clock: np.ndarray,
     island_of: np.ndarray, x: np.ndarray, angle: np.ndarray, v: np.ndarray,
     omega: np.ndarray, accel: np.ndarray, piece_body: np.ndarray, piece_start: np.ndarray,
     piece_count: np.ndarray, piece_radius: np.ndarray, piece_reach: np.ndarray,
@@ -730,7 +736,7 @@ def continuous(
                     # (sunk past the slop: put back where it was as deep as at the start)
                     t = time_of_impact(
                         p, q, b, piece_body[q], dt, 1e-9 * (piece_reach[p] + piece_reach[q]),
-                        False, x, angle, v, omega, still, piece_start, piece_count,
+                        NEW, x, angle, v, omega, still, piece_start, piece_count,
                         piece_radius, piece_reach, local_vertices, local_normals, vertices,
                         normals, out, ids, allow,
                     )  # fmt: skip

@@ -45,6 +45,9 @@ from carom.engines.rigid3d.motion import (
     world_inverse_row,
 )
 from carom.engines.stepped.impacts import (
+    BOUNCED,
+    HELD,
+    NEW,
     PAIR_LOOKS,
     advance,
     approaching,
@@ -491,7 +494,7 @@ def exact_impacts(
         logged_before = logged
         cp, n = island_candidates(cand, cand_first[k], cand_first[k + 1], pairs)
         hit = np.empty(cp.shape[0])  # each candidate's time of impact into the step [s]
-        parting = np.zeros(cp.shape[0], np.bool_)
+        parting = np.full(cp.shape[0], NEW)
         # how deep a pair that stopped approaching while overlapping already was [m]: only
         # sinking deeper is an impact (a pair met late by a search, or left by the solver)
         sunk = np.zeros(cp.shape[0])
@@ -499,7 +502,7 @@ def exact_impacts(
         looks = np.zeros(cp.shape[0], np.int64)
         for c in range(n):
             hit[c] = _next_impact(
-                cp[c, 0], cp[c, 1], 0.0, dt, False, h, clock, island_of, x, q, v, w, accel,
+                cp[c, 0], cp[c, 1], 0.0, dt, NEW, h, clock, island_of, x, q, v, w, accel,
                 inv_mass, inertia, inv_inertia, min_moment, iw, model_ints, piece_radius,
                 piece_reach, local_vertices, local_normals, face_first, face_size, corners,
                 edges, vertices, normals, out, ids,
@@ -538,7 +541,7 @@ def exact_impacts(
             )  # fmt: skip
             log = logged_row(log, logged)
             ma, mb = material[a], material[b]
-            parting[c] = True
+            parting[c] = HELD
             for body in (a, b):
                 world_inverse_row(body, q, inv_inertia, iw)
             if count == 0 or not _impact(
@@ -549,7 +552,7 @@ def exact_impacts(
                 looks[c] += 1
                 sunk[c] = max(sunk[c], -gap[0])
                 hit[c] = _next_impact(
-                    pa, pb, now, dt, True, h, clock, island_of, x, q, v, w, accel, inv_mass,
+                    pa, pb, now, dt, HELD, h, clock, island_of, x, q, v, w, accel, inv_mass,
                     inertia, inv_inertia, min_moment, iw, model_ints, piece_radius,
                     piece_reach, local_vertices, local_normals, face_first, face_size,
                     corners, edges, vertices, normals, out, ids, sunk[c],
@@ -558,6 +561,8 @@ def exact_impacts(
             sunk[c] = 0.0
             if -log[logged, 6] < slow:  # met again slowly: perhaps held in contact
                 looks[c] += 1
+            elif e_table[ma, mb] > 0.0:  # hit apart at speed: the search waits for it to part
+                parting[c] = BOUNCED
             log[logged, 0] = now
             logged += 1
             taken += 1
@@ -575,7 +580,7 @@ def exact_impacts(
             if hit.shape[0] < cp.shape[0]:  # candidates were added: room for their times
                 more = cp.shape[0] - hit.shape[0]
                 hit = np.concatenate((hit, np.empty(more)))
-                parting = np.concatenate((parting, np.zeros(more, np.bool_)))
+                parting = np.concatenate((parting, np.full(more, NEW)))
                 sunk = np.concatenate((sunk, np.zeros(more)))
                 looks = np.concatenate((looks, np.zeros(more, np.int64)))
             for d in range(n):
@@ -630,7 +635,7 @@ def _sync(
 
 @njit(cache=True)
 def _next_impact(
-    pa: int, pb: int, now: float, dt: float, parting: bool, h: float, clock: np.ndarray,
+    pa: int, pb: int, now: float, dt: float, parting: int, h: float, clock: np.ndarray,
     island_of: np.ndarray, x: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray,
     accel: np.ndarray, inv_mass: np.ndarray, inertia: np.ndarray, inv_inertia: np.ndarray,
     min_moment: np.ndarray, iw: np.ndarray, model_ints: tuple[
@@ -706,7 +711,7 @@ def _reach(
 
 @njit(cache=True)
 def _time_of_impact(
-    pa: int, pb: int, a: int, b: int, horizon: float, tol: float, parting: bool,
+    pa: int, pb: int, a: int, b: int, horizon: float, tol: float, parting: int,
     spin: float, h: float, x: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray,
     accel: np.ndarray, inertia: np.ndarray, inv_inertia: np.ndarray, model_ints: tuple[
         np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
@@ -720,8 +725,10 @@ def _time_of_impact(
     """First time in ``[0, horizon]`` [s] at which the pieces come within ``tol`` [m] of
     touching (of overlapping by ``allow`` [m], if given), by conservative advancement; -1 if
     they do not (after many steps, the furthest time known safe: the caller looks again).
-    ``spin`` bounds how fast turning can close the gap [m/s]; ``parting``: the pair has just
-    been hit apart, so the search first lets the gap open beyond ``tol``."""
+    ``spin`` bounds how fast turning can close the gap [m/s]; ``parting``: how the pair
+    was left at its last meeting (``NEW``, ``HELD`` or ``BOUNCED`` of
+    :mod:`carom.engines.stepped.impacts`); unless ``NEW``, the search first lets the gap open
+    beyond ``tol``."""
     gx = accel[a, 0] - accel[b, 0]
     gy = accel[a, 1] - accel[b, 1]
     gz = accel[a, 2] - accel[b, 2]
@@ -812,7 +819,7 @@ def continuous(
                 for allow in (depth + slop, depth):
                     t = _time_of_impact(
                         p, other, b, piece_body[other], dt, _tolerance(p, other, piece_reach),
-                        False, 0.0, dt, x, q, v, w, still, inertia, inv_inertia, model_ints,
+                        NEW, 0.0, dt, x, q, v, w, still, inertia, inv_inertia, model_ints,
                         piece_radius, local_vertices, local_normals, face_first, face_size,
                         corners, edges, vertices, normals, out, ids, allow,
                     )  # fmt: skip
@@ -872,7 +879,7 @@ def cast_shape(
             x[cb] = start
             for _ in range(CAST_ROUNDS):
                 t = _time_of_impact(
-                    c, p, cb, b, best - done, tol, False, 0.0, 1.0, x, q, v, w, accel,
+                    c, p, cb, b, best - done, tol, NEW, 0.0, 1.0, x, q, v, w, accel,
                     inertia, inv_inertia, model_ints, piece_radius, local_vertices,
                     local_normals, face_first, face_size, corners, edges, vertices, normals,
                     out, ids,

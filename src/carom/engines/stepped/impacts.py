@@ -37,8 +37,11 @@ from carom.laws.kinds import KIND_STATIC
 
 __all__ = [
     "BISECTIONS",
+    "BOUNCED",
+    "HELD",
     "MAX_IMPACTS",
     "MAX_ITERATIONS",
+    "NEW",
     "PAIR_LOOKS",
     "Search",
     "add_candidate",
@@ -63,10 +66,18 @@ __all__ = [
 #: to be safe, where the caller finds no contact and searches on from there (a search never
 #: gives up with the pieces run into each other)
 MAX_ITERATIONS = 200
-#: gaps a search waits, still touching, for a pair just hit to part: a pair that parts
-#: (restitution, or a turn) leaves the touching distance within them (a rod struck at one
-#: end, e = 0.5, needs more than 16), one held in contact never does
-PARTING_GAPS = 32
+#: gaps a search waits, still touching, for a pair left :data:`HELD` to part: one that parts
+#: by a turn leaves the touching distance within them, one held in contact never does (a
+#: pair :data:`BOUNCED` apart waits as long as it takes: a rod struck at one end, e = 0.5,
+#: parts in steps of a billionth of its reach and needs more than 16)
+PARTING_GAPS = 16
+#: how a search starts: at a touch that is a new impact (``NEW``); at a touch a pair was
+#: left in at zero normal speed (plastic, a slow impact, or no impact: ``HELD``), waiting
+#: :data:`PARTING_GAPS` gaps for it to part; at a touch a pair was hit apart from at speed
+#: (``BOUNCED``), waiting until it parts
+NEW = 0
+HELD = 1
+BOUNCED = 2
 #: halvings of an overshot interval before settling on its safe end
 BISECTIONS = 60
 #: impacts of an island within one step: this many per candidate pair, and
@@ -81,14 +92,15 @@ PAIR_LOOKS = 4
 ROUND_OFF = 64.0 * np.finfo(np.float64).eps
 
 #: a search's state: the last safe time, the bisected interval (lo, hi), whether it is
-#: bisecting, how many gaps it has taken in its phase, and whether it still waits for a pair
-#: just hit apart to part (then touching is not a new impact)
-Search = tuple[float, float, float, bool, int, bool]
+#: bisecting, how many gaps it has taken in its phase, and how it waits for the pair to part
+#: (:data:`NEW`, :data:`HELD` or :data:`BOUNCED`; touching is an impact only once ``NEW``)
+Search = tuple[float, float, float, bool, int, int]
 
 
 @njit(cache=True, inline="always")
-def search(parting: bool) -> Search:
-    """A new search from ``t = 0``; ``parting``: the pair has just been hit apart."""
+def search(parting: int) -> Search:
+    """A new search from ``t = 0``; ``parting``: :data:`NEW`, :data:`HELD` or
+    :data:`BOUNCED`, how the pair was left at its last meeting."""
     return 0.0, 0.0, 0.0, False, 0, parting
 
 
@@ -118,11 +130,11 @@ def advance(
     if d < -tol:
         # overshot: bisect back between the last safe time and t
         return False, 0.5 * (safe + t), (safe, safe, t, True, 0, parting)
-    if d <= tol and not parting:
+    if d <= tol and parting == NEW:
         return True, t, state
     if d > tol:
-        parting = False
-    elif taken >= PARTING_GAPS:  # still touching: held in contact, the caller looks again
+        parting = NEW
+    elif parting == HELD and taken >= PARTING_GAPS:  # still held: the caller looks again
         return True, t, state
     if closing <= 0.0:
         return True, -1.0, state
