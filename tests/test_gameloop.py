@@ -269,11 +269,14 @@ def test_a_3d_orientation_must_be_a_unit_quaternion() -> None:
     np.testing.assert_array_equal(world.orientations[0], [0.0, 0.0, 0.0, 1.0])
 
 
-def test_the_event_driven_engine_says_it_does_not_take_them_yet() -> None:
+def test_the_event_driven_engine_says_what_it_does_not_take_yet() -> None:
+    # (what it takes: tests/test_gameloop_edmd.py)
     world = carom.World(2, box=[1.0, 1.0])
     world.add_spheres([[0.5, 0.5]], [[1.0, 0.0]], radius=0.05)
-    with pytest.raises(CaromError, match="rigid engines only"):
-        world.body(0).apply_impulse([1.0, 0.0])
+    with pytest.raises(CaromError, match="forces through a step are the rigid engines'"):
+        world.body(0).apply_force([1.0, 0.0])
+    with pytest.raises(CaromError, match="torques through a step are the rigid engines'"):
+        world.body(0).apply_torque(1.0)
 
 
 @pytest.mark.parametrize("dim", [2, 3])

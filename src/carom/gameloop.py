@@ -8,7 +8,8 @@ same steps, so they give the same bits at the same times. Between steps, ``world
 reads and sets a body's motion and takes impulses, and forces and torques for the next step;
 ``world.apply_impulses``, ``world.apply_forces``, ``world.apply_torques``,
 ``world.set_velocities``, ``world.set_positions`` and ``world.set_angular_velocities`` do so
-for many bodies in one call (the rigid engines).
+for many bodies in one call. The event-driven engine takes all but forces and torques, at its
+clock, and predicts the changed bodies' events again.
 
 >>> import carom
 >>> from carom.shapes import Box
@@ -29,7 +30,9 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from carom.bodies import Bodies
 from carom.engines.base import Engine
+from carom.engines.edmd.driver import EdmdEngine
 from carom.engines.stepped.driver import SteppedEngine
 from carom.engines.stepped.events import EventArrays
 from carom.engines.stepped.filters import bits64, default_filters, whole_number
@@ -56,6 +59,9 @@ class _Running(Protocol):
 
     @property
     def n_bodies(self) -> int: ...
+
+    @property
+    def bodies(self) -> Bodies: ...
 
     def build(self) -> Engine: ...
 
@@ -201,18 +207,19 @@ class GameLoop:
         ------
         CaromError
             An index out of range, a body not dynamic, a value not finite or beyond carom's
-            limits, a shape that does not fit; nothing has changed then. The event-driven
-            engine does not take impulses yet.
+            limits, a shape that does not fit; an impulse off the centre of a sphere of the
+            event-driven engine that keeps no spins. Nothing has changed then.
         """
-        engine = _rigid(self)
-        given = _plain(self, ids, impulses, points)
-        if given is not None and engine.apply_impulses(*given, _alive_of(self)):
-            return
+        engine = self.build()
+        if isinstance(engine, SteppedEngine):
+            given = _plain(self, ids, impulses, points)
+            if given is not None and engine.apply_impulses(*given, _alive_of(self)):
+                return
         # something is wrong (or given in an unusual form): the checks that say what
-        engine, rows = _dynamic_rows(self, ids, "impulses")
+        reached, rows = _dynamic_rows(self, ids, "impulses")
         j = _vectors(self, "impulses", impulses, rows.size)
         at = None if points is None else _vectors(self, "points", points, rows.size)
-        engine.apply_impulses(rows, j, at)
+        reached.apply_impulses(rows, j, at)
 
     def apply_forces(
         self: _Running, ids: ArrayLike, forces: ArrayLike, points: ArrayLike | None = None
@@ -241,7 +248,8 @@ class GameLoop:
         CaromError
             As :meth:`apply_impulses`.
         """
-        engine, rows = _dynamic_rows(self, ids, "forces")
+        engine = _rigid(self, _NO_FORCES.format("forces"))
+        _, rows = _dynamic_rows(self, ids, "forces")
         f = _vectors(self, "forces", forces, rows.size)
         at = None if points is None else _vectors(self, "points", points, rows.size)
         engine.apply_forces(rows, f, at)
@@ -250,7 +258,8 @@ class GameLoop:
         """Torques on many dynamic bodies through the next step, then cleared: (k,) or one
         number in 2D, (k, 3) or (3,) (world axes) in 3D [N m]. As :meth:`apply_impulses` for
         what is refused."""
-        engine, rows = _dynamic_rows(self, ids, "torques")
+        engine = _rigid(self, _NO_FORCES.format("torques"))
+        _, rows = _dynamic_rows(self, ids, "torques")
         shape: tuple[int, ...] = () if self.dim == 2 else (3,)
         engine.apply_torques(rows, _vectors(self, "torques", torques, rows.size, shape))
 
@@ -381,7 +390,9 @@ class Body:
     """Body ``index`` of a world, between steps (:meth:`GameLoop.body`).
 
     Reads give the state now; writes take effect at once and wake the body (the energy they
-    change is booked as work done on it, so the ledger still closes). The rigid engines.
+    change is booked as work done on it, so the ledger still closes). The event-driven
+    engine reads and sets its bodies at its clock and predicts their events again; forces and
+    torques are the rigid engines'.
     """
 
     __slots__ = ("_world", "index")
@@ -394,13 +405,21 @@ class Body:
     def __repr__(self) -> str:
         return f"<carom body {self.index}, {self.kind}>"
 
-    def _engine(self) -> SteppedEngine:
+    def _engine(self) -> SteppedEngine | EdmdEngine:
         engine, _ = _dynamic_rows(self._world, [self.index], None)
         return engine
 
     def _read(self, field: str) -> NDArray[np.float64]:
-        engine = _rigid(self._world)
-        return np.array(getattr(engine.state, field)[self.index], dtype=np.float64)
+        engine = self._world.build()
+        if isinstance(engine, SteppedEngine):
+            return np.array(getattr(engine.state, field)[self.index], dtype=np.float64)
+        # the event-driven engine: the body at its clock
+        x, v, orient, w = engine.motion_of(np.array([self.index]))
+        at: dict[str, NDArray[np.float64]] = {
+            "x": x[0], "v": v[0], "angle": orient[0, 0], "q": orient[0], "omega": w[0, 2],
+            "w": w[0],
+        }  # fmt: skip
+        return at[field]
 
     def _write(self, field: str, value: ArrayLike, shape: tuple[int, ...], name: str) -> None:
         engine = self._engine()
@@ -510,9 +529,14 @@ _NOT_YET_EVENTS = (
     "collisions through run(log=True) (World.collisions) or run(on_collisions=...)"
 )
 
+_NO_FORCES = (
+    "{} through a step are the rigid engines' so far: the event-driven engine takes impulses "
+    "(apply_impulses) and new velocities"
+)
+
 _NOT_YET = (
-    "reaching a body between steps is done for the rigid engines only so far; the "
-    "event-driven engine's bodies are set before its run (add_spheres)"
+    "this is the rigid engines' so far; the event-driven engine's bodies take new motion and "
+    "impulses between steps (World.body, set_velocities, apply_impulses), not this"
 )
 
 
@@ -558,27 +582,35 @@ def _plain(
 
 def _dynamic_rows(
     world: _Running, ids: ArrayLike, what: str | None
-) -> tuple[SteppedEngine, NDArray[np.int64]]:
-    """The rigid engine and the indices ``ids`` (k,), each a dynamic body (``what``: what is
+) -> tuple[SteppedEngine | EdmdEngine, NDArray[np.int64]]:
+    """The world's engine and the indices ``ids`` (k,), each a dynamic body (``what``: what is
     given to them, for the message; None: any kind)."""
     rows = _rows(world, ids)
-    engine = _rigid(world)
+    engine = _reachable(world)
     if what is not None:
-        kind = engine.model.kind[rows]
-        if np.any(kind != KIND_DYNAMIC):
-            bad = int(rows[np.flatnonzero(kind != KIND_DYNAMIC)[0]])
+        kinds = engine.model.kind if isinstance(engine, SteppedEngine) else world.bodies.kind
+        if np.any(kinds[rows] != KIND_DYNAMIC):
+            bad = int(rows[np.flatnonzero(kinds[rows] != KIND_DYNAMIC)[0]])
             raise CaromError(
-                f"body {bad} is {KIND_NAMES[int(engine.model.kind[bad])]}: {what} move dynamic "
-                "bodies only"
+                f"body {bad} is {KIND_NAMES[int(kinds[bad])]}: {what} move dynamic bodies only"
             )
     return engine, rows
 
 
-def _rigid(world: _Running) -> SteppedEngine:
-    """The world's engine, built, when it is a rigid one; else a CaromError."""
+def _reachable(world: _Running) -> SteppedEngine | EdmdEngine:
+    """The world's engine, built: a rigid one or the event-driven one."""
+    engine = world.build()
+    if not isinstance(engine, SteppedEngine | EdmdEngine):
+        raise CaromError(_NOT_YET)
+    return engine
+
+
+def _rigid(world: _Running, why: str = "") -> SteppedEngine:
+    """The world's engine, built, when it is a rigid one; else a CaromError (saying ``why``,
+    or that the call is the rigid engines' so far)."""
     engine = world.build()
     if not isinstance(engine, SteppedEngine):
-        raise CaromError(_NOT_YET)
+        raise CaromError(why or _NOT_YET)
     return engine
 
 

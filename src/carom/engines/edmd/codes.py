@@ -30,3 +30,4 @@ C_FLOOR = 7  # pair collisions whose parting speed the floor raised (collide_pai
 S_VIRIAL = 0  # sum over collisions of J . r  [J s] (pairs: r = x1 - x2; walls: r = x)
 S_KE_LOST = 1  # kinetic energy dissipated by the impact laws [J]
 S_KE_GIVEN = 2  # kinetic energy given by the parting-speed floor [J] (collide_pair)
+S_WORK = 3  # kinetic energy given to bodies between calls (their new motion, impulses) [J]

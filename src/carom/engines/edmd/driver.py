@@ -32,10 +32,12 @@ from carom.engines.edmd.handle import new_handle, sample_motion_now, sample_now
 from carom.engines.edmd.model import Environment, Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
 from carom.engines.edmd.ordering import spatial_order
+from carom.engines.edmd.reach import bodies_now, set_bodies
 from carom.engines.edmd.renumber import cell_ranks, renumber
 from carom.engines.edmd.settings import SHELL_DEFAULT, EdmdSettings
 from carom.engines.edmd.state import (
     KIN_V,
+    N_SUMS,
     Records,
     State,
     aligned_records,
@@ -505,6 +507,7 @@ class EdmdEngine:
             energy_lost=float(s[codes.S_KE_LOST]),
             floor_collisions=int(c[codes.C_FLOOR]),
             energy_given=float(s[codes.S_KE_GIVEN]),
+            work_done=float(s[codes.S_WORK]),
         )
 
     def resting(self) -> NDArray[np.int64]:
@@ -520,6 +523,157 @@ class EdmdEngine:
     def max_cell_occupancy(self) -> int:
         """The most bodies in one cell now (diagnostics and tests)."""
         return int(self.state.cell_count.max())
+
+    # -- reaching bodies between calls ------------------------------------------------------
+
+    def _engine_rows(self, bodies: NDArray[np.int64]) -> NDArray[np.int64]:
+        """Engine rows of the caller's ``bodies`` (k,)."""
+        rank = np.empty_like(self.order)
+        rank[self.order] = np.arange(self.order.shape[0])
+        return rank[bodies]
+
+    def motion_of(
+        self, bodies: NDArray[np.int64]
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """The caller's ``bodies`` (k,) at the clock: positions (k, d), velocities (k, d),
+        orientations ((k, 1) angles or (k, 4) quaternions) and spins (k, 3); nothing moves."""
+        k, dim = bodies.shape[0], self.env.dim
+        out = (np.empty((k, dim)), np.empty((k, dim)), np.empty((k, 4 if dim == 3 else 1)))
+        w = np.empty((k, 3))
+        bodies_now(self.handle, self._engine_rows(bodies), *out, w)
+        return (*out, w)
+
+    def set_motion(self, bodies: NDArray[np.int64], field: str, values: FloatArray) -> None:
+        """Give the caller's mobile ``bodies`` (k,) new ``values`` of ``field`` at the clock:
+        "x" positions (k, d) [m], "v" velocities (k, d) [m/s], "w" spins (k, 3) or "omega"
+        (k,) (2D, about z) [rad/s], "q" orientations (k, 4) or "angle" (k,) [rad]; their events
+        are predicted again. The kinetic energy changed is booked as work done.
+
+        Raises
+        ------
+        CaromError
+            A spin or orientation in a world whose spheres do not spin; a position outside
+            the box or the planes, or overlapping another sphere. Nothing has changed then.
+        """
+        x, v, orient, w = self.motion_of(bodies)
+        if field == "x":
+            x = self._placed(bodies, values)
+        elif field == "v":
+            v = values
+        else:
+            if not self.spinning:
+                raise CaromError(_NO_SPINS)
+            if field == "w":
+                w = values
+            elif field == "omega":
+                w[:, 2] = values
+            elif field == "q":
+                orient = values
+            else:  # "angle"
+                orient = values.reshape(-1, 1)
+        self._give(bodies, x, v, orient, w, moved=field == "x")
+
+    def apply_impulses(
+        self, bodies: NDArray[np.int64], impulses: FloatArray, points: FloatArray | None
+    ) -> None:
+        """Impulses ``impulses`` (k, d) [N s] on the caller's mobile ``bodies`` (k,), in order,
+        at the world ``points`` (k, d) [m] (the centres when None): velocity and spin change
+        at the clock and the bodies' events are predicted again; the kinetic energy changed is
+        booked as work done.
+
+        Raises
+        ------
+        CaromError
+            An impulse off the centre of a sphere that does not spin (a world without spins).
+            Nothing has changed then.
+        """
+        x, v, orient, w = self.motion_of(bodies)
+        b = self.bodies
+        inv_mass = 1.0 / b.mass[bodies]
+        dim = self.env.dim
+        turns = np.zeros((bodies.shape[0], 3))
+        if points is not None:
+            arm = np.zeros((bodies.shape[0], 3))
+            arm[:, :dim] = points - x
+            push = np.zeros_like(arm)
+            push[:, :dim] = impulses
+            moment = b.inertia_factor[bodies] * b.mass[bodies] * b.radius[bodies] ** 2
+            turns = np.cross(arm, push) / moment[:, None]
+            if dim == 2:
+                turns[:, :2] = 0.0
+            if not self.spinning and np.any(turns != 0.0):
+                raise CaromError(_NO_SPINS + "; or give the impulse at the centre (no point)")
+        # in order: a body given twice takes both, the second after the first
+        _, first, into = np.unique(bodies, return_index=True, return_inverse=True)
+        for r in range(bodies.shape[0]):
+            j = first[into[r]]
+            v[j] = v[j] + impulses[r] * inv_mass[r]
+            w[j] = w[j] + turns[r]
+        self._give(bodies[first], x[first], v[first], orient[first], w[first], moved=False)
+
+    def _give(
+        self, bodies: NDArray[np.int64], x: FloatArray, v: FloatArray, orient: FloatArray,
+        w: FloatArray, *, moved: bool,
+    ) -> None:  # fmt: skip
+        """New motion for the caller's ``bodies`` at the clock, the change in their kinetic
+        energy booked as work done, their events predicted again."""
+        before = self._kinetic(bodies)
+        rows = self._engine_rows(bodies)
+        arrays = [np.ascontiguousarray(a, dtype=np.float64) for a in (x, v, orient, w)]
+        while (status := set_bodies(self.handle, rows, *arrays, moved)) != FITS:  # type: ignore[call-arg]
+            self._grow(codes.LISTS_FULL if status == LIST_FULL else codes.CELLS_FULL)
+            self.resize_grid(self.capacity, self.cell_capacity)
+        self.state.sums[codes.S_WORK] += self._kinetic(bodies) - before
+
+    def _kinetic(self, bodies: NDArray[np.int64]) -> float:
+        """Kinetic energy of the caller's ``bodies`` at the clock [J], spin included."""
+        _, v, _, w = self.motion_of(bodies)
+        b = self.bodies
+        mass = b.mass[bodies]
+        spin = b.inertia_factor[bodies] * mass * b.radius[bodies] ** 2
+        return float(0.5 * np.sum(mass * np.sum(v * v, axis=1) + spin * np.sum(w * w, axis=1)))
+
+    def _placed(self, bodies: NDArray[np.int64], at: FloatArray) -> FloatArray:
+        """Positions ``at`` (k, d) for the caller's ``bodies`` (k,), wrapped into a periodic
+        box; a CaromError if one leaves the box or the planes or overlaps another sphere."""
+        env, radius = self.env, self.bodies.radius
+        at = np.array(at, dtype=np.float64)
+        if np.unique(bodies).shape[0] != bodies.shape[0]:
+            raise CaromError("positions: each body once (a body cannot be in two places)")
+        if env.periodic:
+            at -= env.box * np.floor(at / env.box)
+        r = radius[bodies]
+        for k, body in enumerate(bodies.tolist()):
+            inside = at[k] - r[k] >= 0.0
+            inside &= at[k] + r[k] <= env.box
+            if not env.periodic and not inside.all():
+                raise CaromError(
+                    f"body {body} at {at[k].tolist()} would leave the box "
+                    f"{env.box.tolist()} (radius {r[k]:g} m); place its centre at least its "
+                    "radius inside the walls"
+                )
+            depth = (at[k] - env.plane_point) @ np.asarray(env.plane_normal).T
+            if np.any(np.atleast_1d(depth) < r[k]):
+                raise CaromError(
+                    f"body {body} at {at[k].tolist()} would cut a plane of the world; place "
+                    "its centre at least its radius on the planes' open side"
+                )
+        x, _ = self.sample_motion()
+        x[bodies] = at
+        for k, body in enumerate(bodies.tolist()):
+            gap = x - at[k]
+            if env.periodic:
+                gap -= env.box * np.round(gap / env.box)
+            reach = np.sqrt(np.sum(gap * gap, axis=1)) - radius - r[k]
+            reach[body] = np.inf
+            other = int(np.argmin(reach))
+            if reach[other] < -OVERLAP_TOLERANCE * (radius[other] + r[k]):
+                raise CaromError(
+                    f"body {body} at {at[k].tolist()} would overlap body {other} (at "
+                    f"{x[other].tolist()}) by {-reach[other]:.3g} m; place the spheres at "
+                    "least the sum of their radii apart"
+                )
+        return at
 
     # -- checkpoints ------------------------------------------------------------------------
 
@@ -558,6 +712,10 @@ class EdmdEngine:
                 missing.append(group[there.index(False)])
         if missing:
             raise KeyError(f"state.{missing[0]}")  # (the checkpoint reader calls it damaged)
+        if fields["sums"].shape[0] < N_SUMS:  # (saved before the work done was kept)
+            fields["sums"] = np.concatenate(
+                (fields["sums"], np.zeros(N_SUMS - fields["sums"].shape[0]))
+            )
         state = State(**fields)
         capacity, cell_capacity = (int(c) for c in arrays["capacity"])
         engine = cls(
@@ -573,6 +731,12 @@ class EdmdEngine:
         bodies.lend(engine)  # the table's motion: the engine's, at its clock
         return engine
 
+
+_NO_SPINS = (
+    "this world's spheres do not spin (smooth contacts, none spinning or turned at the "
+    "start), so the event-driven engine keeps no spins: give them friction (a rough contact "
+    "law) or a spin at the start"
+)
 
 #: the state's fields a checkpoint may lack: acc and support are None without gravity, the
 #: spins and orientations when no body spins (and then not written)

@@ -36,7 +36,7 @@ __all__ = [
 ]
 
 N_COUNTS = 8
-N_SUMS = 3
+N_SUMS = 4
 
 # Columns of the kinematic record ``State.kin``: position (x, y, z), clock, velocity, radius.
 # One body's record is one 64-byte cache line, which is what a prediction reads of each
@@ -106,7 +106,7 @@ class State(NamedTuple):
         The event calendar (:mod:`carom.engines.edmd.calendar` describes each array).
     clock : (1,) float64
         Simulation time [s].
-    counts : (8,) int64; sums : (3,) float64
+    counts : (8,) int64; sums : (4,) float64
         Running statistics (:mod:`carom.engines.edmd.codes` names the slots).
     log_time, log_a, log_b, log_impulse, log_un, log_point, log_n
         The event log buffer, emptied by :class:`carom.World` as it fills.

@@ -1,0 +1,147 @@
+"""Reaching the event-driven engine's bodies between two calls: their motion read at the
+engine's clock, and new motion given to them, with their events predicted again.
+
+A body given a new velocity, spin or position is first flown to the clock (its own lags: lazy
+clocks), takes the new motion there, leaves its support if it no longer slides on it, and has
+its collision counter raised: every event a neighbour predicted with it is stale from then on
+(Rapaport's rule, as after a collision), and its own next event is predicted afresh from its new
+motion. From there it follows the new free flight exactly: a sphere kicked in flight takes the
+new parabola from the clock on, to round-off.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from carom.engines.edmd.calendar import calendar_update
+from carom.engines.edmd.codes import C_SHELL
+from carom.engines.edmd.neighbours import FITS, rebuild_shell
+from carom.engines.edmd.predict import (
+    calendar_of,
+    face_normal,
+    free_flight,
+    kinematic_views,
+    predict,
+    schedule_views,
+    set_support,
+)
+from carom.geometry.rotation import turn
+
+__all__ = ["bodies_now", "set_bodies"]
+
+
+@njit(cache=True, error_model="numpy")
+def bodies_now(h, rows, x_out, v_out, orient_out, w_out) -> None:  # type: ignore[no-untyped-def]
+    """Engine rows ``rows`` (k,): position (k, d), velocity (k, d), orientation (k, 1) or
+    (k, 4) and spin (k, 3) at the engine's clock, into the outputs (nothing moves)."""
+    m, s = h.model, h.state
+    _now(
+        rows, s.kin, s.acc, m.gravity, s.w, s.orient, s.orient_t, m.box, m.periodic,
+        s.clock[0], x_out, v_out, orient_out, w_out,
+    )  # fmt: skip
+
+
+@njit(cache=True, error_model="numpy")
+def _now(  # type: ignore[no-untyped-def]
+    rows, kin, acc, gravity, w, orient, orient_t, box, periodic, T, x_out, v_out, orient_out,
+    w_out,
+) -> None:  # fmt: skip
+    """:func:`bodies_now` on the arrays (``gravity`` and ``w`` None when the engine has none:
+    a branch on an argument that is None is pruned as it compiles)."""
+    dim = box.shape[0]
+    x, v, t = kinematic_views(kin, dim)
+    for r in range(rows.shape[0]):
+        i = rows[r]
+        dt = T - t[i]
+        for k in range(dim):
+            a = 0.0 if gravity is None else acc[i, k]
+            x_out[r, k] = x[i, k] + (v[i, k] + 0.5 * a * dt) * dt
+            v_out[r, k] = v[i, k] + a * dt
+            if periodic:
+                x_out[r, k] -= box[k] * np.floor(x_out[r, k] / box[k])
+        if w is None:
+            for k in range(orient_out.shape[1]):
+                orient_out[r, k] = 1.0 if k == 0 and dim == 3 else 0.0
+            for k in range(3):
+                w_out[r, k] = 0.0
+        else:
+            for k in range(orient_out.shape[1]):
+                orient_out[r, k] = orient[i, k]
+            turn(orient_out, r, w[i, 0], w[i, 1], w[i, 2], T - orient_t[i], dim)
+            for k in range(3):
+                w_out[r, k] = w[i, k]
+
+
+@njit(cache=True, error_model="numpy")
+def set_bodies(h, rows, x_new, v_new, orient_new, w_new, moved) -> int:  # type: ignore[no-untyped-def]
+    """Give engine rows ``rows`` (k,) the positions ``x_new`` (k, d) (when ``moved``),
+    velocities ``v_new`` (k, d), orientations ``orient_new`` and spins ``w_new`` (k, 3)
+    (when the engine keeps spins) at the engine's clock, and predict their events again.
+
+    Every value replaces the old one, so a call that returns early can be made again whole.
+    Returns ``FITS``, or why a moved body's neighbour list or cell row did not fit (the
+    caller grows them, rebuilds them all and calls again)."""
+    m, s = h.model, h.state
+    dim = m.box.shape[0]
+    kin = s.kin
+    x, v, t = kinematic_views(kin, dim)
+    ev_kind, ev_other, ev_stamp, counter = schedule_views(s.sched)
+    T = s.clock[0]
+    for r in range(rows.shape[0]):
+        i = rows[r]
+        free_flight(x, v, s.acc, m.gravity, t, i, T)
+        _turn_to(i, r, T, s.w, s.orient, s.orient_t, orient_new, w_new, dim)
+        for k in range(dim):
+            v[i, k] = v_new[r, k]
+        _leave_support(i, moved, v, m.gravity, s.support, s.acc, m.plane_normal)
+        if moved:
+            s.counts[C_SHELL] += 1  # (a stamp no earlier rebuild used, as a shell event's)
+            for k in range(dim):
+                x[i, k] = x_new[r, k]
+                s.shell[i, k] = x[i, k]
+            status = rebuild_shell(
+                i, s.shell, m.mobile, s.nbr, s.nbr_count, s.cell_count, s.cell_body, s.slot,
+                s.cell, m.box, m.periodic, m.shell_thickness, m.cell_size, m.ncell, s.nbr_mark,
+                s.nbr_old, s.counts[C_SHELL], s.scan, s.scan_body,
+            )  # fmt: skip
+            if status != FITS:
+                return status
+        counter[i] += 1  # every event a neighbour predicted with it is stale
+    cal = calendar_of(s)
+    for r in range(rows.shape[0]):
+        i = rows[r]
+        predict(
+            i, T, kin, x, v, s.acc, m.gravity, t, s.shell, s.support, s.nbr, s.nbr_count,
+            s.near, counter, m.radius, m.mobile, m.box, m.inv_box, m.periodic,
+            m.shell_thickness, m.plane_point, m.plane_normal, s.ev_time, ev_kind, ev_other,
+            ev_stamp,
+        )  # fmt: skip
+        calendar_update(s.ev_time, i, cal)
+    return FITS
+
+
+@njit(cache=True, error_model="numpy")
+def _turn_to(i, r, T, w, orient, orient_t, orient_new, w_new, dim) -> None:  # type: ignore[no-untyped-def]
+    """Row ``i`` turned to the clock ``T``, then given orientation and spin row ``r`` of the
+    new ones (nothing when the engine keeps no spins, ``w`` None)."""
+    if w is not None:
+        turn(orient, i, w[i, 0], w[i, 1], w[i, 2], T - orient_t[i], dim)
+        orient_t[i] = T
+        for k in range(orient_new.shape[1]):
+            orient[i, k] = orient_new[r, k]
+        for k in range(3):
+            w[i, k] = w_new[r, k]
+
+
+@njit(cache=True, error_model="numpy")
+def _leave_support(i, moved, v, gravity, support, acc, plane_normal) -> None:  # type: ignore[no-untyped-def]
+    """Row ``i`` leaves the face it rests on when moved or given a speed along its normal
+    (it then flies, or meets the face at once); it slides on along it otherwise."""
+    if gravity is not None and support[i] >= 0:
+        dim = v.shape[1]
+        un = 0.0
+        for k in range(dim):
+            un += v[i, k] * face_normal(plane_normal, dim, support[i], k)
+        if moved or un != 0.0:
+            set_support(gravity, plane_normal, support, acc, i, -1)
