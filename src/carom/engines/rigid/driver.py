@@ -166,8 +166,7 @@ class RigidEngine(SteppedEngine):
 
     def _fly(self, free: NDArray[np.int64]) -> None:
         s, a, dt = self.state, self._accel, self.dt
-        for i in free.tolist():
-            motion.fly(i, dt, s.x, s.angle, s.v, s.omega, a[i, 0], a[i, 1])
+        motion.fly_all(free, dt, s.x, s.angle, s.v, s.omega, a)
         if self._loads.on:  # a torque's constant angular acceleration, exactly
             alpha = self._spin_load[free]
             s.angle[free] += 0.5 * alpha * dt * dt

@@ -216,11 +216,10 @@ class RigidEngine3D(SteppedEngine):
 
     def _fly(self, free: NDArray[np.int64]) -> None:
         m, s, a, t = self.model, self.state, self._accel, self._spin_load
-        for i in free.tolist():
-            motion.fly(
-                i, self.dt, self.settings.substeps, s.x, s.q, s.v, s.w, a[i, 0], a[i, 1],
-                a[i, 2], m.inertia, m.inv_inertia, (t[i, 0], t[i, 1], t[i, 2]),
-            )  # fmt: skip
+        motion.fly_all(
+            free, self.dt, self.settings.substeps, s.x, s.q, s.v, s.w, a, m.inertia,
+            m.inv_inertia, t,
+        )  # fmt: skip
 
     def _cast(
         self, rays: tuple[FloatArray, ...], movers: tuple[Any, ...], mask: int, hits: Any
