@@ -36,7 +36,7 @@ LAYERS = [
     {"engines"},
     # the facade and what it is made of
     {"scenery", "recording", "collision_log", "checkpoint", "gameloop", "queries", "joints"},
-    {"sensing"},
+    {"sensing", "kinds"},
     {"observables"},
     {"world"},
     # the edges

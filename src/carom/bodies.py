@@ -426,6 +426,42 @@ class Bodies:
         """True when every body is a sphere (disk in 2D): the event-driven engine's world."""
         return bool(np.all(self.shape == SHAPE_CODES["sphere"]))
 
+    def kinds_kept(self) -> tuple[Any, ...]:
+        """What :meth:`switch_kind` changes (kinds, masses, inertias), for
+        :meth:`restore_kinds` (the arrays themselves: a switch replaces them)."""
+        return self.kind, self.mass, self.inertia_factor, self._tensor
+
+    def restore_kinds(self, kept: tuple[Any, ...]) -> None:
+        """Take back the kinds, masses and inertias :meth:`kinds_kept` gave."""
+        self.kind, self.mass, self.inertia_factor, self._tensor = kept
+
+    def switch_kind(
+        self, rows: NDArray[np.int64], kind: int, mass: FloatArray, inertia: FloatArray
+    ) -> None:
+        """Make bodies ``rows`` (k,) of ``kind`` with masses ``mass`` (k,) [kg] and inertias
+        about their centres of mass ``inertia``: (k,) [kg m^2] in 2D, body-frame tensors
+        (k, 3, 3) in 3D (inf for a static or kinematic body, as :meth:`append_bodies` stores
+        them). Their pieces stay: a body's pieces are about its centroid, its centre of mass
+        at any uniform density."""
+        self._stored()
+        if self._tensor is None and self.dim == 3 and not self.spheres_only:
+            self._tensor = self.inertia_tensor
+        self.kind = self.kind.copy()
+        self.kind[rows] = kind
+        self.mass = self.mass.copy()
+        self.mass[rows] = mass
+        reach = self.radius[rows]
+        moment = inertia if self.dim == 2 else np.trace(inertia, axis1=1, axis2=2) / 3.0
+        with np.errstate(invalid="ignore", divide="ignore"):
+            q = np.where(np.isfinite(mass) & (reach > 0.0), moment / (mass * reach**2), 0.0)
+        # a sphere keeps its factor whatever its kind (its inertia is made from it)
+        q = np.where(self.shape[rows] == SHAPE_CODES["sphere"], self.inertia_factor[rows], q)
+        self.inertia_factor = self.inertia_factor.copy()
+        self.inertia_factor[rows] = q
+        if self._tensor is not None:
+            self._tensor = self._tensor.copy()
+            self._tensor[rows] = inertia if self.dim == 3 else 0.0
+
     def append_spheres(
         self,
         position: FloatArray,

@@ -37,6 +37,7 @@ from carom.shapes3d import ConvexPiece3D, Plane, Shape3D, TrianglePieces, rotati
 __all__ = [
     "ShapedBodies",
     "angular_velocities",
+    "dynamic_mass",
     "motion",
     "per_body",
     "per_value",
@@ -315,7 +316,7 @@ def shaped_bodies(
             with _in_float64(shape):
                 centroid = shape.centroid
     if code == KIND_DYNAMIC:
-        body_mass, inertia, centroid = _mass_of(shape, density, mass)
+        body_mass, inertia, centroid = dynamic_mass(shape, density, mass)
     else:
         _check_still(kind, density, mass, velocity, spin)
         body_mass = math.inf
@@ -373,7 +374,7 @@ def _in_float64(shape: Shape2D | Shape3D) -> Iterator[None]:
         ) from None
 
 
-def _mass_of(
+def dynamic_mass(
     shape: Shape2D | Shape3D, density: float | None, mass: float | None
 ) -> tuple[float, FloatArray | float, FloatArray]:
     """A dynamic body's mass [kg], inertia about its centroid and centroid, refused when the

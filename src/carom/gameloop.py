@@ -428,8 +428,13 @@ class Body:
 
     @property
     def kind(self) -> str:
-        """ "dynamic", "kinematic" or "static"."""
+        """ "dynamic", "kinematic" or "static"; set, it switches the body's kind
+        (:meth:`carom.kinds.Kinds.set_kind`, the rigid engines)."""
         return KIND_NAMES[int(self._world.bodies.kind[self.index])]
+
+    @kind.setter
+    def kind(self, value: str) -> None:
+        self._world.set_kind([self.index], value)
 
     @property
     def awake(self) -> bool:

@@ -4,10 +4,9 @@ A World holds what a simulation is made of, engine-neutral: the body table
 (:class:`carom.bodies.Bodies`), materials (:mod:`carom.materials`), the box, its walls and
 planes, gravity, and each engine's settings. Running it builds an engine from the table of
 engines (:mod:`carom.engines.registry`) and advances it: the exact event-driven one
-(:mod:`carom.engines.edmd`) for spheres and disks, the time-stepped rigid-body one
-(:mod:`carom.engines.rigid`, :mod:`carom.engines.rigid3d`) for bodies of any shape in 2D and
-3D, or any engine registered beside them. Frames, collisions and observables read the
-engine's state in the caller's numbering of bodies.
+(:mod:`carom.engines.edmd`) for spheres and disks, the time-stepped rigid-body one (2D and 3D
+bodies of any shape), or any engine registered beside them. Frames, collisions and
+observables read the engine's state in the caller's numbering of bodies.
 
 >>> import carom
 >>> world = carom.World(2, box=[1.0, 1.0])
@@ -38,6 +37,7 @@ from carom.engines.base import Counters, Engine, FrameArrays, describe_partner
 from carom.errors import CaromError
 from carom.gameloop import GameLoop
 from carom.joints import Joints
+from carom.kinds import Kinds
 from carom.limits import check_body_count
 from carom.materials import Material
 from carom.observables import Stats
@@ -63,7 +63,7 @@ __all__ = ["LOG_LIMIT", "RECORD_BYTES", "Frame", "Material", "Recording", "World
 FloatArray = NDArray[np.float64]
 
 
-class World(Scenery, GameLoop, Queries, Joints, Sensing):
+class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
     """Bodies in a box, advanced by an engine: spheres (3D) or disks (2D) simulated exactly,
     event by event, or rigid bodies of any shape in 2D and 3D, step by step.
 
@@ -102,8 +102,7 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing):
     """
 
     def _start(self) -> None:
-        """The World's own part of the start (:class:`Scenery` sets the rest): no bodies,
-        no engine yet, the clock at 0."""
+        """The World's own start (:class:`Scenery` sets the rest): no bodies, no engine."""
         self.bodies = Bodies(self.dim)
         self._engine: Engine | None = None
         self._built_with: Any = None  # the settings it was built with (others since: rebuilt)
@@ -280,6 +279,7 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing):
             self._time = self._engine.time
             self.bodies.set_state(*self._engine.sample())
             self._counters_before = self.counters()
+            self._loads_kept = getattr(self._engine, "loads_now", lambda: None)()  # (rebuilt)
         self._engine = None
 
     # -- the engine -------------------------------------------------------------------------

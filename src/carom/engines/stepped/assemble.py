@@ -159,6 +159,8 @@ class _Stepped(Protocol):
 
     def retire(self, ids: NDArray[np.int64]) -> None: ...
 
+    def take_loads(self, kept: tuple[NDArray[np.float64], NDArray[np.float64]]) -> None: ...
+
 
 Built = TypeVar("Built", bound=_Stepped)
 
@@ -168,7 +170,9 @@ def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
     deeper than the linear slop (the solver would throw them apart); else a CaromError
     naming the two. The world's collision filters (:meth:`carom.World.set_filter`), sensors
     (:meth:`carom.World.set_sensor`) and joints (:meth:`carom.World.add_joint`) are the
-    engine's first: a pair they keep apart may start overlapping."""
+    engine's first: a pair they keep apart may start overlapping; so are the forces and
+    torques given for the next step to an engine the world dropped (bodies added or switched
+    between steps)."""
     table = getattr(world, "collision_filters", None)
     if table is not None and len(table):
         engine.use_filters(np.asarray(table, np.int64))
@@ -178,6 +182,10 @@ def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
     share_joints = getattr(world, "share_joints", None)  # (a World's, issue 43)
     if share_joints is not None:
         share_joints(engine)
+    kept = getattr(world, "_loads_kept", None)  # forces and torques given before a rebuild
+    if kept is not None:
+        engine.take_loads(kept)
+        world._loads_kept = None  # type: ignore[attr-defined]
     alive = getattr(world, "alive", None)
     if alive is not None and not np.all(alive):
         engine.retire(np.flatnonzero(~np.asarray(alive)))

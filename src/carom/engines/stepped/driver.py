@@ -557,6 +557,15 @@ class SteppedEngine:
         """Kinetic and gravitational potential energy of the dynamic bodies [J]."""
         return self._energy(np.arange(self.model.kind.shape[0]))
 
+    def energy_of(self, rows: NDArray[np.int64]) -> float:
+        """:meth:`energy` of the dynamic bodies among ``rows`` (k,) [J]."""
+        return self._energy(rows)
+
+    def book_work(self, work: float) -> None:
+        """Book ``work`` [J] done on the bodies from outside the engine (their kinds
+        switched: the energy that entered or left the count)."""
+        self._work_done += work
+
     def _moving(self) -> NDArray[np.bool_]:
         """Kinematic bodies in motion (N,)."""
         moving = np.zeros(self._kinematic.shape[0], np.bool_)
@@ -711,6 +720,21 @@ class SteppedEngine:
         the next step, then cleared. The bodies wake."""
         self._loads.add_torques(ids, torques)
         self._wake_bodies(np.unique(ids))
+
+    def loads_now(self) -> tuple[FloatArray, FloatArray] | None:
+        """The forces (n, d) [N] and torques [N m] given for the next step (copies), None when
+        none are."""
+        loads = self._loads
+        return (loads.force.copy(), loads.torque.copy()) if loads.on else None
+
+    def take_loads(self, kept: tuple[FloatArray, FloatArray]) -> None:
+        """The loads :meth:`loads_now` gave (another engine's, over the first bodies of this
+        one), on the bodies still dynamic, for the next step."""
+        force, torque = kept
+        rows = np.flatnonzero(self._dynamic[: force.shape[0]])
+        if rows.size:
+            self._loads.add_forces(rows, force[rows], None)
+            self._loads.add_torques(rows, torque[rows])
 
     def retire(self, ids: NDArray[np.int64]) -> None:
         """Take bodies ``ids`` (k,) out of the world for good, their indices kept: they stop
