@@ -133,3 +133,23 @@ def test_a_removed_body_ends_its_contacts_at_the_next_step() -> None:
     assert ended == {(1, 2)}
     world.step()
     assert world.contact_events().end.size == 0
+
+
+def test_frames_say_which_bodies_are_in_the_world() -> None:
+    world = _stack()
+    assert world.frame().alive is None  # every body is
+    world.remove_body(1)
+    frame = world.frame()
+    assert frame.alive is not None
+    assert frame.alive.tolist() == [True, False, True]
+    frames = list(world.frames(world.time + 0.1, 0.05))
+    assert len(frames) == 2
+    for f in frames:
+        assert f.alive is not None
+        assert f.alive.tolist() == [True, False, True]
+    recording = world.record([world.time + 0.05, world.time + 0.1])
+    assert recording.alive is not None
+    assert recording.alive.tolist() == [True, False, True]
+    assert recording.frame(1).alive is recording.alive
+    # the removed body's rows hold where it stopped
+    np.testing.assert_array_equal(recording.positions[:, 1], [frame.positions[1]] * 2)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,6 +23,7 @@ __all__ = [
     "Frame",
     "Recording",
     "advance_frame_by_frame",
+    "alive_of",
     "check_interval",
     "check_span",
     "check_steps",
@@ -51,6 +52,9 @@ class Frame:
         Angle about z [rad]; unit quaternion ``w, x, y, z`` (body to world).
     angular_velocities : (N, 3) float64
         [rad/s], world frame (2D: about z, column 2).
+    alive : (N,) bool or None
+        Which bodies are in the world (False: removed, :meth:`carom.World.remove_body`; their
+        rows hold where they stopped); None: every body.
     """
 
     time: float
@@ -58,10 +62,12 @@ class Frame:
     velocities: FloatArray
     orientations: FloatArray
     angular_velocities: FloatArray
+    alive: NDArray[np.bool_] | None = None
 
     @classmethod
-    def of(cls, out: FrameArrays, f: int, dim: int) -> Frame:
-        """Frame ``f`` of what an engine wrote into ``out`` (views of its arrays)."""
+    def of(cls, out: FrameArrays, f: int, dim: int, alive: NDArray[np.bool_] | None) -> Frame:
+        """Frame ``f`` of what an engine wrote into ``out`` (views of its arrays); ``alive``
+        (N,) as :attr:`alive`."""
         orient = out.orientations[f]
         return cls(
             float(out.times[f]),
@@ -69,6 +75,7 @@ class Frame:
             out.velocities[f],
             orient[:, 0] if dim == 2 else orient,
             out.angular_velocities[f],
+            alive,
         )
 
 
@@ -86,6 +93,9 @@ class Recording:
         Angle about z [rad]; unit quaternion ``w, x, y, z`` (body to world).
     angular_velocities : (F, N, 3) float64
         [rad/s], world frame (2D: about z, column 2).
+    alive : (N,) bool or None
+        Which bodies are in the world through the frames (False: removed before them, their
+        rows frozen where they stopped); None: every body.
     """
 
     times: FloatArray
@@ -93,6 +103,7 @@ class Recording:
     velocities: FloatArray
     orientations: FloatArray
     angular_velocities: FloatArray
+    alive: NDArray[np.bool_] | None = None
 
     def __len__(self) -> int:
         return len(self.times)
@@ -105,11 +116,15 @@ class Recording:
             self.velocities[f],
             self.orientations[f],
             self.angular_velocities[f],
+            self.alive,
         )
 
     @classmethod
-    def of(cls, out: FrameArrays, done: int, dim: int) -> Recording:
-        """The first ``done`` frames an engine wrote into ``out``."""
+    def of(
+        cls, out: FrameArrays, done: int, dim: int, alive: NDArray[np.bool_] | None
+    ) -> Recording:
+        """The first ``done`` frames an engine wrote into ``out``; ``alive`` (N,) as
+        :attr:`alive`."""
         orientations = out.orientations[:done]
         return cls(
             times=out.times[:done],
@@ -117,6 +132,7 @@ class Recording:
             velocities=out.velocities[:done],
             orientations=orientations[..., 0] if dim == 2 else orientations,
             angular_velocities=out.angular_velocities[:done],
+            alive=alive,
         )
 
 
@@ -229,13 +245,14 @@ def advance_frame_by_frame(
     sink: Sink | None,
     stop: Callable[[], bool] | None,
     reached: Callable[[bool], None],
-    shape: tuple[int, int],
+    world: Any,
 ) -> Iterator[Frame]:
-    """Advance ``engine`` to ``until`` [s], yielding a :class:`Frame` of its ``shape`` =
-    (N bodies, d dimensions) at each ``start + k frame_interval`` (None: none) and at
-    ``until``; ``reached`` is told after each stretch whether the engine got there (False:
-    ``stop`` ended it, and no frame follows)."""
-    n, dim = shape
+    """Advance ``engine`` to ``until`` [s], yielding a :class:`Frame` of ``world``'s bodies
+    (its ``n_bodies``, ``dim`` and ``alive``) at each ``start + k frame_interval`` (None:
+    none) and at ``until``; ``reached`` is told after each stretch whether the engine got
+    there (False: ``stop`` ended it, and no frame follows)."""
+    n, dim = world.n_bodies, world.dim
+    alive = alive_of(world)
     start = engine.time
     k = 1
     while True:
@@ -249,10 +266,16 @@ def advance_frame_by_frame(
         if not done:
             return
         if frame_interval is not None:
-            yield Frame.of(out, 0, dim)
+            yield Frame.of(out, 0, dim, alive)
         if target >= until:
             return
         k += 1
+
+
+def alive_of(world: Any) -> NDArray[np.bool_] | None:
+    """``world``'s mask of bodies in it (N,), None when every body is."""
+    alive: NDArray[np.bool_] | None = getattr(world, "alive", None)
+    return None if alive is None or alive.all() else alive
 
 
 def check_steps(dt: float | None, engine: str, **times: float | None) -> None:

@@ -47,6 +47,7 @@ from carom.recording import (
     Frame,
     Recording,
     advance_frame_by_frame,
+    alive_of,
     check_interval,
     check_span,
     check_times,
@@ -413,8 +414,7 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
         def reached(done: bool) -> None:
             self.reached = done
 
-        shape = (self.n_bodies, self.dim)
-        yield from advance_frame_by_frame(engine, until, frame_interval, sink, stop, reached, shape)
+        yield from advance_frame_by_frame(engine, until, frame_interval, sink, stop, reached, self)
 
     def record(
         self,
@@ -456,7 +456,7 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
         done = engine.advance_frames(grid, sink, stop, out)
         if grid.size:  # no frame asked, nothing said (prepare() warms this path so)
             self.reached = done == grid.size
-        return Recording.of(out, done, self.dim)
+        return Recording.of(out, done, self.dim, alive_of(self))
 
     def frame_times(self, until: float, frame_interval: float) -> FloatArray:
         """The times [s] at which :meth:`frames` yields, (F,): ``time + k frame_interval``
@@ -472,7 +472,7 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
     def frame(self) -> Frame:
         """The current state as a :class:`Frame`."""
         x, v, orient, w = self._state_now()
-        return Frame(self.time, x, v, orient[:, 0] if self.dim == 2 else orient, w)
+        return Frame(self.time, x, v, orient[:, 0] if self.dim == 2 else orient, w, alive_of(self))
 
     # -- reading ------------------------------------------------------------------------------
 
