@@ -15,6 +15,7 @@ import pytest
 
 import carom
 from carom.errors import CaromError
+from carom.materials import Material
 
 G = np.array([0.0, 0.0, -9.81])
 ULPS = 1e-12  # [m], [m/s]: a few ulps of coordinates and speeds of order 1-10
@@ -189,3 +190,62 @@ def test_bad_input_is_refused_and_changes_nothing() -> None:
         world.apply_impulses([0], [np.nan, 0.0, 0.0])
     assert world.positions.tobytes() == before[0].tobytes()
     assert world.velocities.tobytes() == before[1].tobytes()
+
+
+def test_contact_events_of_two_spheres_meeting_head_on() -> None:
+    # no gravity, e = 1, each at 1 m/s: the gap of 1 m closes at 2 m/s, at t = 0.5 s
+    world = carom.World(3, [10.0, 10.0, 10.0], engine="event-driven")
+    world.add_spheres([[4.0, 5.0, 5.0], [5.2, 5.0, 5.0]], [[1.0, 0, 0], [-1.0, 0, 0]],
+                      radius=0.1)  # fmt: skip
+    assert world.contact_events().begin.size == 0  # asked for: later steps gather them
+    world.step(0.4)
+    assert world.contact_events().hit.size == 0
+    world.step(0.2)
+    events = world.contact_events()
+    assert events.begin[["a", "b"]].tolist() == [(0, 1)]
+    assert events.end[["a", "b"]].tolist() == [(0, 1)]  # hard spheres touch for an instant
+    (hit,) = events.hit
+    assert (hit["a"], hit["b"]) == (0, 1)
+    # (the time of impact to a few ulps of the gap over the closing speed: 1e-14 s)
+    assert hit["time"] == pytest.approx(0.5, abs=1e-14)
+    np.testing.assert_allclose(hit["point"], [4.6, 5.0, 5.0], atol=ULPS)
+    np.testing.assert_allclose(hit["normal"], [1.0, 0.0, 0.0], atol=1e-15)  # from a to b
+    assert hit["speed"] == pytest.approx(2.0, rel=1e-15)
+    np.testing.assert_allclose(events.begin["normal"][0], [1.0, 0.0, 0.0], atol=1e-15)
+    world.step(0.2)
+    assert world.contact_events().begin.size == 0
+    assert world.contact_events().end.size == 0
+
+
+def test_a_ball_that_lands_touches_the_floor_until_it_is_kicked_off() -> None:
+    # dropped from rest 0.5 m above touching (e = 0): it lands at sqrt(2 h / g) at
+    # sqrt(2 g h), comes to rest on the floor, and touches it (body -1) until lifted
+    world = _gas_world(walls=Material(restitution=0.0))
+    world.add_spheres([[5.0, 5.0, 0.6]], radius=0.1, restitution=0.0)
+    world.hit_threshold = 0.5
+    world.contact_events()
+    world.step(0.5)
+    events = world.contact_events()
+    assert events.begin[["a", "b"]].tolist() == [(-1, 0)]
+    np.testing.assert_allclose(events.begin["normal"][0], [0.0, 0.0, 1.0], atol=0)
+    assert events.end.size == 0
+    (hit,) = events.hit
+    assert hit["time"] == pytest.approx(np.sqrt(2 * 0.5 / 9.81), rel=1e-14)
+    assert hit["speed"] == pytest.approx(np.sqrt(2 * 9.81 * 0.5), rel=1e-14)
+    np.testing.assert_allclose(hit["point"], [5.0, 5.0, 0.0], atol=ULPS)
+    world.step(0.5)  # resting: still touching, nothing new
+    assert world.contact_events().begin.size == 0
+    assert world.contact_events().end.size == 0
+    world.body(0).apply_impulse([0.0, 0.0, 2.0])
+    world.step(0.1)
+    assert world.contact_events().end[["a", "b"]].tolist() == [(-1, 0)]
+
+
+def test_slow_collisions_are_not_hits() -> None:
+    world = carom.World(3, [10.0, 10.0, 10.0], engine="event-driven")
+    world.add_spheres([[4.0, 5.0, 5.0], [4.5, 5.0, 5.0]], [[0.5, 0, 0], [0, 0, 0]], radius=0.1)
+    world.contact_events()
+    world.step(1.0)  # they meet at 0.6 s at 0.5 m/s, under the default threshold (1 m/s)
+    events = world.contact_events()
+    assert events.begin.size == 1
+    assert events.hit.size == 0

@@ -122,7 +122,19 @@ class GameLoop:
             )
         step = _positive_time(dt)
         _within_limits(step, self.time)
-        self.reached = engine.advance(self.time + step, np.iinfo(np.int64).max, sink)
+        # contact events, once asked for (contact_events): the step's collisions, gathered
+        met = engine.events if isinstance(engine, EdmdEngine) and engine.events.on else None
+        if met is not None:
+            met.threshold = float(getattr(self, _THRESHOLD, 1.0))
+            met.gathering = True
+            sink = sink or _no_sink  # (the engine logs its collisions only for a sink)
+        try:
+            self.reached = engine.advance(self.time + step, np.iinfo(np.int64).max, sink)
+        finally:
+            if met is not None:
+                met.gathering = False
+        if met is not None:
+            met.close(np.flatnonzero(engine.resting() >= 0))
         kept, count = getattr(self, _HAND, (None, 0))
         setattr(self, _HAND, (engine, (count if kept is engine else 0) + 1))
 
@@ -150,9 +162,14 @@ class GameLoop:
         Gathered by :meth:`step` (a game loop's steps) and, once this has been called, by
         every step (``run`` and ``frames``, which otherwise do not pay for them). Empty before
         the first step gathered; that step's ``begin`` holds every pair touching then.
+
+        The event-driven engine gathers them in the steps after this is first called: hard
+        spheres touch for an instant, so a pair that collides begins, ends and (fast enough)
+        hits in that step; a sphere that comes to rest on a wall or plane touches the scenery
+        (-1) until it lifts off.
         """
         engine = self.build()
-        if not isinstance(engine, SteppedEngine):
+        if not isinstance(engine, SteppedEngine | EdmdEngine):
             raise CaromError(_NOT_YET_EVENTS)
         engine.events.on = True
         return engine.events.last
@@ -529,10 +546,12 @@ class Body:
             raise CaromError(f"{name} is a 3D body's; a 2D body has an angle [rad]")
 
 
-_NOT_YET_EVENTS = (
-    "contact events are the rigid engines' so far; the event-driven engine reports its "
-    "collisions through run(log=True) (World.collisions) or run(on_collisions=...)"
-)
+_NOT_YET_EVENTS = "contact events are the rigid and event-driven engines'"
+
+
+def _no_sink(records: NDArray[Any]) -> None:
+    """A sink that keeps nothing (the event-driven engine logs collisions only for one)."""
+
 
 _NO_FORCES = (
     "{} through a step are the rigid engines' so far: the event-driven engine takes impulses "

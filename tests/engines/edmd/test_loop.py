@@ -61,6 +61,7 @@ def test_a_full_buffer_is_reported_by_the_loop() -> None:
         log_impulse=np.zeros((2, 3)),
         log_un=np.zeros((2, 2)),
         log_point=np.zeros((2, 3)),
+        log_normal=np.zeros((2, 3)),
     )
     assert run(engine, 10.0, 10**9, True) == codes.LOG_FULL
     assert int(engine.state.log_n[0]) == 2

@@ -28,10 +28,11 @@ from carom.geometry.rotation import turn
 from carom.laws.kernels import LAW_SMOOTH, impulse_spheres
 
 #: the log buffer's arrays: times, bodies, partners, impulses, normal speeds, contact points,
-#: and the count (State.log_*)
+#: normals, and the count (State.log_*)
 LogBuffer = tuple[
-    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray
-]
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+    np.ndarray,
+]  # fmt: skip
 
 
 @njit_inlined
@@ -48,15 +49,22 @@ def log_event(
     p0: float,
     p1: float,
     p2: float,
+    n0: float,
+    n1: float,
+    n2: float,
 ) -> None:
     """Append one collision to the log: time, bodies (or face), impulse on ``a``, normal
-    speeds before and after, and the contact point ``p`` [m] (with the impulse, the angular
-    impulse about any centre: ``(p - x) x J``)."""
-    log_time, log_a, log_b, log_impulse, log_un, log_point, log_n = logbuf
+    speeds before and after, the contact point ``p`` [m] (with the impulse, the angular
+    impulse about any centre: ``(p - x) x J``) and the unit normal ``n`` from ``a`` to its
+    partner."""
+    log_time, log_a, log_b, log_impulse, log_un, log_point, log_normal, log_n = logbuf
     n = log_n[0]
     log_point[n, 0] = p0
     log_point[n, 1] = p1
     log_point[n, 2] = p2
+    log_normal[n, 0] = n0
+    log_normal[n, 1] = n1
+    log_normal[n, 2] = n2
     log_time[n] = T
     log_a[n] = a
     log_b[n] = b
@@ -307,6 +315,9 @@ def collide_pair(
             x[j, 0] + a_j * n0,
             x[j, 1] + a_j * n1,
             x[j, 2] + a_j * n2 if dim == 3 else 0.0,
+            -n0,  # (n points from j to i)
+            -n1,
+            -n2 if dim == 3 else 0.0,
         )
 
 
@@ -494,4 +505,7 @@ def collide_face(
             x[i, 0] - radius[i] * face_normal(plane_normal, dim, face, 0),
             x[i, 1] - radius[i] * face_normal(plane_normal, dim, face, 1),
             x[i, 2] - radius[i] * face_normal(plane_normal, dim, face, 2) if dim == 3 else 0.0,
+            -face_normal(plane_normal, dim, face, 0),  # (the face's normal points inward)
+            -face_normal(plane_normal, dim, face, 1),
+            -face_normal(plane_normal, dim, face, 2) if dim == 3 else 0.0,
         )

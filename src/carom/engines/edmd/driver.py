@@ -28,6 +28,7 @@ from carom.engines.base import (
 )
 from carom.engines.edmd import aside, codes, loop, neighbours
 from carom.engines.edmd.calendar import Calendar, calendar_build
+from carom.engines.edmd.events import EdmdEvents
 from carom.engines.edmd.handle import new_handle, sample_motion_now, sample_now
 from carom.engines.edmd.model import Environment, Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
@@ -124,6 +125,15 @@ class EdmdEngine:
 
     name = "edmd"
     _handle: Any = None
+    _events: EdmdEvents | None = None
+
+    @property
+    def events(self) -> EdmdEvents:
+        """The contact events a game loop's steps gather (:mod:`carom.engines.edmd.events`),
+        made on first use."""
+        if self._events is None:
+            self._events = EdmdEvents(self.bodies.n, self.env.dim)
+        return self._events
 
     @property
     def state(self) -> State:
@@ -406,12 +416,15 @@ class EdmdEngine:
         )
 
     def _drain(self, sink: Sink | None) -> None:
-        """Hand the log buffer's collisions to ``sink``, in the caller's numbering."""
+        """Hand the log buffer's collisions to ``sink``, in the caller's numbering (and to
+        :attr:`events` when on)."""
         state = self.state
         n = int(state.log_n[0])
         if n == 0:
             return
         state.log_n[0] = 0
+        if self.events.gathering:
+            self._gather_events(n)
         if sink is None:
             return
         record = np.empty(n, dtype=COLLISION_DTYPE)
@@ -435,6 +448,19 @@ class EdmdEngine:
             point[:, :dim] -= self.env.box * np.floor(point[:, :dim] / self.env.box)
         record["point"] = point
         sink(record)
+
+    def _gather_events(self, n: int) -> None:
+        """The log buffer's first ``n`` collisions to :attr:`events`: a face is partner -1."""
+        state, dim = self.state, self.env.dim
+        b = state.log_b[:n]
+        point = state.log_point[:n, :dim].copy()
+        if self.env.periodic:
+            point -= self.env.box * np.floor(point / self.env.box)
+        self.events.gather(
+            state.log_time[:n], self.order[state.log_a[:n]],
+            np.where(b >= 0, self.order[np.maximum(b, 0)], -1), state.log_un[:n, 0], point,
+            state.log_normal[:n, :dim],
+        )  # fmt: skip
 
     # -- reading ----------------------------------------------------------------------------
 
@@ -712,6 +738,8 @@ class EdmdEngine:
                 missing.append(group[there.index(False)])
         if missing:
             raise KeyError(f"state.{missing[0]}")  # (the checkpoint reader calls it damaged)
+        if fields["log_normal"] is None:  # (saved before the log kept normals)
+            fields["log_normal"] = np.zeros((fields["log_time"].shape[0], 3))
         if fields["sums"].shape[0] < N_SUMS:  # (saved before the work done was kept)
             fields["sums"] = np.concatenate(
                 (fields["sums"], np.zeros(N_SUMS - fields["sums"].shape[0]))
@@ -742,7 +770,7 @@ _NO_SPINS = (
 #: spins and orientations when no body spins (and then not written)
 GRAVITY_FIELDS = ("acc", "support")
 SPIN_FIELDS = ("w", "orient", "orient_t")
-OPTIONAL = (*GRAVITY_FIELDS, *SPIN_FIELDS)
+OPTIONAL = (*GRAVITY_FIELDS, *SPIN_FIELDS, "log_normal")
 
 
 def spinning(bodies: Bodies, env: Environment) -> bool:

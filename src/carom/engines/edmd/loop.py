@@ -160,7 +160,10 @@ def run_frames(  # type: ignore[no-untyped-def]
     cal = calendar_of(s)
     counts, sums = s.counts, s.sums
     # grouped as tuples for the inlined callees (a call takes at most 30 arguments there)
-    logbuf = (s.log_time, s.log_a, s.log_b, s.log_impulse, s.log_un, s.log_point, s.log_n)
+    logbuf = (
+        s.log_time, s.log_a, s.log_b, s.log_impulse, s.log_un, s.log_point, s.log_normal,
+        s.log_n,
+    )  # fmt: skip
     log_time, log_n = s.log_time, s.log_n
     cell, slot, cell_count, cell_body = s.cell, s.slot, s.cell_count, s.cell_body
     radius, mass, inv_mass, q, mobile = m.radius, m.mass, m.inv_mass, m.q, m.mobile

@@ -108,8 +108,9 @@ class State(NamedTuple):
         Simulation time [s].
     counts : (8,) int64; sums : (4,) float64
         Running statistics (:mod:`carom.engines.edmd.codes` names the slots).
-    log_time, log_a, log_b, log_impulse, log_un, log_point, log_n
-        The event log buffer, emptied by :class:`carom.World` as it fills.
+    log_time, log_a, log_b, log_impulse, log_un, log_point, log_normal, log_n
+        The event log buffer, emptied by :class:`carom.World` as it fills (``log_normal``: the
+        unit normal at the contact, from the body to its partner or face).
     """
 
     kin: NDArray[np.float64]
@@ -151,6 +152,7 @@ class State(NamedTuple):
     log_impulse: NDArray[np.float64]
     log_un: NDArray[np.float64]
     log_point: NDArray[np.float64]
+    log_normal: NDArray[np.float64]
     log_n: NDArray[np.int64]
 
 
@@ -308,6 +310,7 @@ def allocate_state(
         log_impulse=np.zeros((log_capacity, 3)),
         log_un=np.zeros((log_capacity, 2)),
         log_point=np.zeros((log_capacity, 3)),
+        log_normal=np.zeros((log_capacity, 3)),
         log_n=np.zeros(1, np.int64),
     )
 
