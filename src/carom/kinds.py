@@ -45,7 +45,7 @@ __all__ = ["Kinds"]
 _STATIC_ONLY = {SHAPE_CODES["segment"], SHAPE_CODES["chain"], SHAPE_CODES["mesh"]}
 
 
-class _Pieces2D(Shape2D):
+class _Stored:
     """A stored body's pieces as a shape, for its mass properties."""
 
     kind = "body"
@@ -57,16 +57,12 @@ class _Pieces2D(Shape2D):
         return self._pieces
 
 
-class _Pieces3D(Shape3D):
-    """A stored body's pieces as a shape, for its mass properties."""
+class _Pieces2D(_Stored, Shape2D):
+    """A 2D body's pieces as a shape."""
 
-    kind = "body"
 
-    def __init__(self, pieces: tuple[Any, ...]) -> None:
-        self._pieces = pieces
-
-    def pieces(self) -> tuple[Any, ...]:
-        return self._pieces
+class _Pieces3D(_Stored, Shape3D):
+    """A 3D body's pieces as a shape."""
 
 
 class _World(_Running, Protocol):
