@@ -686,7 +686,9 @@ def _vectors(
 def per_body(world: Any, name: str, fill: Callable[[int], NDArray[Any]]) -> NDArray[Any]:
     """The world's per-body array kept as attribute ``name``, grown with ``fill(k)`` (k
     rows of its default) to the world's bodies (bodies added since it was set)."""
-    array: NDArray[Any] = getattr(world, name, fill(0))
+    array: NDArray[Any] | None = getattr(world, name, None)
+    if array is None:
+        array = fill(0)
     if array.shape[0] < world.n_bodies:
         array = np.concatenate((array, fill(world.n_bodies - array.shape[0])))
         setattr(world, name, array)

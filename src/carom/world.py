@@ -106,7 +106,7 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
         """The World's own start (:class:`Scenery` sets the rest): no bodies, no engine."""
         self.bodies = Bodies(self.dim)
         self._engine: Engine | None = None
-        self._built_with: Any = None  # the settings it was built with (others since: rebuilt)
+        self._built_with: Any = None  # (name, settings) it was built with (others: rebuilt)
         self._time = 0.0
         self._log = CollisionLog()
         #: whether the last run got to its target (False: its stop request ended it early)
@@ -309,7 +309,8 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
     def build(self) -> Engine:
         """Build the engine now (running does it when needed), refusing bodies outside the
         box, on the wrong side of a plane, or overlapping; return it."""
-        if self._engine is not None and self._built_with is not self.settings_of(self.engine_name):
+        built = self._built_with  # (the engine's name and the settings it was built with)
+        if self._engine is not None and built[1] is not self.engine_settings.get(built[0]):
             self._invalidate()  # settings assigned since it was built: built again with them
         if self._engine is None:
             if self.bodies.n == 0:
@@ -317,7 +318,7 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
             check_body_count(self.bodies.n, "the world")
             entry = registry.pick(self.engine_choice, self)
             self._engine = entry.plug(self.dim).build(self)
-            self._built_with = self.settings_of(entry.name)
+            self._built_with = (entry.name, self.settings_of(entry.name))
         return self._engine
 
     def prepare(self) -> None:
@@ -332,8 +333,7 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
         return self._engine
 
     def counters(self) -> Counters:
-        """The engine's running totals since the world was first run (:class:`Stats` takes
-        differences of them)."""
+        """The engine's running totals since the world was first run (:class:`Stats`)."""
         base = self._counters_before
         if self._engine is None:
             return base
@@ -479,12 +479,8 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
     def _state_now(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         if self._engine is None:
             b = self.bodies
-            return (
-                b.position.copy(),
-                b.velocity.copy(),
-                b.orientation.copy(),
-                b.angular_velocity.copy(),
-            )
+            x, v, q, w = b.position, b.velocity, b.orientation, b.angular_velocity
+            return x.copy(), v.copy(), q.copy(), w.copy()
         return self._engine.sample()
 
     @property
@@ -500,7 +496,8 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
     @property
     def positions(self) -> FloatArray:
         """Centres now, (N, d) [m] (periodic: wrapped into the box)."""
-        return self._motion_now()[0]
+        only = getattr(self._engine, "sample_positions", None)  # (a rigid engine's: one copy)
+        return self._motion_now()[0] if only is None else only()
 
     @property
     def velocities(self) -> FloatArray:
@@ -597,4 +594,4 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
             return
         entry = registry.find(engine_name) if engine_name else self.engine_entry
         self._engine = entry.plug(self.dim).restore(self, engine_arrays)
-        self._built_with = self.settings_of(entry.name)
+        self._built_with = (entry.name, self.settings_of(entry.name))

@@ -927,6 +927,11 @@ class SteppedEngine:
         s, n = self.state, self.n_bodies
         return s.x[:n].copy(), s.v[:n].copy()
 
+    def sample_positions(self) -> FloatArray:
+        """The caller's bodies' centres of mass now, (n, d) [m]; a copy."""
+        x: FloatArray = self.state.x[: self.n_bodies].copy()
+        return x
+
     def sample_turns(self) -> FloatArray:
         """The caller's bodies' orientations now: (n,) angles [rad] in 2D, (n, 4) unit
         quaternions in 3D; a copy."""
