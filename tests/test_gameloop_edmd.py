@@ -249,3 +249,14 @@ def test_slow_collisions_are_not_hits() -> None:
     events = world.contact_events()
     assert events.begin.size == 1
     assert events.hit.size == 0
+
+
+def test_contact_events_asked_for_outlive_a_rebuild() -> None:
+    # spheres added between steps build the engine again: its steps still gather events
+    world = carom.World(3, [10.0, 10.0, 10.0], engine="event-driven")
+    world.add_spheres([[4.0, 5.0, 5.0]], [[1.0, 0, 0]], radius=0.1)
+    world.contact_events()
+    world.step(0.1)
+    world.add_spheres([[5.2, 5.0, 5.0]], [[-1.0, 0, 0]], radius=0.1)
+    world.step(0.5)  # the gap of 0.9 m closes at 2 m/s, 0.45 s into the step
+    assert world.contact_events().hit[["a", "b"]].tolist() == [(0, 1)]

@@ -74,6 +74,9 @@ class _Running(Protocol):
 _HAND = "_hand_steps"
 #: the attribute in which a world keeps its hit threshold [m/s]
 _THRESHOLD = "_hit_threshold"
+#: the attribute that says contact events were asked for (the event-driven engine logs its
+#: steps' collisions from then on, through rebuilds)
+_ASKED = "_events_asked"
 
 
 class GameLoop:
@@ -123,8 +126,11 @@ class GameLoop:
         step = _positive_time(dt)
         _within_limits(step, self.time)
         # contact events, once asked for (contact_events): the step's collisions, gathered
-        met = engine.events if isinstance(engine, EdmdEngine) and engine.events.on else None
+        met = engine.events if isinstance(engine, EdmdEngine) else None
+        if met is not None and not (met.on or getattr(self, _ASKED, False)):
+            met = None  # (not asked for: the steps log nothing)
         if met is not None:
+            met.on = True  # (an engine built again since they were asked for)
             met.threshold = float(getattr(self, _THRESHOLD, 1.0))
             met.gathering = True
             sink = sink or _no_sink  # (the engine logs its collisions only for a sink)
@@ -172,6 +178,7 @@ class GameLoop:
         if not isinstance(engine, SteppedEngine | EdmdEngine):
             raise CaromError(_NOT_YET_EVENTS)
         engine.events.on = True
+        setattr(self, _ASKED, True)
         return engine.events.last
 
     @property
