@@ -169,6 +169,23 @@ def test_forces_given_before_a_rebuild_act_in_the_next_step() -> None:
     np.testing.assert_allclose(world.velocities[a] - v0, [0.0, (30.0 - 2 * G) * DT], atol=1e-14)
 
 
+def test_a_refused_switch_keeps_the_forces_given_once() -> None:
+    world = _world()
+    a = world.add_body(Box(1.0, 1.0), [5.0, 5.0])  # 1 kg
+    world.add_body(Box(1.0, 1.0), [9.0, 5.0], kind="static")
+    inside = world.add_body(Box(1.0, 1.0), [9.2, 5.0], kind="static")
+    world.step()
+    v0 = world.velocities[a].copy()
+    world.apply_forces([a], [0.0, 30.0])
+    with pytest.raises(CaromError, match="overlap"):
+        world.set_kind(inside, "dynamic")
+    world.step()  # the force acts once: dv = (F / m - g) dt
+    np.testing.assert_allclose(world.velocities[a] - v0, [0.0, (30.0 - G) * DT], atol=1e-14)
+    world.add_body(Circle(0.1), [2.0, 2.0])  # a rebuild later adds nothing
+    world.step()
+    np.testing.assert_allclose(world.velocities[a] - v0, [0.0, (30.0 - 2 * G) * DT], atol=1e-14)
+
+
 def test_bad_switches_are_refused_and_change_nothing() -> None:
     world = _world()
     box = world.add_body(Box(1.0, 1.0), [5.0, 5.0])
@@ -196,6 +213,8 @@ def test_bad_switches_are_refused_and_change_nothing() -> None:
     assert world.engine is engine
     assert world.positions.tobytes() == before.tobytes()
     assert world.bodies.kind.tobytes() == kinds.tobytes()
+    world.set_kind(box, "dynamic")  # already: nothing to do, the engine stays
+    assert world.engine is engine
     assert world.body(box).kind == "dynamic"
     world.step()  # and steps on
     spheres = carom.World(2, [1.0, 1.0], engine="event-driven")

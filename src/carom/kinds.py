@@ -131,6 +131,8 @@ class Kinds:
                     f"body {i} is a segment, chain or mesh: a surface, static only; a body "
                     "of it that moves needs an area or volume (a Polygon, a Hull)"
                 )
+        if np.all(table.kind[rows] == code) and density is None and mass is None:
+            return  # (nothing to switch: the engine is not built again)
         masses, inertias = self._masses(rows, code, density, mass)
         before = engine.energy_of(rows)
         kept = _kept_of(self)
@@ -152,7 +154,9 @@ class Kinds:
             kept.update(undo[0])
             table.restore_kinds(undo[1])
             # the engine as it was, never told
-            self.__dict__.update(_engine=engine, _counters_before=undo[2], _time=undo[3])
+            self.__dict__.update(
+                _engine=engine, _counters_before=undo[2], _time=undo[3], _loads_kept=None
+            )
             raise
         built.book_work(built.energy_of(rows) - before)
 
