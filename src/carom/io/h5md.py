@@ -16,7 +16,7 @@ Layout written (de Buyl et al., Comput. Phys. Commun. 185, 1546, 2014; nongnu.or
                               (V, 2) [m] in the body's frame about its centre of mass
     /particles/all/joints     the joints (when there are any), time-independent: kind (J,)
                               strings ("revolute", ...; "removed"), bodies (J, 2) (-1: the
-                              world), anchors (J, 2, 2) [m] in each body's frame about its
+                              world), anchors (J, 2, d) [m] in each body's frame about its
                               centre of mass (a world point for the world)
     /particles/all/radius     (N,) [m]    time-independent
     /particles/all/mass       (N,) [kg]   (inf for static bodies)
@@ -406,6 +406,7 @@ class H5MDWriter:
 def _write_joints(group: Any, world: World, h5py: Any) -> None:
     """The world's joints into ``group`` (the module docstring's layout)."""
     from carom.engines.rigid import joints as rows2
+    from carom.engines.rigid3d import joints as rows3
     from carom.engines.stepped import joints as shared
 
     ints, floats = world.joint_rows
@@ -415,7 +416,10 @@ def _write_joints(group: Any, world: World, h5py: Any) -> None:
     ]
     group.create_dataset("kind", data=np.array(names, dtype=h5py.string_dtype()))
     group.create_dataset("bodies", data=ints[:, [shared.J_A, shared.J_B]])
-    anchors = floats[:, rows2.LAX : rows2.LBY + 1].reshape(-1, 2, 2)
+    if world.dim == 2:
+        anchors = floats[:, rows2.LAX : rows2.LBY + 1].reshape(-1, 2, 2)
+    else:
+        anchors = floats[:, rows3.LA : rows3.LB + 3].reshape(-1, 2, 3)
     group.create_dataset("anchors", data=anchors).attrs["unit"] = "m"
 
 

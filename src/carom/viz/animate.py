@@ -201,7 +201,7 @@ class TrajectoryScene:
     ) -> None:
         self.dim, self.box, self.periodic = dim, box, periodic
         #: the joints, drawn as lines (:func:`carom.joints.joint_lines`): their rows (J, 4)
-        #: and local anchors (J, 4), or None
+        #: and local anchors (J, 2 d), or None
         self.joints = joints
         self.radius = radius
         self.moving = np.isfinite(mass)
@@ -239,7 +239,8 @@ class TrajectoryScene:
             ints = np.zeros((len(kinds), 4), np.int64)
             ints[:, 0] = [0 if k != "removed" else -1 for k in kinds]
             ints[:, 1:3] = stored_joints["bodies"][:]
-            joints = (ints, np.asarray(stored_joints["anchors"][:], dtype=float).reshape(-1, 4))
+            anchors = np.asarray(stored_joints["anchors"][:], dtype=float)
+            joints = (ints, anchors.reshape(len(kinds), -1))  # (J, 2 d): A's, then B's
         return cls(
             int(box.attrs["dimension"]),
             np.asarray(box["edges"][:], dtype=float),
@@ -580,7 +581,7 @@ class _Painter:
         )
         self.ax.add_collection(self.shapes)
         self.ax.add_collection(self.insets)
-        # the joints (2D): a line from each body's centre to its anchor, anchor to anchor
+        # the joints: a line from each body's centre to its anchor, anchor to anchor
         self.joints: Any = LineCollection([], colors="#2a9d8f", linewidths=1.1, zorder=4)
         self.ax.add_collection(self.joints)
         self.fig.text(0.04, 0.965, title, fontsize=13, weight="bold")
@@ -601,6 +602,22 @@ class _Painter:
         self.fig.canvas.draw()
         self.still = cast(Any, self.fig.canvas).copy_from_bbox(self.fig.bbox)
 
+    def _joint_lines(self, positions: FloatArray, angles: FloatArray | None) -> FloatArray:
+        """The joints as lines on the picture (K, 4, 2): each from A's centre through the
+        anchors to B's centre (:func:`carom.joints.joint_lines`), seen through the camera in
+        3D."""
+        assert self.scene.joints is not None
+        if self.camera is None:
+            turn = np.zeros(len(positions)) if angles is None else np.asarray(angles, float)
+            return joint_lines(*self.scene.joints, positions, turn)
+        turns = np.asarray(angles, float) if angles is not None else None
+        if turns is None:
+            turns = np.zeros((len(positions), 4))
+            turns[:, 0] = 1.0  # (unturned)
+        lines = joint_lines(*self.scene.joints, positions, turns)
+        screen, _ = self.camera.project(lines.reshape(-1, 3))
+        return screen.reshape(-1, 4, 2)
+
     def draw(
         self,
         t: float,
@@ -620,9 +637,8 @@ class _Painter:
             self.shapes.set_facecolor(colour * 0.72)
             self.shapes.set_edgecolor(colour * 0.45)
             self.insets.set_facecolor(colour + (1.0 - colour) * 0.12)
-        if scene.joints is not None and scene.dim == 2:
-            turn = np.zeros(len(positions)) if angles is None else np.asarray(angles, float)
-            self.joints.set_segments(list(joint_lines(*scene.joints, positions, turn)))
+        if scene.joints is not None:
+            self.joints.set_segments(list(self._joint_lines(positions, angles)))
         if self.camera is not None and len(scene.facets.body):
             turns = np.zeros((len(positions), 4)) if angles is None else np.asarray(angles)
             self._draw_faces(positions, turns, every)
