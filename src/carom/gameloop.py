@@ -77,6 +77,8 @@ _THRESHOLD = "_hit_threshold"
 #: the attribute that says contact events were asked for (the event-driven engine logs its
 #: steps' collisions from then on, through rebuilds)
 _ASKED = "_events_asked"
+#: the attribute in which a world keeps the loads of an engine it dropped (World._invalidate)
+_LOADS_KEPT = "_loads_kept"
 
 
 class GameLoop:
@@ -126,11 +128,9 @@ class GameLoop:
         step = _positive_time(dt)
         _within_limits(step, self.time)
         # contact events, once asked for (contact_events): the step's collisions, gathered
-        met = engine.events if isinstance(engine, EdmdEngine) else None
-        if met is not None and not (met.on or getattr(self, _ASKED, False)):
-            met = None  # (not asked for: the steps log nothing)
+        asked = getattr(self, _ASKED, False)  # (else the steps log nothing)
+        met = engine.events if isinstance(engine, EdmdEngine) and asked else None
         if met is not None:
-            met.on = True  # (an engine built again since they were asked for)
             met.threshold = float(getattr(self, _THRESHOLD, 1.0))
             met.gathering = True
             sink = sink or _no_sink  # (the engine logs its collisions only for a sink)
@@ -177,7 +177,8 @@ class GameLoop:
         engine = self.build()
         if not isinstance(engine, SteppedEngine | EdmdEngine):
             raise CaromError(_NOT_YET_EVENTS)
-        engine.events.on = True
+        if isinstance(engine, SteppedEngine):
+            engine.events.on = True
         setattr(self, _ASKED, True)
         return engine.events.last
 
@@ -208,6 +209,16 @@ class GameLoop:
         return int(count) if kept is engine else 0
 
     # -- reaching bodies between steps ------------------------------------------------------
+
+    def hand_over_loads(self: _Running) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+        """The forces and torques given for the next step to an engine this world dropped to
+        build it again (bodies added, kinds switched), once: for the new engine
+        (:func:`carom.engines.stepped.assemble.checked_start`); None when there are none."""
+        kept: tuple[NDArray[np.float64], NDArray[np.float64]] | None = getattr(
+            self, _LOADS_KEPT, None
+        )
+        setattr(self, _LOADS_KEPT, None)
+        return kept
 
     def body(self: _Running, index: int) -> Body:
         """A light handle on body ``index`` (:class:`Body`): read and set its motion, push it."""

@@ -320,8 +320,10 @@ class Queries:
 def _cast_2d(
     shape: Any, origin: NDArray[np.float64], angle: float, orientation: ArrayLike | None
 ) -> tuple[tuple[NDArray[Any], ...], NDArray[np.float64], float, NDArray[np.float64]]:
-    """A 2D shape to cast: its pieces' arrays (the 2D kernel's), its corners placed, its
-    largest rounding radius [m], and its pose (x, y, angle)."""
+    """A 2D shape to cast: its pieces' arrays (the 2D kernel's, as its one-body model keeps
+    them), its corners placed, its largest rounding radius [m], and its pose (x, y, angle)."""
+    from carom.engines.rigid.model import build_model
+    from carom.laws.kinds import KIND_DYNAMIC
     from carom.shapes import Segment, Shape2D
 
     if not isinstance(shape, Shape2D) or isinstance(shape, Segment):
@@ -334,21 +336,15 @@ def _cast_2d(
     turn = _finite("angle", angle, 2)
     if turn.shape != ():
         raise CaromError(f"angle must be one number [rad]; got {angle!r}")
-    pieces = shape.pieces()
-    corners = [np.asarray(p.vertices, np.float64) for p in pieces]
-    counts = np.array([len(c) for c in corners], np.int64)
-    # (a circle's one corner has no edge: a row of zeros, as the engine's model keeps)
-    edges = [
-        p.normals if len(c) > 1 else np.zeros((1, 2)) for p, c in zip(pieces, corners, strict=True)
-    ]
+    none = np.zeros((1, 1))
+    model = build_model(
+        [shape.pieces()], np.array([KIND_DYNAMIC]), np.ones(1), np.ones(1),
+        np.zeros(1, np.int64), none, none, np.zeros(2),
+    )  # fmt: skip
     cast = (
-        np.concatenate(corners),
-        np.concatenate(edges),
-        np.concatenate(([0], np.cumsum(counts)[:-1])).astype(np.int64),
-        counts,
-        np.array([p.radius for p in pieces], np.float64),
-        np.array([p.reach for p in pieces], np.float64),
-    )
+        model.local_vertices, model.local_normals, model.piece_start, model.piece_count,
+        model.piece_radius, model.piece_reach,
+    )  # fmt: skip
     c, s = math.cos(float(turn)), math.sin(float(turn))
     placed = cast[0] @ np.array([[c, s], [-s, c]]) + origin
     return cast, placed, float(cast[4].max()), np.array([origin[0], origin[1], float(turn)])

@@ -563,11 +563,17 @@ class EdmdEngine:
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """The caller's ``bodies`` (k,) at the clock: positions (k, d), velocities (k, d),
         orientations ((k, 1) angles or (k, 4) quaternions) and spins (k, 3); nothing moves."""
-        k, dim = bodies.shape[0], self.env.dim
-        out = (np.empty((k, dim)), np.empty((k, dim)), np.empty((k, 4 if dim == 3 else 1)))
-        w = np.empty((k, 3))
-        bodies_now(self.handle, self._engine_rows(bodies), *out, w)
-        return (*out, w)
+        return self._motion(self._engine_rows(bodies))
+
+    def _motion(
+        self, rows: NDArray[np.int64]
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """:meth:`motion_of` for engine ``rows`` (k,)."""
+        k, dim = rows.shape[0], self.env.dim
+        x, v = np.empty((1, k, dim)), np.empty((1, k, dim))  # (frame 0 of a sample)
+        orient, w = np.empty((k, 4 if dim == 3 else 1)), np.empty((k, 3))
+        bodies_now(self.handle, rows, x, v, orient, w)
+        return x[0], v[0], orient, w
 
     def set_motion(self, bodies: NDArray[np.int64], field: str, values: FloatArray) -> None:
         """Give the caller's mobile ``bodies`` (k,) new ``values`` of ``field`` at the clock:
@@ -581,7 +587,9 @@ class EdmdEngine:
             A spin or orientation in a world whose spheres do not spin; a position outside
             the box or the planes, or overlapping another sphere. Nothing has changed then.
         """
-        x, v, orient, w = self.motion_of(bodies)
+        rows = self._engine_rows(bodies)
+        x, v, orient, w = self._motion(rows)
+        before = self._kinetic(bodies, v, w)
         if field == "x":
             x = self._placed(bodies, values)
         elif field == "v":
@@ -597,7 +605,7 @@ class EdmdEngine:
                 orient = values
             else:  # "angle"
                 orient = values.reshape(-1, 1)
-        self._give(bodies, x, v, orient, w, moved=field == "x")
+        self._give(bodies, rows, (x, v, orient, w), before, moved=field == "x")
 
     def apply_impulses(
         self, bodies: NDArray[np.int64], impulses: FloatArray, points: FloatArray | None
@@ -613,7 +621,8 @@ class EdmdEngine:
             An impulse off the centre of a sphere that does not spin (a world without spins).
             Nothing has changed then.
         """
-        x, v, orient, w = self.motion_of(bodies)
+        rows = self._engine_rows(bodies)
+        x, v, orient, w = self._motion(rows)
         b = self.bodies
         inv_mass = 1.0 / b.mass[bodies]
         dim = self.env.dim
@@ -631,29 +640,32 @@ class EdmdEngine:
                 raise CaromError(_NO_SPINS + "; or give the impulse at the centre (no point)")
         # in order: a body given twice takes both, the second after the first
         _, first, into = np.unique(bodies, return_index=True, return_inverse=True)
+        before = self._kinetic(bodies[first], v[first], w[first])
         for r in range(bodies.shape[0]):
             j = first[into[r]]
             v[j] = v[j] + impulses[r] * inv_mass[r]
             w[j] = w[j] + turns[r]
-        self._give(bodies[first], x[first], v[first], orient[first], w[first], moved=False)
+        motion = (x[first], v[first], orient[first], w[first])
+        self._give(bodies[first], rows[first], motion, before, moved=False)
 
     def _give(
-        self, bodies: NDArray[np.int64], x: FloatArray, v: FloatArray, orient: FloatArray,
-        w: FloatArray, *, moved: bool,
+        self, bodies: NDArray[np.int64], rows: NDArray[np.int64],
+        motion: tuple[FloatArray, ...], before: float, *, moved: bool,
     ) -> None:  # fmt: skip
-        """New motion for the caller's ``bodies`` at the clock, the change in their kinetic
-        energy booked as work done, their events predicted again."""
-        before = self._kinetic(bodies)
-        rows = self._engine_rows(bodies)
-        arrays = [np.ascontiguousarray(a, dtype=np.float64) for a in (x, v, orient, w)]
+        """New ``motion`` (positions, velocities, orientations, spins) at the clock for the
+        caller's ``bodies``, engine ``rows``, whose kinetic energy was ``before`` [J]: the
+        change booked as work done, their events predicted again."""
+        arrays = [np.ascontiguousarray(a, dtype=np.float64) for a in motion]
         while (status := set_bodies(self.handle, rows, *arrays, moved)) != FITS:  # type: ignore[call-arg]
             self._grow(codes.LISTS_FULL if status == LIST_FULL else codes.CELLS_FULL)
             self.resize_grid(self.capacity, self.cell_capacity)
-        self.state.sums[codes.S_WORK] += self._kinetic(bodies) - before
+        # (the bodies hold these velocities and spins now, bit for bit)
+        after = self._kinetic(bodies, arrays[1], arrays[3])
+        self.state.sums[codes.S_WORK] += after - before
 
-    def _kinetic(self, bodies: NDArray[np.int64]) -> float:
-        """Kinetic energy of the caller's ``bodies`` at the clock [J], spin included."""
-        _, v, _, w = self.motion_of(bodies)
+    def _kinetic(self, bodies: NDArray[np.int64], v: FloatArray, w: FloatArray) -> float:
+        """Kinetic energy [J] of the caller's ``bodies`` (k,) at velocities ``v`` (k, d) and
+        spins ``w`` (k, 3)."""
         b = self.bodies
         mass = b.mass[bodies]
         spin = b.inertia_factor[bodies] * mass * b.radius[bodies] ** 2

@@ -26,9 +26,8 @@ class EdmdEvents:
     def __init__(self, n: int, d: int) -> None:
         self.n, self.d = n, d
         self.dtypes = event_dtypes(d)
-        #: whether a game loop's steps gather events (once asked for: other runs never do)
-        self.on = False
-        #: whether the engine gathers now (during a game loop's step)
+        #: whether the engine gathers now (during a game loop's step, once events were asked
+        #: for: other runs never do)
         self.gathering = False
         #: the least approach speed of a hit [m/s]
         self.threshold = 1.0

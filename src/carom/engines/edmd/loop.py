@@ -335,7 +335,7 @@ def run_frames(  # type: ignore[no-untyped-def]
 
 
 @njit_inlined
-def _motion_at(x, v, t, acc, box, periodic, t_f, f, i, r, x_out, v_out) -> None:  # type: ignore[no-untyped-def]
+def motion_at(x, v, t, acc, box, periodic, t_f, f, i, r, x_out, v_out) -> None:  # type: ignore[no-untyped-def]
     """Body ``i``'s position and velocity at ``t_f`` [s] into ``[f, r]`` of ``x_out`` and
     ``v_out`` (periodic positions wrapped into the box)."""
     dt = t_f - t[i]
@@ -362,7 +362,7 @@ def write_frame(  # type: ignore[no-untyped-def]
     frame = orient_out[f]
     for i in range(x.shape[0]):
         r = order[i]
-        _motion_at(x, v, t, acc, box, periodic, t_f, f, i, r, x_out, v_out)
+        motion_at(x, v, t, acc, box, periodic, t_f, f, i, r, x_out, v_out)
         if w is None:  # no spins: every orientation is the identity (pruned otherwise)
             for k in range(frame.shape[1]):
                 frame[r, k] = 1.0 if k == 0 and dim == 3 else 0.0
@@ -382,4 +382,4 @@ def write_motion(kin, acc, box, periodic, order, t_f, f, t_out, x_out, v_out) ->
     t_out[f] = t_f
     x, v, t = kinematic_views(kin, box.shape[0])
     for i in range(x.shape[0]):
-        _motion_at(x, v, t, acc, box, periodic, t_f, f, i, order[i], x_out, v_out)
+        motion_at(x, v, t, acc, box, periodic, t_f, f, i, order[i], x_out, v_out)

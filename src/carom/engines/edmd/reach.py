@@ -11,11 +11,11 @@ new parabola from the clock on, to round-off.
 
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
 from carom.engines.edmd.calendar import calendar_update
 from carom.engines.edmd.codes import C_SHELL
+from carom.engines.edmd.loop import motion_at
 from carom.engines.edmd.neighbours import FITS, rebuild_shell
 from carom.engines.edmd.predict import (
     calendar_of,
@@ -33,33 +33,27 @@ __all__ = ["bodies_now", "set_bodies"]
 
 @njit(cache=True, error_model="numpy")
 def bodies_now(h, rows, x_out, v_out, orient_out, w_out) -> None:  # type: ignore[no-untyped-def]
-    """Engine rows ``rows`` (k,): position (k, d), velocity (k, d), orientation (k, 1) or
-    (k, 4) and spin (k, 3) at the engine's clock, into the outputs (nothing moves)."""
+    """Engine rows ``rows`` (k,): position and velocity (1, k, d) (as frame 0 of a sample,
+    :func:`carom.engines.edmd.loop.write_frame`), orientation (k, 1) or (k, 4) and spin
+    (k, 3) at the engine's clock, into the outputs (nothing moves)."""
     m, s = h.model, h.state
     _now(
-        rows, s.kin, s.acc, m.gravity, s.w, s.orient, s.orient_t, m.box, m.periodic,
-        s.clock[0], x_out, v_out, orient_out, w_out,
+        rows, s.kin, s.acc, s.w, s.orient, s.orient_t, m.box, m.periodic, s.clock[0], x_out,
+        v_out, orient_out, w_out,
     )  # fmt: skip
 
 
 @njit(cache=True, error_model="numpy")
 def _now(  # type: ignore[no-untyped-def]
-    rows, kin, acc, gravity, w, orient, orient_t, box, periodic, T, x_out, v_out, orient_out,
-    w_out,
+    rows, kin, acc, w, orient, orient_t, box, periodic, T, x_out, v_out, orient_out, w_out
 ) -> None:  # fmt: skip
-    """:func:`bodies_now` on the arrays (``gravity`` and ``w`` None when the engine has none:
+    """:func:`bodies_now` on the arrays (``acc`` and ``w`` None when the engine has none:
     a branch on an argument that is None is pruned as it compiles)."""
     dim = box.shape[0]
     x, v, t = kinematic_views(kin, dim)
     for r in range(rows.shape[0]):
         i = rows[r]
-        dt = T - t[i]
-        for k in range(dim):
-            a = 0.0 if gravity is None else acc[i, k]
-            x_out[r, k] = x[i, k] + (v[i, k] + 0.5 * a * dt) * dt
-            v_out[r, k] = v[i, k] + a * dt
-            if periodic:
-                x_out[r, k] -= box[k] * np.floor(x_out[r, k] / box[k])
+        motion_at(x, v, t, acc, box, periodic, T, 0, i, r, x_out, v_out)
         if w is None:
             for k in range(orient_out.shape[1]):
                 orient_out[r, k] = 1.0 if k == 0 and dim == 3 else 0.0

@@ -182,10 +182,10 @@ def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
     share_joints = getattr(world, "share_joints", None)  # (a World's, issue 43)
     if share_joints is not None:
         share_joints(engine)
-    kept = getattr(world, "_loads_kept", None)  # forces and torques given before a rebuild
+    hand_over = getattr(world, "hand_over_loads", None)  # (a World's, issue 43)
+    kept = hand_over() if hand_over is not None else None
     if kept is not None:
         engine.take_loads(kept)
-        world._loads_kept = None  # type: ignore[attr-defined]
     alive = getattr(world, "alive", None)
     if alive is not None and not np.all(alive):
         engine.retire(np.flatnonzero(~np.asarray(alive)))
