@@ -15,6 +15,7 @@ from tqdm import tqdm
 
 from carom.compare.closed_form import Expectation, expectation
 from carom.compare.engines import ENGINES, EngineEntry, engine
+from carom.compare.jointed import JointGauge
 from carom.compare.monitor import Monitor
 from carom.compare.rigid import ImpactCheck, RigidMonitor, RigidScene, impact_expectation
 from carom.compare.rigid3d import (
@@ -159,6 +160,9 @@ class RigidComparison:
             "bodies": self.scene.n,
             "until_s": self.scene.until,
             "closed_form": None if check is None else check.source,
+            "joint_closed_form": (
+                JointGauge(self.scene).source if self.scene.joint_ints.shape[0] else None
+            ),
             "checks": []
             if check is None
             else [
@@ -233,9 +237,10 @@ def compare(
     names = list(engines) if engines is not None else default_engines(spec.dim, kind)
     chosen: list[EngineEntry] = []
     skipped: dict[str, str] = {}
+    jointed = isinstance(spec, RigidScene | RigidScene3D) and spec.joint_ints.shape[0] > 0
     for name in names:
         e = engine(name)
-        problem = e.unable(spec.dim, kind)
+        problem = e.unable(spec.dim, kind, jointed)
         if problem is not None:
             if asked:
                 raise CaromError(problem)

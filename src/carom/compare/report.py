@@ -81,31 +81,53 @@ def format_table(comparison: Comparison | RigidComparison) -> str:
 
 
 def format_rigid_table(comparison: RigidComparison) -> str:
-    """A rigid comparison as a fixed-width table, one row per engine."""
+    """A rigid comparison as a fixed-width table, one row per engine (a scene with joints
+    adds the joint gap and the error against the joints' closed forms)."""
     spec = comparison.scene
     check = comparison.expected
+    jointed = spec.joint_ints.shape[0] > 0
+    forms = [check.source] if check is not None else []
+    if jointed:
+        from carom.compare.jointed import JointGauge
+
+        said = JointGauge(spec).source
+        forms += [said] if said else []
+    head = (
+        f"{'engine':<9} {'version':<8} {'Hz':>5} {'v err':>8} {'w err':>8} {'E gained':>8} "
+        f"{'overlap':>8} {'through':>7} {'top moved':>9} {'max turn':>8} "
+    )
+    if jointed:
+        head += f"{'joint gap':>9} {'form err':>8} "
     lines = [
         f"{spec.name}: {_bodies(spec.n)}, {spec.dim}D rigid, {spec.until:g} s simulated "
         f"(carom at {1.0 / spec.dt:g} Hz)",
-        f"closed form: {check.source if check is not None else 'none'}",
+        f"closed form: {'; '.join(forms) if forms else 'none'}",
         "",
-        f"{'engine':<9} {'version':<8} {'Hz':>5} {'v err':>8} {'w err':>8} {'E gained':>8} "
-        f"{'overlap':>8} {'through':>7} {'top moved':>9} {'max turn':>8} {'ms/step':>8} "
-        f"{'/ carom':>7}",
+        head + f"{'ms/step':>8} {'/ carom':>7}",
     ]
     for name, run in comparison.engines.items():
         m = run["metrics"]
         ratio = _to_carom(comparison.engines, run)
-        lines.append(
+        row = (
             f"{name:<9} {run['version']:<8} {1.0 / run['dt_s']:>5.4g} "
             f"{format_number(m['velocity_error']):>8} "
             f"{format_number(m['omega_error']):>8} {format_number(m['energy_gain']):>8} "
             f"{format_number(m['max_overlap_m']):>8} {m['bodies_through_static']:>7} "
             f"{m['top_drift_m']:>8.3g}m {m['max_rotation_deg']:>7.3g}° "
-            f"{run['ms_per_step']:>8.3g} {ratio:>7}"
         )
+        if jointed:
+            row += f"{format_number(m['joint_gap_m']):>8}m {format_number(m['joint_error']):>8} "
+        lines.append(row + f"{run['ms_per_step']:>8.3g} {ratio:>7}")
     for name, why in comparison.skipped.items():
         lines.append(f"{name:<9} skipped: {why}")
+    joints = (
+        "joint gap: the largest break of any joint over the run [m] (a pin's anchors apart, a "
+        "rod's length off, a rope past its length, a slider off its axis); form err: the "
+        "largest relative error against the joints' closed forms (a lone pendulum's period; "
+        "the cradle's |1 - out| and the others' speed, over the strike speed); "
+        if jointed
+        else ""
+    )
     lines += [
         "",
         "Hz: the engine's steps per second; v err, w err: |v - v_exact| and |w - w_exact| x "
@@ -113,8 +135,8 @@ def format_rigid_table(comparison: RigidComparison) -> str:
         "largest rise of kinetic plus potential energy over E(0); overlap: deepest overlap "
         "seen [m] (carom's exact geometry on each engine's poses); through: bodies whose "
         "centre crossed a static body; top moved: the highest body's distance from its start "
-        "at the end; max turn: largest rotation of any body; ms/step: time inside the step "
-        "calls per step; / carom: time inside the step calls "
+        f"at the end; max turn: largest rotation of any body; {joints}ms/step: time inside "
+        "the step calls per step; / carom: time inside the step calls "
         "for the whole run over carom's (the same simulated time)",
     ]
     return "\n".join(lines)

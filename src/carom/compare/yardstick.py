@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol, Self
 import numpy as np
 from numpy.typing import NDArray
 
+from carom.compare.jointed import JointGauge, JointSpec, joint_specs
 from carom.compare.spec import steps_to
 from carom.engines.stepped.settings import RigidSettings
 from carom.errors import CaromError
@@ -106,6 +107,9 @@ class RigidSceneBase:
         [m/s^2], ``position`` and ``velocity`` [m], [m/s] (centres of mass).
     world : callable
         A fresh copy of the scene's :class:`World`, not yet run.
+    joint_ints, joint_floats : ndarray
+        The world's joint rows (J, 4) and (J, F) (:attr:`carom.World.joint_rows`); the
+        :attr:`joints` property reads them as :class:`~carom.compare.jointed.JointSpec`.
 
     A dimension's scene adds its bodies' ``pieces`` (each body's convex pieces in its frame,
     centre of mass at the origin [m]) and says how its engine's parts are read
@@ -120,6 +124,8 @@ class RigidSceneBase:
     model: Any = field(compare=False, repr=False)
     start: Any = field(compare=False, repr=False)
     world: Callable[[], World] = field(compare=False, repr=False)
+    joint_ints: IntArray = field(compare=False, repr=False)
+    joint_floats: FloatArray = field(compare=False, repr=False)
 
     #: 2 or 3
     dim: ClassVar[int]
@@ -131,6 +137,7 @@ class RigidSceneBase:
         """Read the world ``build()`` makes, as its rigid engine would start."""
         world = build()
         model, state = cls._parts(world)
+        joint_ints, joint_floats = world.joint_rows
         return cls(
             name=name,
             title=title or name,
@@ -140,6 +147,8 @@ class RigidSceneBase:
             model=model,
             start=state,
             world=functools.partial(copy.deepcopy, world),
+            joint_ints=joint_ints,
+            joint_floats=joint_floats,
             pieces=cls._pieces(model),  # type: ignore[call-arg]
         )
 
@@ -163,6 +172,12 @@ class RigidSceneBase:
     gravity = property(lambda self: self.model.gravity)
     position = property(lambda self: self.start.x)
     velocity = property(lambda self: self.start.v)
+
+    @property
+    def joints(self) -> tuple[JointSpec, ...]:
+        """The live joints in world terms at the start, for the peers to build."""
+        turn = self.start.angle if self.dim == 2 else self.start.q
+        return joint_specs(self.joint_ints, self.joint_floats, self.position, turn)
 
     @property
     def bodies(self) -> int:
@@ -331,6 +346,7 @@ class Yardstick:
     def __init__(self, scene: Any, expected: Expectation | None, dt: float) -> None:
         self.scene = scene
         self.expected = expected
+        self.joints = JointGauge(scene) if scene.joint_ints.shape[0] else None
         dyn = np.nonzero(scene.kind[: scene.n] == KIND_DYNAMIC)[0]
         top = self._setup(dyn)
         self._begin(dt, dyn, top, extent(scene.pieces[top]) if top >= 0 else 1.0)
@@ -426,6 +442,8 @@ class Yardstick:
             if gap < self._best[0]:
                 moved = v[check.body] + scene.gravity * (check.time - time)
                 self._best = (gap, moved, np.array(spin[check.body], float))
+        if self.joints is not None:
+            self.joints.observe(time, x, v, turn)
         if self.steps % self._every == 0:
             self.series["time"].append(time)
             self.series["translation"].append(translation)
@@ -446,7 +464,12 @@ class Yardstick:
             omega_error = miss * check.reach / check.speed
         e0 = self.energy0 if self.energy0 is not None else 0.0
         scale = abs(e0) if e0 != 0.0 else 1.0
+        joints: dict[str, Any] = {"joint_gap_m": None, "pendulums": [], "cradle": None}
+        if self.joints is not None:
+            joints = self.joints.result()
         return {
+            **joints,
+            "joint_error": None if self.joints is None else self.joints.error(),
             "velocity_error": velocity_error,
             "omega_error": omega_error,
             "energy_gain": self.energy_gain / scale,

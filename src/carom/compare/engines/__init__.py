@@ -72,6 +72,8 @@ class EngineEntry:
         Its module's name, when not the distribution's.
     rigid_dims : tuple of int
         Dimensions of the rigid scenes it takes (default: ``dims``).
+    joints : bool
+        Whether it is given a rigid scene's joints (:mod:`carom.compare.jointed`).
     """
 
     name: str
@@ -81,6 +83,7 @@ class EngineEntry:
     kinds: tuple[str, ...] = ("spheres",)
     import_name: str = ""
     rigid_dims: tuple[int, ...] = ()
+    joints: bool = False
 
     def missing(self) -> str | None:
         """None when installed, else why not and how to install it."""
@@ -88,9 +91,9 @@ class EngineEntry:
             return f"{self.name} is not installed; pip install 'carom[compare]'"
         return None
 
-    def unable(self, dim: int, kind: str = "spheres") -> str | None:
+    def unable(self, dim: int, kind: str = "spheres", joints: bool = False) -> str | None:
         """None when installed and able to simulate ``dim`` dimensions of ``kind`` bodies
-        (``"spheres"`` or ``"rigid"``), else why not."""
+        (``"spheres"`` or ``"rigid"``), with ``joints`` if asked, else why not."""
         problem = self.missing()
         if problem is None and dim not in self.dims:
             problem = f"{self.name} simulates {' and '.join(f'{d}D' for d in self.dims)} only"
@@ -101,6 +104,9 @@ class EngineEntry:
         if problem is None and kind == "rigid" and dim not in rigid_dims:
             dims = " and ".join(f"{d}D" for d in rigid_dims)
             problem = f"{self.name} is compared on rigid bodies in {dims} only"
+        if problem is None and joints and not self.joints:
+            takers = ", ".join(e.name for e in ENGINES.values() if e.joints)
+            problem = f"{self.name} is not given carom's joints in a comparison ({takers} are)"
         return problem
 
     def takes(self, dim: int, kind: str = "spheres") -> bool:
@@ -122,8 +128,10 @@ class EngineEntry:
         """Set the engine up for ``scene`` (a :class:`Simulation`; for a rigid scene its
         ``state()`` also gives angles (3D: quaternions ``(w, x, y, z)``) and angular
         velocities)."""
-        kind = "rigid" if isinstance(scene, RigidScene | RigidScene3D) else "spheres"
-        problem = self.unable(scene.dim, kind)
+        rigid = isinstance(scene, RigidScene | RigidScene3D)
+        kind = "rigid" if rigid else "spheres"
+        jointed = rigid and scene.joint_ints.shape[0] > 0  # type: ignore[union-attr]
+        problem = self.unable(scene.dim, kind, jointed)
         if problem is not None:
             raise CaromError(f"{problem}; scene {scene.name!r} is {scene.dim}D {kind}")
         module = importlib.import_module(self.module)
@@ -135,10 +143,20 @@ ENGINES: dict[str, EngineEntry] = {
     e.name: e
     for e in (
         EngineEntry(
-            "carom", "carom", (2, 3), "carom.compare.engines.carom_engine", ("spheres", "rigid")
+            "carom",
+            "carom",
+            (2, 3),
+            "carom.compare.engines.carom_engine",
+            ("spheres", "rigid"),
+            joints=True,
         ),
         EngineEntry(
-            "pymunk", "pymunk", (2,), "carom.compare.engines.pymunk_engine", ("spheres", "rigid")
+            "pymunk",
+            "pymunk",
+            (2,),
+            "carom.compare.engines.pymunk_engine",
+            ("spheres", "rigid"),
+            joints=True,
         ),
         EngineEntry(
             "pybullet",
@@ -155,6 +173,7 @@ ENGINES: dict[str, EngineEntry] = {
             "carom.compare.engines.mujoco_engine",
             ("spheres", "rigid"),
             rigid_dims=(3,),
+            joints=True,
         ),
         EngineEntry(
             "rapier3d",
@@ -164,7 +183,13 @@ ENGINES: dict[str, EngineEntry] = {
             ("rigid",),
         ),
         EngineEntry(
-            "box2d", "box2d", (2,), "carom.compare.engines.box2d_engine", ("rigid",), "Box2D"
+            "box2d",
+            "box2d",
+            (2,),
+            "carom.compare.engines.box2d_engine",
+            ("rigid",),
+            "Box2D",
+            joints=True,
         ),
     )
 }

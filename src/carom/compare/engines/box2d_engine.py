@@ -13,6 +13,8 @@ recommends.
   ``max(r_a, r_b)`` rule, so that each pair gets the scene's value.
 * Continuous collision (time of impact against static bodies) on, as by default; sleeping as
   in the scene.
+* Joints as Box2D's own (:func:`_add_joints`): revolute, distance, rope, weld, prismatic and
+  wheel joints, with their limits, motors and springs, ``collideConnected`` as the joint says.
 
 Box2D 2.3 computes in single precision (float32): its answers agree with a closed form to
 about 1e-7 relative at best.
@@ -78,6 +80,7 @@ class Box2DRigidSimulation:
                 body.linearVelocity = (float(scene.velocity[i, 0]), float(scene.velocity[i, 1]))
                 body.angularVelocity = float(scene.omega[i])
             self.bodies.append(body)
+        joint_notes = _add_joints(world, self.bodies, scene)
         self.world = world
         self.n = scene.n
         self.dt = scene.dt
@@ -99,6 +102,7 @@ class Box2DRigidSimulation:
             "8 velocity and 3 position iterations at 1/60 s, the manual's suggestion",
             "massData from carom's exact mass properties (Box2D's own from density agree)",
             "Box2D 2.3 computes in float32",
+            *joint_notes,
         ]
 
     def step(self) -> None:
@@ -149,6 +153,98 @@ def _add_piece(
             f"{Box2D.b2_maxPolygonVertices}: split it into a compound"
         )
     body.CreatePolygonFixture(vertices=points, density=1.0, **surface)
+
+
+def _add_joints(world: Any, bodies: list[Any], scene: RigidScene) -> list[str]:
+    """The scene's joints as Box2D 2.3 joints; the notes on how they were built.
+
+    Anchors are world points at the start (Box2D keeps them in each body's frame, its
+    reference angles from the bodies' angles then, as carom does). A distance joint is
+    Box2D's distance joint (rigid, or a spring by ``frequencyHz`` and ``dampingRatio``), a
+    range with no least length its rope joint; a weld's angular spring is Box2D 2.3's weld
+    softness (it has no linear one, nor a revolute or prismatic spring: refused).
+    """
+    ground: Any = None
+    kinds: set[str] = set()
+    for spec in scene.joints:
+        if ground is None and min(spec.a, spec.b) < 0:
+            ground = world.CreateStaticBody(position=(0.0, 0.0))
+        a = ground if spec.a < 0 else bodies[spec.a]
+        b = ground if spec.b < 0 else bodies[spec.b]
+        pa = (float(spec.anchor_a[0]), float(spec.anchor_a[1]))
+        pb = (float(spec.anchor_b[0]), float(spec.anchor_b[1]))
+        common = {"bodyA": a, "bodyB": b, "collideConnected": spec.collide}
+        kinds.add(spec.kind)
+        unable = None
+        if spec.kind == "revolute":
+            extra: dict[str, Any] = {}
+            if spec.limits is not None:
+                extra = {
+                    "enableLimit": True,
+                    "lowerAngle": spec.limits[0],
+                    "upperAngle": spec.limits[1],
+                }
+            if spec.motor is not None:
+                extra |= {
+                    "enableMotor": True,
+                    "motorSpeed": spec.motor[0],
+                    "maxMotorTorque": spec.motor[1],
+                }
+            unable = "a revolute spring" if spec.spring is not None else None
+            world.CreateRevoluteJoint(anchor=pa, **common, **extra)
+        elif spec.kind == "distance" and spec.limits is not None and spec.limits[0] == 0.0:
+            world.CreateRopeJoint(
+                localAnchorA=a.GetLocalPoint(pa),
+                localAnchorB=b.GetLocalPoint(pb),
+                maxLength=spec.limits[1],
+                **common,
+            )
+        elif spec.kind == "distance":
+            unable = "a distance joint with a least length" if spec.limits is not None else None
+            hertz, ratio = spec.spring if spec.spring is not None else (0.0, 0.0)
+            joint = world.CreateDistanceJoint(
+                anchorA=pa, anchorB=pb, frequencyHz=hertz, dampingRatio=ratio, **common
+            )
+            joint.length = spec.length
+        elif spec.kind == "weld":
+            unable = "a weld's linear spring" if spec.spring is not None else None
+            hertz, ratio = spec.angular_spring if spec.angular_spring else (0.0, 0.0)
+            world.CreateWeldJoint(anchor=pa, frequencyHz=hertz, dampingRatio=ratio, **common)
+        elif spec.kind in ("prismatic", "wheel"):
+            assert spec.axis is not None
+            axis = (float(spec.axis[0]), float(spec.axis[1]))
+            extra = {}
+            if spec.motor is not None:
+                torque = "maxMotorForce" if spec.kind == "prismatic" else "maxMotorTorque"
+                extra = {"enableMotor": True, "motorSpeed": spec.motor[0], torque: spec.motor[1]}
+            if spec.kind == "prismatic":
+                if spec.limits is not None:
+                    extra |= {
+                        "enableLimit": True,
+                        "lowerTranslation": spec.limits[0],
+                        "upperTranslation": spec.limits[1],
+                    }
+                unable = "a prismatic spring" if spec.spring is not None else None
+                world.CreatePrismaticJoint(anchor=pa, axis=axis, **common, **extra)
+            else:
+                unable = "a wheel joint's limits" if spec.limits is not None else None
+                hertz, ratio = spec.spring if spec.spring is not None else (0.0, 0.0)
+                world.CreateWheelJoint(
+                    anchor=pa, axis=axis, frequencyHz=hertz, dampingRatio=ratio, **common, **extra
+                )
+        else:
+            unable = f"a {spec.kind} joint"
+        if unable is not None:
+            raise CaromError(
+                f"scene {scene.name!r} has {unable}, which Box2D 2.3 does not have: compare "
+                "it with pymunk"
+            )
+    if not kinds:
+        return []
+    return [
+        f"joints ({', '.join(sorted(kinds))}) as Box2D 2.3's own joints (a rope joint for a "
+        "range from 0), collideConnected as each joint says"
+    ]
 
 
 def start_rigid(scene: RigidScene) -> Box2DRigidSimulation:

@@ -24,7 +24,7 @@ import numpy as np
 
 from carom.compare.spec import PeerScene
 from carom.errors import CaromError
-from carom.geometry.rotation import rotation_matrices
+from carom.geometry.rotation import matrix_quaternion, rotation_matrices
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
 
 __all__ = ["damping_ratio", "start", "start_rigid"]
@@ -180,6 +180,12 @@ class MujocoRigidSimulation:
       to move a body it does not simulate).
     * ``implicitfast``, which the changelog (2.3.3) recommends for all new models; the
       default 0.002 s step, solver and pyramidal cone.
+    * Joints (:func:`_joint_tree`): a joint to the world is a joint of MuJoCo's tree (``ball``,
+      ``hinge``, ``slide``; a weld: none), its limits the joint's ``range``, its motor a
+      ``velocity`` actuator saturated at the motor's torque or force (:func:`_motor`); a weld
+      between two bodies nests one in the other; the other joints between two bodies are
+      ``connect`` equality constraints (:func:`_equality`). Joined pairs that may not touch
+      are excluded from contact (``<contact><exclude>``).
     """
 
     def __init__(self, scene: Any) -> None:
@@ -213,49 +219,94 @@ class MujocoRigidSimulation:
             solref = ""
         assets: list[str] = []
         world: list[str] = []
-        bodies: list[str] = []
         self.n = scene.n
         self.scene = scene
         self.time = 0.0
+        parent, loops = _joint_tree(scene)
+        if any(spec.motor is not None for spec in loops):
+            raise CaromError(
+                f"MuJoCo: scene {scene.name!r} has a motor on a joint that closes a loop; "
+                "MuJoCo drives the joints of its tree"
+            )
+        children: dict[int, list[int]] = {}
+        for child, (up, _) in sorted(parent.items()):
+            children.setdefault(up, []).append(child)
+        geoms: list[str] = []
         for i in range(scene.bodies):
             m = int(scene.material[i])
             common = f' condim="{condim}" friction="{float(mu[m])!r} 0 0"{solref}'
-            geoms = []
-            for k, part in enumerate(parts[i]):
-                geoms.append(self._geom(part, f"b{i}p{k}", common, assets))
-            if scene.kind[i] == KIND_DYNAMIC:
-                inertia = scene.inertia[i]
-                full = [inertia[0, 0], inertia[1, 1], inertia[2, 2]]
-                full += [inertia[0, 1], inertia[0, 2], inertia[1, 2]]
-                bodies.append(
-                    f'<body pos="{_numbers(scene.position[i])}" '
-                    f'quat="{_numbers(scene.orientation[i])}"><freejoint/>'
-                    f'<inertial pos="0 0 0" mass="{float(scene.mass[i])!r}" '
-                    f'fullinertia="{_numbers(full)}"/>{"".join(geoms)}</body>'
+            geoms.append(
+                "".join(
+                    self._geom(part, f"b{i}p{k}", common, assets) for k, part in enumerate(parts[i])
                 )
-            else:
+            )
+            if scene.kind[i] != KIND_DYNAMIC:
                 mocap = ' mocap="true"' if scene.kind[i] == KIND_KINEMATIC else ""
                 world.append(
                     f'<body pos="{_numbers(scene.position[i])}" '
-                    f'quat="{_numbers(scene.orientation[i])}"{mocap}>{"".join(geoms)}</body>'
+                    f'quat="{_numbers(scene.orientation[i])}"{mocap}>{geoms[i]}</body>'
                 )
+
+        def body(i: int) -> str:
+            """Body ``i`` and the bodies it carries, in its parent's frame."""
+            up, spec = parent.get(i, (-1, None))
+            r = rotation_matrices(scene.orientation[i])[0]
+            if up >= 0:
+                r_up = rotation_matrices(scene.orientation[up])[0]
+                pos = r_up.T @ (scene.position[i] - scene.position[up])
+                quat = matrix_quaternion(r_up.T @ r)
+            else:
+                pos, quat = scene.position[i], scene.orientation[i]
+            joint = "<freejoint/>" if spec is None else _tree_joint(spec, i, r, scene)
+            inertia = scene.inertia[i]
+            full = [inertia[0, 0], inertia[1, 1], inertia[2, 2]]
+            full += [inertia[0, 1], inertia[0, 2], inertia[1, 2]]
+            inner = "".join(body(c) for c in children.get(i, []))
+            return (
+                f'<body name="b{i}" pos="{_numbers(pos)}" quat="{_numbers(quat)}">{joint}'
+                f'<inertial pos="0 0 0" mass="{float(scene.mass[i])!r}" '
+                f'fullinertia="{_numbers(full)}"/>{geoms[i]}{inner}</body>'
+            )
+
+        driven = [(child, spec) for child, (_, spec) in sorted(parent.items()) if spec.motor]
+        motors = "".join(_motor(spec, child) for child, spec in driven)
+        roots = [
+            i for i in range(scene.bodies) if scene.kind[i] == KIND_DYNAMIC and i not in parent
+        ]
+        tops = [c for c in children.get(-1, [])] + roots
+        bodies = [body(i) for i in sorted(tops)]
+        equality = "".join(_equality(spec, scene) for spec in loops)
         xml = (
             f'<mujoco model="{scene.name}"><compiler angle="radian"/>'
             f'<option timestep="{RIGID_DT!r}" gravity="{_numbers(scene.gravity)}" '
             f'integrator="implicitfast"/>'
             f"<asset>{''.join(assets)}</asset>"
-            f"<worldbody>{''.join(world)}{''.join(bodies)}</worldbody></mujoco>"
+            f"<worldbody>{''.join(world)}{''.join(bodies)}</worldbody>"
+            f"{f'<equality>{equality}</equality>' if equality else ''}"
+            f"{_exclusions(scene)}"
+            f"{f'<actuator>{motors}</actuator>' if motors else ''}</mujoco>"
         )
         self.model = model = mujoco.MjModel.from_xml_string(xml)
         self.data = data = mujoco.MjData(model)
-        self._joints = [int(model.body_jntadr[b]) for b in range(model.nbody)]
-        free = [b for b in range(model.nbody) if model.body_jntnum[b] > 0]
-        self._qpos = np.array([model.jnt_qposadr[model.body_jntadr[b]] for b in free])
-        self._qvel = np.array([model.jnt_dofadr[model.body_jntadr[b]] for b in free])
+        for k, (child, spec) in enumerate(driven):  # each servo's speed, as the joint turns
+            data.ctrl[k] = spec.motor[0] if child == spec.b else -spec.motor[0]
         self._rows = np.nonzero(scene.kind[: scene.n] == KIND_DYNAMIC)[0]
+        self._ids = np.array(
+            [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"b{row}") for row in self._rows],
+            dtype=np.int64,
+        )
         # the mocap bodies in the order MuJoCo numbers them (the world body's children first)
         self._mocap = [int(row) for row in np.nonzero(scene.kind == KIND_KINEMATIC)[0]]
-        for row, qv in zip(self._rows, self._qvel, strict=True):
+        for row in self._rows:
+            moving = np.any(scene.velocity[row]) or np.any(scene.omega[row])
+            if row in parent:
+                if moving:
+                    raise CaromError(
+                        f"MuJoCo: body {row} of scene {scene.name!r} is jointed and starts "
+                        "moving; carom compare starts MuJoCo's jointed bodies at rest"
+                    )
+                continue
+            qv = int(model.jnt_dofadr[model.body_jntadr[self._ids[list(self._rows).index(row)]]])
             data.qvel[qv : qv + 3] = scene.velocity[row]  # world frame
             r = rotation_matrices(scene.orientation[row])[0]
             data.qvel[qv + 3 : qv + 6] = r.T @ scene.omega[row]  # a free joint: body frame
@@ -326,16 +377,156 @@ class MujocoRigidSimulation:
             if kin < n:
                 x[kin], q[kin] = self.data.mocap_pos[k], self.data.mocap_quat[k]
                 v[kin], w[kin] = self.scene.velocity[kin], self.scene.omega[kin]
-        qpos, qvel = self.data.qpos, self.data.qvel
-        for row, qp, qv in zip(self._rows, self._qpos, self._qvel, strict=True):
-            x[row] = qpos[qp : qp + 3]
-            q[row] = qpos[qp + 3 : qp + 7]
-            v[row] = qvel[qv : qv + 3]
-            w[row] = rotation_matrices(q[row])[0] @ qvel[qv + 3 : qv + 6]
+        data, twist = self.data, np.zeros(6)
+        for row, body in zip(self._rows, self._ids, strict=True):
+            x[row] = data.xpos[body]
+            q[row] = data.xquat[body]
+            # (angular, linear) at the body's centre of mass, in the world's axes
+            mujoco.mj_objectVelocity(self.model, data, mujoco.mjtObj.mjOBJ_BODY, body, twist, 0)
+            w[row], v[row] = twist[:3], twist[3:]
         return x, v, q, w
 
     def close(self) -> None:
         pass
+
+
+def _joint_tree(scene: Any) -> tuple[dict[int, tuple[int, Any]], list[Any]]:
+    """MuJoCo's kinematic tree for the scene's joints: each body a joint carries, with its
+    parent (-1: the world) and the joint. A joint to the world is a joint of the tree (a
+    ball, hinge or slide joint; a weld: none, the body fixed in the world); a weld between
+    two bodies fixes one in the other; the other joints between two bodies are equality
+    constraints (``connect``), as MuJoCo closes loops: a chain of light bodies on ball joints
+    in its tree (the rope's 30 balls of 0.4 g) goes unstable at its default step, and MuJoCo
+    resets it, where free bodies held by ``connect`` run."""
+    specs = list(scene.joints)
+    for spec in specs:
+        for end in (spec.a, spec.b):
+            if end >= 0 and scene.kind[end] != KIND_DYNAMIC:
+                raise CaromError(
+                    f"MuJoCo: scene {scene.name!r} joins a static or kinematic body ({end}); "
+                    "carom compare gives MuJoCo joints between dynamic bodies and the world"
+                )
+        if spec.kind not in ("spherical", "revolute", "prismatic", "weld"):
+            raise CaromError(
+                f"MuJoCo: scene {scene.name!r} has a {spec.kind} joint; carom compare gives "
+                "MuJoCo spherical, revolute, prismatic and fixed joints"
+            )
+        if spec.spring is not None or spec.angular_spring is not None:
+            raise CaromError(
+                f"MuJoCo: scene {scene.name!r} has a joint with a spring; carom compare gives "
+                "MuJoCo rigid joints (with limits and motors) only"
+            )
+    parent: dict[int, tuple[int, Any]] = {}
+    used: set[int] = set()
+    dynamic = [i for i in range(scene.bodies) if scene.kind[i] == KIND_DYNAMIC]
+    for root in [-1, *dynamic]:
+        if root >= 0 and root in parent:
+            continue
+        reached, frontier = {root}, [root]
+        while frontier:
+            here = frontier.pop(0)
+            for k, spec in enumerate(specs):
+                if k in used or here not in (spec.a, spec.b):
+                    continue
+                other = spec.b if spec.a == here else spec.a
+                if here >= 0 and spec.kind != "weld":
+                    continue
+                if other < 0 or other in parent or other in reached or other == root:
+                    continue
+                parent[other] = (here, spec)
+                used.add(k)
+                reached.add(other)
+                frontier.append(other)
+        if root >= 0:
+            parent.pop(root, None)
+    return parent, [spec for k, spec in enumerate(specs) if k not in used]
+
+
+def _tree_joint(spec: Any, child: int, turn: np.ndarray, scene: Any) -> str:
+    """The MJCF joint that lets ``child`` move in its parent as ``spec`` says (``turn`` the
+    child's rotation matrix at the start); empty for a weld."""
+    if spec.kind == "weld":
+        return ""
+    forward = child == spec.b  # MuJoCo moves the child relative to its parent: B in A
+    anchor = spec.anchor_b if forward else spec.anchor_a
+    pos = turn.T @ (anchor - scene.position[child])
+    if spec.kind == "spherical":
+        return f'<joint name="j{child}" type="ball" pos="{_numbers(pos)}"/>'
+    axis = turn.T @ (spec.axis if forward else -spec.axis)
+    limits = ""
+    if spec.limits is not None:
+        low, high = spec.limits
+        limits = f' limited="true" range="{low!r} {high!r}"'
+    kind = "hinge" if spec.kind == "revolute" else "slide"
+    return (
+        f'<joint name="j{child}" type="{kind}" pos="{_numbers(pos)}" axis="{_numbers(axis)}"'
+        f"{limits}/>"
+    )
+
+
+#: a motor's velocity servo saturates until its joint is within this share of the speed
+MOTOR_SLIP = 1e-3
+
+
+def _motor(spec: Any, child: int) -> str:
+    """A joint's motor as MuJoCo's ``velocity`` actuator (a servo ``kv (speed - qvel)``,
+    clamped at the motor's largest torque or force: a motor that pushes at its most until
+    within :data:`MOTOR_SLIP` of its speed; ``implicitfast`` integrates its damping
+    implicitly)."""
+    speed, most = spec.motor
+    kv = most / (MOTOR_SLIP * max(abs(speed), 1.0))
+    return (
+        f'<velocity joint="j{child}" kv="{kv!r}" forcelimited="true" '
+        f'forcerange="{-most!r} {most!r}"/>'
+    )
+
+
+def _equality(spec: Any, scene: Any) -> str:
+    """A joint that closes a loop as MuJoCo's equality constraints: a ``connect`` at a
+    spherical joint's anchor, two along a hinge's axis, a ``weld`` (its pose at the start);
+    a slider in a loop is refused."""
+
+    def local(body: int, point: np.ndarray) -> np.ndarray:
+        r = rotation_matrices(scene.orientation[body])[0]
+        turned: np.ndarray = r.T @ (point - scene.position[body])
+        return turned
+
+    a, b = (spec.a, spec.b) if spec.a >= 0 else (spec.b, spec.a)
+    other = f' body2="b{b}"' if b >= 0 else ""
+    anchor = spec.anchor_a if a == spec.a else spec.anchor_b
+    if spec.kind == "weld":
+        return f'<weld body1="b{a}"{other}/>'
+    if spec.kind == "spherical":
+        return f'<connect body1="b{a}"{other} anchor="{_numbers(local(a, anchor))}"/>'
+    if spec.kind == "revolute":
+        reach = max(float(scene.model.reach[a]), 0.05)
+        return "".join(
+            f'<connect body1="b{a}"{other} anchor="{_numbers(local(a, anchor + t * spec.axis))}"/>'
+            for t in (-reach, reach)
+        )
+    raise CaromError(
+        f"MuJoCo: scene {scene.name!r} closes a loop with a prismatic joint, which MuJoCo has "
+        "no equality constraint for"
+    )
+
+
+def _exclusions(scene: Any) -> str:
+    """MuJoCo's ``<contact><exclude>`` for the joined pairs that may not touch (it leaves a
+    parent and its child apart already; a joint to the world needs nothing)."""
+    pairs = sorted(
+        {
+            (min(s.a, s.b), max(s.a, s.b))
+            for s in scene.joints
+            if not s.collide and min(s.a, s.b) >= 0
+        }
+    )
+    if not pairs:
+        return ""
+    return (
+        "<contact>"
+        + "".join(f'<exclude body1="b{a}" body2="b{b}"/>' for a, b in pairs)
+        + "</contact>"
+    )
 
 
 def start_rigid(scene: Any) -> MujocoRigidSimulation:

@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -22,6 +23,7 @@ import pymunk.batch
 from carom.compare.rigid import RigidScene
 from carom.compare.spec import PeerScene, factor_restitution
 from carom.compare.yardstick import shape_coefficients
+from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
 
 __all__ = ["start"]
@@ -161,6 +163,8 @@ class PymunkRigidSimulation:
       pair the scene's value.
     * ``collision_slop`` = carom's linear slop (5 mm, Box2D's; pymunk's default 0.1 is
       meant for pixels), sleeping as in the scene (pymunk's default: none).
+    * Joints as pymunk's constraints (:func:`_add_joints`), joined bodies kept from touching
+      unless the joint lets them (``collide_bodies``, which pymunk leaves on by default).
     """
 
     def __init__(self, scene: RigidScene) -> None:
@@ -205,6 +209,7 @@ class PymunkRigidSimulation:
                 shapes.append(shape)
             space.add(body, *shapes)
             self.bodies.append(body)
+        joint_notes = _add_joints(space, self.bodies, scene)
         self.n = scene.n
         self.space = space
         self.dt = scene.dt
@@ -232,6 +237,7 @@ class PymunkRigidSimulation:
             "noticeable overlap; the default 0.1 assumes pixel units)",
             "dt = the scene's step (1/60 s, the docs' space.step(1/60)); iterations at the "
             "default 10",
+            *joint_notes,
         ]
 
     def step(self) -> None:
@@ -248,3 +254,119 @@ class PymunkRigidSimulation:
 
 def start_rigid(scene: RigidScene) -> PymunkRigidSimulation:
     return PymunkRigidSimulation(scene)
+
+
+def _local(body: pymunk.Body, point: np.ndarray) -> tuple[float, float]:
+    """A world point in ``body``'s frame (the static body's frame is the world's)."""
+    local = pymunk.Vec2d(float(point[0]), float(point[1])) - body.position
+    turned = local.rotated(-body.angle)
+    return float(turned.x), float(turned.y)
+
+
+def _reduced(*moments: float) -> float:
+    """The reduced mass or moment of two bodies (a static one's is infinite)."""
+    return 1.0 / sum(1.0 / m for m in moments if math.isfinite(m) and m > 0.0)
+
+
+def _add_joints(space: pymunk.Space, bodies: list[pymunk.Body], scene: RigidScene) -> list[str]:
+    """The scene's joints as pymunk constraints; the notes on how each kind was built.
+
+    * revolute: a ``PivotJoint`` at the pin; limits a ``RotaryLimitJoint`` (pymunk limits
+      ``b.angle - a.angle``: carom's, from the start, shifted by the angle between them then),
+      a motor a ``SimpleMotor`` (pymunk's rate is ``a.w - b.w``: carom's speed negated) with
+      ``max_force`` the motor's torque, a spring a ``DampedRotarySpring``;
+    * distance: a ``PinJoint`` (a rod), a ``SlideJoint`` (a rope, a range), a ``DampedSpring``;
+    * weld: a ``PivotJoint`` and a ``GearJoint`` of ratio 1 (or, soft, a ``DampedSpring`` and a
+      ``DampedRotarySpring``);
+    * prismatic and wheel: a ``GrooveJoint`` along the axis (its ends the limits, else 1 km
+      each way), a ``GearJoint`` for the prismatic joint's lock on turning, a
+      ``DampedSpring`` of rest length 0 for the spring, a ``SimpleMotor`` for a wheel's motor.
+
+    A spring's stiffness ``k = m w^2`` and damping ``c = 2 m zeta w`` (w = 2 pi f) use the two
+    bodies' reduced mass (moment); pymunk has no linear motor: a prismatic motor is refused.
+    """
+    made: list[pymunk.Constraint] = []
+    kinds: set[str] = set()
+    for spec in scene.joints:
+        a = space.static_body if spec.a < 0 else bodies[spec.a]
+        b = space.static_body if spec.b < 0 else bodies[spec.b]
+        la, lb = _local(a, spec.anchor_a), _local(b, spec.anchor_b)
+        ref = b.angle - a.angle
+        kinds.add(spec.kind)
+        mass = _reduced(a.mass, b.mass)
+        moment = _reduced(a.moment, b.moment)
+
+        def springs(hertz: float, ratio: float, inertia: float) -> tuple[float, float]:
+            w = 2.0 * math.pi * hertz
+            return inertia * w * w, 2.0 * inertia * ratio * w
+
+        parts: list[pymunk.Constraint] = []
+        if spec.kind == "revolute":
+            parts.append(pymunk.PivotJoint(a, b, la, lb))
+            if spec.limits is not None:
+                low, high = spec.limits
+                parts.append(pymunk.RotaryLimitJoint(a, b, ref + low, ref + high))
+            if spec.motor is not None:
+                motor = pymunk.SimpleMotor(a, b, -spec.motor[0])
+                motor.max_force = spec.motor[1]
+                parts.append(motor)
+            if spec.spring is not None:
+                k, c = springs(*spec.spring, moment)
+                parts.append(pymunk.DampedRotarySpring(a, b, ref, k, c))
+        elif spec.kind == "distance":
+            if spec.spring is not None:
+                k, c = springs(*spec.spring, mass)
+                parts.append(pymunk.DampedSpring(a, b, la, lb, spec.length, k, c))
+            elif spec.limits is not None:
+                parts.append(pymunk.SlideJoint(a, b, la, lb, *spec.limits))
+            else:
+                pin = pymunk.PinJoint(a, b, la, lb)
+                pin.distance = spec.length
+                parts.append(pin)
+        elif spec.kind == "weld":
+            if spec.spring is not None:
+                k, c = springs(*spec.spring, mass)
+                parts.append(pymunk.DampedSpring(a, b, la, lb, 0.0, k, c))
+            else:
+                parts.append(pymunk.PivotJoint(a, b, la, lb))
+            if spec.angular_spring is not None:
+                k, c = springs(*spec.angular_spring, moment)
+                parts.append(pymunk.DampedRotarySpring(a, b, ref, k, c))
+            else:
+                parts.append(pymunk.GearJoint(a, b, -ref, 1.0))
+        elif spec.kind in ("prismatic", "wheel"):
+            assert spec.axis is not None
+            low, high = spec.limits if spec.limits is not None else (-1e3, 1e3)
+            ends = [spec.anchor_a + t * spec.axis for t in (low, high)]
+            parts.append(pymunk.GrooveJoint(a, b, _local(a, ends[0]), _local(a, ends[1]), lb))
+            if spec.kind == "prismatic":
+                parts.append(pymunk.GearJoint(a, b, -ref, 1.0))
+                if spec.motor is not None:
+                    raise CaromError(
+                        f"scene {scene.name!r} has a prismatic motor; pymunk has no linear "
+                        "motor: compare it with Box2D"
+                    )
+            elif spec.motor is not None:
+                motor = pymunk.SimpleMotor(a, b, -spec.motor[0])
+                motor.max_force = spec.motor[1]
+                parts.append(motor)
+            if spec.spring is not None:
+                k, c = springs(*spec.spring, mass)
+                parts.append(pymunk.DampedSpring(a, b, la, lb, 0.0, k, c))
+        else:
+            raise CaromError(
+                f"scene {scene.name!r} has a {spec.kind} joint; carom compare gives pymunk "
+                "revolute, distance, weld, prismatic and wheel joints"
+            )
+        for part in parts:
+            part.collide_bodies = spec.collide
+        made += parts
+    if made:
+        space.add(*made)
+    if not kinds:
+        return []
+    return [
+        f"joints ({', '.join(sorted(kinds))}) as pymunk constraints: {len(made)} in all "
+        "(PivotJoint, PinJoint, SlideJoint, GrooveJoint, GearJoint, SimpleMotor, Damped"
+        "(Rotary)Spring as each needs); joined bodies do not collide unless the joint says"
+    ]
