@@ -178,9 +178,15 @@ class RigidComparison:
         }
 
 
-def default_engines(dim: int, kind: str = "spheres") -> list[str]:
-    """carom and every peer that simulates ``dim`` dimensions of ``kind`` bodies."""
-    return [e.name for e in ENGINES.values() if e.takes(dim, kind)]
+def default_engines(dim: int, kind: str = "spheres", joints: bool = False) -> list[str]:
+    """carom and every peer that simulates ``dim`` dimensions of ``kind`` bodies, and with
+    ``joints`` the peers that take such a scene with joints (the others are then skipped,
+    with the reason)."""
+    return [
+        e.name
+        for e in ENGINES.values()
+        if e.takes(dim, kind) or (joints and e.takes(dim, kind, joints))
+    ]
 
 
 def compare(
@@ -234,10 +240,10 @@ def compare(
     )
     kind = "rigid" if isinstance(spec, RigidScene | RigidScene3D) else "spheres"
     asked = engines is not None
-    names = list(engines) if engines is not None else default_engines(spec.dim, kind)
+    jointed = isinstance(spec, RigidScene | RigidScene3D) and spec.joint_ints.shape[0] > 0
+    names = list(engines) if engines is not None else default_engines(spec.dim, kind, jointed)
     chosen: list[EngineEntry] = []
     skipped: dict[str, str] = {}
-    jointed = isinstance(spec, RigidScene | RigidScene3D) and spec.joint_ints.shape[0] > 0
     for name in names:
         e = engine(name)
         problem = e.unable(spec.dim, kind, jointed)
@@ -247,16 +253,20 @@ def compare(
             skipped[name] = problem
             continue
         chosen.append(e)
-    if isinstance(spec, RigidScene):
-        check = impact_expectation(spec, spec.dt)  # every engine steps at the scene's rate
-        rigid = {e.name: run_rigid(e, spec, check, progress) for e in chosen}
+    if isinstance(spec, RigidScene | RigidScene3D):
+        if isinstance(spec, RigidScene):
+            check: ImpactCheck | ImpactCheck3D | None = impact_expectation(spec, spec.dt)
+        else:  # the peers step at their own documented rates; the check waits for the slowest
+            check = impact_expectation3d(spec, max([spec.dt, *(e.rigid_dt(spec) for e in chosen)]))
+        rigid = {}
+        for e in chosen:
+            try:
+                rigid[e.name] = run_rigid(e, spec, check, progress)
+            except CaromError as refused:  # a peer that cannot build this scene
+                if asked or e.name == "carom":
+                    raise
+                skipped[e.name] = str(refused)
         return RigidComparison(spec, check, rigid, skipped)
-    if isinstance(spec, RigidScene3D):
-        # the peers step at their own documented rates; the check waits for the slowest
-        slowest = max([spec.dt, *(e.rigid_dt(spec) for e in chosen)])
-        check3 = impact_expectation3d(spec, slowest)
-        rigid = {e.name: run_rigid(e, spec, check3, progress) for e in chosen}
-        return RigidComparison(spec, check3, rigid, skipped)
     expected = expectation(spec)
     runs = {}
     for e in chosen:

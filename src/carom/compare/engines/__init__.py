@@ -74,6 +74,8 @@ class EngineEntry:
         Dimensions of the rigid scenes it takes (default: ``dims``).
     joints : bool
         Whether it is given a rigid scene's joints (:mod:`carom.compare.jointed`).
+    jointed_dims : tuple of int
+        Dimensions of the rigid scenes with joints it takes (default: ``rigid_dims``).
     """
 
     name: str
@@ -84,6 +86,7 @@ class EngineEntry:
     import_name: str = ""
     rigid_dims: tuple[int, ...] = ()
     joints: bool = False
+    jointed_dims: tuple[int, ...] = ()
 
     def missing(self) -> str | None:
         """None when installed, else why not and how to install it."""
@@ -101,18 +104,25 @@ class EngineEntry:
             what = {"spheres": "spheres and disks", "rigid": "rigid bodies of any shape"}
             problem = f"{self.name} is compared on {what[self.kinds[0]]} only"
         rigid_dims = self.rigid_dims or self.dims
+        if joints and self.jointed_dims:
+            rigid_dims = self.jointed_dims
         if problem is None and kind == "rigid" and dim not in rigid_dims:
             dims = " and ".join(f"{d}D" for d in rigid_dims)
-            problem = f"{self.name} is compared on rigid bodies in {dims} only"
+            bodies = "rigid bodies with joints" if joints and self.jointed_dims else "rigid bodies"
+            problem = f"{self.name} is compared on {bodies} in {dims} only"
         if problem is None and joints and not self.joints:
             takers = ", ".join(e.name for e in ENGINES.values() if e.joints)
             problem = f"{self.name} is not given carom's joints in a comparison ({takers} are)"
         return problem
 
-    def takes(self, dim: int, kind: str = "spheres") -> bool:
-        """Whether the engine simulates ``dim`` dimensions of ``kind`` bodies (installed or
-        not)."""
-        dims = (self.rigid_dims or self.dims) if kind == "rigid" else self.dims
+    def takes(self, dim: int, kind: str = "spheres", joints: bool = False) -> bool:
+        """Whether the engine simulates ``dim`` dimensions of ``kind`` bodies, with ``joints``
+        if asked (installed or not)."""
+        dims = self.dims
+        if kind == "rigid":
+            dims = self.rigid_dims or self.dims
+            if joints:
+                dims = self.jointed_dims or dims if self.joints else ()
         return dim in dims and kind in self.kinds
 
     def rigid_dt(self, scene: RigidScene | RigidScene3D) -> float:
@@ -174,6 +184,7 @@ ENGINES: dict[str, EngineEntry] = {
             ("spheres", "rigid"),
             rigid_dims=(3,),
             joints=True,
+            jointed_dims=(2, 3),
         ),
         EngineEntry(
             "rapier3d",

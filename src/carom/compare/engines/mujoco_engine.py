@@ -162,6 +162,39 @@ def _numbers(values: Any) -> str:
     return " ".join(repr(float(c)) for c in np.ravel(values))
 
 
+def _model(xml: str, name: str) -> Any:
+    """MuJoCo's model of ``xml``; a model MuJoCo refuses is a CaromError naming the scene."""
+    try:
+        return mujoco.MjModel.from_xml_string(xml)
+    except ValueError as refused:
+        raise CaromError(f"MuJoCo refused its model of scene {name!r}: {refused}") from None
+
+
+def _contact_settings(scene: Any) -> tuple[np.ndarray, int, str, float, list[str]]:
+    """How MuJoCo's contacts are set for a rigid scene: friction per material (MuJoCo takes
+    the larger of two geoms'), ``condim`` (1 when nothing has friction), the ``solref``
+    attribute of the Modeling chapter's restitution recipe (empty for e = 0), the
+    restitution, and the notes; a scene with more than one restitution is refused."""
+    from carom.compare.yardstick import shape_coefficients
+
+    pairs = scene.needed_pairs()
+    values = sorted({float(scene.restitution[a, b]) for a, b in pairs})
+    if len(values) > 1:
+        raise CaromError(
+            f"MuJoCo: scene {scene.name!r} has pairs with different restitutions "
+            f"{values}; MuJoCo's solref recipe gives one; give every pair one restitution"
+        )
+    e = values[0] if values else 0.0
+    mu, notes = shape_coefficients(scene, scene.friction, "max", "MuJoCo", "friction")
+    condim = 1 if not np.any(mu > 0.0) else 3
+    stiffness = 1.0 / (2.0 * RIGID_DT) ** 2
+    solref = ""
+    if e > 0.0:
+        damping = 2.0 * damping_ratio(e) * math.sqrt(stiffness)
+        solref = f' solref="{-stiffness!r} {-damping!r}"'
+    return mu, condim, solref, e, notes
+
+
 class MujocoRigidSimulation:
     """A 3D rigid scene in MuJoCo, as its Modeling chapter builds bodies.
 
@@ -190,7 +223,6 @@ class MujocoRigidSimulation:
 
     def __init__(self, scene: Any) -> None:
         from carom.compare.rigid3d import primitives
-        from carom.compare.yardstick import shape_coefficients
 
         parts = [primitives(scene, i) for i in range(scene.bodies)]
         for i, own in enumerate(parts):
@@ -200,23 +232,7 @@ class MujocoRigidSimulation:
                     f"MuJoCo collides a mesh as its convex hull, which would fill it in; "
                     f"leave MuJoCo out of this scene"
                 )
-        pairs = scene.needed_pairs()
-        values = sorted({float(scene.restitution[a, b]) for a, b in pairs})
-        if len(values) > 1:
-            raise CaromError(
-                f"MuJoCo: scene {scene.name!r} has pairs with different restitutions "
-                f"{values}; MuJoCo's solref recipe gives one; give every pair one restitution"
-            )
-        e = values[0] if values else 0.0
-        mu, notes = shape_coefficients(scene, scene.friction, "max", "MuJoCo", "friction")
-        frictionless = not np.any(mu > 0.0)
-        condim = 1 if frictionless else 3
-        stiffness = 1.0 / (2.0 * RIGID_DT) ** 2
-        if e > 0.0:
-            damping = 2.0 * damping_ratio(e) * math.sqrt(stiffness)
-            solref = f' solref="{-stiffness!r} {-damping!r}"'
-        else:
-            solref = ""
+        mu, condim, solref, e, notes = _contact_settings(scene)
         assets: list[str] = []
         world: list[str] = []
         self.n = scene.n
@@ -286,7 +302,7 @@ class MujocoRigidSimulation:
             f"{_exclusions(scene)}"
             f"{f'<actuator>{motors}</actuator>' if motors else ''}</mujoco>"
         )
-        self.model = model = mujoco.MjModel.from_xml_string(xml)
+        self.model = model = _model(xml, scene.name)
         self.data = data = mujoco.MjData(model)
         for k, (child, spec) in enumerate(driven):  # each servo's speed, as the joint turns
             data.ctrl[k] = spec.motor[0] if child == spec.b else -spec.motor[0]
@@ -529,5 +545,228 @@ def _exclusions(scene: Any) -> str:
     )
 
 
-def start_rigid(scene: Any) -> MujocoRigidSimulation:
+def start_rigid(scene: Any) -> MujocoRigidSimulation | MujocoPlanarSimulation:
+    if scene.dim == 2:
+        return MujocoPlanarSimulation(scene)
     return MujocoRigidSimulation(scene)
+
+
+class MujocoPlanarSimulation:
+    """A 2D rigid scene with joints in MuJoCo: its bodies in the plane z = 0.
+
+    * Each dynamic body a ``body`` with two ``slide`` joints (x, y) and a ``hinge`` about z,
+      carom's mass and moment about z; a circle a ``sphere``, a capsule a ``capsule``, a
+      polygon a prism (a ``mesh``: its corners at z = +-H), H the largest reach in the scene,
+      so that every pair meets across the same depth; static bodies' geoms in the world body.
+      Rounded polygons, static segments and kinematic bodies are refused.
+    * The joints as equality constraints, the way MuJoCo closes loops (its tree has only
+      the plane's joints): a revolute joint a ``connect`` at the pin, a weld a ``weld``, a
+      distance joint a spatial tendon between two sites, held at its length by a ``tendon``
+      equality (a rod), limited to its range (a rope), or with the tendon's ``stiffness`` and
+      ``damping`` (a spring: ``k = m w^2``, ``c = 2 m zeta w`` with the reduced mass). Limits,
+      motors and springs on the other joints, and sliders and wheels, are refused.
+    * Contacts, step and integrator as :class:`MujocoRigidSimulation`.
+    """
+
+    def __init__(self, scene: Any) -> None:
+        mu, condim, solref, e, notes = _contact_settings(scene)
+        kinds = np.asarray(scene.kind)
+        if np.any(kinds == KIND_KINEMATIC):
+            raise CaromError(
+                f"MuJoCo: scene {scene.name!r} has a kinematic body; carom compare gives MuJoCo "
+                "2D scenes of dynamic and static bodies"
+            )
+        depth = max(
+            float(np.max(np.linalg.norm(piece.vertices, axis=1))) + piece.radius
+            for pieces in scene.pieces[: scene.n]
+            for piece in pieces
+        )
+        assets: list[str] = []
+        world: list[str] = []
+        bodies: list[str] = []
+        sites: dict[int, list[str]] = {}
+        tendons: list[str] = []
+        equality: list[str] = []
+        for k, spec in enumerate(scene.joints):
+            problem = _planar_joint(spec, k, scene, sites, tendons, equality)
+            if problem:
+                raise CaromError(
+                    f"MuJoCo: scene {scene.name!r} has {problem}; carom compare gives MuJoCo's "
+                    "2D scenes revolute joints, welds and distance joints (rods, ropes, "
+                    "springs), without limits or motors"
+                )
+        for i in range(scene.bodies):
+            m = int(scene.material[i])
+            common = f' condim="{condim}" friction="{float(mu[m])!r} 0 0"{solref}'
+            # the body's frame keeps the world's axes (its slide joints move along x and y);
+            # its pieces are turned by its angle at the start instead
+            turn = float(scene.angle[i])
+            c, s = math.cos(turn), math.sin(turn)
+            geoms = "".join(
+                _planar_geom(
+                    piece.vertices @ np.array([[c, s], [-s, c]]), float(piece.radius),
+                    f"b{i}p{k}", depth, common, assets, scene.name, i,
+                )
+                for k, piece in enumerate(scene.pieces[i])
+            )  # fmt: skip
+            where = f"{float(scene.position[i, 0])!r} {float(scene.position[i, 1])!r} 0"
+            quat = "1 0 0 0"
+            own = "".join(sites.get(i, []))
+            if kinds[i] == KIND_DYNAMIC:
+                moment = float(scene.inertia[i])
+                bodies.append(
+                    f'<body name="b{i}" pos="{where}" quat="{quat}">'
+                    f'<joint type="slide" axis="1 0 0"/><joint type="slide" axis="0 1 0"/>'
+                    f'<joint type="hinge" axis="0 0 1"/>'
+                    f'<inertial pos="0 0 0" mass="{float(scene.mass[i])!r}" '
+                    f'diaginertia="{moment!r} {moment!r} {moment!r}"/>{geoms}{own}</body>'
+                )
+            else:
+                world.append(f'<body name="b{i}" pos="{where}" quat="{quat}">{geoms}{own}</body>')
+        gravity = f"{float(scene.gravity[0])!r} {float(scene.gravity[1])!r} 0"
+        xml = (
+            f'<mujoco model="{scene.name}"><compiler angle="radian"/>'
+            f'<option timestep="{RIGID_DT!r}" gravity="{gravity}" integrator="implicitfast"/>'
+            f"<asset>{''.join(assets)}</asset>"
+            f"<worldbody>{''.join(sites.get(-1, []))}{''.join(world)}{''.join(bodies)}"
+            "</worldbody>"
+            f"{f'<tendon>{chr(10).join(tendons)}</tendon>' if tendons else ''}"
+            f"{f'<equality>{chr(10).join(equality)}</equality>' if equality else ''}"
+            f"{_exclusions(scene)}</mujoco>"
+        )
+        self.model = model = _model(xml, scene.name)
+        self.data = data = mujoco.MjData(model)
+        self.n = scene.n
+        self._rows = np.nonzero(kinds[: scene.n] == KIND_DYNAMIC)[0]
+        ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"b{r}") for r in self._rows]
+        self._qpos = np.array([model.jnt_qposadr[model.body_jntadr[b]] for b in ids], np.int64)
+        self._qvel = np.array([model.jnt_dofadr[model.body_jntadr[b]] for b in ids], np.int64)
+        for row, qv in zip(self._rows, self._qvel, strict=True):
+            data.qvel[qv : qv + 2] = scene.velocity[row]
+            data.qvel[qv + 2] = scene.omega[row]
+        mujoco.mj_forward(model, data)
+        self._x0 = np.asarray(scene.position[: scene.n], np.float64).copy()
+        self._angle0 = np.asarray(scene.angle[: scene.n], np.float64).copy()
+        self.dt = RIGID_DT
+        self.settings: dict[str, Any] = {
+            **_options(model),
+            "condim": condim,
+            "friction_per_material": mu.tolist(),
+            "restitution": e,
+            "plane": "slide x, slide y, hinge z per body; prisms H deep",
+            "depth_m": depth,
+        }
+        self.notes = [
+            *notes,
+            "2D: each body on two slide joints and a hinge in the plane z = 0 (MuJoCo's "
+            "planar bodies); circles as spheres, polygons as prisms",
+            "joints as equality constraints (connect, weld) and spatial tendons (distance "
+            "joints), the way MuJoCo closes loops",
+            "implicitfast integrator; MuJoCo's default step 0.002 s, solver and cone",
+        ]
+
+    def step(self) -> None:
+        mujoco.mj_step(self.model, self.data)
+
+    def state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        x, angle = self._x0.copy(), self._angle0.copy()
+        v, w = np.zeros((self.n, 2)), np.zeros(self.n)
+        qpos, qvel = self.data.qpos, self.data.qvel
+        for row, qp, qv in zip(self._rows, self._qpos, self._qvel, strict=True):
+            x[row] += qpos[qp : qp + 2]  # a slide joint counts from the body's start
+            angle[row] += qpos[qp + 2]
+            v[row] = qvel[qv : qv + 2]
+            w[row] = qvel[qv + 2]
+        return x, v, angle, w
+
+    def close(self) -> None:
+        pass
+
+
+def _planar_geom(
+    corners: np.ndarray,
+    radius: float,
+    name: str,
+    depth: float,
+    common: str,
+    assets: list[str],
+    scene: str,
+    body: int,
+) -> str:
+    """One 2D piece, its ``corners`` (k, 2) [m] in its body's frame (turned to the world's
+    axes) and rounding ``radius`` [m], as a MuJoCo geom in the plane z = 0 (a prism ``depth``
+    deep each way)."""
+    if corners.shape[0] == 1:
+        centre = f"{float(corners[0, 0])!r} {float(corners[0, 1])!r} 0"
+        return f'<geom type="sphere" pos="{centre}" size="{radius!r}"{common}/>'
+    if corners.shape[0] == 2 and radius > 0.0:
+        ends = " ".join(f"{float(c)!r}" for c in (*corners[0], 0.0, *corners[1], 0.0))
+        return f'<geom type="capsule" fromto="{ends}" size="{radius!r}"{common}/>'
+    if radius > 0.0 or corners.shape[0] < 3:
+        raise CaromError(
+            f"MuJoCo: body {body} of scene {scene!r} has a rounded polygon or a bare segment; "
+            "carom compare gives MuJoCo circles, capsules and polygons in 2D"
+        )
+    prism = [(*c, z) for z in (-depth, depth) for c in corners.tolist()]
+    assets.append(f'<mesh name="{name}" vertex="{_numbers(prism)}"/>')
+    return f'<geom type="mesh" mesh="{name}"{common}/>'
+
+
+def _planar_joint(
+    spec: Any,
+    k: int,
+    scene: Any,
+    sites: dict[int, list[str]],
+    tendons: list[str],
+    equality: list[str],
+) -> str | None:
+    """Joint ``k`` as MuJoCo equality constraints (and a tendon between two sites), appended
+    to ``sites`` (per body, -1 the world), ``tendons`` and ``equality``; what cannot be
+    given, in words, else None."""
+
+    def local(body: int, point: np.ndarray) -> str:
+        """A world point in ``body``'s frame (its axes the world's: see the builder)."""
+        at = point if body < 0 else point - scene.position[body]
+        return f"{float(at[0])!r} {float(at[1])!r} 0"
+
+    if spec.motor is not None or spec.angular_spring is not None:
+        return f"a {spec.kind} joint with a motor or an angular spring"
+    a, b = (spec.a, spec.b) if spec.a >= 0 else (spec.b, spec.a)
+    anchor_a = spec.anchor_a if a == spec.a else spec.anchor_b
+    other = f' body2="b{b}"' if b >= 0 else ""
+    if spec.kind == "revolute":
+        if spec.limits is not None or spec.spring is not None:
+            return "a revolute joint with limits or a spring"
+        equality.append(f'<connect body1="b{a}"{other} anchor="{local(a, anchor_a)}"/>')
+        return None
+    if spec.kind == "weld":
+        if spec.spring is not None:
+            return "a soft weld"
+        equality.append(f'<weld body1="b{a}"{other}/>')
+        return None
+    if spec.kind != "distance":
+        return f"a {spec.kind} joint"
+    for end, body, point in (("a", spec.a, spec.anchor_a), ("b", spec.b, spec.anchor_b)):
+        sites.setdefault(body, []).append(
+            f'<site name="j{k}{end}" pos="{local(body, point)}" size="0.001"/>'
+        )
+    path = f'<site site="j{k}a"/><site site="j{k}b"/>'
+    if spec.spring is not None:
+        hertz, ratio = spec.spring
+        mass = 1.0 / sum(1.0 / float(scene.mass[i]) for i in (spec.a, spec.b) if i >= 0)
+        omega = 2.0 * math.pi * hertz
+        stiff, damp = mass * omega * omega, 2.0 * mass * ratio * omega
+        tendons.append(
+            f'<spatial name="t{k}" stiffness="{stiff!r}" damping="{damp!r}" '
+            f'springlength="{spec.length!r}">{path}</spatial>'
+        )
+    elif spec.limits is not None:
+        low, high = spec.limits
+        tendons.append(
+            f'<spatial name="t{k}" limited="true" range="{low!r} {high!r}">{path}</spatial>'
+        )
+    else:
+        tendons.append(f'<spatial name="t{k}">{path}</spatial>')
+        # the tendon's length held at its length at the start (qpos0)
+        equality.append(f'<tendon tendon1="t{k}" polycoef="0 0 0 0 0"/>')
+    return None

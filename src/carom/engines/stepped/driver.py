@@ -41,12 +41,9 @@ from carom.engines.stepped.contacts import extremes, store_points
 from carom.engines.stepped.events import ContactEvents
 from carom.engines.stepped.filters import default_filters, filter_pairs
 from carom.engines.stepped.joints import (
-    J_A,
-    J_B,
-    J_KIND,
     JOINT_INTS,
-    REMOVED,
     joined_keys,
+    joints_now,
     links,
 )
 from carom.engines.stepped.loads import Loaded, Loads
@@ -173,6 +170,8 @@ class SteppedEngine:
         pieces = model.piece_body.shape[0]
         self._boxes = np.zeros((pieces, 2 * dims))
         self._parent = np.zeros(n, np.int64)
+        self._no_joints = np.zeros(0, np.int64)  # (the joints and bodies of no joint)
+        self._none_jointed = np.zeros(n, np.bool_)
         self._role = np.zeros(n, np.int64)
         self._island_of = np.zeros(n, np.int64)
         self._dynamic = model.kind == KIND_DYNAMIC
@@ -485,21 +484,11 @@ class SteppedEngine:
     def _joints_now(self) -> tuple[NDArray[np.int64], NDArray[np.bool_]]:
         """The joints stage 7 solves (those of a body it solves), and the bodies of their
         islands (N,) bool (their contacts take their impacts first)."""
-        n = self.model.kind.shape[0]
-        jointed = np.zeros(n, np.bool_)
         if self._links.shape[0] == 0:
-            return np.zeros(0, np.int64), jointed
-        ji = self.joint_ints
-        solved = np.append(self._role == islands.ROLE_SOLVER, False) & np.append(
-            self._dynamic, False
+            return self._no_joints, self._none_jointed
+        return joints_now(
+            self.joint_ints, self._role, islands.ROLE_SOLVER, self._dynamic, self._parent
         )
-        live = ji[:, J_KIND] != REMOVED
-        active = np.flatnonzero(live & (solved[ji[:, J_A]] | solved[ji[:, J_B]]))
-        if active.size:
-            bodies = ji[active][:, [J_A, J_B]].ravel()
-            roots = np.unique(self._parent[bodies[bodies >= 0]])
-            jointed = np.isin(self._parent, roots) & self._dynamic
-        return active.astype(np.int64), jointed
 
     def use_joints(self, ints: NDArray[np.int64], floats: FloatArray, wake: bool = True) -> None:
         """The joints' rows (:mod:`.joints`), taken as they are (the solver writes their

@@ -44,6 +44,7 @@ __all__ = [
     "joined",
     "joined_keys",
     "joint_softness",
+    "joints_now",
     "links",
 ]
 
@@ -101,3 +102,54 @@ def joint_softness(h: float, contact_hertz: float) -> tuple[float, float, float]
     than half the substep rate, at :data:`JOINT_DAMPING_RATIO`."""
     hertz = min(JOINT_HERTZ_SCALE * contact_hertz, 0.5 / h)
     return softness(hertz, JOINT_DAMPING_RATIO, h)
+
+
+@njit(cache=True)
+def joints_now(
+    ji: np.ndarray, role: np.ndarray, solver_role: int, dynamic: np.ndarray, parent: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The joints the soft step solves this step, and the bodies of their islands.
+
+    Parameters
+    ----------
+    ji : (J, 4) int64
+        The joints' integer rows (removed ones have kind :data:`REMOVED`).
+    role : (N,) int64
+        Each body's role this step (:mod:`carom.engines.stepped.islands`); the solver's is
+        ``solver_role``.
+    dynamic : (N,) bool
+        The dynamic bodies.
+    parent : (N,) int64
+        Each body's island root.
+
+    Returns
+    -------
+    active : (A,) int64
+        The live joints with a dynamic body the solver solves, ascending.
+    jointed : (N,) bool
+        The dynamic bodies whose island holds one of them (their contacts take their
+        impacts first).
+    """
+    n = role.shape[0]
+    jointed = np.zeros(n, np.bool_)
+    active = np.empty(ji.shape[0], np.int64)
+    count = 0
+    rooted = np.zeros(n, np.bool_)
+    for j in range(ji.shape[0]):
+        if ji[j, J_KIND] == REMOVED:
+            continue
+        a, b = ji[j, J_A], ji[j, J_B]
+        solved = (a >= 0 and role[a] == solver_role and dynamic[a]) or (
+            b >= 0 and role[b] == solver_role and dynamic[b]
+        )
+        if not solved:
+            continue
+        active[count] = j
+        count += 1
+        for body in (a, b):
+            if body >= 0:
+                rooted[parent[body]] = True
+    if count:
+        for i in range(n):
+            jointed[i] = dynamic[i] and rooted[parent[i]]
+    return active[:count], jointed
