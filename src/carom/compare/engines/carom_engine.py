@@ -11,7 +11,7 @@ from carom.compare.rigid import RigidScene
 from carom.compare.rigid3d import RigidScene3D
 from carom.compare.spec import PeerScene
 from carom.engines.base import FrameArrays
-from carom.world import Frame, Recording
+from carom.world import Recording
 
 __all__ = ["start"]
 
@@ -75,15 +75,18 @@ def start(scene: PeerScene) -> CaromSimulation:
 
 class CaromRigidSimulation:
     """carom's rigid-body engine stepping at the scene's rate (its settings as the scene
-    gives them; impacts solved exactly on)."""
+    gives them; impacts solved exactly on).
+
+    A step is :meth:`carom.World.step` (the same bits as a run), as a peer's step is its own
+    step call; its state is read afterwards, outside the timed step, as the peers' is."""
 
     def __init__(self, scene: RigidScene | RigidScene3D) -> None:
         world = scene.world()
         self.dim = scene.dim
         self.dt = scene.dt
         world.prepare()  # the kernels compile (or load from the cache) outside the timing
-        self._frame: Frame = world.frame()
-        self._frames = world.frames(scene.steps(self.dt) * self.dt, self.dt)
+        world.build()
+        self._world = world
         s = world.rigid_settings
         self.settings = {
             "dt_s": self.dt,
@@ -102,14 +105,17 @@ class CaromRigidSimulation:
         ]
 
     def step(self) -> None:
-        self._frame = next(self._frames)
+        self._world.step()
 
     def state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Centres, velocities, angles (2D) or quaternions ``(w, x, y, z)`` (3D), and
         angular velocities (2D: about z; 3D: vectors in the world frame)."""
-        f = self._frame
-        spin = f.angular_velocities if self.dim == 3 else f.angular_velocities[:, 2]
-        return f.positions, f.velocities, np.asarray(f.orientations), spin
+        w = self._world
+        spin = np.asarray(w.angular_velocities)
+        turn = np.asarray(w.orientations)
+        if self.dim == 2:  # (about z)
+            spin, turn = spin[:, 2].copy(), turn.reshape(-1)
+        return np.asarray(w.positions), np.asarray(w.velocities), turn, spin
 
     def close(self) -> None:
         pass

@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 from carom.engines.rigid import broadphase, contacts, impacts, joints, motion, queries, solver
 from carom.engines.rigid.model import RigidModel, RigidState
 from carom.engines.stepped.driver import Isolated, SteppedEngine
+from carom.engines.stepped.joints import rod_rows
 from carom.engines.stepped.settings import RigidSettings
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.limits import LARGEST
@@ -72,6 +73,8 @@ def warm_up() -> None:
     state = new_state(model, x, v, np.zeros(n), np.zeros(n))
     settings = RigidSettings(sleep_time=0.1)
     engine = RigidEngine(model, state, settings)
+    engine.events.on = True  # (a game loop's steps gather contact events)
+    engine.use_joints(*rod_rows(4, (1.0, 0.6), 0.5, joints))  # the circle on a rod
     for _ in range(40):
         engine.step()
     engine.deepest_overlap()

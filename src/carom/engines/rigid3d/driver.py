@@ -21,6 +21,7 @@ from carom.engines.rigid3d import broadphase, contacts, impacts, joints, motion,
 from carom.engines.rigid3d.model import Model3D, State3D, empty_manifolds
 from carom.engines.stepped import islands
 from carom.engines.stepped.driver import Isolated, SteppedEngine
+from carom.engines.stepped.joints import rod_rows
 from carom.engines.stepped.settings import RigidSettings
 from carom.geometry.rotation import turn
 from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
@@ -76,6 +77,8 @@ def warm_up() -> None:
     w[1] = (1.0, 2.0, 3.0)
     state = new_state(model, x, np.zeros((n, 3)), q, w)
     engine = RigidEngine3D(model, state, RigidSettings())
+    engine.events.on = True  # (a game loop's steps gather contact events)
+    engine.use_joints(*rod_rows(0, (0.0, 0.0, 0.6), 0.5, joints))  # the ball on a rod
     for _ in range(30):
         engine.step()
     engine.deepest_overlap()

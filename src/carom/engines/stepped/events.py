@@ -211,7 +211,7 @@ class ContactEvents:
         self.threshold = 1.0
         #: whether steps gather events (a game loop's steps do; a run's need not pay for them)
         self.on = False
-        self.last = EventArrays(*(np.zeros(0, t) for t in self.dtypes))
+        self.last = self._none = EventArrays(*(np.zeros(0, t) for t in self.dtypes))
         #: pairs of bodies taken out of the world since the last step: they end in the next
         self.ending = np.zeros(0, np.int64)
 
@@ -243,8 +243,13 @@ class ContactEvents:
         )  # fmt: skip
         n = self.number.shape[0] + 1
         now, began, row, ended = compare(keys, self.keys, moving, n)
-        ended = np.concatenate((self.ending, ended))
-        self.ending = np.zeros(0, np.int64)
+        if self.ending.size:
+            ended = np.concatenate((self.ending, ended))
+            self.ending = np.zeros(0, np.int64)
+        self.keys = now
+        if began.size == 0 and ended.size == 0 and pairs.shape[0] == 0:
+            self.last = self._none  # (a step of no event: the same empty arrays)
+            return
         d = self.d
         begin_t, end_t, hit_t = self.dtypes
         begin = np.zeros(began.size, begin_t)
@@ -258,5 +263,4 @@ class ContactEvents:
         hit["time"] = start + times
         hit["point"], hit["normal"] = values[:, :d], values[:, d : 2 * d]
         hit["speed"] = values[:, 2 * d]
-        self.keys = now
         self.last = EventArrays(begin, end, hit)

@@ -16,6 +16,8 @@ flight between impacts), and the pairs of bodies they keep from touching
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit
 
@@ -46,6 +48,7 @@ __all__ = [
     "joint_softness",
     "joints_now",
     "links",
+    "rod_rows",
 ]
 
 #: the kinds of joint (a removed joint keeps its row as REMOVED: the others keep their index)
@@ -153,3 +156,19 @@ def joints_now(
         for i in range(n):
             jointed[i] = dynamic[i] and rooted[parent[i]]
     return active[:count], jointed
+
+
+def rod_rows(
+    body: int, anchor: tuple[float, ...], length: float, rows: Any
+) -> tuple[np.ndarray, np.ndarray]:
+    """The rows (1, 4) and (1, F) of a rigid distance joint holding ``body``'s centre
+    ``length`` [m] from the world point ``anchor`` [m], in a dimension's layout ``rows`` (the
+    module of :mod:`carom.engines.rigid.joints` or :mod:`carom.engines.rigid3d.joints`): the
+    engines' warm-ups use it to load the joints' kernels."""
+    ints = np.array([[DISTANCE, -1, body, 0]], np.int64)
+    floats = np.zeros((1, int(rows.JOINT_FLOATS)))
+    la = int(rows.LA)
+    floats[0, la : la + len(anchor)] = anchor
+    for column in ("LENGTH", "LOWER", "UPPER"):
+        floats[0, int(getattr(rows, column))] = length
+    return ints, floats
