@@ -355,15 +355,20 @@ class GameLoop:
         The body stops where it is and never moves again; nothing touches it, no ray sees it,
         and its index is refused from then on (:attr:`alive` says which bodies are in). The
         kinetic energy it had leaves the ledger as work done on it. Its place in the arrays
-        (positions, frames) stays, frozen. The rigid engines.
+        (positions, frames) stays, frozen. In the event-driven engine it stops at the clock,
+        and every sphere flies through its place from then on.
 
         Raises
         ------
         CaromError
-            An index out of range or already removed; the event-driven engine. Nothing has
-            changed then.
+            An index out of range or already removed. Nothing has changed then.
         """
         i = _index(self, index)
+        built = self.build()
+        if isinstance(built, EdmdEngine):
+            built.retire(np.array([i]))
+            _alive_of(self)[i] = False
+            return
         engine = _rigid(self)
         table = _filters_of(self)
         table[i] = 0  # no category, no mask: nothing touches it, no ray sees it

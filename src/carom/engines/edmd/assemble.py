@@ -108,9 +108,12 @@ def _settings(world: WorldView) -> EdmdSettings:
 
 def build(world: WorldView) -> EdmdEngine:
     """The engine, from the world's bodies at its clock; a CaromError for a body outside the
-    box or a plane's free side, or bodies that overlap."""
+    box or a plane's free side, or bodies that overlap. The bodies taken out of the world
+    (:meth:`carom.World.remove_body`) stay out: nothing meets them."""
     check_placement(world)
-    return EdmdEngine(world.bodies, environment(world), _settings(world), world.time)
+    alive = getattr(world, "alive", None)  # (a World's, issue 43)
+    gone = None if alive is None or np.all(alive) else ~np.asarray(alive, np.bool_)
+    return EdmdEngine(world.bodies, environment(world), _settings(world), world.time, gone=gone)
 
 
 def restore(world: WorldView, arrays: Mapping[str, NDArray[Any]]) -> EdmdEngine:

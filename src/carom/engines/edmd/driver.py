@@ -33,7 +33,7 @@ from carom.engines.edmd.handle import new_handle, sample_motion_now, sample_now
 from carom.engines.edmd.model import Environment, Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
 from carom.engines.edmd.ordering import spatial_order
-from carom.engines.edmd.reach import bodies_now, set_bodies
+from carom.engines.edmd.reach import bodies_now, retire_bodies, set_bodies
 from carom.engines.edmd.renumber import cell_ranks, renumber
 from carom.engines.edmd.settings import SHELL_DEFAULT, EdmdSettings
 from carom.engines.edmd.state import (
@@ -171,6 +171,7 @@ class EdmdEngine:
         order: NDArray[np.int64] | None = None,
         capacity: int | None = None,
         cell_capacity: int = 0,
+        gone: NDArray[np.bool_] | None = None,
     ) -> None:
         self.bodies = bodies
         self.env = env
@@ -229,6 +230,8 @@ class EdmdEngine:
             in_ranges(loop.initialise, n, model, state)  # every body's first event
             calendar_build(state.ev_time, _calendar(state))
             self.model, self.state = model, state
+            if gone is not None and gone.any():  # (bodies taken out: none can overlap them)
+                self._retire_rows(self._engine_rows(np.flatnonzero(gone)))
             self._check_overlaps()
         except BaseException:
             if start:
@@ -663,6 +666,24 @@ class EdmdEngine:
         after = self._kinetic(bodies, arrays[1], arrays[3])
         self.state.sums[codes.S_WORK] += after - before
 
+    def retire(self, ids: NDArray[np.int64]) -> None:
+        """Take the caller's bodies ``ids`` (k,) out of the world for good, their indices
+        kept: each stops where it is at the clock (the kinetic energy it had leaves the
+        ledger as work done on it), no other sphere meets it again, and it has no event
+        (:func:`carom.engines.edmd.reach.retire_bodies`)."""
+        bodies = np.unique(ids)
+        rows = self._engine_rows(bodies)
+        _, v, _, w = self._motion(rows)
+        moving = self.bodies.mobile[bodies]  # (a static sphere has no kinetic energy)
+        before = self._kinetic(bodies[moving], v[moving], w[moving])
+        self._retire_rows(rows)
+        self.state.sums[codes.S_WORK] -= before
+
+    def _retire_rows(self, rows: NDArray[np.int64]) -> None:
+        while (status := retire_bodies(self.handle, rows)) != FITS:
+            self._grow(codes.LISTS_FULL if status == LIST_FULL else codes.CELLS_FULL)
+            self.resize_grid(self.capacity, self.cell_capacity)
+
     def _kinetic(self, bodies: NDArray[np.int64], v: FloatArray, w: FloatArray) -> float:
         """Kinetic energy [J] of the caller's ``bodies`` (k,) at velocities ``v`` (k, d) and
         spins ``w`` (k, 3)."""
@@ -698,12 +719,14 @@ class EdmdEngine:
                 )
         x, _ = self.sample_motion()
         x[bodies] = at
+        gone = self.order[np.isnan(self.state.shell[:, 3])]  # (taken out: met by none)
         for k, body in enumerate(bodies.tolist()):
             gap = x - at[k]
             if env.periodic:
                 gap -= env.box * np.round(gap / env.box)
             reach = np.sqrt(np.sum(gap * gap, axis=1)) - radius - r[k]
             reach[body] = np.inf
+            reach[gone] = np.inf
             other = int(np.argmin(reach))
             if reach[other] < -OVERLAP_TOLERANCE * (radius[other] + r[k]):
                 raise CaromError(

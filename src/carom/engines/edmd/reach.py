@@ -11,6 +11,7 @@ new parabola from the clock on, to round-off.
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 from carom.engines.edmd.calendar import calendar_update
@@ -28,7 +29,7 @@ from carom.engines.edmd.predict import (
 )
 from carom.geometry.rotation import turn
 
-__all__ = ["bodies_now", "set_bodies"]
+__all__ = ["bodies_now", "retire_bodies", "set_bodies"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -139,3 +140,93 @@ def _leave_support(i, moved, v, gravity, support, acc, plane_normal) -> None:  #
             un += v[i, k] * face_normal(plane_normal, dim, support[i], k)
         if moved or un != 0.0:
             set_support(gravity, plane_normal, support, acc, i, -1)
+
+
+@njit(cache=True, error_model="numpy")
+def retire_bodies(h, rows) -> int:  # type: ignore[no-untyped-def]
+    """Take engine rows ``rows`` (k,) out of the world for good: each is flown to the clock
+    and stopped there (no speed, no spin, no acceleration: it rests on nothing), its shell
+    made to overlap no other (its reach NaN: every test of a distance against it fails, so no
+    list ever holds it again, whatever is rebuilt), it leaves every neighbour's list, its
+    collision counter is raised (every event predicted with it is stale) and its own next
+    event is none.
+
+    Returns ``FITS``, or why a neighbour list or cell row did not fit (the caller grows them,
+    rebuilds them all and calls again: every value set here is set again the same)."""
+    m, s = h.model, h.state
+    dim = m.box.shape[0]
+    kin = s.kin
+    x, v, t = kinematic_views(kin, dim)
+    ev_kind, ev_other, ev_stamp, counter = schedule_views(s.sched)
+    T = s.clock[0]
+    for r in range(rows.shape[0]):
+        i = rows[r]
+        free_flight(x, v, s.acc, m.gravity, t, i, T)
+        _stop_turning(i, T, s.w, s.orient, s.orient_t, dim)
+        for k in range(dim):
+            v[i, k] = 0.0
+        _rest_nowhere(i, m.gravity, s.support, s.acc)
+        s.shell[i, 3] = np.nan  # (every overlap test against its shell fails, both ways)
+        s.counts[C_SHELL] += 1  # (a stamp no earlier rebuild used)
+        status = rebuild_shell(
+            i, s.shell, m.mobile, s.nbr, s.nbr_count, s.cell_count, s.cell_body, s.slot,
+            s.cell, m.box, m.periodic, m.shell_thickness, m.cell_size, m.ncell, s.nbr_mark,
+            s.nbr_old, s.counts[C_SHELL], s.scan, s.scan_body,
+        )  # fmt: skip
+        if status != FITS:
+            return status
+        counter[i] += 1
+    cal = calendar_of(s)
+    for r in range(rows.shape[0]):
+        i = rows[r]
+        predict(
+            i,
+            T,
+            kin,
+            x,
+            v,
+            s.acc,
+            m.gravity,
+            t,
+            s.shell,
+            s.support,
+            s.nbr,
+            s.nbr_count,
+            s.near,
+            counter,
+            m.radius,
+            m.mobile,
+            m.box,
+            m.inv_box,
+            m.periodic,
+            m.shell_thickness,
+            m.plane_point,
+            m.plane_normal,
+            s.ev_time,
+            ev_kind,
+            ev_other,
+            ev_stamp,
+        )  # fmt: skip (at rest on nothing, with no neighbour: no event, ever)
+        calendar_update(s.ev_time, i, cal)
+    return FITS
+
+
+@njit(cache=True, error_model="numpy")
+def _stop_turning(i, T, w, orient, orient_t, dim) -> None:  # type: ignore[no-untyped-def]
+    """Row ``i`` turned to the clock ``T`` and its spin stopped (nothing when the engine
+    keeps no spins, ``w`` None)."""
+    if w is not None:
+        turn(orient, i, w[i, 0], w[i, 1], w[i, 2], T - orient_t[i], dim)
+        orient_t[i] = T
+        for k in range(3):
+            w[i, k] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _rest_nowhere(i, gravity, support, acc) -> None:  # type: ignore[no-untyped-def]
+    """Row ``i`` on no face and with no acceleration: it stays where it is (nothing when the
+    world has no gravity: every acceleration is nil already)."""
+    if gravity is not None:
+        support[i] = -1
+        for k in range(acc.shape[1]):
+            acc[i, k] = 0.0
