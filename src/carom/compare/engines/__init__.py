@@ -192,6 +192,7 @@ ENGINES: dict[str, EngineEntry] = {
             (3,),
             "carom.compare.engines.rapier_engine",
             ("rigid",),
+            joints=True,
         ),
         EngineEntry(
             "box2d",

@@ -304,6 +304,7 @@ class MujocoRigidSimulation:
         )
         self.model = model = _model(xml, scene.name)
         self.data = data = mujoco.MjData(model)
+        _servo_gains(model)
         for k, (child, spec) in enumerate(driven):  # each servo's speed, as the joint turns
             data.ctrl[k] = spec.motor[0] if child == spec.b else -spec.motor[0]
         self._rows = np.nonzero(scene.kind[: scene.n] == KIND_DYNAMIC)[0]
@@ -480,21 +481,26 @@ def _tree_joint(spec: Any, child: int, turn: np.ndarray, scene: Any) -> str:
     )
 
 
-#: a motor's velocity servo saturates until its joint is within this share of the speed
-MOTOR_SLIP = 1e-3
-
-
 def _motor(spec: Any, child: int) -> str:
-    """A joint's motor as MuJoCo's ``velocity`` actuator (a servo ``kv (speed - qvel)``,
-    clamped at the motor's largest torque or force: a motor that pushes at its most until
-    within :data:`MOTOR_SLIP` of its speed; ``implicitfast`` integrates its damping
-    implicitly)."""
-    speed, most = spec.motor
-    kv = most / (MOTOR_SLIP * max(abs(speed), 1.0))
+    """A joint's motor as MuJoCo's ``velocity`` actuator: a servo ``kv (speed - qvel)``
+    clamped at the motor's largest torque or force. Its gain is set once the model is built
+    (:func:`_servo_gains`)."""
+    most = spec.motor[1]
     return (
-        f'<velocity joint="j{child}" kv="{kv!r}" forcelimited="true" '
-        f'forcerange="{-most!r} {most!r}"/>'
+        f'<velocity joint="j{child}" kv="1" forcelimited="true" forcerange="{-most!r} {most!r}"/>'
     )
+
+
+def _servo_gains(model: Any) -> None:
+    """Each velocity servo's gain ``kv = M / dt``, M the joint's own inertia (MuJoCo's
+    ``dof_M0``): it would reach its speed in one explicit step, and ``implicitfast``, which
+    counts the servo's damping in the step, keeps it stable. A much larger gain would make
+    that damping swamp the clamped force (the joint all but stops accelerating)."""
+    for k in range(model.nu):
+        dof = int(model.jnt_dofadr[model.actuator_trnid[k, 0]])
+        kv = float(model.dof_M0[dof]) / float(model.opt.timestep)
+        model.actuator_gainprm[k, 0] = kv
+        model.actuator_biasprm[k, 2] = -kv
 
 
 def _equality(spec: Any, scene: Any) -> str:

@@ -13,6 +13,9 @@ guide sets up rigid bodies.
   friction and restitution, and per-material coefficients reproduce the scene's pairs
   (:func:`carom.compare.rigid.shape_coefficients`). No damping. Sleeping as in the scene
   (``can_sleep``). CCD off: Rapier's default.
+* Joints as Rapier's impulse joints (:func:`_add_joints`): spherical, revolute, prismatic and
+  fixed joints, with limits and velocity motors, their frames set so that each joint is at
+  rest where the scene starts; the world's end a fixed body at the origin.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ import rapier3d as r
 from carom.compare.rigid3d import RigidScene3D, primitives, principal_frame
 from carom.compare.yardstick import shape_coefficients
 from carom.errors import CaromError
+from carom.geometry.rotation import matrix_quaternion, rotation_matrices
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
 
 __all__ = ["RIGID_DT", "start_rigid"]
@@ -93,6 +97,7 @@ class RapierSimulation:
                 body = body.linear_damping(0.0).angular_damping(0.0)
                 body = body.can_sleep(bool(scene.settings.sleep))
             self.handles.append(world.add_body(body, colliders))
+        joint_notes = _add_joints(world, self.handles, scene)
         params = world.integration_parameters
         self.dt = float(params.dt)
         self.settings: dict[str, Any] = {
@@ -117,6 +122,7 @@ class RapierSimulation:
             *mu_notes,
             "Rapier's default integration parameters (dt 1/60 s); one thread; f32 arithmetic",
             "carom's mass and inertia tensor on each body's first collider",
+            *joint_notes,
         ]
         if np.any(scene.rolling > 0.0):
             self.notes.append("the scene's rolling resistance is not given to Rapier")
@@ -166,6 +172,92 @@ class RapierSimulation:
 
     def close(self) -> None:
         pass
+
+
+def _add_joints(world: Any, handles: list[Any], scene: RigidScene3D) -> list[str]:
+    """The scene's joints as Rapier's impulse joints; the notes on how they were built.
+
+    Each joint's frame on each body is the joint's world frame at the start seen from that
+    body (anchor and axis turned into the body's frame), so every joint starts at rest and
+    its angle or travel counts from the start, as carom's limits do. A motor is Rapier's
+    velocity motor (``motor_velocity(speed, factor)``, its damping factor large, so it pushes
+    at its most until at the speed) clamped at the motor's largest force or torque. Springs
+    and distance joints are refused (carom compare gives Rapier the 3D rope's joints).
+    """
+    specs = scene.joints
+    if not specs:
+        return []
+    ground = None
+    if any(min(spec.a, spec.b) < 0 for spec in specs):
+        ground = world.add_body(r.RigidBody.fixed(), [])
+    turns = rotation_matrices(scene.orientation)
+    for spec in specs:
+        if spec.kind not in ("spherical", "revolute", "prismatic", "weld"):
+            raise CaromError(
+                f"rapier3d: scene {scene.name!r} has a {spec.kind} joint; carom compare gives "
+                "Rapier spherical, revolute, prismatic and fixed joints"
+            )
+        if spec.spring is not None or spec.angular_spring is not None:
+            raise CaromError(f"rapier3d: scene {scene.name!r} has a sprung {spec.kind} joint")
+
+        def _local(body: int, anchor: np.ndarray) -> tuple[float, float, float]:
+            turn = np.eye(3) if body < 0 else turns[body]
+            centre = np.zeros(3) if body < 0 else scene.position[body]
+            return _vector(turn.T @ (anchor - centre))
+
+        def frame(body: int, anchor: np.ndarray) -> Any:
+            turn = np.eye(3) if body < 0 else turns[body]
+            w, x, y, z = (float(c) for c in matrix_quaternion(turn.T))
+            rotation = r.Rotation3(w=w, x=x, y=y, z=z)
+            return r.Isometry3(translation=_local(body, anchor), rotation=rotation)
+
+        if spec.kind == "spherical":
+            builder: Any = r.SphericalJointBuilder()
+        elif spec.kind == "weld":
+            builder = r.FixedJointBuilder()
+        else:
+            assert spec.axis is not None
+            make = r.RevoluteJointBuilder if spec.kind == "revolute" else r.PrismaticJointBuilder
+            builder = make(_vector(spec.axis))
+        if spec.kind in ("spherical", "weld"):
+            builder = builder.local_frame1(frame(spec.a, spec.anchor_a)).local_frame2(
+                frame(spec.b, spec.anchor_b)
+            )
+        else:  # (these builders take anchors and axes: their frames follow from the axis)
+            builder = builder.local_anchor1(_local(spec.a, spec.anchor_a)).local_anchor2(
+                _local(spec.b, spec.anchor_b)
+            )
+            builder = _axes(builder, spec, turns)
+            if spec.limits is not None:
+                a = np.eye(3) if spec.a < 0 else turns[spec.a]
+                b = np.eye(3) if spec.b < 0 else turns[spec.b]
+                if spec.kind == "revolute" and not np.allclose(a.T @ b, np.eye(3), atol=1e-12):
+                    raise CaromError(
+                        f"rapier3d: scene {scene.name!r} has a limited hinge between bodies "
+                        "turned differently at the start; Rapier's hinge counts its angle from "
+                        "frames built from the axis alone"
+                    )
+                builder = builder.limits(*spec.limits)
+            if spec.motor is not None:
+                speed, most = spec.motor
+                builder = builder.motor_velocity(speed, 1e6).motor_max_force(most)
+        builder = builder.contacts_enabled(spec.collide)
+        one = ground if spec.a < 0 else handles[spec.a]
+        two = ground if spec.b < 0 else handles[spec.b]
+        world.impulse_joints.insert(one, two, builder, True)
+    return [
+        "joints as Rapier's impulse joints, each body's frame of a joint its world frame at "
+        "the start (limits and motors count from there); motors: motor_velocity with a large "
+        "damping factor, clamped at the motor's force or torque"
+    ]
+
+
+def _axes(builder: Any, spec: Any, turns: np.ndarray) -> Any:
+    """A hinge's or a slider's axis in each body's frame."""
+    for body, method in ((spec.a, "local_axis1"), (spec.b, "local_axis2")):
+        turn = np.eye(3) if body < 0 else turns[body]
+        builder = getattr(builder, method)(_vector(turn.T @ spec.axis))
+    return builder
 
 
 def start_rigid(scene: RigidScene3D) -> RapierSimulation:
