@@ -81,7 +81,7 @@ def set_bodies(h, rows, x_new, v_new, orient_new, w_new, moved) -> int:  # type:
     dim = m.box.shape[0]
     kin = s.kin
     x, v, t = kinematic_views(kin, dim)
-    ev_kind, ev_other, ev_stamp, counter = schedule_views(s.sched)
+    counter = schedule_views(s.sched)[3]
     T = s.clock[0]
     for r in range(rows.shape[0]):
         i = rows[r]
@@ -103,17 +103,28 @@ def set_bodies(h, rows, x_new, v_new, orient_new, w_new, moved) -> int:  # type:
             if status != FITS:
                 return status
         counter[i] += 1  # every event a neighbour predicted with it is stale
+    _predict_rows(h, rows)
+    return FITS
+
+
+@njit(cache=True, error_model="numpy")
+def _predict_rows(h, rows) -> None:  # type: ignore[no-untyped-def]
+    """Predict the next event of engine rows ``rows`` (k,), each at the clock, and file it in
+    the calendar."""
+    m, s = h.model, h.state
+    x, v, t = kinematic_views(s.kin, m.box.shape[0])
+    ev_kind, ev_other, ev_stamp, counter = schedule_views(s.sched)
+    T = s.clock[0]
     cal = calendar_of(s)
     for r in range(rows.shape[0]):
         i = rows[r]
         predict(
-            i, T, kin, x, v, s.acc, m.gravity, t, s.shell, s.support, s.nbr, s.nbr_count,
+            i, T, s.kin, x, v, s.acc, m.gravity, t, s.shell, s.support, s.nbr, s.nbr_count,
             s.near, counter, m.radius, m.mobile, m.box, m.inv_box, m.periodic,
             m.shell_thickness, m.plane_point, m.plane_normal, s.ev_time, ev_kind, ev_other,
             ev_stamp,
         )  # fmt: skip
         calendar_update(s.ev_time, i, cal)
-    return FITS
 
 
 @njit(cache=True, error_model="numpy")
@@ -157,7 +168,7 @@ def retire_bodies(h, rows) -> int:  # type: ignore[no-untyped-def]
     dim = m.box.shape[0]
     kin = s.kin
     x, v, t = kinematic_views(kin, dim)
-    ev_kind, ev_other, ev_stamp, counter = schedule_views(s.sched)
+    counter = schedule_views(s.sched)[3]
     T = s.clock[0]
     for r in range(rows.shape[0]):
         i = rows[r]
@@ -176,38 +187,7 @@ def retire_bodies(h, rows) -> int:  # type: ignore[no-untyped-def]
         if status != FITS:
             return status
         counter[i] += 1
-    cal = calendar_of(s)
-    for r in range(rows.shape[0]):
-        i = rows[r]
-        predict(
-            i,
-            T,
-            kin,
-            x,
-            v,
-            s.acc,
-            m.gravity,
-            t,
-            s.shell,
-            s.support,
-            s.nbr,
-            s.nbr_count,
-            s.near,
-            counter,
-            m.radius,
-            m.mobile,
-            m.box,
-            m.inv_box,
-            m.periodic,
-            m.shell_thickness,
-            m.plane_point,
-            m.plane_normal,
-            s.ev_time,
-            ev_kind,
-            ev_other,
-            ev_stamp,
-        )  # fmt: skip (at rest on nothing, with no neighbour: no event, ever)
-        calendar_update(s.ev_time, i, cal)
+    _predict_rows(h, rows)  # (at rest on nothing, with no neighbour: no event, ever)
     return FITS
 
 
