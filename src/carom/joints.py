@@ -52,7 +52,7 @@ from carom.engines.rigid3d import joints as rows3
 from carom.engines.stepped import joints as shared
 from carom.engines.stepped.driver import SteppedEngine
 from carom.errors import CaromError
-from carom.geometry.rotation import matrix_quaternion, rotation_matrices
+from carom.geometry.rotation import matrix_quaternion, orientation_matrices, rotation_matrices
 from carom.laws.kinds import KIND_DYNAMIC
 from carom.limits import LARGEST
 
@@ -478,11 +478,7 @@ def anchors_now(
     d = x.shape[1]
     out = np.full((ints.shape[0], 2, d), np.nan)
     live = ints[:, shared.J_KIND] != shared.REMOVED
-    if d == 2:
-        c, s = np.cos(turn), np.sin(turn)
-        rotations = np.stack((np.stack((c, -s), -1), np.stack((s, c), -1)), -2)
-    else:
-        rotations = rotation_matrices(turn) if len(turn) else np.zeros((0, 3, 3))
+    rotations = orientation_matrices(turn, d)
     for side, col in enumerate((shared.J_A, shared.J_B)):
         body = ints[:, col]
         world = body < 0

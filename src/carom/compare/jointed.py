@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from carom.engines.rigid import joints as rows2
 from carom.engines.rigid3d import joints as rows3
 from carom.engines.stepped import joints as shared
-from carom.geometry.rotation import rotation_matrices
+from carom.geometry.rotation import orientation_matrices
 from carom.joints import anchors_now
 from carom.laws.kinds import KIND_DYNAMIC
 
@@ -103,14 +103,6 @@ def _rows(dim: int) -> Any:
     return rows2 if dim == 2 else rows3
 
 
-def _rotations(turn: FloatArray, dim: int) -> FloatArray:
-    """Rotation matrices (N, d, d) of angles (N,) (2D) or quaternions (N, 4) (3D)."""
-    if dim == 2:
-        c, s = np.cos(turn), np.sin(turn)
-        return np.stack((np.stack((c, -s), -1), np.stack((s, c), -1)), -2)
-    return rotation_matrices(turn) if len(turn) else np.zeros((0, 3, 3))
-
-
 def joint_specs(
     ints: IntArray, floats: FloatArray, x: FloatArray, turn: FloatArray
 ) -> tuple[JointSpec, ...]:
@@ -123,7 +115,7 @@ def joint_specs(
     if ints.shape[0] == 0:
         return ()
     anchors = anchors_now(ints, floats[:, : 2 * dim], x, turn)
-    rotations = _rotations(turn, dim)
+    rotations = orientation_matrices(turn, dim)
     specs = []
     for j in range(ints.shape[0]):
         kind = int(ints[j, shared.J_KIND])
@@ -276,7 +268,7 @@ class JointGauge:
         if np.any(self._slider):
             a = self._ints[self._slider, shared.J_A]
             axis = self._axis[self._slider]
-            turned = _rotations(turn, self._dim)[np.maximum(a, 0)] if len(a) else axis[:, :, None]
+            turned = orientation_matrices(turn, self._dim)[np.maximum(a, 0)]
             axis = np.where((a < 0)[:, None], axis, np.einsum("jab,jb->ja", turned, axis))
             along = np.sum(apart[self._slider] * axis, axis=1)
             gap[self._slider] = np.linalg.norm(apart[self._slider] - along[:, None] * axis, axis=1)

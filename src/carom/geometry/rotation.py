@@ -25,6 +25,7 @@ __all__ = [
     "cos_sin",
     "matrix",
     "matrix_quaternion",
+    "orientation_matrices",
     "quaternion_product",
     "rotation_matrices",
     "turn",
@@ -79,6 +80,17 @@ def rotation_matrices(quaternions: ArrayLike) -> FloatArray:
     out[:, 2, 1] = 2 * (y * z + w * x)
     out[:, 2, 2] = 1 - 2 * (x * x + y * y)
     return out
+
+
+def orientation_matrices(turn: ArrayLike, dim: int) -> FloatArray:
+    """Rotation matrices (N, d, d) of orientations ``turn``: angles (N,) [rad] about z in 2D,
+    unit quaternions (N, 4) ``(w, x, y, z)`` in 3D."""
+    turn = np.asarray(turn, dtype=np.float64)
+    if dim == 2:
+        c, s = np.cos(turn), np.sin(turn)
+        turned: FloatArray = np.stack((np.stack((c, -s), -1), np.stack((s, c), -1)), -2)
+        return turned
+    return rotation_matrices(turn) if len(turn) else np.zeros((0, 3, 3))
 
 
 def matrix_quaternion(r: FloatArray) -> FloatArray:
