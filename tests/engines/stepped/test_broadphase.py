@@ -10,12 +10,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from carom.engines.stepped import broadphase
 from carom.engines.stepped.broadphase import (
     FAT,
     KeptPairs,
     find_pairs,
     max_cells_of,
     refit,
+    repair_pairs,
     select_pairs,
 )
 from carom.geometry.bvh import Bvh, build_bvh, empty_bvh
@@ -131,11 +133,16 @@ def test_an_unbounded_box_meets_every_box_it_overlaps() -> None:
     assert _pairs(boxes, body, yes, dynamic, 0.5) == [(0, 1), (1, 3), (2, 3)]
 
 
+@pytest.mark.parametrize("few", [0, 64])
 @pytest.mark.parametrize("dims", [2, 3])
 def test_fat_boxes_give_the_same_pairs_and_rebuild_only_when_a_piece_leaves_its_own(
-    dims: int,
+    dims: int, few: int, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    # Both engines keep their pairs through fat boxes (KeptPairs, refit, select_pairs).
+    # Both engines keep their pairs through fat boxes (KeptPairs, refit, select_pairs); the
+    # pairs of pieces that left their fat boxes are mended one by one (repair_pairs) when
+    # they are FEW or fewer (64: here always, 55 pieces move) or made again from the grid
+    # (FEW = 0: always)
+    monkeypatch.setattr(broadphase, "FEW", few)
     rng = np.random.default_rng(5)
     pieces = 60
     body = np.arange(pieces)
@@ -150,8 +157,17 @@ def test_fat_boxes_give_the_same_pairs_and_rebuild_only_when_a_piece_leaves_its_
     candidates = np.zeros((pieces * pieces, 2), np.int64)
     n_candidates = 0
     rebuilds = 0
-    kept = KeptPairs(pieces, dims, pieces, lambda boxes, active, out: _find(
-        boxes, body, active, dynamic, 0.5, out, tree))  # fmt: skip
+    finds: list[int] = []  # the keeper's calls of find_pairs
+    kept = KeptPairs(
+        pieces, dims, pieces,
+        lambda boxes, active, out: finds.append(1) or _find(
+            boxes, body, active, dynamic, 0.5, out, tree
+        ),
+        lambda fat, active, moved, n_moved, old, n_old, out: repair_pairs(
+            fat, moved, n_moved, body, active, dynamic, kept.loose,
+            (tree.box, tree.left, tree.first, tree.count, tree.order), old, n_old, out,
+        ),
+    )  # fmt: skip
     # the static pieces never move: settled once (their fat boxes their boxes), in a tree,
     # out of the grid and never refitted (as the engines do)
     kept.settle(np.hstack([centre - reach[:, None], centre + reach[:, None]]), np.arange(5))
@@ -165,10 +181,11 @@ def test_fat_boxes_give_the_same_pairs_and_rebuild_only_when_a_piece_leaves_its_
         active = dynamic & (rng.random(pieces) < 0.9)
         boxes = np.hstack([centre - reach[:, None], centre + reach[:, None]])
         before = fat.copy()
-        moved = refit(boxes, fat, reach, loose)
+        which = np.zeros(pieces, np.int64)
+        moved = refit(boxes, fat, reach, loose, which)
         left = np.any((boxes[:, :dims] < before[:, :dims]) | (boxes[:, dims:] > before[:, dims:]),
                       axis=1)  # fmt: skip
-        assert moved == np.count_nonzero(left)
+        assert which[:moved].tolist() == np.flatnonzero(left).tolist()
         np.testing.assert_array_equal(fat[~left], before[~left])  # the others keep theirs
         np.testing.assert_allclose(fat[left, :dims], boxes[left, :dims] - FAT * reach[left, None])
         if moved:
@@ -181,4 +198,10 @@ def test_fat_boxes_give_the_same_pairs_and_rebuild_only_when_a_piece_leaves_its_
         # the engines' keeper gives the same, whether it pairs the fat boxes or the swept ones
         count = kept.update(boxes, reach, body, active, dynamic)
         assert [(int(a), int(b)) for a, b in kept.pairs[:count]] == found, step
+        if kept._n_fat >= 0:  # the fat pairs it keeps (mended or not) are the grid's
+            grid = _pairs(kept.fat, body, everyone, dynamic, 0.5, tree)
+            assert kept._fat_pairs[: kept._n_fat].tolist() == [list(p) for p in grid], step
     assert rebuilds <= 200 - 66  # the 66 steps moving nothing (step % 3 == 0, after the first)
+    # mended, the grid is used at the first step only (every fat box new then); else at least
+    # at every step a piece left its fat box
+    assert len(finds) == 1 if few else len(finds) >= rebuilds

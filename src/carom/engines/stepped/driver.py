@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 
 from carom.engines.base import COLLISION_DTYPE, PARTNER_BODY, Counters, FrameArrays, Partners, Sink
 from carom.engines.stepped import islands
-from carom.engines.stepped.broadphase import KeptPairs, find_pairs, grid_cell
+from carom.engines.stepped.broadphase import KeptPairs, find_pairs, grid_cell, repair_pairs
 from carom.engines.stepped.contacts import extremes, store_points
 from carom.engines.stepped.events import ContactEvents
 from carom.engines.stepped.filters import default_filters, filter_pairs
@@ -226,7 +226,7 @@ class SteppedEngine:
         boxes finite: a plane's is not) in a tree built once (:func:`find_pairs`)."""
         model = self.model
         pieces = model.piece_body.shape[0]
-        self._kept = KeptPairs(pieces, self.DIMS, model.kind.shape[0], self._find)
+        self._kept = KeptPairs(pieces, self.DIMS, model.kind.shape[0], self._find, self._repair)
         static = ~(self._dynamic | self._kinematic)
         self._rest_boxes()
         bounded = np.all(np.isfinite(self._boxes), axis=1)
@@ -250,6 +250,19 @@ class SteppedEngine:
             find_pairs(
                 boxes, self.model.piece_body, active, self._dynamic, self.cell, self._kept.loose,
                 tree.box, tree.left, tree.first, tree.count, tree.order, out,
+            )
+        )  # fmt: skip
+
+    def _repair(
+        self, fat: NDArray[np.float64], active: NDArray[np.bool_], moved: NDArray[np.int64],
+        n_moved: int, old: NDArray[np.int64], n_old: int, out: NDArray[np.int64],
+    ) -> int:  # fmt: skip
+        tree = self._tree
+        return int(
+            repair_pairs(
+                fat, moved, n_moved, self.model.piece_body, active, self._dynamic,
+                self._kept.loose, (tree.box, tree.left, tree.first, tree.count, tree.order),
+                old, n_old, out,
             )
         )  # fmt: skip
 
