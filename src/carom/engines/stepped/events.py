@@ -28,7 +28,15 @@ from numpy.typing import NDArray
 
 from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_COUNT, PointLayout
 
-__all__ = ["ContactEvents", "EventArrays", "compare", "event_dtypes", "split_off", "touches"]
+__all__ = [
+    "ContactEvents",
+    "EventArrays",
+    "compare",
+    "event_dtypes",
+    "split_off",
+    "step_events",
+    "touches",
+]
 
 
 def event_dtypes(d: int) -> tuple[np.dtype[np.void], np.dtype[np.void], np.dtype[np.void]]:
@@ -185,6 +193,63 @@ def compare(
     return unique[:u], began[:b], row[:b], ended[:e]
 
 
+@njit(cache=True)
+def step_events(
+    rows: tuple[np.ndarray, np.ndarray, int],
+    columns: tuple[int, int, int, int],
+    layout: tuple[int, int, int, int],
+    limits: tuple[float, float, float],
+    log: np.ndarray,
+    number: np.ndarray,
+    last: np.ndarray,
+    moving: np.ndarray,
+    ending: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One step's events in one call: :func:`touches`, :func:`compare`, and the three event
+    arrays' records written as rows of int64 (the integer fields) and float64 (the others,
+    through a view): every field is 8 bytes, so a (k, fields) buffer viewed as
+    :func:`event_dtypes`'s dtype is the structured array, made without a NumPy call per field.
+
+    ``rows``: the contact rows (floats, ints, count); ``columns``: the first point's column, a
+    point's width, the flags' column, d; ``layout`` as :func:`touches`; ``limits``: the
+    slop [m], the hit threshold [m/s] and the step's start [s]; ``log`` the step's exact
+    impacts (all of its rows); ``number``, ``last``, ``moving`` as :func:`touches` and
+    :func:`compare`; ``ending``: keys of pairs that end whatever this step says (bodies
+    taken out), ended first. Returns the pairs touching now (sorted keys) and the begin
+    (b, 2 + 2 d), end (e, 2) and hit (h, 4 + 2 d) records.
+    """
+    cf, ci, nc = rows
+    point0, point_floats, flags, d = columns
+    slop, threshold, start = limits
+    keys, where, pairs, times, values = touches(
+        cf, ci, nc, point0, point_floats, d, layout, flags, slop, threshold, log,
+        log.shape[0], number,
+    )  # fmt: skip
+    n = number.shape[0] + 1
+    now, began, row, ended = compare(keys, last, moving, n)
+    begin = np.empty((began.shape[0], 2 + 2 * d), np.int64)
+    begin_f = begin.view(np.float64)
+    for k in range(began.shape[0]):
+        begin[k, 0] = began[k] // n - 1
+        begin[k, 1] = began[k] % n - 1
+        for c in range(2 * d):
+            begin_f[k, 2 + c] = where[row[k], c]
+    end = np.empty((ending.shape[0] + ended.shape[0], 2), np.int64)
+    for k in range(end.shape[0]):
+        key = ending[k] if k < ending.shape[0] else ended[k - ending.shape[0]]
+        end[k, 0] = key // n - 1
+        end[k, 1] = key % n - 1
+    hit = np.empty((pairs.shape[0], 4 + 2 * d), np.int64)
+    hit_f = hit.view(np.float64)
+    for k in range(pairs.shape[0]):
+        hit[k, 0] = pairs[k, 0]
+        hit[k, 1] = pairs[k, 1]
+        hit_f[k, 2] = start + times[k]
+        for c in range(2 * d + 1):
+            hit_f[k, 3 + c] = values[k, c]
+    return now, begin, end, hit
+
+
 def split_off(
     keys: NDArray[np.int64], gone: NDArray[np.int64], n: int
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
@@ -235,32 +300,18 @@ class ContactEvents:
         flags' column) and its exact impacts' ``log``. ``moving`` (N,) marks the awake
         dynamic bodies: a pair of which neither moves (asleep, static) has no contact row
         while it sleeps, and still touches (as in Box2D, sleep ends nothing)."""
-        cf, ci, nc = rows
         point0, point_floats, flags = columns
-        keys, where, pairs, times, values = touches(
-            cf, ci, nc, point0, point_floats, self.d, self.layout, flags, slop,
-            self.threshold, log, log.shape[0], self.number,
+        now, begin, end, hit = step_events(
+            rows, (point0, point_floats, flags, self.d), self.layout,
+            (slop, self.threshold, start), log, self.number, self.keys, moving, self.ending,
         )  # fmt: skip
-        n = self.number.shape[0] + 1
-        now, began, row, ended = compare(keys, self.keys, moving, n)
-        if self.ending.size:
-            ended = np.concatenate((self.ending, ended))
-            self.ending = np.zeros(0, np.int64)
         self.keys = now
-        if began.size == 0 and ended.size == 0 and pairs.shape[0] == 0:
+        if self.ending.size:
+            self.ending = np.zeros(0, np.int64)
+        if begin.shape[0] == 0 and end.shape[0] == 0 and hit.shape[0] == 0:
             self.last = self._none  # (a step of no event: the same empty arrays)
             return
-        d = self.d
         begin_t, end_t, hit_t = self.dtypes
-        begin = np.zeros(began.size, begin_t)
-        begin["a"], begin["b"] = began // n - 1, began % n - 1
-        chosen = where[row]
-        begin["point"], begin["normal"] = chosen[:, :d], chosen[:, d:]
-        end = np.zeros(ended.size, end_t)
-        end["a"], end["b"] = ended // n - 1, ended % n - 1
-        hit = np.zeros(pairs.shape[0], hit_t)
-        hit["a"], hit["b"] = pairs[:, 0], pairs[:, 1]
-        hit["time"] = start + times
-        hit["point"], hit["normal"] = values[:, :d], values[:, d : 2 * d]
-        hit["speed"] = values[:, 2 * d]
-        self.last = EventArrays(begin, end, hit)
+        self.last = EventArrays(
+            begin.view(begin_t)[:, 0], end.view(end_t)[:, 0], hit.view(hit_t)[:, 0]
+        )
