@@ -21,6 +21,14 @@ without them (``no_cpython_wrapper``, ``no_cfunc_wrapper``) by a dispatcher
 (:class:`KernelOnly`) that refuses a call from Python with a ``TypeError`` instead of jumping
 to an entry point that does not exist. Call it from a jitted function; its Python source
 stays at ``.py_func``.
+
+**Leaf kernels** (:func:`leaf`). Numba counts references to the arrays a compiled function
+holds, with atomic instructions, and where a function branches its optimiser often keeps the
+counts it could have dropped: a call of a small helper taking three arrays cost 30 ns where
+its arithmetic takes 2 (measured: the broad phase's pair test; in the exact path's islands
+the counts took a quarter of the time). A kernel that allocates no array and returns none
+needs no counting at all: compiled without Numba's runtime (``_nrt=False``), it takes the
+arrays its caller holds, which keeps them alive through the call, and counts nothing.
 """
 
 from __future__ import annotations
@@ -45,6 +53,7 @@ __all__ = [
     "kernel_only",
     "kernel_tag",
     "kernels_cached",
+    "leaf",
     "usable_cpus",
 ]
 
@@ -140,6 +149,15 @@ def kernel_only(**options: Any) -> Callable[[_F], _F]:
         return cast(_F, dispatcher)
 
     return decorate
+
+
+def leaf(func: _F) -> _F:
+    """``numba.njit(cache=True)`` for a kernel that allocates no array (no ``np.empty``, no
+    copy, no slice kept), returns none and calls only kernels like it: compiled without
+    Numba's reference counting (module docstring), so a call from a loop costs what its
+    arithmetic costs. Without the JIT it returns the function itself."""
+    options: dict[str, Any] = {"cache": True, "_nrt": False}  # (_nrt: a Numba target option)
+    return cast(_F, numba.njit(**options)(func))
 
 
 def usable_cpus() -> int:

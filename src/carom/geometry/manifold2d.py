@@ -29,6 +29,8 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.jit import leaf
+
 __all__ = ["collide", "core_distance", "core_witness", "segment_closest"]
 
 #: a tie on separation within this fraction of the slop keeps A's face (no flip-flop)
@@ -77,7 +79,7 @@ def _one_point(
     return 1
 
 
-@njit(cache=True)
+@leaf
 def _circles(
     ax: float,
     ay: float,
@@ -105,7 +107,7 @@ def _circles(
     return _one_point(ax, ay, bx, by, nx, ny, ra, rb, separation, 0, out, ids)
 
 
-@njit(cache=True)
+@leaf
 def _polygon_circle(
     vertices: np.ndarray,
     normals: np.ndarray,
@@ -165,7 +167,7 @@ def _polygon_circle(
     return 1
 
 
-@njit(cache=True)
+@leaf
 def segment_closest(
     p1x: float,
     p1y: float,
@@ -404,7 +406,7 @@ def _polygons(
     return count
 
 
-@njit(cache=True)
+@leaf
 def _facing(
     ox: float,
     oy: float,
@@ -458,7 +460,7 @@ def _facing(
     return 2
 
 
-@njit(cache=True)
+@leaf
 def _segments(
     vertices: np.ndarray,
     sa: int,
@@ -643,7 +645,7 @@ def collide(
     return count
 
 
-@njit(cache=True)
+@leaf
 def core_distance(
     vertices: np.ndarray, normals: np.ndarray, sa: int, ka: int, sb: int, kb: int
 ) -> float:
@@ -652,7 +654,7 @@ def core_distance(
     return core_witness(vertices, normals, sa, ka, sb, kb)[0]
 
 
-@njit(cache=True)
+@leaf
 def core_witness(
     vertices: np.ndarray, normals: np.ndarray, sa: int, ka: int, sb: int, kb: int
 ) -> tuple[float, float, float]:

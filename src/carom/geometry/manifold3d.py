@@ -39,6 +39,8 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.jit import leaf
+
 __all__ = [
     "MAX_POINTS",
     "OUT_SIZE",
@@ -158,7 +160,7 @@ def contact_capsule_sphere(
     return _balls(px, py, pz, ra, b[0], b[1], b[2], rb, margin, fid, out, ids)
 
 
-@njit(cache=True)
+@leaf
 def closest_segment_segment(
     p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray
 ) -> tuple[float, float]:
@@ -345,7 +347,7 @@ def _cross(
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
-@njit(cache=True)
+@leaf
 def reduce_points(
     points: np.ndarray, sep: np.ndarray, count: int, normal: np.ndarray, keep: np.ndarray
 ) -> int:
@@ -537,7 +539,7 @@ def _edge(v: np.ndarray, e: np.ndarray, i: int) -> tuple[float, float, float]:
     return v[b, 0] - v[a, 0], v[b, 1] - v[a, 1], v[b, 2] - v[a, 2]
 
 
-@njit(cache=True)
+@leaf
 def _directions(v: np.ndarray, e: np.ndarray, out: np.ndarray) -> int:
     """The edges of distinct directions (the first of each set of parallel edges) into
     ``out``; a box's 12 edges have 3."""
@@ -570,7 +572,7 @@ def _extent(v: np.ndarray, x: float, y: float, z: float) -> tuple[float, float]:
     return low, high
 
 
-@njit(cache=True)
+@leaf
 def _support_edge(
     v: np.ndarray, e: np.ndarray, like: int, x: float, y: float, z: float, level: float,
     tol: float,
@@ -950,7 +952,7 @@ def closest_hulls(
     return 1
 
 
-@njit(cache=True)
+@leaf
 def _closest_on_hull(
     va: np.ndarray, na: np.ndarray, sa: np.ndarray, ca: np.ndarray, cora: np.ndarray,
     ea: np.ndarray, bx: float, by: float, bz: float,

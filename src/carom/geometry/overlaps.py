@@ -24,6 +24,7 @@ import numpy as np
 from numba import njit
 
 from carom.geometry.manifold2d import core_witness
+from carom.jit import leaf
 
 __all__ = [
     "box_meets_piece_3d",
@@ -79,7 +80,7 @@ def _to_box(low: np.ndarray, high: np.ndarray, x: float, y: float, z: float) -> 
     return math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
-@njit(cache=True)
+@leaf
 def _segment_to_box(low: np.ndarray, high: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     """Least distance from the segment ``a b`` to the box [m]: the distance along the
     segment is convex, so golden-section search finds its minimum (to round-off in 80
@@ -106,7 +107,7 @@ def _segment_to_box(low: np.ndarray, high: np.ndarray, a: np.ndarray, b: np.ndar
     return best
 
 
-@njit(cache=True)
+@leaf
 def point_in_piece_3d(
     p: np.ndarray, kind: int, v: np.ndarray, count: int, n: np.ndarray, faces: int,
     face_first: np.ndarray, corners: np.ndarray, radius: float,
@@ -164,7 +165,7 @@ def _box_interval(
     return centre - half, centre + half
 
 
-@njit(cache=True)
+@leaf
 def box_meets_piece_3d(
     low: np.ndarray, high: np.ndarray, kind: int, v: np.ndarray, count: int, n: np.ndarray,
     faces: int, edges: np.ndarray, radius: float,

@@ -9,6 +9,8 @@ back to within the tolerance ``tol`` of touching (|d| <= tol, so |t - t*| <= tol
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from carom.engines.stepped.impacts import BISECTIONS, MAX_ITERATIONS, advance, search
@@ -59,3 +61,21 @@ def test_a_pair_just_hit_apart_must_part_before_it_can_touch_again() -> None:
     assert t > 0.5
     # without parting, the contact it starts in is the impact
     assert _search(lambda t: t * (1.0 - t), lambda t: 1.0, tol, 2.0)[0] == 0.0
+
+
+def test_a_search_that_starts_overlapping_ends_at_once_on_its_start() -> None:
+    # Overlapping by more than tol at t = 0: there is no safe time before it to bisect back
+    # to, so the safe end, t = 0, is the answer at the first gap (it took 61 gaps, the
+    # bisections measuring t = 0 again and again, before the same answer).
+    t, taken = _search(lambda t: -1e-3 + t, lambda t: 1.0, 1e-9, horizon=1.0)
+    assert (t, taken) == (0.0, 1)
+
+
+def test_a_bisection_ends_once_no_time_is_left_between_its_ends() -> None:
+    # A gap that jumps from open to overlapping between two adjacent floats: the bisection
+    # narrows to them in about 53 halvings of [0, 3 t*] and then ends on the safe side, where
+    # the 60 halvings would have measured the same two times over again and ended there too.
+    jump = 0.5
+    t, taken = _search(lambda t: 1.0 if t < jump else -1.0, lambda t: 1.0 / 1.5, 1e-9, horizon=10.0)
+    assert t == math.nextafter(jump, 0.0)  # the last time known open
+    assert taken < 1 + BISECTIONS

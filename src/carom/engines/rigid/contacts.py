@@ -27,6 +27,7 @@ from carom.engines.stepped.contacts import (
 )
 from carom.engines.stepped.rows import I_COUNT, I_ID0, flags_column, point_layout
 from carom.geometry.manifold2d import collide
+from carom.jit import leaf
 
 __all__ = [
     "CONTACT_FLOATS",
@@ -183,7 +184,7 @@ def narrow_phase(
     return m
 
 
-@njit(cache=True)
+@leaf
 def store_tangents(cf: np.ndarray, ci: np.ndarray, n_contacts: int, cache: np.ndarray) -> None:
     """Each point's tangent impulse into the warm-start cache (K, 2, 2) beside the normal one
     (:func:`carom.engines.stepped.contacts.store_points`)."""

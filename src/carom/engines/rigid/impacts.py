@@ -64,6 +64,7 @@ from carom.engines.stepped.impacts import (
 )
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B
 from carom.geometry.manifold2d import collide, core_witness
+from carom.jit import leaf
 
 __all__ = ["IMPACT_FIELDS", "continuous", "exact_impacts"]
 
@@ -73,7 +74,7 @@ __all__ = ["IMPACT_FIELDS", "continuous", "exact_impacts"]
 IMPACT_FIELDS = 13
 
 
-@njit(cache=True)
+@leaf
 def _gap(
     pa: int,
     pb: int,
@@ -140,7 +141,7 @@ def _gap(
     return deepest, out[0], out[1]
 
 
-@njit(cache=True)
+@leaf
 def time_of_impact(
     pa: int,
     pb: int,
@@ -608,7 +609,7 @@ def _sync(
         clock[body] = t
 
 
-@njit(cache=True)
+@leaf
 def _next_impact(
     pa: int, pb: int, now: float, dt: float, parting: int, clock: np.ndarray,
     island_of: np.ndarray, x: np.ndarray, angle: np.ndarray, v: np.ndarray,

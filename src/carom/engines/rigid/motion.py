@@ -14,6 +14,7 @@ import numpy as np
 from numba import njit
 
 from carom.engines.stepped.loads import fit_to_move
+from carom.jit import leaf
 
 __all__ = [
     "apply_impulse",
@@ -27,7 +28,7 @@ __all__ = [
 ]
 
 
-@njit(cache=True)
+@leaf
 def place_piece(
     p: int,
     px: float,
@@ -55,7 +56,7 @@ def place_piece(
         normals[k, 1] = s * nx + c * ny
 
 
-@njit(cache=True)
+@leaf
 def place_pieces(
     x: np.ndarray,
     angle: np.ndarray,
@@ -186,7 +187,7 @@ def fly(
     angle[b] += omega[b] * t
 
 
-@njit(cache=True)
+@leaf
 def fly_all(
     rows: np.ndarray, t: float, x: np.ndarray, angle: np.ndarray, v: np.ndarray,
     omega: np.ndarray, accel: np.ndarray,
@@ -198,7 +199,7 @@ def fly_all(
         fly(b, t, x, angle, v, omega, accel[b, 0], accel[b, 1])
 
 
-@njit(cache=True)
+@leaf
 def mechanical_energy(
     rows: np.ndarray,
     dynamic: np.ndarray,
@@ -221,7 +222,7 @@ def mechanical_energy(
     return total
 
 
-@njit(cache=True)
+@leaf
 def kick(
     ids: np.ndarray, impulses: np.ndarray, points: np.ndarray, x: np.ndarray, v: np.ndarray,
     omega: np.ndarray, inv_mass: np.ndarray, inv_inertia: np.ndarray, mass: np.ndarray,

@@ -69,6 +69,7 @@ from carom.engines.stepped.joints import joint_softness
 from carom.engines.stepped.rows import FLAG_EXACT, FLAG_STRUCK, I_BODY_A, I_BODY_B, I_COUNT
 from carom.engines.stepped.solver import LANE_MATH, LANES, soft_bias
 from carom.geometry.rotation import cos_sin
+from carom.jit import leaf
 
 __all__ = ["solve_step"]
 
@@ -289,7 +290,7 @@ def _slip(buf: np.ndarray, lane: int, q: int) -> tuple[float, float]:
     return ux, uy
 
 
-@njit(cache=True)
+@leaf
 def _group_work(buf: np.ndarray, group: np.ndarray, g: int, warm: bool) -> float:
     """Work [J] done on group g's lanes by their bodies of infinite mass, for the impulses
     the buffer holds beyond what ``group`` held (all of them, if ``warm``): the impulse on
@@ -635,7 +636,7 @@ def _jointed_rows(ci: np.ndarray, nc: int, jointed: np.ndarray) -> np.ndarray:
     return out[:k]
 
 
-@njit(cache=True)
+@leaf
 def _unshift(shift: np.ndarray, bodies: np.ndarray) -> None:
     """Nothing shifted for the next substep (the bodies' rows only: others never are)."""
     for i in bodies:

@@ -67,6 +67,7 @@ from carom.geometry.manifold3d import (
     contact_sphere_sphere,
 )
 from carom.geometry.rotation import matrix
+from carom.jit import leaf
 
 __all__ = [
     "CONTACT_FLOATS",
@@ -590,7 +591,7 @@ def _take(cf: np.ndarray, m: int, j: int, cached: np.ndarray) -> None:
         cf[m, o + t] = cached[1] * cf[m, f] + cached[2] * cf[m, f + 1] + cached[3] * cf[m, f + 2]
 
 
-@njit(cache=True)
+@leaf
 def store_tangents(cf: np.ndarray, ci: np.ndarray, n_contacts: int, cache: np.ndarray) -> None:
     """Each point's tangent impulse as a world vector into the warm-start cache (K, 4, 7),
     beside the normal one (:func:`carom.engines.stepped.contacts.store_points`): a turning

@@ -46,6 +46,7 @@ from carom.engines.stepped.joints import (
 )
 from carom.engines.stepped.solver import softness
 from carom.geometry.rotation import matrix
+from carom.jit import leaf
 
 __all__ = ["JOINT_FLOATS", "prepare", "reactions", "solve", "warm_start"]
 
@@ -194,7 +195,7 @@ def _vec(prep: np.ndarray, k: int, o: int) -> tuple[float, float, float]:
     return prep[k, o], prep[k, o + 1], prep[k, o + 2]
 
 
-@njit(cache=True)
+@leaf
 def _geometry(
     prep: np.ndarray, k: int, state: np.ndarray, a: int, b: int
 ) -> tuple[

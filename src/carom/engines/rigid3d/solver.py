@@ -95,6 +95,7 @@ from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT
 from carom.engines.stepped.solver import LANE_MATH, LANES, soft_bias
 from carom.geometry.manifold3d import MAX_POINTS
 from carom.geometry.rotation import axis_angle_matrix, matrix
+from carom.jit import leaf
 
 __all__ = ["solve_step"]
 
@@ -315,7 +316,7 @@ def _pack(
                             kinematic[g] = True
 
 
-@njit(cache=True)
+@leaf
 def _unpack(group: np.ndarray, lanes: np.ndarray, ci: np.ndarray, cf: np.ndarray) -> None:
     """Copy each point's impulses, its total and its masses (:func:`.shared.unpack`), and
     the rolling impulses, back to its contact row."""
@@ -474,7 +475,7 @@ def _impulse(
     )  # fmt: skip
 
 
-@njit(cache=True)
+@leaf
 def _group_work(buf: np.ndarray, before: np.ndarray, warm: bool) -> float:
     """Work [J] done on the group in rows ``buf`` by its bodies of infinite mass, for the
     impulses it holds beyond those in ``before`` (:func:`_impulses`; all of them, if

@@ -29,6 +29,7 @@ import numpy as np
 from numba import njit
 
 from carom.geometry.bvh import overlap, query_bvh
+from carom.jit import leaf
 from carom.laws.kinds import KIND_DYNAMIC
 
 __all__ = [
@@ -298,7 +299,7 @@ def _sort_pairs(pairs: np.ndarray, count: int, n: int) -> None:
         pairs[k, 1] = keys[k] % n
 
 
-@njit(cache=True)
+@leaf
 def refit(
     boxes: np.ndarray, fat: np.ndarray, piece_reach: np.ndarray, which: np.ndarray,
     moved: np.ndarray,
@@ -446,7 +447,7 @@ def repair_pairs(
     return total if total <= capacity else -total
 
 
-@njit(cache=True)
+@leaf
 def select_pairs(
     candidates: np.ndarray,
     n_candidates: int,

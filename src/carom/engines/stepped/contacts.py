@@ -22,6 +22,7 @@ from carom.engines.stepped.rows import (
     I_PIECE_A,
     I_PIECE_B,
 )
+from carom.jit import leaf
 
 __all__ = [
     "extremes",
@@ -146,7 +147,7 @@ def extremes(
     return closest, closing
 
 
-@njit(cache=True)
+@leaf
 def store_points(
     cf: np.ndarray, ci: np.ndarray, n_contacts: int, n_pieces: int,
     layout: tuple[int, int, int], cache_keys: np.ndarray, cache_ids: np.ndarray,

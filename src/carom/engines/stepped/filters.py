@@ -19,6 +19,7 @@ from numba import njit
 
 from carom.engines.stepped.joints import joined
 from carom.errors import CaromError
+from carom.jit import leaf
 
 __all__ = [
     "ALL",
@@ -76,7 +77,7 @@ def collides(filters: np.ndarray, a: int, b: int) -> bool:
     return touch
 
 
-@njit(cache=True)
+@leaf
 def filter_pairs(
     pairs: np.ndarray, n_pairs: int, piece_body: np.ndarray, filters: np.ndarray,
     joints: np.ndarray, out: np.ndarray,

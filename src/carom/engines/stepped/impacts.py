@@ -124,12 +124,19 @@ def advance(
         else:
             return True, t, state
         taken += 1
-        if taken == BISECTIONS:
+        mid = 0.5 * (lo + hi)
+        if taken == BISECTIONS or not lo < mid < hi:
+            # (no time left between them: the halvings left would measure lo or hi again,
+            # the same gap each time, and end on lo)
             return True, lo, state
-        return False, 0.5 * (lo + hi), (safe, lo, hi, True, taken, parting)
+        return False, mid, (safe, lo, hi, True, taken, parting)
     if d < -tol:
-        # overshot: bisect back between the last safe time and t
-        return False, 0.5 * (safe + t), (safe, safe, t, True, 0, parting)
+        # overshot: bisect back between the last safe time and t (overlapping already at
+        # the search's start, t = safe: nothing between, and the safe end is t)
+        mid = 0.5 * (safe + t)
+        if not safe < mid < t:
+            return True, safe, state
+        return False, mid, (safe, safe, t, True, 0, parting)
     if d <= tol and parting == NEW:
         return True, t, state
     if d > tol:

@@ -27,8 +27,9 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
+
+from carom.jit import leaf
 
 __all__ = ["Loaded", "Loads", "fit_to_move"]
 
@@ -123,7 +124,7 @@ class Loads:
             self.on = False
 
 
-@njit(cache=True)
+@leaf
 def fit_to_move(
     ids: np.ndarray, alive: np.ndarray, dynamic: np.ndarray, values: np.ndarray,
     points: np.ndarray, largest: float,

@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit
 
 from carom.engines.stepped.rows import FLAG_EXACT, FLAG_STRUCK, I_BODY_A, I_BODY_B, I_COUNT
+from carom.jit import leaf
 
 __all__ = [
     "ABSENT_BASE",
@@ -270,7 +271,7 @@ def restitution_impulse(
     return change
 
 
-@njit(cache=True)
+@leaf
 def unpack(
     group: np.ndarray, lanes: np.ndarray, ci: np.ndarray, cf: np.ndarray,
     layout: tuple[int, int, int, int, int], columns: tuple[int, ...], rows: tuple[int, ...],
