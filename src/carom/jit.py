@@ -40,7 +40,7 @@ import tempfile
 from collections.abc import Callable, Iterator
 from functools import cache
 from pathlib import Path
-from typing import Any, TypeVar, cast
+from typing import Any, TypeVar, cast, overload
 
 import numba
 from numba.core.registry import CPUDispatcher
@@ -151,13 +151,24 @@ def kernel_only(**options: Any) -> Callable[[_F], _F]:
     return decorate
 
 
-def leaf(func: _F) -> _F:
-    """``numba.njit(cache=True)`` for a kernel that allocates no array (no ``np.empty``, no
-    copy, no slice kept), returns none and calls only kernels like it: compiled without
-    Numba's reference counting (module docstring), so a call from a loop costs what its
-    arithmetic costs. Without the JIT it returns the function itself."""
-    options: dict[str, Any] = {"cache": True, "_nrt": False}  # (_nrt: a Numba target option)
-    return cast(_F, numba.njit(**options)(func))
+@overload
+def leaf(func: _F) -> _F: ...
+
+
+@overload
+def leaf(func: None = None, **options: Any) -> Callable[[_F], _F]: ...
+
+
+def leaf(func: _F | None = None, **options: Any) -> _F | Callable[[_F], _F]:
+    """``numba.njit(cache=True, **options)`` for a kernel that allocates no array (no
+    ``np.empty``, no copy, no slice kept), returns none and calls only kernels like it:
+    compiled without Numba's reference counting (module docstring), so a call from a loop
+    costs what its arithmetic costs. ``@leaf`` or ``@leaf(fastmath=...)``. Without the JIT it
+    returns the function itself."""
+    settings: dict[str, Any] = {"cache": True, **options, "_nrt": False}  # (a Numba option)
+    if func is None:
+        return cast(Callable[[_F], _F], numba.njit(**settings))
+    return cast(_F, numba.njit(**settings)(func))
 
 
 def usable_cpus() -> int:

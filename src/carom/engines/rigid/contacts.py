@@ -70,7 +70,7 @@ def point_offset(j: int) -> int:
     return POINT0 + POINT_FLOATS * j
 
 
-@njit(cache=True)
+@leaf
 def narrow_phase(
     pairs: np.ndarray,
     n_pairs: int,
@@ -99,19 +99,20 @@ def narrow_phase(
     n_cache: int,
     cf: np.ndarray,
     ci: np.ndarray,
+    scratch: tuple[np.ndarray, np.ndarray],
 ) -> int:
     """Manifolds of the candidate ``pairs`` into contact rows ``cf`` (floats), ``ci`` (ints).
 
     Returns the number of contacts, or minus the number of pairs when the rows may not
     suffice (the caller grows them to at least that and calls again). Impulses found in the
     cache (``cache_keys`` sorted, ``cache_ids`` (K, 2), ``cache_impulses`` (K, 4): normal and
-    tangent of each point, or (K, 2, 2)) warm-start the matching points.
+    tangent of each point, or (K, 2, 2)) warm-start the matching points. ``scratch``: room
+    for one manifold, (8,) float64 and (2,) int64 (a leaf kernel: it allocates nothing).
     """
     if ci.shape[0] < n_pairs:
         return -n_pairs
     n_pieces = piece_start.shape[0]
-    out = np.empty(8)
-    ids = np.empty(2, np.int64)
+    out, ids = scratch
     m = 0
     cursor = 0  # where the next warm-start cache search starts
     for k in range(n_pairs):

@@ -103,6 +103,8 @@ class RigidEngine(SteppedEngine):
         self._g = float(np.hypot(*m.gravity))
         #: the most corners a piece has (a ray kernel's room for one placed piece)
         self._ray_room = (max(1, int(m.piece_count.max(initial=1))), 0)
+        #: room for one manifold (the narrow phase's, a leaf kernel's: it allocates nothing)
+        self._manifold = (np.empty(8), np.empty(2, np.int64))
         # place everything once: static pieces never move again
         motion.place_pieces(
             s.x, s.angle, np.ones(m.kind.shape[0], np.bool_), m.body_pieces, m.piece_start,
@@ -151,6 +153,7 @@ class RigidEngine(SteppedEngine):
                 m.e_table, m.mu_table, s.x, s.v, s.omega, self._dynamic, self._g, self._pull,
                 self.dt, 4.0 * st.linear_slop, st.linear_slop, mem.cache_keys, mem.cache_ids,
                 mem.cache_impulses, int(mem.cache_count[0]), self._cf, self._ci,
+                self._manifold,
             )
         )  # fmt: skip
 

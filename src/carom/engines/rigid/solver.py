@@ -322,16 +322,17 @@ def _group_work(buf: np.ndarray, group: np.ndarray, g: int, warm: bool) -> float
     return total
 
 
-@njit(cache=True, fastmath=LANE_MATH)
+@leaf(fastmath=LANE_MATH)
 def _warm_start(
     group: np.ndarray,
     pair: np.ndarray,
     kinematic: np.ndarray,
     state: np.ndarray,
     work: np.ndarray,
+    buf: np.ndarray,
 ) -> None:
-    """Apply every point's impulse from the last substep (or step) again."""
-    buf = np.empty(BUFFER_ROWS * LANES)
+    """Apply every point's impulse from the last substep (or step) again (``buf``: room for
+    one group, ``BUFFER_ROWS * LANES``)."""
     for g in range(group.shape[0]):
         _gather(buf, group, pair, g, state)
         for p in range(2):
@@ -348,7 +349,7 @@ def _warm_start(
         _scatter(buf, group, pair, g, state)
 
 
-@njit(cache=True, fastmath=LANE_MATH)
+@leaf(fastmath=LANE_MATH)
 def _solve(
     group: np.ndarray,
     pair: np.ndarray,
@@ -358,12 +359,12 @@ def _solve(
     use_bias: bool,
     push_speed: float,
     work: np.ndarray,
+    buf: np.ndarray,
 ) -> None:
     """One Gauss-Seidel pass over the groups: normal impulses, then friction, lane by lane.
     ``state`` (N+1, STATE_COLS: velocity, angular velocity, move and the cos and sin of the
     turn since the step began) has a row for each body and one for the padding lanes' dummy;
-    ``work[0]`` gathers what kinematic bodies do."""
-    buf = np.empty(BUFFER_ROWS * LANES)
+    ``work[0]`` gathers what kinematic bodies do; ``buf`` as :func:`_warm_start`'s."""
     for g in range(group.shape[0]):
         _gather_all(buf, group, pair, g, state)
         for p in range(2):
@@ -709,6 +710,7 @@ def solve_step(
     )
     slots = _slots(lanes, nc) if first.shape[0] else np.zeros(1, np.int64)
     spared = np.empty((2 * first.shape[0], 2))
+    buf = np.empty(BUFFER_ROWS * LANES)  # (room for one group, for the leaf kernels)
     for _ in range(substeps):
         for i in bodies:
             state[i, S_VX] += h * accel[i, 0]
@@ -720,9 +722,9 @@ def solve_step(
                 joined,
             )  # fmt: skip
         joints.warm_start(jf, ji, active, prep, rows, state)
-        _warm_start(group, pair, kinematic, state, work)
+        _warm_start(group, pair, kinematic, state, work, buf)
         joints.solve(jf, ji, active, prep, rows, state, h, soft_joint, True)
-        _solve(group, pair, kinematic, state, 1.0 / h, True, push_speed, work)
+        _solve(group, pair, kinematic, state, 1.0 / h, True, push_speed, work, buf)
         for i in bodies:
             # (shift: what an impact taken first within the substep took from the move)
             mx = h * state[i, S_VX] + shift[i, 0]
@@ -748,7 +750,7 @@ def solve_step(
                 cf, ci, first, slots, group, state, shift, h, impact_speed, spared, joined
             )
         joints.solve(jf, ji, active, prep, rows, state, h, soft_joint, False)
-        _solve(group, pair, kinematic, state, 1.0 / h, False, push_speed, work)
+        _solve(group, pair, kinematic, state, 1.0 / h, False, push_speed, work, buf)
         if held:
             _give_back(group, spared, held)
     joints.reactions(jf, ji, active, prep, rows, state, h)
