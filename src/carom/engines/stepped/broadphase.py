@@ -48,8 +48,8 @@ __all__ = [
 #: a fat box is a piece's swept box grown by this fraction of the piece's reach on each side
 FAT = 0.1
 #: at most this many pieces leaving their fat boxes in a step have their pairs mended one by
-#: one (:func:`repair_pairs`, O(FEW L) against the L loose pieces); more, and the grid is made
-#: again (O(L), at about 0.8 us a piece: measured on the game loop's pit of boxes)
+#: one (:func:`repair_pairs`, O(FEW L) against the L loose pieces, a few ns a test); more, and
+#: the grid is made again (O(L): 0.5 us a piece on the game loop's pit of boxes)
 FEW = 64
 
 
