@@ -27,8 +27,9 @@ holds, with atomic instructions, and where a function branches its optimiser oft
 counts it could have dropped: a call of a small helper taking three arrays cost 30 ns where
 its arithmetic takes 2 (measured: the broad phase's pair test; in the exact path's islands
 the counts took a quarter of the time). A kernel that allocates no array and returns none
-needs no counting at all: compiled without Numba's runtime (``_nrt=False``), it takes the
-arrays its caller holds, which keeps them alive through the call, and counts nothing.
+needs no counting at all: compiled without Numba's runtime (:data:`NO_REFCOUNTING`, as the
+event loop's kernels are), it takes the arrays its caller holds, which keeps them alive
+through the call, and counts nothing.
 """
 
 from __future__ import annotations
@@ -47,6 +48,7 @@ from numba.core.registry import CPUDispatcher
 
 __all__ = [
     "KERNEL_PACKAGES",
+    "NO_REFCOUNTING",
     "KernelOnly",
     "kernel_cache",
     "kernel_cache_dir",
@@ -56,6 +58,11 @@ __all__ = [
     "leaf",
     "usable_cpus",
 ]
+
+#: Numba's option for a kernel compiled without reference counting (an internal flag; the remedy
+#: Numba's developers give in numba#2345): :func:`leaf`, and the event loop's kernels
+#: (:mod:`carom.engines.edmd.jitflags`)
+NO_REFCOUNTING: dict[str, Any] = {"_nrt": False}
 
 #: the packages that hold Numba kernels, or constants and functions a kernel reads
 KERNEL_PACKAGES = ("engines", "geometry", "laws")
@@ -165,7 +172,7 @@ def leaf(func: _F | None = None, **options: Any) -> _F | Callable[[_F], _F]:
     compiled without Numba's reference counting (module docstring), so a call from a loop
     costs what its arithmetic costs. ``@leaf`` or ``@leaf(fastmath=...)``. Without the JIT it
     returns the function itself."""
-    settings: dict[str, Any] = {"cache": True, **options, "_nrt": False}  # (a Numba option)
+    settings: dict[str, Any] = {"cache": True, **options, **NO_REFCOUNTING}
     if func is None:
         return cast(Callable[[_F], _F], numba.njit(**settings))
     return cast(_F, numba.njit(**settings)(func))

@@ -1,14 +1,15 @@
 """How the event loop's kernels are compiled: without reference counting, and inlined by LLVM.
 
 **Without reference counting.** Nothing is allocated per event, so the functions the loop
-calls are compiled without Numba's reference counting (``_nrt=False``, an internal Numba flag;
-the remedy Numba's developers give in numba#2345): each call would otherwise increment and
-decrement an atomic counter per array argument, and each such locked instruction stalls the
-loads around it (measured: the event loop 1.4x faster without them). The loop itself counts
-only where it reads the engine's handle, once a call (:mod:`carom.engines.edmd.loop`). A kernel that
-allocated would fail to compile, loudly. A function compiled so must not return an array
-either (its caller, if counted, would release a reference it never took): the few helpers
-that return views stay in Numba's own inliner (``inline="always"``).
+calls are compiled without Numba's reference counting (:data:`carom.jit.NO_REFCOUNTING`, an
+internal Numba flag; the remedy Numba's developers give in numba#2345; the rigid engines' leaf
+kernels take it too, :func:`carom.jit.leaf`): each call would otherwise increment and decrement
+an atomic counter per array argument, and each such locked instruction stalls the loads
+around it (measured: the event loop 1.4x faster without them). The loop itself counts only
+where it reads the engine's handle, once a call (:mod:`carom.engines.edmd.loop`). A kernel
+that allocated would fail to compile, loudly. A function compiled so must not return an
+array either (its caller, if counted, would release a reference it never took): the few
+helpers that return views stay in Numba's own inliner (``inline="always"``).
 
 **Inlined by LLVM, not by Numba.** The loop's helpers are inlined into it, because a call
 that is not inlined passes every array as about nine machine words and copies any tuple whole
@@ -25,12 +26,7 @@ wrapper for calls from Python or C: the helpers are compiled without them
 
 from __future__ import annotations
 
-from typing import Any
-
-from carom.jit import kernel_only
-
-#: compile without reference counting (see the module docstring); an internal Numba flag
-NO_REFCOUNTING: dict[str, Any] = {"_nrt": False}
+from carom.jit import NO_REFCOUNTING, kernel_only
 
 #: a function the event loop calls, not inlined: compiled once, cached, without reference
 #: counting, with no entry point from Python (:func:`carom.jit.kernel_only`)
