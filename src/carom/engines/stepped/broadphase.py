@@ -430,20 +430,17 @@ def repair_pairs(
     if capacity == 0:
         return -1  # (as find_pairs)
     j = 0
-    a = b = 0
-    for k in range(n_old + 1):
-        if k < n_old:
-            a, b = old[k, 0], old[k, 1]
-            if again[a] | again[b]:
-                continue
-            key = a * pieces + b
-        else:
-            key = pieces * pieces  # (after every pair: the new ones left)
+    for k in range(n_old):
+        a, b = old[k, 0], old[k, 1]
+        if again[a] | again[b]:
+            continue
+        key = a * pieces + b
         while j < found and new[j] < key:
             total = _put(out, total, capacity, new[j] // pieces, new[j] % pieces)
             j += 1
-        if k < n_old:
-            total = _put(out, total, capacity, a, b)
+        total = _put(out, total, capacity, a, b)
+    for rest in range(j, found):  # (the new pairs after every kept one)
+        total = _put(out, total, capacity, new[rest] // pieces, new[rest] % pieces)
     return total if total <= capacity else -total
 
 
@@ -538,8 +535,8 @@ class KeptPairs:
         When a few pieces (up to :data:`FEW`) left their fat boxes, the pairs of overlapping
         fat boxes are mended: those of the pieces that stayed are kept, the others paired
         again one by one (:func:`repair_pairs`; a game's pushed bodies). When more left, the
-        fat pairs are made again from the grid; while that many leave theirs step after
-        step (a tumbler), the swept boxes are paired directly, which costs less than pairing
+        fat pairs are made again from the grid; while more than that leave theirs step
+        after step (a tumbler), the swept boxes are paired directly, which costs less than pairing
         the fat boxes and choosing among them. Every way gives the pairs ``find`` gives for
         ``boxes`` (two bodies, one ``moving``, one ``dynamic``), in the same order.
         """
@@ -565,30 +562,25 @@ class KeptPairs:
     def _mend(self, moved: int) -> None:
         """The fat pairs after the ``moved`` pieces in :attr:`_moved` got new fat boxes
         (:func:`repair_pairs`), into the spare array, which becomes the fat pairs."""
-        while True:
-            count = int(
-                self._repair(
-                    self.fat,
-                    self._everyone,
-                    self._moved,
-                    moved,
-                    self._fat_pairs,
-                    self._n_fat,
-                    self._spare,
-                )
-            )
-            if count >= 0:
-                break
-            self._spare = np.zeros((2 * -count, 2), np.int64)
-        self._fat_pairs, self._spare = self._spare, self._fat_pairs
-        self._n_fat = count
+        old, n_old = self._fat_pairs, self._n_fat
+        self._n_fat, self._fat_pairs = _filled(
+            lambda out: self._repair(self.fat, self._everyone, self._moved, moved, old, n_old, out),
+            self._spare,
+        )
+        self._spare = old
 
     def _grown(
         self, boxes: np.ndarray, active: np.ndarray, out: np.ndarray
     ) -> tuple[int, np.ndarray]:
         """``find`` into ``out``, grown until they fit: the count and the array."""
-        while True:
-            count = int(self._find(boxes, active, out))
-            if count >= 0:
-                return count, out
-            out = np.zeros((2 * -count, 2), np.int64)
+        return _filled(lambda rows: self._find(boxes, active, rows), out)
+
+
+def _filled(fill: Callable[[np.ndarray], int], out: np.ndarray) -> tuple[int, np.ndarray]:
+    """``fill(out)`` (the count of pairs written into ``out`` (K, 2), or minus the rows
+    needed), ``out`` grown until they fit: the count and the array."""
+    while True:
+        count = int(fill(out))
+        if count >= 0:
+            return count, out
+        out = np.zeros((2 * -count, 2), np.int64)

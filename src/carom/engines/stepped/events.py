@@ -300,9 +300,8 @@ class ContactEvents:
         flags' column) and its exact impacts' ``log``. ``moving`` (N,) marks the awake
         dynamic bodies: a pair of which neither moves (asleep, static) has no contact row
         while it sleeps, and still touches (as in Box2D, sleep ends nothing)."""
-        point0, point_floats, flags = columns
         now, begin, end, hit = step_events(
-            rows, (point0, point_floats, flags, self.d), self.layout,
+            rows, (*columns, self.d), self.layout,
             (slop, self.threshold, start), log, self.number, self.keys, moving, self.ending,
         )  # fmt: skip
         self.keys = now
