@@ -270,13 +270,13 @@ def test_a_3d_orientation_must_be_a_unit_quaternion() -> None:
 
 
 def test_the_event_driven_engine_says_what_it_does_not_take_yet() -> None:
-    # (what it takes: tests/test_gameloop_edmd.py)
+    # (what it takes: tests/test_gameloop_edmd.py, tests/test_gameloop_edmd_forces.py)
     world = carom.World(2, box=[1.0, 1.0])
     world.add_spheres([[0.5, 0.5]], [[1.0, 0.0]], radius=0.05)
-    with pytest.raises(CaromError, match="forces through a step are the rigid engines'"):
-        world.body(0).apply_force([1.0, 0.0])
-    with pytest.raises(CaromError, match="torques through a step are the rigid engines'"):
+    with pytest.raises(CaromError, match="a torque through a step is the rigid engines'"):
         world.body(0).apply_torque(1.0)
+    with pytest.raises(CaromError, match="a force off a sphere's centre through a step"):
+        world.body(0).apply_force([1.0, 0.0], point=[0.5, 0.55])
 
 
 @pytest.mark.parametrize("dim", [2, 3])

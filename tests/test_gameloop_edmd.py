@@ -183,7 +183,7 @@ def test_bad_input_is_refused_and_changes_nothing() -> None:
     with pytest.raises(CaromError, match="do not spin"):
         world.body(0).angular_velocity = [0.0, 0.0, 1.0]
     with pytest.raises(CaromError, match="rigid engines"):
-        world.apply_forces([0], [1.0, 0.0, 0.0])
+        world.apply_torques([0], [0.0, 0.0, 1.0])
     with pytest.raises(CaromError, match="finite"):
         world.apply_impulses([0], [np.nan, 0.0, 0.0])
     assert world.positions.tobytes() == before[0].tobytes()

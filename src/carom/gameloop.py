@@ -8,8 +8,9 @@ same steps, so they give the same bits at the same times. Between steps, ``world
 reads and sets a body's motion and takes impulses, and forces and torques for the next step;
 ``world.apply_impulses``, ``world.apply_forces``, ``world.apply_torques``,
 ``world.set_velocities``, ``world.set_positions`` and ``world.set_angular_velocities`` do so
-for many bodies in one call. The event-driven engine takes all but forces and torques, at its
-clock, and predicts the changed bodies' events again.
+for many bodies in one call. The event-driven engine takes all but torques (its spheres keep
+their spin between impacts), at its clock, and predicts the changed bodies' events again; a
+force it takes through the next step, its spheres flying the parabolas of ``g + F / m``.
 
 >>> import carom
 >>> from carom.shapes import Box
@@ -135,7 +136,10 @@ class GameLoop:
             met.gathering = True
             sink = sink or _no_sink  # (the engine logs its collisions only for a sink)
         try:
-            self.reached = engine.advance(self.time + step, np.iinfo(np.int64).max, sink)
+            if isinstance(engine, EdmdEngine):  # (with the forces given for this step)
+                self.reached = engine.advance_step(self.time + step, sink)
+            else:
+                self.reached = engine.advance(self.time + step, np.iinfo(np.int64).max, sink)
         finally:
             if met is not None:
                 met.gathering = False
@@ -276,24 +280,34 @@ class GameLoop:
         -----
         The force is constant through the step. Free flight stays exact under it (the
         centre follows ``x + v t + (g + F / m) t^2 / 2``); the solver takes it each substep,
-        as it takes gravity. Its work is booked in the energy ledger.
+        as it takes gravity. Its work is booked in the energy ledger. The event-driven
+        engine flies its spheres on that parabola through the step, exactly
+        (:meth:`carom.engines.edmd.driver.EdmdEngine.advance_step`).
 
         Raises
         ------
         CaromError
-            As :meth:`apply_impulses`.
+            As :meth:`apply_impulses`; in the event-driven engine, a force off a sphere's
+            centre (it would turn it: torques are the rigid engines').
         """
-        engine = _rigid(self, _NO_FORCES.format("forces"))
-        _, rows = _dynamic_rows(self, ids, "forces")
+        engine, rows = _dynamic_rows(self, ids, "forces")
         f = _vectors(self, "forces", forces, rows.size)
         at = None if points is None else _vectors(self, "points", points, rows.size)
-        engine.apply_forces(rows, f, at)
+        if isinstance(engine, SteppedEngine):
+            engine.apply_forces(rows, f, at)
+            return
+        if at is not None:  # (taken when on the force's line through the centre)
+            flat = ((0, 0), (0, 3 - self.dim))
+            arm = np.pad(at - engine.motion_of(rows)[0], flat)
+            if np.any(np.cross(arm, np.pad(f, flat)) != 0.0):
+                raise CaromError(_NO_TORQUES.format("a force off a sphere's centre"))
+        engine.apply_forces(rows, f)
 
     def apply_torques(self: _Running, ids: ArrayLike, torques: ArrayLike) -> None:
         """Torques on many dynamic bodies through the next step, then cleared: (k,) or one
         number in 2D, (k, 3) or (3,) (world axes) in 3D [N m]. As :meth:`apply_impulses` for
         what is refused."""
-        engine = _rigid(self, _NO_FORCES.format("torques"))
+        engine = _rigid(self, _NO_TORQUES.format("a torque"))
         _, rows = _dynamic_rows(self, ids, "torques")
         shape: tuple[int, ...] = () if self.dim == 2 else (3,)
         engine.apply_torques(rows, _vectors(self, "torques", torques, rows.size, shape))
@@ -431,8 +445,8 @@ class Body:
 
     Reads give the state now; writes take effect at once and wake the body (the energy they
     change is booked as work done on it, so the ledger still closes). The event-driven
-    engine reads and sets its bodies at its clock and predicts their events again; forces and
-    torques are the rigid engines'.
+    engine reads and sets its bodies at its clock and predicts their events again; it takes
+    forces at the centres, and torques are the rigid engines'.
     """
 
     __slots__ = ("_world", "index")
@@ -576,9 +590,10 @@ def _no_sink(records: NDArray[Any]) -> None:
     """A sink that keeps nothing (the event-driven engine logs collisions only for one)."""
 
 
-_NO_FORCES = (
-    "{} through a step are the rigid engines' so far: the event-driven engine takes impulses "
-    "(apply_impulses) and new velocities"
+_NO_TORQUES = (
+    "{} through a step is the rigid engines': the event-driven engine's spheres keep their "
+    "spin between impacts (it turns them at a constant rate, exactly); turn one with an "
+    "impulse at a point (apply_impulses(ids, impulses, points)), or push it at its centre"
 )
 
 _NOT_YET = (

@@ -113,7 +113,12 @@ def build(world: WorldView) -> EdmdEngine:
     check_placement(world)
     alive = getattr(world, "alive", None)  # (a World's, issue 43)
     gone = None if alive is None or np.all(alive) else ~np.asarray(alive, np.bool_)
-    return EdmdEngine(world.bodies, environment(world), _settings(world), world.time, gone=gone)
+    engine = EdmdEngine(world.bodies, environment(world), _settings(world), world.time, gone=gone)
+    hand_over = getattr(world, "hand_over_loads", None)  # (a World's, issue 43)
+    kept = hand_over() if hand_over is not None else None
+    if kept is not None:  # (the forces given for the next step to the engine it replaces)
+        engine.take_loads(kept)
+    return engine
 
 
 def restore(world: WorldView, arrays: Mapping[str, NDArray[Any]]) -> EdmdEngine:

@@ -121,7 +121,7 @@ def collide_pair(
     material: np.ndarray,
     pair_table: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     face_e: np.ndarray,
-    gravity: np.ndarray | None,
+    pull: np.ndarray | None,
     plane_normal: np.ndarray,
     box: np.ndarray,
     periodic: bool,
@@ -204,7 +204,7 @@ def collide_pair(
     # gives is booked apart from the law's dissipation (S_KE_GIVEN).
     u = g0 * n0 + g1 * n1 + g2 * n2
     u_pull = 0.0
-    if gravity is not None:
+    if pull is not None:
         a_n = 0.0
         for k in range(dim):
             nk = n0 if k == 0 else (n1 if k == 1 else n2)
@@ -223,10 +223,10 @@ def collide_pair(
     # every hop: galton-board gained 0.21 J that way. (Smooth law: the impulse is along n.)
     held_i = held_j = False
     # (supports exist only under gravity; without it, this code is pruned before typing)
-    if gravity is not None and unlikely(support[i] >= 0 or support[j] >= 0) and law == LAW_SMOOTH:
+    if pull is not None and unlikely(support[i] >= 0 or support[j] >= 0) and law == LAW_SMOOTH:
         push = jn + extra
-        ci = held_cosine(i, push, n0, n1, n2, support, inv_i, face_e, gravity, plane_normal, t_c)
-        cj = held_cosine(j, -push, n0, n1, n2, support, inv_j, face_e, gravity, plane_normal, t_c)
+        ci = held_cosine(i, push, n0, n1, n2, support, inv_i, face_e, pull, plane_normal, t_c)
+        cj = held_cosine(j, -push, n0, n1, n2, support, inv_j, face_e, pull, plane_normal, t_c)
         held_i = ci != 0.0
         held_j = cj != 0.0
         k_held = inv_i * (1.0 - ci * ci) + inv_j * (1.0 - cj * cj)
@@ -252,9 +252,9 @@ def collide_pair(
         jk = j0 if k == 0 else (j1 if k == 1 else j2)
         v[i, k] += jk * inv_i
         v[j, k] -= jk * inv_j
-    if gravity is not None and held_i:
+    if pull is not None and held_i:
         hold_on_support(i, v, support, plane_normal)
-    if gravity is not None and held_j:
+    if pull is not None and held_j:
         hold_on_support(j, v, support, plane_normal)
     if q is not None and unlikely(law != LAW_SMOOTH):
         # the spins change: first turn both bodies to now at their old spins
@@ -295,10 +295,10 @@ def collide_pair(
     counts[C_PAIR] += 1
     sums[S_VIRIAL] += j0 * r0 + j1 * r1 + j2 * r2
     # a body resting on a support: lifted off, or pushed into it (the support pushes back)
-    if gravity is not None and support[i] >= 0:
-        support_reaction(i, v, acc, support, face_e, gravity, plane_normal, mass, t_c, sums)
-    if gravity is not None and support[j] >= 0:
-        support_reaction(j, v, acc, support, face_e, gravity, plane_normal, mass, t_c, sums)
+    if pull is not None and support[i] >= 0:
+        support_reaction(i, v, acc, support, face_e, pull, plane_normal, mass, t_c, sums)
+    if pull is not None and support[j] >= 0:
+        support_reaction(j, v, acc, support, face_e, pull, plane_normal, mass, t_c, sums)
     if log_on:
         # the contact point: on j's surface towards i (raw coordinates; periodic boxes wrap
         # it when the log is read)
@@ -350,7 +350,7 @@ def held_cosine(
     support: np.ndarray,
     inv_b: float,
     face_e: np.ndarray,
-    gravity: np.ndarray,
+    pull: np.ndarray,
     plane_normal: np.ndarray,
     t_c: float,
 ) -> float:
@@ -362,13 +362,13 @@ def held_cosine(
     face = support[b]
     if face < 0:
         return 0.0
-    dim = gravity.shape[0]
+    dim = pull.shape[1]
     c = 0.0
     g_n = 0.0
     for k in range(dim):
         fk = face_normal(plane_normal, dim, face, k)
         c += (n0 if k == 0 else (n1 if k == 1 else n2)) * fk
-        g_n += gravity[k] * fk
+        g_n += pull[b, k] * fk
     un = push * c * inv_b  # its speed along f after the impulse (it rests: zero before)
     if un < 0.0 and -2.0 * face_e[face] * un < -g_n * t_c:
         return c
@@ -394,7 +394,7 @@ def support_reaction(
     acc: np.ndarray,
     support: np.ndarray,
     face_e: np.ndarray,
-    gravity: np.ndarray,
+    pull: np.ndarray,
     plane_normal: np.ndarray,
     mass: np.ndarray,
     t_c: float,
@@ -411,7 +411,7 @@ def support_reaction(
     for k in range(dim):
         nk = face_normal(plane_normal, dim, face, k)
         un += v[b, k] * nk
-        g_n += gravity[k] * nk
+        g_n += pull[b, k] * nk
     if un < 0.0:
         e_w = face_e[face]
         for k in range(dim):
@@ -425,7 +425,7 @@ def support_reaction(
         return
     if un != 0.0:
         # -1 typed, not a literal (a literal argument compiles a second copy of the helper)
-        set_support(gravity, plane_normal, support, acc, b, np.int64(-1))  # type: ignore[arg-type]
+        set_support(pull, plane_normal, support, acc, b, np.int64(-1))  # type: ignore[arg-type]
 
 
 @njit_inlined
@@ -443,7 +443,7 @@ def collide_face(
     radius: np.ndarray,
     mass: np.ndarray,
     face_e: np.ndarray,
-    gravity: np.ndarray | None,
+    pull: np.ndarray | None,
     plane_normal: np.ndarray,
     t_c: float,
     counts: np.ndarray,
@@ -457,7 +457,7 @@ def collide_face(
     for k in range(dim):
         nk = face_normal(plane_normal, dim, face, k)
         un += v[i, k] * nk
-        if gravity is not None:  # (else acc is None: no acceleration)
+        if pull is not None:  # (else acc is None: no acceleration)
             acc_n += acc[i, k] * nk
     # Leaving (un > 0) flies off, unless so slowly that gravity brings it back within t_c
     # (the gap reopens for 2 u / |a_n|, which can be below the clock's resolution: a loop of
@@ -484,8 +484,8 @@ def collide_face(
         nk = face_normal(plane_normal, dim, face, k)
         v[i, k] -= (1.0 + e) * un * nk
         x_dot_j += x[i, k] * jn * nk
-    if gravity is not None and rest:  # (rest needs a pull: never without gravity)
-        set_support(gravity, plane_normal, support, acc, i, face)
+    if pull is not None and rest:  # (rest needs a pull: never without gravity)
+        set_support(pull, plane_normal, support, acc, i, face)
     counter[i] += 1
     last_coll[i] = T
     counts[C_WALL] += 1

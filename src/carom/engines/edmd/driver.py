@@ -33,7 +33,7 @@ from carom.engines.edmd.handle import new_handle, sample_motion_now, sample_now
 from carom.engines.edmd.model import Environment, Model
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, build_all
 from carom.engines.edmd.ordering import spatial_order
-from carom.engines.edmd.reach import bodies_now, retire_bodies, set_bodies
+from carom.engines.edmd.reach import bodies_now, retire_bodies, set_bodies, set_pulls
 from carom.engines.edmd.renumber import cell_ranks, renumber
 from carom.engines.edmd.settings import SHELL_DEFAULT, EdmdSettings
 from carom.engines.edmd.state import (
@@ -185,7 +185,7 @@ class EdmdEngine:
         if state is not None:
             assert order is not None
             self.order = order
-            self.model = self._build_model(order, state.w is not None)
+            self.model = self._build_model(order, state.w is not None, state.acc is not None)
             self.state = state
             return
         x = bodies.position.copy()
@@ -261,9 +261,13 @@ class EdmdEngine:
             )
         return delta, grid_cells(env.box, shell_diameter, n)
 
-    def _build_model(self, order: NDArray[np.int64], spins: bool) -> Model:
+    def _build_model(
+        self, order: NDArray[np.int64], spins: bool, accelerations: bool = False
+    ) -> Model:
         """The Model with bodies in engine order ``order``; without inertia factors (``q``
-        None: the engine holds no spins) unless some body ``spins`` (:func:`spinning`)."""
+        None: the engine holds no spins) unless some body ``spins`` (:func:`spinning`);
+        without gravity (None: no accelerations) unless the world has some or the state
+        keeps ``accelerations`` (a force has acted: :meth:`advance_step`)."""
         b, env = self.bodies, self.env
         mass = b.mass[order]
         mobile = np.isfinite(mass)
@@ -275,7 +279,7 @@ class EdmdEngine:
             box=env.box.copy(),
             inv_box=1.0 / env.box,
             periodic=env.periodic,
-            gravity=env.gravity.copy() if np.any(env.gravity != 0.0) else None,
+            gravity=env.gravity.copy() if accelerations or np.any(env.gravity != 0.0) else None,
             mobile=mobile,
             radius=radius,
             mass=mass,
@@ -666,6 +670,83 @@ class EdmdEngine:
         after = self._kinetic(bodies, arrays[1], arrays[3])
         self.state.sums[codes.S_WORK] += after - before
 
+    # -- forces through a step (issue 43) ----------------------------------------------------
+
+    _force: FloatArray | None = None
+
+    def apply_forces(self, bodies: NDArray[np.int64], forces: FloatArray) -> None:
+        """Forces ``forces`` (k, d) [N] at the centres of the caller's mobile ``bodies`` (k,)
+        through the next :meth:`advance_step`, then cleared; given twice, they add up."""
+        if self._force is None:
+            self._force = np.zeros((self.bodies.n, self.env.dim))
+        np.add.at(self._force, bodies, forces)
+
+    def loads_now(self) -> tuple[FloatArray, FloatArray] | None:
+        """The forces (n, d) [N] given for the next step and the torques (n,) (none: this
+        engine takes none), copies; None when no force is given."""
+        if self._force is None:
+            return None
+        return self._force.copy(), np.zeros(self.bodies.n)
+
+    def take_loads(self, kept: tuple[FloatArray, FloatArray]) -> None:
+        """The forces :meth:`loads_now` gave (an engine's this one replaces, over its first
+        bodies), on the bodies still mobile, for the next step."""
+        force = kept[0]
+        rows = np.flatnonzero(self.bodies.mobile[: force.shape[0]])
+        if rows.size:
+            self.apply_forces(rows, force[rows])
+
+    def advance_step(self, until: float, sink: Sink | None) -> bool:
+        """:meth:`advance` to ``until`` [s] with the forces given for this step
+        (:meth:`apply_forces`) acting throughout, then cleared.
+
+        A force F on a body of mass m adds F / m to its pull from the clock on: it flies on
+        the parabola of ``g + F / m``, exactly as under gravity, slides along a face it rests
+        on (which bears the force's push into it) or lifts off one it pulls away from. At
+        ``until`` the pull is gravity again and the events are predicted anew. The work the
+        force did, ``F . (x(until) - x(start))`` (the path unwrapped in a periodic box), is
+        booked in the ledger: a constant force's work whatever the impacts on the way.
+        """
+        force, self._force = self._force, None
+        pushed = np.flatnonzero(np.any(force != 0.0, axis=1)) if force is not None else None
+        if force is None or pushed is None or pushed.size == 0:
+            return self.advance(until, np.iinfo(np.int64).max, sink)
+        self._keep_accelerations()
+        rows = self._engine_rows(pushed)
+        given = force[pushed]
+        extra = given / self.bodies.mass[pushed][:, None]
+        set_pulls(self.handle, rows, extra)
+        start = self._unwrapped(rows)
+        try:
+            return self.advance(until, np.iinfo(np.int64).max, sink)
+        finally:  # (interrupted too: the force acted up to the clock, and stops there)
+            rows = self._engine_rows(pushed)  # (a long step may have renumbered the rows)
+            set_pulls(self.handle, rows, np.zeros_like(extra))
+            moved = self._unwrapped(rows) - start
+            self.state.sums[codes.S_WORK] += float(np.sum(given * moved))
+
+    def _keep_accelerations(self) -> None:
+        """Give an engine built without gravity (no accelerations kept) zero gravity and the
+        arrays of accelerations, pulls and supports it needs to take a force; every path
+        stays what it was (a straight line is the parabola of a zero acceleration)."""
+        if self.state.pull is not None:
+            return
+        n, dim = self.state.kin.shape[0], self.env.dim
+        self.model = self.model._replace(gravity=np.zeros(dim))
+        acc = np.zeros((n, dim))
+        self.state = self.state._replace(
+            acc=acc, pull=acc.copy(), support=np.full(n, -1, np.int64)
+        )  # (the handle is made again: see the state's setter)
+
+    def _unwrapped(self, rows: NDArray[np.int64]) -> FloatArray:
+        """Engine ``rows``' positions (k, d) [m] as of their own clocks, unwrapped: a
+        periodic box's wraps (:attr:`State.wraps`) added back."""
+        s, dim = self.state, self.env.dim
+        x = s.kin[rows, :dim].copy()
+        if self.env.periodic:
+            x += s.wraps[rows] * self.env.box
+        return x
+
     def retire(self, ids: NDArray[np.int64]) -> None:
         """Take the caller's bodies ``ids`` (k,) out of the world for good, their indices
         kept: each stops where it is at the clock (the kinetic energy it had leaves the
@@ -773,6 +854,13 @@ class EdmdEngine:
                 missing.append(group[there.index(False)])
         if missing:
             raise KeyError(f"state.{missing[0]}")  # (the checkpoint reader calls it damaged)
+        order = arrays["order"]
+        if fields["acc"] is not None and fields["pull"] is None:  # (saved before forces)
+            # between steps every pull is gravity, zero for the static and those taken out
+            pulled = np.isfinite(bodies.mass[order]) & ~np.isnan(fields["shell"][:, 3])
+            fields["pull"] = np.where(pulled[:, None], env.gravity[None, :], 0.0)
+        if fields["wraps"] is None:  # (the same: only a step reads them)
+            fields["wraps"] = np.zeros((len(order) if env.periodic else 0, env.dim))
         if fields["log_normal"] is None:  # (saved before the log kept normals)
             fields["log_normal"] = np.zeros((fields["log_time"].shape[0], 3))
         if fields["sums"].shape[0] < N_SUMS:  # (saved before the work done was kept)
@@ -787,7 +875,7 @@ class EdmdEngine:
             settings,
             float(state.clock[0]),
             state=state,
-            order=arrays["order"],
+            order=order,
             capacity=capacity,
             cell_capacity=cell_capacity,
         )
@@ -805,7 +893,7 @@ _NO_SPINS = (
 #: spins and orientations when no body spins (and then not written)
 GRAVITY_FIELDS = ("acc", "support")
 SPIN_FIELDS = ("w", "orient", "orient_t")
-OPTIONAL = (*GRAVITY_FIELDS, *SPIN_FIELDS, "log_normal")
+OPTIONAL = (*GRAVITY_FIELDS, *SPIN_FIELDS, "log_normal", "pull", "wraps")
 
 
 def spinning(bodies: Bodies, env: Environment) -> bool:

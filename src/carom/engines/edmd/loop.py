@@ -149,7 +149,7 @@ def run_frames(  # type: ignore[no-untyped-def]
     m, s, order = h.model, h.state, h.order
     kin = s.kin
     x, v, t = kinematic_views(kin, m.box.shape[0])
-    acc = s.acc
+    acc, pull, wraps = s.acc, s.pull, s.wraps
     rot = (s.w, s.orient, s.orient_t)
     shell, support, last_coll = s.shell, s.support, s.last_coll
     nbr, nbr_count, nbr_mark, nbr_old, near = s.nbr, s.nbr_count, s.nbr_mark, s.nbr_old, s.near
@@ -262,7 +262,7 @@ def run_frames(  # type: ignore[no-untyped-def]
                     material,
                     pair_table,
                     face_e,
-                    gravity,
+                    pull,
                     plane_normal,
                     box,
                     periodic,
@@ -286,7 +286,7 @@ def run_frames(  # type: ignore[no-untyped-def]
                 radius,
                 mass,
                 face_e,
-                gravity,
+                pull,
                 plane_normal,
                 t_c,
                 counts,
@@ -295,9 +295,9 @@ def run_frames(  # type: ignore[no-untyped-def]
             )
         else:  # EV_SHELL
             counts[C_SHELL] += 1
+            if periodic:
+                wrap_into_box(x, wraps, box, i)
             for k in range(dim):
-                if periodic:
-                    x[i, k] -= box[k] * np.floor(x[i, k] / box[k])
                 shell[i, k] = x[i, k]
             status = rebuild_shell(
                 i,
@@ -332,6 +332,17 @@ def run_frames(  # type: ignore[no-untyped-def]
                 ev_time, ev_kind, ev_other, ev_stamp,
             )  # fmt: skip
             calendar_update(ev_time, body, cal)
+
+
+@njit_inlined
+def wrap_into_box(x, wraps, box, i) -> None:  # type: ignore[no-untyped-def]
+    """Body ``i``'s position moved back into the periodic box, each move counted in
+    ``wraps``."""
+    for k in range(box.shape[0]):
+        back = np.floor(x[i, k] / box[k])
+        if back != 0.0:
+            x[i, k] -= box[k] * back
+            wraps[i, k] += back
 
 
 @njit_inlined

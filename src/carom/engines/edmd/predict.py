@@ -46,23 +46,25 @@ def face_normal(plane_normal: np.ndarray, dim: int, face: int, k: int) -> float:
 
 @njit_inlined
 def set_support(
-    gravity: np.ndarray,
+    pull: np.ndarray,
     plane_normal: np.ndarray,
     support: np.ndarray,
     acc: np.ndarray,
     i: int,
     face: int,
 ) -> None:
-    """Rest body ``i`` on ``face`` (or lift it off, ``face = -1``) and update its acceleration."""
-    dim = gravity.shape[0]
+    """Rest body ``i`` on ``face`` (or lift it off, ``face = -1``) and update its acceleration:
+    its pull (gravity, and a force's over its mass through a step that has one), less the
+    normal part the face bears."""
+    dim = pull.shape[1]
     support[i] = face
     g_n = 0.0
     if face >= 0:
         for k in range(dim):
-            g_n += gravity[k] * face_normal(plane_normal, dim, face, k)
+            g_n += pull[i, k] * face_normal(plane_normal, dim, face, k)
     for k in range(dim):
         nk = face_normal(plane_normal, dim, face, k) if face >= 0 else 0.0
-        acc[i, k] = gravity[k] - g_n * nk
+        acc[i, k] = pull[i, k] - g_n * nk
 
 
 @njit(cache=True, error_model="numpy", inline="always")

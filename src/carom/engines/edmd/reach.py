@@ -29,7 +29,7 @@ from carom.engines.edmd.predict import (
 )
 from carom.geometry.rotation import turn
 
-__all__ = ["bodies_now", "retire_bodies", "set_bodies"]
+__all__ = ["bodies_now", "retire_bodies", "set_bodies", "set_pulls"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -89,7 +89,7 @@ def set_bodies(h, rows, x_new, v_new, orient_new, w_new, moved) -> int:  # type:
         _turn_to(i, r, T, s.w, s.orient, s.orient_t, orient_new, w_new, dim)
         for k in range(dim):
             v[i, k] = v_new[r, k]
-        _leave_support(i, moved, v, m.gravity, s.support, s.acc, m.plane_normal)
+        _leave_support(i, moved, v, s.pull, s.support, s.acc, m.plane_normal)
         if moved:
             s.counts[C_SHELL] += 1  # (a stamp no earlier rebuild used, as a shell event's)
             for k in range(dim):
@@ -105,6 +105,37 @@ def set_bodies(h, rows, x_new, v_new, orient_new, w_new, moved) -> int:  # type:
         counter[i] += 1  # every event a neighbour predicted with it is stale
     _predict_rows(h, rows)
     return FITS
+
+
+@njit(cache=True, error_model="numpy")
+def set_pulls(h, rows, extra) -> None:  # type: ignore[no-untyped-def]
+    """Give engine rows ``rows`` (k,) the pull gravity plus ``extra`` (k, d) [m/s^2] (a
+    force over the mass; zero to end one) from the engine's clock on, and predict their
+    events again. Each row is first flown to the clock; one resting on a face stays on it
+    while the new pull presses it onto the face or along it (the face bears the normal
+    part) and lifts off when it pulls it away. Needs an engine with accelerations (``pull``
+    not None)."""
+    m, s = h.model, h.state
+    dim = m.box.shape[0]
+    x, v, t = kinematic_views(s.kin, dim)
+    counter = schedule_views(s.sched)[3]
+    pull, support, acc, gravity = s.pull, s.support, s.acc, m.gravity
+    T = s.clock[0]
+    for r in range(rows.shape[0]):
+        i = rows[r]
+        free_flight(x, v, acc, gravity, t, i, T)
+        for k in range(dim):
+            pull[i, k] = gravity[k] + extra[r, k]
+        face = support[i]
+        if face >= 0:
+            p_n = 0.0
+            for k in range(dim):
+                p_n += pull[i, k] * face_normal(m.plane_normal, dim, face, k)
+            if p_n > 0.0:
+                face = -1  # (pulled off: it flies)
+        set_support(pull, m.plane_normal, support, acc, i, face)
+        counter[i] += 1  # every event a neighbour predicted with it is stale
+    _predict_rows(h, rows)
 
 
 @njit(cache=True, error_model="numpy")
@@ -141,16 +172,16 @@ def _turn_to(i, r, T, w, orient, orient_t, orient_new, w_new, dim) -> None:  # t
 
 
 @njit(cache=True, error_model="numpy")
-def _leave_support(i, moved, v, gravity, support, acc, plane_normal) -> None:  # type: ignore[no-untyped-def]
+def _leave_support(i, moved, v, pull, support, acc, plane_normal) -> None:  # type: ignore[no-untyped-def]
     """Row ``i`` leaves the face it rests on when moved or given a speed along its normal
     (it then flies, or meets the face at once); it slides on along it otherwise."""
-    if gravity is not None and support[i] >= 0:
+    if pull is not None and support[i] >= 0:
         dim = v.shape[1]
         un = 0.0
         for k in range(dim):
             un += v[i, k] * face_normal(plane_normal, dim, support[i], k)
         if moved or un != 0.0:
-            set_support(gravity, plane_normal, support, acc, i, -1)
+            set_support(pull, plane_normal, support, acc, i, -1)
 
 
 @njit(cache=True, error_model="numpy")
@@ -176,7 +207,7 @@ def retire_bodies(h, rows) -> int:  # type: ignore[no-untyped-def]
         _stop_turning(i, T, s.w, s.orient, s.orient_t, dim)
         for k in range(dim):
             v[i, k] = 0.0
-        _rest_nowhere(i, m.gravity, s.support, s.acc)
+        _rest_nowhere(i, s.pull, s.support, s.acc)
         s.shell[i, 3] = np.nan  # (every overlap test against its shell fails, both ways)
         s.counts[C_SHELL] += 1  # (a stamp no earlier rebuild used)
         status = rebuild_shell(
@@ -203,10 +234,11 @@ def _stop_turning(i, T, w, orient, orient_t, dim) -> None:  # type: ignore[no-un
 
 
 @njit(cache=True, error_model="numpy")
-def _rest_nowhere(i, gravity, support, acc) -> None:  # type: ignore[no-untyped-def]
-    """Row ``i`` on no face and with no acceleration: it stays where it is (nothing when the
-    world has no gravity: every acceleration is nil already)."""
-    if gravity is not None:
+def _rest_nowhere(i, pull, support, acc) -> None:  # type: ignore[no-untyped-def]
+    """Row ``i`` on no face, with no pull and no acceleration: it stays where it is (nothing
+    when the world has no gravity: every acceleration is nil already)."""
+    if pull is not None:
         support[i] = -1
         for k in range(acc.shape[1]):
             acc[i, k] = 0.0
+            pull[i, k] = 0.0

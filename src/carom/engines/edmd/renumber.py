@@ -179,12 +179,13 @@ def renumber(
     number = np.empty(n, np.int32)
     if not _new_numbers(state.cell, cell_rank, number):
         return False
+    wraps = state.wraps if model.periodic else None  # (no rows with walls)
     per_body = (
         model.mobile, model.radius, model.mass, model.inv_mass, model.q, model.material,
-        state.kin, state.acc, state.support, state.w, state.orient, state.orient_t,
-        state.last_coll, state.shell, state.nbr, state.nbr_count, state.nbr_mark, state.cell,
-        state.slot, state.ev_time, state.sched, state.cal_next, state.cal_prev, state.cal_loc,
-        state.cur_where, order,
+        state.kin, state.acc, state.pull, wraps, state.support, state.w, state.orient,
+        state.orient_t, state.last_coll, state.shell, state.nbr, state.nbr_count,
+        state.nbr_mark, state.cell, state.slot, state.ev_time, state.sched, state.cal_next,
+        state.cal_prev, state.cal_loc, state.cur_where, order,
     )  # fmt: skip
     _move(per_body, number)
     # the arrays that hold body numbers; places past a list's or a row's count are spare,

@@ -66,6 +66,16 @@ class State(NamedTuple):
     acc : (N, d) float64 or None
         Acceleration [m/s^2]: gravity, less the normal part a support bears; zero if static.
         None without gravity (``Model.gravity`` None: every acceleration is zero).
+    pull : (N, d) float64 or None
+        The acceleration [m/s^2] each body would have flying free: gravity, plus a force's
+        over the body's mass through a step that applies one (``World.apply_forces``); zero
+        if static or taken out. A support bears its normal part when it presses the body
+        onto the support (``acc`` is then the rest). None with ``acc``.
+    wraps : (N, d) float64
+        How many box lengths each body's position was moved back into a periodic box, per
+        axis, since it was built (its path unwrapped is ``x + wraps * box``: the work a
+        force does through a step). No rows, (0, d), when the box has walls (an array all
+        the same: every kind of box has one set of kernel types).
     w : (N, 3) float64 or None
         Spin [rad/s] (2D: about z, in column 2).
     orient : (N, 4) float64 or None; orient_t : (N,) float64 or None
@@ -115,6 +125,8 @@ class State(NamedTuple):
 
     kin: NDArray[np.float64]
     acc: NDArray[np.float64] | None
+    pull: NDArray[np.float64] | None
+    wraps: NDArray[np.float64]
     w: NDArray[np.float64] | None
     orient: NDArray[np.float64] | None
     orient_t: NDArray[np.float64] | None
@@ -288,6 +300,8 @@ def allocate_state(
     return State(
         kin=kin,
         acc=acc,
+        pull=None if acc is None else acc.copy(),
+        wraps=np.zeros((n if model.periodic else 0, dim)),
         support=np.full(n, -1, np.int64) if gravity is not None else None,
         w=w,
         orient=orient,
