@@ -711,7 +711,7 @@ class EdmdEngine:
         pushed = np.flatnonzero(np.any(force != 0.0, axis=1)) if force is not None else None
         if force is None or pushed is None or pushed.size == 0:
             return self.advance(until, np.iinfo(np.int64).max, sink)
-        self._keep_accelerations()
+        self._ready_for_forces()  # (and the wraps counted, in a periodic box)
         rows = self._engine_rows(pushed)
         given = force[pushed]
         extra = given / self.bodies.mass[pushed][:, None]
@@ -725,13 +725,16 @@ class EdmdEngine:
             moved = self._unwrapped(rows) - start
             self.state.sums[codes.S_WORK] += float(np.sum(given * moved))
 
-    def _keep_accelerations(self) -> None:
+    def _ready_for_forces(self) -> None:
         """Give an engine built without gravity (no accelerations kept) zero gravity and the
         arrays of accelerations, pulls and supports it needs to take a force; every path
-        stays what it was (a straight line is the parabola of a zero acceleration)."""
+        stays what it was (a straight line is the parabola of a zero acceleration). In a
+        periodic box, the wraps are counted from now on (:attr:`State.wraps`)."""
+        n, dim = self.state.kin.shape[0], self.env.dim
+        if self.env.periodic and len(self.state.wraps) == 0:
+            self.state = self.state._replace(wraps=np.zeros((n, dim)))
         if self.state.pull is not None:
             return
-        n, dim = self.state.kin.shape[0], self.env.dim
         self.model = self.model._replace(gravity=np.zeros(dim))
         acc = np.zeros((n, dim))
         self.state = self.state._replace(
@@ -743,7 +746,7 @@ class EdmdEngine:
         periodic box's wraps (:attr:`State.wraps`) added back."""
         s, dim = self.state, self.env.dim
         x = s.kin[rows, :dim].copy()
-        if self.env.periodic:
+        if len(s.wraps):  # (a periodic box, counted since the first force)
             x += s.wraps[rows] * self.env.box
         return x
 
@@ -859,8 +862,8 @@ class EdmdEngine:
             # between steps every pull is gravity, zero for the static and those taken out
             pulled = np.isfinite(bodies.mass[order]) & ~np.isnan(fields["shell"][:, 3])
             fields["pull"] = np.where(pulled[:, None], env.gravity[None, :], 0.0)
-        if fields["wraps"] is None:  # (the same: only a step reads them)
-            fields["wraps"] = np.zeros((len(order) if env.periodic else 0, env.dim))
+        if fields["wraps"] is None:  # (saved before forces: none counted yet)
+            fields["wraps"] = np.zeros((0, env.dim))
         if fields["log_normal"] is None:  # (saved before the log kept normals)
             fields["log_normal"] = np.zeros((fields["log_time"].shape[0], 3))
         if fields["sums"].shape[0] < N_SUMS:  # (saved before the work done was kept)

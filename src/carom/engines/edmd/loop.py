@@ -337,12 +337,14 @@ def run_frames(  # type: ignore[no-untyped-def]
 @njit_inlined
 def wrap_into_box(x, wraps, box, i) -> None:  # type: ignore[no-untyped-def]
     """Body ``i``'s position moved back into the periodic box, each move counted in
-    ``wraps``."""
+    ``wraps`` once it has rows (a force has acted: ``State.wraps``)."""
+    counted = wraps.shape[0] > 0
     for k in range(box.shape[0]):
         back = np.floor(x[i, k] / box[k])
         if back != 0.0:
             x[i, k] -= box[k] * back
-            wraps[i, k] += back
+            if counted:
+                wraps[i, k] += back
 
 
 @njit_inlined

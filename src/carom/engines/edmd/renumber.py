@@ -179,7 +179,7 @@ def renumber(
     number = np.empty(n, np.int32)
     if not _new_numbers(state.cell, cell_rank, number):
         return False
-    wraps = state.wraps if model.periodic else None  # (no rows with walls)
+    wraps = state.wraps if len(state.wraps) else None  # (no rows until a force acts)
     per_body = (
         model.mobile, model.radius, model.mass, model.inv_mass, model.q, model.material,
         state.kin, state.acc, state.pull, wraps, state.support, state.w, state.orient,

@@ -71,11 +71,12 @@ class State(NamedTuple):
         over the body's mass through a step that applies one (``World.apply_forces``); zero
         if static or taken out. A support bears its normal part when it presses the body
         onto the support (``acc`` is then the rest). None with ``acc``.
-    wraps : (N, d) float64
+    wraps : (N, d) or (0, d) float64
         How many box lengths each body's position was moved back into a periodic box, per
-        axis, since it was built (its path unwrapped is ``x + wraps * box``: the work a
-        force does through a step). No rows, (0, d), when the box has walls (an array all
-        the same: every kind of box has one set of kernel types).
+        axis, since the first force acted (its path unwrapped is ``x + wraps * box``: the
+        work a force does through a step). No rows, and no count kept, until then and in a
+        box with walls (an array all the same: every kind of box has one set of kernel
+        types; a gas never pushed keeps no 24 bytes a body for it).
     w : (N, 3) float64 or None
         Spin [rad/s] (2D: about z, in column 2).
     orient : (N, 4) float64 or None; orient_t : (N,) float64 or None
@@ -301,7 +302,7 @@ def allocate_state(
         kin=kin,
         acc=acc,
         pull=None if acc is None else acc.copy(),
-        wraps=np.zeros((n if model.periodic else 0, dim)),
+        wraps=np.zeros((0, dim)),
         support=np.full(n, -1, np.int64) if gravity is not None else None,
         w=w,
         orient=orient,
