@@ -8,14 +8,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from carom.geometry.bvh import LEAF, Bvh, build_bvh, query_bvh
+from carom.geometry.bvh import LEAF, STACK, Bvh, build_bvh, query_bvh
 
 
 def _query(tree: Bvh, boxes: np.ndarray, query: np.ndarray) -> np.ndarray:
     out = np.zeros(4, np.int64)
     while True:
         args = (tree.box, tree.left, tree.first, tree.count, tree.order)
-        found = query_bvh(*args, boxes, query, out)
+        found = query_bvh(*args, boxes, query, out, np.empty(STACK, np.int64))
         if found <= out.shape[0]:
             return out[:found]
         out = np.zeros(found, np.int64)  # too small: grow and ask again

@@ -24,9 +24,11 @@ from numba import njit
 from numpy.typing import NDArray
 
 from carom.geometry.rays import ray_box
+from carom.jit import leaf
 
 __all__ = [
     "LEAF",
+    "STACK",
     "Bvh",
     "build_bvh",
     "empty_bvh",
@@ -38,6 +40,9 @@ __all__ = [
 
 #: boxes in a leaf at most
 LEAF = 4
+#: nodes a walk keeps waiting at most: a tree's depth is about log2(T / LEAF), under 64 for any
+#: number of boxes a machine holds
+STACK = 128
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -168,13 +173,16 @@ def _build(
     return used
 
 
-@njit(cache=True)
+@leaf
 def query_bvh(
     node_box: np.ndarray, left: np.ndarray, first: np.ndarray, count: np.ndarray,
     order: np.ndarray, boxes: np.ndarray, query: np.ndarray, out: np.ndarray,
+    stack: np.ndarray,
 ) -> int:  # fmt: skip
     """The boxes of ``boxes`` (T, 2 d) in the tree that overlap the box ``query`` (2 d,)
-    [m] (touching counts), into ``out``, in the tree's order.
+    [m] (touching counts), into ``out``, in the tree's order; ``stack`` (:data:`STACK`,)
+    int64 is the walk's scratch (the caller's: this allocates nothing, so a loop of queries
+    keeps no reference counts).
 
     Returns
     -------
@@ -182,7 +190,6 @@ def query_bvh(
         How many there are; when more than ``out`` holds, only the first ones are written
         (the caller grows ``out`` and asks again).
     """
-    stack = np.empty(128, np.int64)
     stack[0] = 0
     top = 1
     found = 0

@@ -32,7 +32,7 @@ from numba import njit
 
 from carom.engines.stepped.filters import collides
 from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
-from carom.geometry.bvh import overlap, query_bvh
+from carom.geometry.bvh import STACK, overlap, query_bvh
 from carom.laws.kinds import KIND_STATIC
 
 __all__ = [
@@ -414,10 +414,11 @@ def statics_in(
     count, order, its items' boxes), then the ``open_statics`` it does not hold. Returns
     ``found`` (grown if need be) and how many it holds."""
     node_box, left, first, count, order, items = tree
-    total = query_bvh(node_box, left, first, count, order, items, box, found)
+    stack = np.empty(STACK, np.int64)
+    total = query_bvh(node_box, left, first, count, order, items, box, found, stack)
     if total + open_statics.shape[0] > found.shape[0]:
         found = np.empty(total + open_statics.shape[0], np.int64)
-        total = query_bvh(node_box, left, first, count, order, items, box, found)
+        total = query_bvh(node_box, left, first, count, order, items, box, found, stack)
     for q in open_statics:
         if overlap(items, q, box):
             found[total] = q
