@@ -218,6 +218,51 @@ def test_bad_switches_are_refused_and_change_nothing() -> None:
     assert world.body(box).kind == "dynamic"
     world.step()  # and steps on
     spheres = carom.World(2, [1.0, 1.0], engine="event-driven")
-    spheres.add_spheres([[0.5, 0.5]], radius=0.1)
-    with pytest.raises(CaromError, match="rigid engines'"):
-        spheres.set_kind(0, "static")
+    spheres.add_spheres([[0.5, 0.5]], [[0.3, 0.0]], radius=0.1)
+    spheres.step(0.1)
+    engine, before = spheres.engine, spheres.positions.copy()
+    with pytest.raises(CaromError, match="dynamic or static"):
+        spheres.set_kind(0, "kinematic")
+    assert spheres.engine is engine
+    assert spheres.positions.tobytes() == before.tobytes()
+    assert spheres.body(0).kind == "dynamic"
+
+
+G3 = np.array([0.0, 0.0, -9.81])
+
+
+def test_event_driven_spheres_made_static_stop_and_made_dynamic_fall_from_rest() -> None:
+    # closed forms: free flight x0 + v t + g t^2 / 2 (the engine's own arithmetic: a few ulps)
+    world = carom.World(3, [4.0, 4.0, 4.0], gravity=G3, engine="event-driven")
+    world.add_spheres([[1.0, 2.0, 2.0], [2.2, 2.0, 2.0]], [[0.5, 0.0, 1.0], [-5.0, 0.0, 0.0]],
+                      radius=0.2, mass=2.0)  # fmt: skip
+    e0 = _ledger_energy(world)
+    world.step(0.1)
+    world.body(0).kind = "static"
+    x_stop = world.positions[0].copy()
+    np.testing.assert_allclose(x_stop, [1.05, 2.0, 2.0 + 0.1 - 0.5 * 9.81 * 0.01], atol=1e-12)
+    # the other sphere, flying at it along x (0.65 m apart), meets it within 0.06 s and
+    # bounces back off it (nearly head on: its speed along x reversed)
+    world.step(0.2)
+    assert world.body(0).kind == "static"
+    np.testing.assert_array_equal(world.positions[0], x_stop)
+    assert world.velocities[1, 0] > 0.0
+    world.set_kind(0, "dynamic")  # its mass as before (2 kg): it falls from rest
+    world.step(0.2)
+    np.testing.assert_allclose(world.positions[0], x_stop + 0.5 * G3 * 0.04, atol=1e-12)
+    np.testing.assert_allclose(world.velocities[0], G3 * 0.2, atol=1e-12)
+    assert world.bodies.mass[0] == 2.0
+    # what the switches took out and gave back is booked as work: the ledger closes
+    c = world.counters()
+    assert c.work_done != 0.0
+    scale = abs(e0) + abs(c.work_done)
+    closed = e0 + c.work_done - (_ledger_energy(world) + c.energy_lost - c.energy_given)
+    assert abs(closed) < 1e-12 * scale  # (a handful of events: a few ulps each)
+
+
+def _ledger_energy(world: carom.World) -> float:
+    """Kinetic and potential energy [J] of the dynamic spheres (no spins)."""
+    moving = world.bodies.kind == 0
+    m = world.bodies.mass[moving]
+    v, x = world.velocities[moving], world.positions[moving]
+    return float(0.5 * np.sum(m * np.sum(v * v, axis=1)) - np.sum(m * (x @ world.gravity)))

@@ -9,7 +9,8 @@ The mechanical energy the switched bodies gain or lose (a dynamic body's kinetic
 gravitational energy enters or leaves the count) is booked as work done, so the ledger closes.
 The engine is built again with the new kinds, as when bodies are added between steps (the
 state and the forces given for the next step are kept; warm starts and sleep are not). The
-rigid engines.
+event-driven engine switches its spheres between dynamic and static the same way (it has no
+kinematic bodies): a sphere made static stops at the clock, one made dynamic flies from there.
 
 >>> import carom
 >>> from carom.shapes import Box
@@ -33,8 +34,9 @@ from numpy.typing import ArrayLike, NDArray
 from carom.body_input import dynamic_mass
 from carom.engines.base import Counters
 from carom.errors import CaromError
-from carom.gameloop import _rigid, _rows, _Running
-from carom.laws.kinds import BODY_KINDS, KIND_DYNAMIC, KIND_STATIC
+from carom.engines.edmd.driver import EdmdEngine
+from carom.gameloop import _reachable, _rows, _Running
+from carom.laws.kinds import BODY_KINDS, KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.shape_base import SHAPE_CODES
 from carom.shapes import Circle, Shape2D
 from carom.shapes3d import Shape3D, Sphere
@@ -107,8 +109,8 @@ class Kinds:
         ------
         CaromError
             An index out of range or removed; an unknown kind; a mass for bodies not made
-            dynamic; a segment, chain or mesh made anything but static; the event-driven
-            engine. Nothing has changed then.
+            dynamic; a segment, chain or mesh made anything but static; a kinematic body in
+            the event-driven engine. Nothing has changed then.
         """
         if kind not in BODY_KINDS:
             raise CaromError(f"kind must be one of {tuple(BODY_KINDS)}; got {kind!r}")
@@ -119,11 +121,12 @@ class Kinds:
                 "mass=, or make it dynamic"
             )
         rows = np.unique(_rows(self, np.atleast_1d(np.asarray(ids))))
-        engine = _rigid(
-            self,
-            "switching kinds is the rigid engines' (the event-driven "
-            "engine's spheres are dynamic or static from the start)",
-        )
+        engine = _reachable(self)
+        if isinstance(engine, EdmdEngine) and code == KIND_KINEMATIC:
+            raise CaromError(
+                "the event-driven engine's spheres are dynamic or static: none moves at a "
+                'velocity of its own whatever it meets (a kinematic body: engine="rigid")'
+            )
         table = self.bodies
         for i in rows.tolist():
             if code != KIND_STATIC and int(table.shape[i]) in _STATIC_ONLY:
@@ -148,7 +151,7 @@ class Kinds:
                 velocity[rows] = 0.0
                 spin[rows] = 0.0
                 table.set_state(table.position, velocity, table.orientation, spin)
-            built = _rigid(self)  # (refused: a body made dynamic deep in another)
+            built = _reachable(self)  # (refused: a body made dynamic deep in another)
         except BaseException:
             kept.clear()
             kept.update(undo[0])

@@ -670,6 +670,19 @@ class EdmdEngine:
         after = self._kinetic(bodies, arrays[1], arrays[3])
         self.state.sums[codes.S_WORK] += after - before
 
+    def energy_of(self, bodies: NDArray[np.int64]) -> float:
+        """Mechanical energy [J] of the mobile ones among the caller's ``bodies`` (k,) at the
+        clock: kinetic (translation and spin) and potential in gravity, ``-m g . x``."""
+        moving = bodies[self.bodies.mobile[bodies]]
+        x, v, _, w = self.motion_of(moving)
+        potential = -float(np.sum(self.bodies.mass[moving] * (x @ self.env.gravity)))
+        return self._kinetic(moving, v, w) + potential
+
+    def book_work(self, work: float) -> None:
+        """Book ``work`` [J] done on the bodies from outside the engine (their kinds switched:
+        the energy that entered or left the count)."""
+        self.state.sums[codes.S_WORK] += work
+
     # -- forces through a step (issue 43) ----------------------------------------------------
 
     _force: FloatArray | None = None
