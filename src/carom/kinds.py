@@ -33,8 +33,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from carom.body_input import dynamic_mass
 from carom.engines.base import Counters
-from carom.errors import CaromError
 from carom.engines.edmd.driver import EdmdEngine
+from carom.errors import CaromError
 from carom.gameloop import _reachable, _rows, _Running
 from carom.laws.kinds import BODY_KINDS, KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 from carom.shape_base import SHAPE_CODES
