@@ -139,8 +139,10 @@ def save_world(world: Checkpointed, path: Path, extra: Mapping[str, NDArray[Any]
         arrays["filters"] = filters
         arrays["alive"] = world.alive  # type: ignore[attr-defined]
     sensors = getattr(world, "sensors", None)
-    if sensors is not None and np.any(sensors):
+    sensor_pieces = getattr(world, "sensor_pieces", np.zeros((0, 2), np.int64))
+    if sensors is not None and (np.any(sensors) or len(sensor_pieces)):
         arrays["sensors"] = sensors
+        arrays["sensor_pieces"] = sensor_pieces
     if getattr(world, "n_joints", 0):  # the joints, their impulses too (to go on bit for bit)
         arrays["joints.ints"], arrays["joints.floats"] = world.joint_rows  # type: ignore[attr-defined]
     arrays |= {f"extra.{k}": v for k, v in extra.items()}
@@ -226,7 +228,8 @@ def _read(path: Path, data: Any, make: Callable[..., W]) -> tuple[W, dict[str, N
     if "filters" in data.files:
         world.restore_filters(data["filters"], data["alive"])  # type: ignore[attr-defined]
     if "sensors" in data.files:
-        world.restore_sensors(data["sensors"])  # type: ignore[attr-defined]
+        pieces = data["sensor_pieces"] if "sensor_pieces" in data.files else None
+        world.restore_sensors(data["sensors"], pieces)  # type: ignore[attr-defined]
     if "joints.ints" in data.files:
         world.restore_joints(data["joints.ints"], data["joints.floats"])  # type: ignore[attr-defined]
     extra = {k[len("extra.") :]: data[k] for k in data.files if k.startswith("extra.")}

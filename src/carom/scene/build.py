@@ -115,7 +115,7 @@ def build_world(scene: Scene, *, engine: bool = True) -> World:
                 )
         except CaromError as exc:
             raise where.error([table], str(exc), "", index) from None
-        if b.get("sensor") or any(b.get(key) is not None for key in _FILTER_KEYS):
+        if b.get("sensor") or _sensor_parts(b) or any(b.get(k) is not None for k in _FILTER_KEYS):
             touching.append((table, index, b, np.arange(first, world.n_bodies)))
     for index, g in enumerate(scene.gas):
         try:
@@ -160,6 +160,19 @@ def _filter_and_sense(world: World, b: Mapping[str, Any], ids: NDArray[np.int64]
         world.set_filter(ids, **given)
     if b.get("sensor"):
         world.set_sensor(ids)
+    parts = _sensor_parts(b)
+    if parts:
+        # each part is one convex piece or, cut up (a concave polygon), several in a row
+        counts = [len(shape_of(piece, world.dim).pieces()) for piece in b["pieces"]]
+        starts = np.concatenate(([0], np.cumsum(counts)))
+        pieces = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in parts])
+        for i in ids.tolist():
+            world.set_sensor(i, pieces=pieces)
+
+
+def _sensor_parts(b: Mapping[str, Any]) -> list[int]:
+    """The parts of a compound entry ``b`` marked ``sensor = true`` (by place)."""
+    return [k for k, piece in enumerate(b.get("pieces") or ()) if piece.get("sensor")]
 
 
 class _Entry:

@@ -315,6 +315,7 @@ PIECE_KEYS: dict[str, Check] = {
     "offset": _vector,
     "angle": _number,
     "orientation": _turns,
+    "sensor": _boolean,
 }
 
 SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {

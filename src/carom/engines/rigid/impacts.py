@@ -727,7 +727,7 @@ def continuous(
                 p, vertices, piece_start, piece_count, piece_radius, piece_reach, v[b, 0],
                 v[b, 1], omega[b], 0.0, 0.0, dt, False, 0.0, 0.0, box,
             )  # fmt: skip
-            found, total = statics_in(box, tree, open_statics, found, filters, b, piece_body)
+            found, total = statics_in(box, tree, open_statics, found, filters, p, piece_body)
             for j in range(total):
                 q = found[j]
                 # a contact near at the start is the solver's: only sinking into it by

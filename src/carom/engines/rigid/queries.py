@@ -66,7 +66,8 @@ def cast_rays(
     ``statics``: the static pieces' tree (node boxes, left, first, count, order) and their
     boxes; ``open_statics`` the static pieces with no finite box; ``movers``: the other pieces'
     tree over boxes of its own, then each box's piece (an empty tree: every box tested one
-    by one). A body whose ``categories`` (N,) bits hold none of ``mask`` is not seen.
+    by one). A piece whose ``categories`` (P,) bits (its body's; none for a sensor's piece)
+    hold none of ``mask`` is not seen.
     ``room``: the most corners a piece has (and 0).
     """
     m_boxes, m_pieces = movers[5], movers[6]
@@ -88,7 +89,7 @@ def cast_rays(
             if p < 0:
                 continue
             b = piece_body[p]
-            if categories[b] & mask == 0:
+            if categories[p] & mask == 0:
                 continue
             count = _place(
                 p, b, x, angle, piece_start, piece_count, local_vertices, local_normals, v, n
@@ -110,14 +111,14 @@ def overlap_pieces(
 ) -> None:  # fmt: skip
     """Which of the pieces ``candidates`` (K,) hold the point ``low`` (``point``) or meet the
     box ``[low, high]`` (2,) now, exactly (:mod:`carom.geometry.overlaps`), into ``hit``
-    (K,) bool; a body whose ``categories`` bits hold none of ``mask`` is not seen."""
+    (K,) bool; a piece whose ``categories`` (P,) bits hold none of ``mask`` is not seen."""
     v = np.empty((room, 2))
     n = np.empty((room, 2))
     for j in range(candidates.shape[0]):
         p = candidates[j]
         b = piece_body[p]
         hit[j] = False
-        if categories[b] & mask == 0:
+        if categories[p] & mask == 0:
             continue
         count = _place(
             p, b, x, angle, piece_start, piece_count, local_vertices, local_normals, v, n
@@ -184,7 +185,8 @@ def cast_shape(
     the cores less the radii, :func:`carom.geometry.manifold2d.core_witness`) the shape
     cannot touch before travelling ``d``, so the fraction moves on by ``d / |move|`` until
     the gap is within a billionth of the pieces' reach; a shape that starts touching or
-    overlapping hits at 0. A body whose ``categories`` bits hold none of ``mask`` is not seen.
+    overlapping hits at 0. A piece whose ``categories`` (P,) bits hold none of ``mask`` is not
+    seen.
     """
     c_vertices, c_normals, c_start, c_count, c_radius, c_reach = cast
     length = math.hypot(move[0], move[1])
@@ -199,7 +201,7 @@ def cast_shape(
     for j in range(candidates.shape[0]):
         p = candidates[j]
         b = piece_body[p]
-        if categories[b] & mask == 0:
+        if categories[p] & mask == 0:
             continue
         kb = _place(p, b, x, angle, piece_start, piece_count, local_vertices, local_normals, v, n)
         for q in range(c_start.shape[0]):

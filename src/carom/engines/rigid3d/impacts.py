@@ -809,7 +809,7 @@ def continuous(
                 p, b, vertices, normals, piece_kind, piece_vstart, piece_vcount, piece_fstart,
                 piece_radius, piece_reach, v, w, dynamic, still[b], 0.0, dt, 0.0, box,
             )  # fmt: skip
-            found, total = statics_in(box, tree, open_statics, found, filters, b, piece_body)
+            found, total = statics_in(box, tree, open_statics, found, filters, p, piece_body)
             for j in range(total):
                 other = found[j]
                 # a contact near at the start is the solver's: only sinking into it by more
@@ -859,8 +859,8 @@ def cast_shape(
     held still (zero ``v``, ``w``, ``accel``). By the exact path's conservative advancement
     (:func:`_time_of_impact`, in rounds from where the last stopped safe), to a billionth of
     the two pieces' reach. Returns the piece hit (-1: none) and writes ``hit``: the fraction,
-    the point (3) and the piece's outward normal there (3). A body whose ``categories`` bits
-    hold none of ``mask`` is not seen."""
+    the point (3) and the piece's outward normal there (3). A piece whose ``categories`` (P,)
+    bits hold none of ``mask`` is not seen."""
     piece_body = model_ints[0]
     out = np.empty(OUT_SIZE)
     ids = np.empty(MAX_POINTS, np.int64)
@@ -871,7 +871,7 @@ def cast_shape(
     for j in range(candidates.shape[0]):
         p = candidates[j]
         b = piece_body[p]
-        if categories[b] & mask == 0:
+        if categories[p] & mask == 0:
             continue
         for c in cast_pieces:
             tol = _tolerance(c, p, piece_reach)

@@ -62,7 +62,7 @@ def cast_rays(
     ``normal`` (R, 3) there. ``model_ints``: the pieces' body, kind, vertex start and count,
     face start and count, corner start (:class:`.model.Model3D`); ``statics``, ``open_statics``
     and ``movers`` as in 2D (:func:`carom.engines.rigid.queries.cast_rays`); a body whose
-    ``categories`` (N,) bits hold none of ``mask`` is not seen; ``room``: the most corners
+    ``categories`` (P,) bits hold none of ``mask`` is not seen; ``room``: the most corners
     and faces a piece has."""
     piece_body, piece_kind, vstart, vcount, fstart, fcount, cstart = model_ints
     m_boxes, m_pieces = movers[5], movers[6]
@@ -86,7 +86,7 @@ def cast_rays(
             if p < 0:
                 continue
             b = piece_body[p]
-            if categories[b] & mask == 0:
+            if categories[p] & mask == 0:
                 continue
             _place(
                 p, b, x, q, vstart, vcount, fstart, fcount, local_vertices, local_normals, rot, v, n
@@ -126,8 +126,8 @@ def overlap_pieces(
     """Which of the pieces ``candidates`` (K,) hold the point ``low`` (``point``) or meet the
     box ``[low, high]`` (3,) now, exactly (:mod:`carom.geometry.overlaps`), into ``hit``
     (K,) bool. ``model_ints``: the pieces' body, kind, vertex start and count, face start and
-    count, corner start, edge start and count; a body whose ``categories`` bits hold none of
-    ``mask`` is not seen; ``room``: the most corners and faces a piece has."""
+    count, corner start, edge start and count; a piece whose ``categories`` (P,) bits hold
+    none of ``mask`` is not seen; ``room``: the most corners and faces a piece has."""
     piece_body, piece_kind, vstart, vcount, fstart, fcount, cstart, estart, ecount = model_ints
     v = np.empty((room[0], 3))
     n = np.empty((room[1], 3))
@@ -136,7 +136,7 @@ def overlap_pieces(
         p = candidates[j]
         b = piece_body[p]
         hit[j] = False
-        if categories[b] & mask == 0:
+        if categories[p] & mask == 0:
             continue
         _place(p, b, x, q, vstart, vcount, fstart, fcount, local_vertices, local_normals, rot, v, n)
         fs, fc = fstart[p], fcount[p]

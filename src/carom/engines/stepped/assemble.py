@@ -155,7 +155,10 @@ class _Stepped(Protocol):
 
     def use_filters(self, table: NDArray[np.int64]) -> None: ...
 
-    def use_sensors(self, sensor: NDArray[np.bool_], changed: NDArray[np.int64]) -> None: ...
+    def use_sensors(
+        self, sensor: NDArray[np.bool_], changed: NDArray[np.int64],
+        pieces: NDArray[np.int64] | None = None,
+    ) -> None: ...  # fmt: skip
 
     def retire(self, ids: NDArray[np.int64]) -> None: ...
 
@@ -177,8 +180,9 @@ def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
     if table is not None and len(table):
         engine.use_filters(np.asarray(table, np.int64))
     sensors = getattr(world, "sensors", None)
-    if sensors is not None and np.any(sensors):
-        engine.use_sensors(np.asarray(sensors, np.bool_), np.zeros(0, np.int64))
+    pieces = getattr(world, "sensor_pieces", None)
+    if sensors is not None and (np.any(sensors) or (pieces is not None and len(pieces))):
+        engine.use_sensors(np.asarray(sensors, np.bool_), np.zeros(0, np.int64), pieces)
     share_joints = getattr(world, "share_joints", None)  # (a World's, issue 43)
     if share_joints is not None:
         share_joints(engine)

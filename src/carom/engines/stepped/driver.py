@@ -162,7 +162,7 @@ class SteppedEngine:
         self.callers = np.where(partners.kind == PARTNER_BODY, partners.number, -1)
         #: the contact events of the last step (:mod:`.events`)
         self.events = ContactEvents(self.DIMS, self.callers, point_layout(self.DIMS))
-        self.sensors = Sensors(self.callers)
+        self.sensors = Sensors(self.callers, model.piece_body.shape[0])
         self.cell = grid_cell(model.kind, model.piece_body, model.piece_reach)
         rows, dims = self.ROWS, self.DIMS
         self._cf = np.zeros((max(64, 2 * n), rows.CONTACT_FLOATS))
@@ -180,8 +180,9 @@ class SteppedEngine:
         self._movers = np.flatnonzero(self._kinematic)
         self._accel = np.zeros((n, dims))
         self._accel[self._dynamic] = model.gravity
-        #: each body's collision filter (:mod:`.filters`), and whether any is not the default
-        self.filters = default_filters(n)
+        #: each piece's collision filter (:func:`.filters.piece_filters`: its body's, none for
+        #: a sensor's piece), and whether any is not the default
+        self.filters = default_filters(model.piece_body.shape[0])
         self.filtered = False
         #: the joints (:mod:`.joints`): integer and float rows (the world's own arrays,
         #: shared: the solver writes their impulses and reactions in place), the bodies they
@@ -456,6 +457,7 @@ class SteppedEngine:
                 self.model.piece_body,
                 self.filters,
                 self._joined,
+                self.model.kind.shape[0],
                 self._now,
             )
         self._n_pairs = n_pairs
@@ -761,16 +763,27 @@ class SteppedEngine:
         found at the next step."""
         full = self.sensors.filters.copy()
         full[: table.shape[0]] = table
-        self.filters[:] = self.sensors.solid(full)
+        self.filters[:] = self.sensors.solid(full, self.model.piece_body)
         self.filtered = bool(np.any(self.filters != default_filters(1)))
         if changed is not None:
             self._wake_bodies(np.unique(changed))
 
-    def use_sensors(self, sensor: NDArray[np.bool_], changed: NDArray[np.int64]) -> None:
-        """Which of the caller's bodies are sensors, ``sensor`` (n,) (:mod:`.sensors`): they
-        touch nothing and report the bodies overlapping them after each step that gathers
-        events. The bodies ``changed`` (k,) wake."""
-        self.sensors.mask[: sensor.shape[0]] = sensor
+    def use_sensors(
+        self, sensor: NDArray[np.bool_], changed: NDArray[np.int64],
+        pieces: NDArray[np.int64] | None = None,
+    ) -> None:  # fmt: skip
+        """Which of the caller's bodies are sensors, ``sensor`` (n,), and which pieces of
+        others, ``pieces`` (k, 2) rows (body, its piece) (:mod:`.sensors`): they touch nothing
+        and report the bodies overlapping them after each step that gathers events. The
+        bodies ``changed`` (k,) wake."""
+        m = self.model
+        marked = np.zeros(m.piece_body.shape[0], np.bool_)
+        whole = np.zeros(m.kind.shape[0], np.bool_)  # (the world's walls and planes: none)
+        whole[: sensor.shape[0]] = sensor
+        marked |= whole[m.piece_body]
+        if pieces is not None and len(pieces):
+            marked[m.body_pieces[pieces[:, 0]] + pieces[:, 1]] = True
+        self.sensors.mask[:] = marked
         self.use_filters(self.sensors.filters, changed)
 
     def _sensed(self) -> NDArray[np.int64]:

@@ -9,7 +9,9 @@ touches every category, group 0: everything touches.
 Joined bodies do not touch either, unless their joint says so (Box2D's ``collideConnected``).
 A filter removes the pair from the step altogether: the broad phase's pairs are filtered
 before the narrow phase (so no contact, no exact impact), and the static geometry an exact
-impact or a sweep looks through skips the pieces its body does not touch.
+impact or a sweep looks through skips the pieces its body does not touch. The engines step
+with a filter row per piece (:func:`piece_filters`): its body's, or none for a sensor's piece
+(:mod:`.sensors`), so that a body may be solid in some pieces and a sensor in others.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ __all__ = [
     "collides",
     "default_filters",
     "filter_pairs",
+    "piece_filters",
     "whole_number",
 ]
 
@@ -64,6 +67,15 @@ def default_filters(n: int) -> np.ndarray:
     return rows
 
 
+def piece_filters(filters: np.ndarray, piece_body: np.ndarray, sensing: np.ndarray) -> np.ndarray:
+    """The filter row (P, 3) each piece steps with: its body's of ``filters`` (N, 3), zeroed
+    (no category, no mask, no group: it touches nothing and no ray sees it) where ``sensing``
+    (P,) marks a sensor's piece."""
+    rows: np.ndarray = filters[piece_body]
+    rows[sensing] = 0
+    return rows
+
+
 @njit(cache=True, inline="always")
 def collides(filters: np.ndarray, a: int, b: int) -> bool:
     """Whether bodies ``a`` and ``b`` may touch under ``filters`` (N, 3)."""
@@ -79,18 +91,20 @@ def collides(filters: np.ndarray, a: int, b: int) -> bool:
 
 @leaf
 def filter_pairs(
-    pairs: np.ndarray, n_pairs: int, piece_body: np.ndarray, filters: np.ndarray,
-    joints: np.ndarray, out: np.ndarray,
+    pairs: np.ndarray, n_pairs: int, piece_body: np.ndarray, piece_filters: np.ndarray,
+    joints: np.ndarray, n_bodies: int, out: np.ndarray,
 ) -> int:  # fmt: skip
-    """The first ``n_pairs`` rows of ``pairs`` (pieces) whose bodies may touch, into ``out``
-    in order; returns how many. Bodies that a joint keeps apart (``joints``, sorted keys of
-    :func:`carom.engines.stepped.joints.joined_keys`) do not touch either."""
+    """The first ``n_pairs`` rows of ``pairs`` (pieces) that may touch under
+    ``piece_filters`` (P, 3) (each piece's body's filter, zeroed for a sensor's pieces:
+    :func:`piece_filters`), into ``out`` in order; returns how many. Bodies that a joint
+    keeps apart (``joints``, sorted keys of :func:`carom.engines.stepped.joints.joined_keys`,
+    of ``n_bodies``) do not touch either."""
     m = 0
-    n = filters.shape[0]
     for k in range(n_pairs):
-        a = piece_body[pairs[k, 0]]
-        b = piece_body[pairs[k, 1]]
-        if collides(filters, a, b) and not joined(joints, a, b, n):
+        pa, pb = pairs[k, 0], pairs[k, 1]
+        a = piece_body[pa]
+        b = piece_body[pb]
+        if collides(piece_filters, pa, pb) and not joined(joints, a, b, n_bodies):
             out[m, 0] = pairs[k, 0]
             out[m, 1] = pairs[k, 1]
             m += 1

@@ -341,14 +341,14 @@ def look_around(
             boxes[p, d + j] = max(boxes[p, d + j], box[d + j])
         tree, open_statics, movers, filters = reach
         found, total = statics_in(
-            box, tree, open_statics, np.empty(64, np.int64), filters, piece_body[p], piece_body
+            box, tree, open_statics, np.empty(64, np.int64), filters, p, piece_body
         )
         for j in range(total):
             cp, n = add_candidate(cp, n, p, found[j])
         body = piece_body[p]
         for q in movers:
             other = piece_body[q]
-            if other == body or not overlap(boxes, q, box):
+            if other == body or not overlap(boxes, q, box) or not collides(filters, p, q):
                 continue
             if island_of[other] != k:
                 return cp, n, True
@@ -406,13 +406,14 @@ def started_sunk(
 @njit(cache=True)
 def statics_in(
     box: np.ndarray, tree: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-    np.ndarray], open_statics: np.ndarray, found: np.ndarray, filters: np.ndarray, body: int,
+    np.ndarray], open_statics: np.ndarray, found: np.ndarray, filters: np.ndarray, piece: int,
     piece_body: np.ndarray,
 ) -> tuple[np.ndarray, int]:  # fmt: skip
-    """The static pieces whose boxes meet ``box`` (2 d,) and that ``body`` may touch under
-    ``filters`` (:mod:`.filters`): through the static ``tree`` (node boxes, left, first,
-    count, order, its items' boxes), then the ``open_statics`` it does not hold. Returns
-    ``found`` (grown if need be) and how many it holds."""
+    """The static pieces whose boxes meet ``box`` (2 d,) and that ``piece`` may touch under
+    the pieces' ``filters`` (P, 3) (:func:`.filters.piece_filters`): through the static
+    ``tree`` (node boxes, left, first, count, order, its items' boxes), then the
+    ``open_statics`` it does not hold. Returns ``found`` (grown if need be) and how many it
+    holds."""
     node_box, left, first, count, order, items = tree
     stack = np.empty(STACK, np.int64)
     total = query_bvh(node_box, left, first, count, order, items, box, found, stack)
@@ -425,7 +426,7 @@ def statics_in(
             total += 1
     kept = 0
     for j in range(total):
-        if collides(filters, body, piece_body[found[j]]):
+        if collides(filters, piece, found[j]):
             found[kept] = found[j]
             kept += 1
     return found, kept

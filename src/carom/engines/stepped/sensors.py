@@ -1,11 +1,14 @@
-"""Sensors: bodies that overlap others and say so, and never push (Box2D's sensor shapes).
+"""Sensors: bodies, or pieces of bodies, that overlap others and say so, and never push
+(Box2D's sensor shapes).
 
-A sensor is a body of any kind whose pieces touch nothing: its row in the filters the
-engine steps with is zeroed (no category, no mask, no group), so the broad phase's pairs
-with it are dropped before the narrow phase, no exact impact, sweep or ray meets it, and a
-dynamic sensor flies freely. What it sees is decided by the caller's own filters
-(:mod:`.filters`): a sensor reports a body when the two would touch were it solid. A sensor
-sees no other sensor, nor the world's walls and planes.
+A sensor piece touches nothing: its row in the filters the engine steps with, one a piece
+(:func:`.filters.piece_filters`), is zeroed (no category, no mask, no group), so the broad
+phase's pairs with it are dropped before the narrow phase, and no exact impact, sweep or ray
+meets it. A sensor body is one whose pieces are all sensors (a dynamic one flies freely); a
+body with some sensor pieces (a character's foot sensor) is solid in the others, and moves
+and weighs as a whole. What a sensor piece sees is decided by the caller's own filters
+(:mod:`.filters`): it reports a body when the two would touch were it solid. A sensor piece
+sees no other sensor piece, nor the world's walls and planes.
 
 After each step that gathers events, every broad-phase pair of a sensor and a body is
 tested exactly at the step's end (the pieces placed at their poses then: overlapping or
@@ -29,7 +32,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from carom.engines.stepped.events import compare, split_off
-from carom.engines.stepped.filters import collides, default_filters
+from carom.engines.stepped.filters import collides, default_filters, piece_filters
 
 __all__ = ["SENSOR_DTYPE", "SensorArrays", "Sensors", "sensor_pair"]
 
@@ -51,15 +54,15 @@ def sensor_pair(
     pa: int, pb: int, piece_body: np.ndarray, sensor: np.ndarray, filters: np.ndarray,
     number: np.ndarray,
 ) -> tuple[int, int, int, int]:  # fmt: skip
-    """Pieces ``pa`` and ``pb`` as a sensor's piece and a visitor's: ``(sensor body,
-    visitor body, sensor piece, visitor piece)``, or -1s when the pair is not one a sensor
-    reports (neither or both sensors, a wall or plane, kept apart by the caller's
-    ``filters``)."""
+    """Pieces ``pa`` and ``pb`` as a sensor piece and a visitor's: ``(sensor body, visitor
+    body, sensor piece, visitor piece)``, or -1s when the pair is not one a sensor reports
+    (neither or both sensor pieces (``sensor`` (P,)), a wall or plane, kept apart by the
+    caller's body ``filters``)."""
     a = piece_body[pa]
     b = piece_body[pb]
-    if sensor[a] == sensor[b] or number[a] < 0 or number[b] < 0:
+    if sensor[pa] == sensor[pb] or number[a] < 0 or number[b] < 0:
         return -1, -1, -1, -1
-    if sensor[b]:
+    if sensor[pb]:
         a, b, pa, pb = b, a, pb, pa
     if not collides(filters, a, b):
         return -1, -1, -1, -1
@@ -68,13 +71,14 @@ def sensor_pair(
 
 class Sensors:
     """The sensors of an engine of N rows numbered ``number`` (N,) for the caller (-1: the
-    world's walls and planes), their pairs overlapping at the last step and its events."""
+    world's walls and planes) and P ``pieces``, their pairs overlapping at the last step and
+    its events."""
 
-    def __init__(self, number: NDArray[np.int64]) -> None:
+    def __init__(self, number: NDArray[np.int64], pieces: int) -> None:
         n = number.shape[0]
         self.number = number
-        #: which rows are sensors (N,), and the caller's filters (N, 3): whom each sees
-        self.mask = np.zeros(n, np.bool_)
+        #: which pieces are sensors (P,), and the caller's filters (N, 3): whom each sees
+        self.mask = np.zeros(pieces, np.bool_)
         self.filters = default_filters(n)
         #: the pairs overlapping at the last step (sorted keys), and its events
         self.keys = np.zeros(0, np.int64)
@@ -90,16 +94,15 @@ class Sensors:
 
     @property
     def on(self) -> bool:
-        """Whether any body is a sensor."""
+        """Whether any piece is a sensor."""
         return bool(self.mask.any())
 
-    def solid(self, table: NDArray[np.int64]) -> NDArray[np.int64]:
-        """The filters (N, 3) the engine steps with: the caller's ``table``, taken as whom
-        sensors see, with the sensors' rows zeroed (nothing touches them)."""
+    def solid(self, table: NDArray[np.int64], piece_body: NDArray[np.int64]) -> NDArray[np.int64]:
+        """The filters (P, 3) the engine steps with, one a piece of body ``piece_body`` (P,):
+        the caller's ``table`` (N, 3), kept as whom sensors see, with the sensor pieces' rows
+        zeroed (nothing touches them)."""
         self.filters = table.copy()
-        kept = table.copy()
-        kept[self.mask] = 0
-        return kept
+        return piece_filters(table, piece_body, self.mask)
 
     def update(self, keys: NDArray[np.int64], moving: NDArray[np.bool_]) -> None:
         """The events of a step whose end found the pairs ``keys`` (k,) overlapping (repeats
