@@ -68,7 +68,8 @@ class Sensing:
             ``world.bodies.pieces[ids]`` holds them: a Compound's parts, each convex part one
             piece; a circle or sphere is one): a character's foot sensor, a car's pickup
             zone. The body moves and weighs as a whole, and touches with its other pieces;
-            a sensor piece reports, as a sensor body does, the body index of its own.
+            a sensor piece reports, as a sensor body does, the body index of its own. (A
+            body that is a sensor whole stays one whatever its pieces say.)
 
         Notes
         -----
@@ -79,8 +80,8 @@ class Sensing:
         Raises
         ------
         CaromError
-            An index out of range or of a removed body; the event-driven engine. Nothing
-            has changed then.
+            An index out of range or of a removed body; ``pieces`` of more than one body,
+            or not pieces of it; the event-driven engine. Nothing has changed then.
         """
         rows = _rows(self, np.atleast_1d(np.asarray(ids)))
         marked = _pieces_of(self, rows, pieces)
