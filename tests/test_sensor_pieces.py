@@ -20,6 +20,7 @@ import pytest
 import carom
 from carom.errors import CaromError
 from carom.materials import Material
+from tests.worlds import scene_world
 
 C = -0.55 * 0.12 / 1.12  # the box's centre above the body's centre of mass [m]
 BOX_BOTTOM = 0.5 + C  # below the centre of mass [m]
@@ -131,15 +132,6 @@ def test_sensor_pieces_outlive_a_checkpoint(tmp_path: Path) -> None:
 
 
 SCENE = """
-[world]
-dimension = 2
-box = [10.0, 10.0]
-boundary = "open"
-gravity = [0.0, -9.81]
-
-[run]
-until = 1.0
-
 [[bodies]]
 shape = "compound"
 pieces = [{shape = "box", size = [1.0, 1.0]},
@@ -149,13 +141,8 @@ positions = [[5.0, 5.0], [5.0, 8.0]]
 """
 
 
-def test_a_scene_marks_a_compounds_sensor_pieces(tmp_path: Path) -> None:
-    from carom.scene import load_scene
-    from carom.scene.build import build_world
-
-    path = tmp_path / "feet.toml"
-    path.write_text(SCENE, encoding="utf-8")
-    world = build_world(load_scene(path))
+def test_a_scene_marks_a_compounds_sensor_pieces() -> None:
+    world = scene_world(SCENE)
     # the foot, the third part (piece 2), of each of the two bodies; the bodies solid else
     assert [len(pieces) for pieces in world.bodies.pieces] == [3, 3]
     assert world.sensor_pieces.tolist() == [[0, 2], [1, 2]]

@@ -17,6 +17,7 @@ import pytest
 
 import carom
 from carom.errors import CaromError
+from tests.worlds import scene_world
 
 G = 9.81
 R = 0.25  # the ball's radius [m]
@@ -196,15 +197,6 @@ def test_bad_sensor_calls_are_refused_and_change_nothing() -> None:
 
 
 SCENE = """
-[world]
-dimension = 2
-box = [10.0, 10.0]
-boundary = "open"
-gravity = [0.0, -9.81]
-
-[run]
-until = 1.0
-
 [[bodies]]
 shape = "box"
 size = [2.0, 1.0]
@@ -233,13 +225,7 @@ kind = "static"
 
 
 def _scene(floor: str) -> carom.World:
-    import textwrap
-    import tomllib
-
-    from carom.scene import Scene
-
-    text = textwrap.dedent(SCENE).format(floor=floor)
-    return Scene.from_dict(tomllib.loads(text), "scene.toml", text).build()
+    return scene_world(SCENE.format(floor=floor))
 
 
 def test_sensors_and_filters_in_a_scene() -> None:

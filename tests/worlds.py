@@ -2,10 +2,34 @@
 
 from __future__ import annotations
 
+import textwrap
+import tomllib
+
 import numpy as np
 
 import carom
+from carom.scene import Scene
 from carom.scene.layouts import lattice_gas
+
+#: a scene's [world] and [run] tables: a 10 m square 2D world, open, under gravity, run 1 s
+OPEN_2D = """
+[world]
+dimension = 2
+box = [10.0, 10.0]
+boundary = "open"
+gravity = [0.0, -9.81]
+
+[run]
+until = 1.0
+"""
+
+
+def scene_world(tables: str) -> carom.World:
+    """The world of the scene :data:`OPEN_2D` followed by ``tables`` (TOML: its bodies,
+    joints), built as ``carom run`` builds it."""
+    text = OPEN_2D + textwrap.dedent(tables)
+    world: carom.World = Scene.from_dict(tomllib.loads(text), "scene.toml", text).build()
+    return world
 
 
 def rotation(q: np.ndarray) -> np.ndarray:

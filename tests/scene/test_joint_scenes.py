@@ -5,25 +5,16 @@ from __future__ import annotations
 
 import math
 import textwrap
-import tomllib
 
 import numpy as np
 import pytest
 
 import carom
-from carom.scene import Scene, find_scene, load_scene
+from carom.scene import find_scene, load_scene
 from carom.scene.schema import SceneError
+from tests.worlds import scene_world
 
 HEAD = """
-[world]
-dimension = 2
-box = [10.0, 10.0]
-boundary = "open"
-gravity = [0.0, -9.81]
-
-[run]
-until = 1.0
-
 [[bodies]]
 shape = "box"
 size = [0.5, 0.1]
@@ -32,8 +23,7 @@ positions = [[5.25, 8.0], [5.75, 8.0], [6.25, 8.0]]
 
 
 def scene(joints: str) -> carom.World:
-    text = textwrap.dedent(HEAD) + textwrap.dedent(joints)
-    return Scene.from_dict(tomllib.loads(text), "scene.toml", text).build()
+    return scene_world(HEAD + textwrap.dedent(joints))
 
 
 def gaps(world: carom.World) -> np.ndarray:
