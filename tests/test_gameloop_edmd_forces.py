@@ -211,3 +211,14 @@ def test_torques_and_forces_off_centre_are_refused_and_change_nothing() -> None:
     world.apply_forces([1], [1.0, 0.0, 0.0], points=[[2.5, 1.0, 1.0]])
     world.step(0.1)
     assert world.velocities[1, 0] > 0.0
+
+
+def test_forces_wait_through_a_run_for_the_next_step() -> None:
+    # the engine has no step of its own: a force acts through the next World.step(dt)
+    world = _world()
+    world.add_spheres([[5.0, 5.0, 5.0]], radius=0.5)  # 1 kg: dv = F dt
+    world.apply_forces([0], [1.0, 0.0, 0.0])
+    world.run(until=0.5)
+    np.testing.assert_array_equal(world.velocities[0], [0.0, 0.0, 0.0])
+    world.step(DT)
+    np.testing.assert_allclose(world.velocities[0], [DT, 0.0, 0.0], atol=ULPS)

@@ -281,8 +281,9 @@ class GameLoop:
         The force is constant through the step. Free flight stays exact under it (the
         centre follows ``x + v t + (g + F / m) t^2 / 2``); the solver takes it each substep,
         as it takes gravity. Its work is booked in the energy ledger. The event-driven
-        engine flies its spheres on that parabola through the step, exactly
-        (:meth:`carom.engines.edmd.driver.EdmdEngine.advance_step`).
+        engine flies its spheres on that parabola through the next :meth:`step`, exactly
+        (:meth:`carom.engines.edmd.driver.EdmdEngine.advance_step`); having no step of its
+        own, it keeps them for that call (a ``run`` in between leaves them waiting).
 
         Raises
         ------
