@@ -138,7 +138,7 @@ def _build(
     node the union of its boxes (children come after their parent: a backward sweep);
     return how many nodes."""
     d = boxes.shape[1] // 2
-    stack = np.empty((128, 3), np.int64)  # node, first, count; depth log2(T / LEAF) + 1
+    stack = np.empty((STACK, 3), np.int64)  # node, first, count; depth log2(T / LEAF) + 1
     stack[0, 0], stack[0, 1], stack[0, 2] = 0, 0, order.shape[0]
     top = 1
     used = 1
@@ -225,7 +225,7 @@ def ray_query_bvh(
     direction ``inv`` (d,) meets within ``[0, t_max]`` [m] (:func:`carom.geometry.rays.ray_box`),
     into ``out`` from ``start``; returns where they end (past ``out``'s size: grow it and ask
     again)."""
-    stack = np.empty(128, np.int64)
+    stack = np.empty(STACK, np.int64)
     stack[0] = 0
     top = 1
     found = start

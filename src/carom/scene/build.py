@@ -162,7 +162,8 @@ def _filter_and_sense(world: World, b: Mapping[str, Any], ids: NDArray[np.int64]
         world.set_sensor(ids)
     parts = _sensor_parts(b)
     if parts:
-        # each part is one convex piece or, cut up (a concave polygon), several in a row
+        # the parts' pieces in order, each part's own in a row (one a part for every piece
+        # shape a compound takes; counted, not assumed)
         counts = [len(shape_of(piece, world.dim).pieces()) for piece in b["pieces"]]
         starts = np.concatenate(([0], np.cumsum(counts)))
         pieces = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in parts])

@@ -61,7 +61,7 @@ def cast_rays(
     (R,) [m]: each one's ``distance`` [m] (inf: no hit), the ``piece`` hit (-1) and the outward
     ``normal`` (R, 3) there. ``model_ints``: the pieces' body, kind, vertex start and count,
     face start and count, corner start (:class:`.model.Model3D`); ``statics``, ``open_statics``
-    and ``movers`` as in 2D (:func:`carom.engines.rigid.queries.cast_rays`); a body whose
+    and ``movers`` as in 2D (:func:`carom.engines.rigid.queries.cast_rays`); a piece whose
     ``categories`` (P,) bits hold none of ``mask`` is not seen; ``room``: the most corners
     and faces a piece has."""
     piece_body, piece_kind, vstart, vcount, fstart, fcount, cstart = model_ints

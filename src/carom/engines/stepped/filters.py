@@ -78,7 +78,8 @@ def piece_filters(filters: np.ndarray, piece_body: np.ndarray, sensing: np.ndarr
 
 @njit(cache=True, inline="always")
 def collides(filters: np.ndarray, a: int, b: int) -> bool:
-    """Whether bodies ``a`` and ``b`` may touch under ``filters`` (N, 3)."""
+    """Whether rows ``a`` and ``b`` of ``filters`` may touch: two bodies' (N, 3), or two
+    pieces' (P, 3) (:func:`piece_filters`)."""
     ga = filters[a, F_GROUP]
     if ga != 0 and ga == filters[b, F_GROUP]:
         grouped: bool = ga > 0
@@ -105,7 +106,7 @@ def filter_pairs(
         a = piece_body[pa]
         b = piece_body[pb]
         if collides(piece_filters, pa, pb) and not joined(joints, a, b, n_bodies):
-            out[m, 0] = pairs[k, 0]
-            out[m, 1] = pairs[k, 1]
+            out[m, 0] = pa
+            out[m, 1] = pb
             m += 1
     return m
