@@ -48,6 +48,8 @@ from carom.engines.stepped.impacts import (
     PAIR_LOOKS,
     advance,
     approaching,
+    closing_bound,
+    discriminant_root,
     earliest,
     gather,
     give_back,
@@ -141,6 +143,85 @@ def _gap(
     return deepest, out[0], out[1]
 
 
+@njit(cache=True, inline="always")
+def _first_root(c: float, b: float, k: float) -> float:
+    """Least ``h > 0`` [s] with ``c + b h - k h^2 / 2 = 0`` given ``c > 0``; inf if none."""
+    root = discriminant_root(b, 2.0 * k * c)
+    if root < 0.0:
+        return np.inf
+    if b < 0.0:
+        return 2.0 * c / (root - b)
+    if k > 0.0:
+        return (b + root) / k
+    return np.inf
+
+
+@leaf
+def _curved_step(
+    pa: int,
+    pb: int,
+    a: int,
+    b: int,
+    t: float,
+    nx: float,
+    ny: float,
+    gap: float,
+    x: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    accel: np.ndarray,
+    piece_start: np.ndarray,
+    piece_count: np.ndarray,
+    vertices: np.ndarray,
+) -> float:
+    """A step [s] in which pieces pa and pb (placed at ``t`` in ``vertices``), apart along
+    ``n`` (from B to A), cannot lose ``gap`` [m] of their separation along ``n``.
+
+    Each corner's height along ``n`` is, to first order, its height now plus its velocity's
+    part along ``n`` times ``h``; what is left over is at least ``(g_n - omega^2 r) h^2 / 2``
+    (Taylor's remainder: a corner ``r`` from its centre turning at ``omega``, the centre's own
+    acceleration ``g_n`` along ``n`` exact). The separation along a fixed ``n`` is at most
+    the distance, so the least time at which some corner pair's bound could close the gap
+    cannot pass the first touch. Unlike a bound on the fastest closing speed, it keeps the
+    corners' real velocities: a body turning about a corner that touches, or sliding along a
+    face, is not held to steps of the gap over its fastest corner's speed.
+    """
+    xa = x[a, 0] + (v[a, 0] + 0.5 * accel[a, 0] * t) * t
+    ya = x[a, 1] + (v[a, 1] + 0.5 * accel[a, 1] * t) * t
+    xb = x[b, 0] + (v[b, 0] + 0.5 * accel[b, 0] * t) * t
+    yb = x[b, 1] + (v[b, 1] + 0.5 * accel[b, 1] * t) * t
+    vax = v[a, 0] + accel[a, 0] * t
+    vay = v[a, 1] + accel[a, 1] * t
+    vbx = v[b, 0] + accel[b, 0] * t
+    vby = v[b, 1] + accel[b, 1] * t
+    wa = omega[a]
+    wb = omega[b]
+    pull = (accel[a, 0] - accel[b, 0]) * nx + (accel[a, 1] - accel[b, 1]) * ny
+    sa, ka = piece_start[pa], piece_count[pa]
+    sb, kb = piece_start[pb], piece_count[pb]
+    low = np.inf  # the separation along n now: A's lowest corner less B's highest
+    high = -np.inf
+    for i in range(sa, sa + ka):
+        low = min(low, vertices[i, 0] * nx + vertices[i, 1] * ny)
+    for j in range(sb, sb + kb):
+        high = max(high, vertices[j, 0] * nx + vertices[j, 1] * ny)
+    best = np.inf
+    for i in range(sa, sa + ka):
+        rx = vertices[i, 0] - xa
+        ry = vertices[i, 1] - ya
+        above = vertices[i, 0] * nx + vertices[i, 1] * ny - low
+        rise = (vax - wa * ry) * nx + (vay + wa * rx) * ny
+        bend = wa * wa * math.sqrt(rx * rx + ry * ry) - pull
+        for j in range(sb, sb + kb):
+            qx = vertices[j, 0] - xb
+            qy = vertices[j, 1] - yb
+            below = high - (vertices[j, 0] * nx + vertices[j, 1] * ny)
+            sink = (vbx - wb * qy) * nx + (vby + wb * qx) * ny
+            k = bend + wb * wb * math.sqrt(qx * qx + qy * qy)
+            best = min(best, _first_root(gap + above + below, rise - sink, k))
+    return best
+
+
 @leaf
 def time_of_impact(
     pa: int,
@@ -177,7 +258,6 @@ def time_of_impact(
     spin = abs(omega[a]) * piece_reach[pa] + abs(omega[b]) * piece_reach[pb]
     gx = accel[a, 0] - accel[b, 0]
     gy = accel[a, 1] - accel[b, 1]
-    g_rel = math.sqrt(gx * gx + gy * gy)
     state = search(parting)
     t = 0.0
     while True:
@@ -185,10 +265,18 @@ def time_of_impact(
             pa, pb, a, b, t, x, angle, v, omega, accel, piece_start, piece_count, piece_radius,
             local_vertices, local_normals, vertices, normals, out, ids,
         )  # fmt: skip
-        # how fast the gap can close from now to the horizon
+        # how fast the gap can close until it could first be closed
         ux = (v[a, 0] + accel[a, 0] * t) - (v[b, 0] + accel[b, 0] * t)
         uy = (v[a, 1] + accel[a, 1] * t) - (v[b, 1] + accel[b, 1] * t)
-        closing = -(ux * wx + uy * wy) + spin + g_rel * (horizon - t)
+        gap = max(d + allow, tol)
+        closing = closing_bound(gap, ux * wx + uy * wy, gx * wx + gy * wy, spin)
+        if wx != 0.0 or wy != 0.0:
+            curved = _curved_step(
+                pa, pb, a, b, t, wx, wy, gap, x, v, omega, accel, piece_start, piece_count,
+                vertices,
+            )  # fmt: skip
+            if curved * closing > gap:  # the longer of two safe steps
+                closing = gap / curved
         done, t, state = advance(state, t, d + allow, closing, tol, horizon)
         if done:
             return t

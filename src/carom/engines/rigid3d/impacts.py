@@ -51,6 +51,7 @@ from carom.engines.stepped.impacts import (
     PAIR_LOOKS,
     advance,
     approaching,
+    closing_bound,
     earliest,
     gather,
     give_back,
@@ -732,7 +733,6 @@ def _time_of_impact(
     gx = accel[a, 0] - accel[b, 0]
     gy = accel[a, 1] - accel[b, 1]
     gz = accel[a, 2] - accel[b, 2]
-    g_rel = math.sqrt(gx * gx + gy * gy + gz * gz)
     state = search(parting)
     t = 0.0
     while True:
@@ -741,11 +741,13 @@ def _time_of_impact(
             piece_radius, local_vertices, local_normals, face_first, face_size, corners,
             edges, vertices, normals, out, ids,
         )  # fmt: skip
-        # how fast the gap can close from now to the horizon
+        # how fast the gap can close until it could first be closed
         ux = (v[a, 0] + accel[a, 0] * t) - (v[b, 0] + accel[b, 0] * t)
         uy = (v[a, 1] + accel[a, 1] * t) - (v[b, 1] + accel[b, 1] * t)
         uz = (v[a, 2] + accel[a, 2] * t) - (v[b, 2] + accel[b, 2] * t)
-        closing = -(ux * wx + uy * wy + uz * wz) + spin + g_rel * (horizon - t)
+        closing = closing_bound(
+            max(d + allow, tol), ux * wx + uy * wy + uz * wz, gx * wx + gy * wy + gz * wz, spin
+        )
         done, t, state = advance(state, t, d + allow, closing, tol, horizon)
         if done:
             return t

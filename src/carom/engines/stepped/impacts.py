@@ -27,6 +27,8 @@ between the last safe time and this one.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -47,6 +49,8 @@ __all__ = [
     "add_candidate",
     "advance",
     "approaching",
+    "closing_bound",
+    "discriminant_root",
     "earliest",
     "gather",
     "give_back",
@@ -152,6 +156,43 @@ def advance(
     if taken == MAX_ITERATIONS:
         return True, later, state  # (safe: the pieces cannot touch before it)
     return False, later, (t, lo, hi, False, taken, parting)
+
+
+@njit(cache=True, inline="always")
+def discriminant_root(b: float, q: float) -> float:
+    """``sqrt(b^2 + q)``, or -1 where ``b^2 + q < 0``, without squaring ``b`` (whose square
+    underflows to 0 below 1e-154 and overflows above 1e154)."""
+    if q >= 0.0:
+        return math.hypot(b, math.sqrt(q))
+    r = math.sqrt(-q)
+    if abs(b) < r:
+        return -1.0
+    return math.sqrt(abs(b) - r) * math.sqrt(abs(b) + r)
+
+
+@njit(cache=True, inline="always")
+def closing_bound(gap: float, opening: float, pull: float, spin: float) -> float:
+    """How fast [m/s] a gap of ``gap`` [m] > 0 can close on average until it could first be
+    closed: ``gap / s`` for the least ``s`` [s] at which it can, 0 if it never can.
+
+    The pieces' separation along the direction ``n`` they are measured in (from B to A) at
+    time ``s`` from now is at least ``gap + opening s + pull s^2 / 2 - spin s``: the centres'
+    relative motion along ``n`` is exact (``opening`` [m/s], ``pull`` [m/s^2]: the relative
+    velocity and acceleration along ``n``), and a point turning about its centre moves at most
+    its reach times the spin (``spin`` [m/s], both bodies'). That quadratic's least root is
+    ``s = 2 gap / (b + sqrt(b^2 - 2 pull gap))`` with ``b = spin - opening``: a step that
+    cannot pass the first touch (Mirtich's conservative advancement with the centres' motion
+    taken exactly rather than bounded by the fastest speed to the horizon).
+    """
+    b = spin - opening
+    q = -2.0 * pull * gap
+    root = discriminant_root(b, q)
+    if root < 0.0:
+        return 0.0  # the bound stays above the gap for ever
+    if b >= 0.0:
+        return 0.5 * (b + root)
+    # b < 0: (b + root) / 2 without the cancellation, (root^2 - b^2) / (2 (root - b))
+    return max(0.5 * q / (root - b), 0.0)
 
 
 @njit(cache=True, inline="always")
