@@ -18,7 +18,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from carom.engines.rigid.impacts import _curved_step, time_of_impact
+from carom.engines.rigid.impacts import _curved_step, _face_step, time_of_impact
 from carom.engines.rigid.motion import place_piece
 from carom.engines.stepped.impacts import NEW, closing_bound
 from carom.geometry.manifold2d import core_witness
@@ -105,7 +105,7 @@ def test_a_step_never_loses_more_than_the_gap_along_its_direction(
     gap = share * d
     h = _curved_step(
         0, 1, 0, 1, 0.0, n[0], n[1], gap, pair.x, pair.v, pair.omega, pair.accel,
-        pair.piece_start, pair.piece_count, pair.vertices,
+        pair.piece_start, pair.piece_count, pair.piece_reach, pair.vertices,
     )  # fmt: skip
     assert h > 0.0
     start = pair.separation(n)
@@ -177,3 +177,68 @@ def test_a_box_turning_about_a_corner_that_nearly_touches_finds_its_next_impact(
     assert 0.1 < first < 0.2  # the next corner, near theta0 / |omega| = 0.15 s
     assert t <= first + 1e-12  # never past the first touch (the reference's own round-off)
     assert lowest(t) <= tol + 1e-15  # and within tol of it
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.floats(-0.4, 0.4), st.floats(0.0, math.pi / 2), st.tuples(finite, finite),
+    st.tuples(finite, finite), finite, finite, st.tuples(finite, finite), st.floats(0.01, 1.0),
+)  # fmt: skip
+def test_a_face_step_never_loses_more_than_asked_along_the_turning_face(
+    dx, turn, va, vb, wa, wb, pull, share
+) -> None:
+    # A square above a wide box B, both moving, turning and pulled: over the face step h, the
+    # separation of A's corners from B's top face along the face's own normal (turning with
+    # B), sampled densely on the exact motion, stays above the target it was given.
+    pair = Pair(_box(0.3, 0.3), _box(2.0, 0.5))
+    pair.x[:] = [[dx, 1.5], [0.0, 0.0]]
+    pair.angle[:] = [turn, 0.0]
+    pair.v[:] = [va, vb]
+    pair.omega[:] = [wa, wb]
+    pair.accel[0] = pull
+    pair.place(0.0)
+    top_row = 2  # B's face (2.0, 0.5) -> (-2.0, 0.5): normal +y
+    n = pair.normals[4 + top_row]
+    assert np.allclose(n, [0.0, 1.0])
+    start = pair.separation(n)
+    target = start - share * start
+    horizon = 1.0
+    h = _face_step(
+        1, 1, 0, 0, 0.0, n[0], n[1], target, horizon, pair.x, pair.v, pair.omega, pair.accel,
+        pair.piece_start, pair.piece_count, pair.piece_reach, pair.vertices,
+    )  # fmt: skip
+    assert h > 0.0
+    for tau in np.linspace(0.0, min(h, horizon), 401):
+        pair.place(tau)
+        # the face's normal at tau is B's row, turned with it; the bound's arithmetic is a
+        # few ulps of O(1) heights and speeds
+        assert pair.separation(pair.normals[4 + top_row].copy()) >= target - 1e-12
+
+
+def test_a_corner_over_a_face_that_turns_under_it_finds_the_touch_at_once() -> None:
+    # A wide box (half 2 x 0.5) turns at 0.5 rad/s about its centre under a still square's
+    # corner hanging 1e-7 m above its top face's middle; no gravity. The corner's height
+    # above the face is (0.5 + 1e-7) cos(omega t) - 0.5: it touches at
+    # t* = acos(0.5 / (0.5 + 1e-7)) / omega = 1.26e-3 s. The face's ends rise at 1 m/s, so a
+    # fixed direction's bound would step 1e-7 s at a time (12600 steps for a search capped at
+    # 200); the face followed as it turns sees the corner sink at the rate it does.
+    omega, lift = 0.5, 1e-7
+    pair = Pair(_box(0.5, 0.5), _box(2.0, 0.5))
+    pair.x[:] = [[0.0, 0.5 + lift + math.sqrt(0.5)], [0.0, 0.0]]
+    pair.angle[:] = [math.pi / 4, 0.0]
+    pair.omega[:] = [0.0, omega]
+    tol = 1e-9 * float(pair.piece_reach.sum())
+    t = time_of_impact(
+        0, 1, 0, 1, 1.0, tol, NEW, pair.x, pair.angle, pair.v, pair.omega, pair.accel,
+        pair.piece_start, pair.piece_count, pair.piece_radius, pair.piece_reach,
+        pair.local_vertices, pair.local_normals, pair.vertices, pair.normals, np.zeros(8),
+        np.zeros(2, np.int64),
+    )  # fmt: skip
+
+    def height(tau: float) -> float:
+        return (0.5 + lift) * math.cos(omega * tau) - 0.5
+
+    first = _first_touch(height, 0.01)
+    assert abs(first - math.acos(0.5 / (0.5 + lift)) / omega) < 1e-9  # the closed form
+    assert t <= first + 1e-12  # never past the first touch
+    assert height(t) <= tol + 1e-15  # and within tol of it

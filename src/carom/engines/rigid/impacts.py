@@ -172,6 +172,7 @@ def _curved_step(
     accel: np.ndarray,
     piece_start: np.ndarray,
     piece_count: np.ndarray,
+    piece_reach: np.ndarray,
     vertices: np.ndarray,
 ) -> float:
     """A step [s] in which pieces pa and pb (placed at ``t`` in ``vertices``), apart along
@@ -179,12 +180,13 @@ def _curved_step(
 
     Each corner's height along ``n`` is, to first order, its height now plus its velocity's
     part along ``n`` times ``h``; what is left over is at least ``(g_n - omega^2 r) h^2 / 2``
-    (Taylor's remainder: a corner ``r`` from its centre turning at ``omega``, the centre's own
-    acceleration ``g_n`` along ``n`` exact). The separation along a fixed ``n`` is at most
-    the distance, so the least time at which some corner pair's bound could close the gap
-    cannot pass the first touch. Unlike a bound on the fastest closing speed, it keeps the
-    corners' real velocities: a body turning about a corner that touches, or sliding along a
-    face, is not held to steps of the gap over its fastest corner's speed.
+    (Taylor's remainder: a corner at most ``r`` (the piece's reach) from its centre turning at
+    ``omega``, the centres' relative acceleration ``g_n`` along ``n`` exact). The separation
+    along a fixed ``n`` is at most the distance, so the least time at which some corner pair's
+    bound could close the gap cannot pass the first touch. Unlike a bound on the fastest
+    closing speed, it keeps the corners' real velocities: a body turning about a corner that
+    touches, or sliding along a face, is not held to steps of the gap over its fastest
+    corner's speed.
     """
     xa = x[a, 0] + (v[a, 0] + 0.5 * accel[a, 0] * t) * t
     ya = x[a, 1] + (v[a, 1] + 0.5 * accel[a, 1] * t) * t
@@ -197,28 +199,139 @@ def _curved_step(
     wa = omega[a]
     wb = omega[b]
     pull = (accel[a, 0] - accel[b, 0]) * nx + (accel[a, 1] - accel[b, 1]) * ny
+    k = wa * wa * piece_reach[pa] + wb * wb * piece_reach[pb] - pull
     sa, ka = piece_start[pa], piece_count[pa]
     sb, kb = piece_start[pb], piece_count[pb]
     low = np.inf  # the separation along n now: A's lowest corner less B's highest
     high = -np.inf
+    lowest = sa
+    highest = sb
     for i in range(sa, sa + ka):
-        low = min(low, vertices[i, 0] * nx + vertices[i, 1] * ny)
+        h = vertices[i, 0] * nx + vertices[i, 1] * ny
+        if h < low:
+            low, lowest = h, i
     for j in range(sb, sb + kb):
-        high = max(high, vertices[j, 0] * nx + vertices[j, 1] * ny)
+        h = vertices[j, 0] * nx + vertices[j, 1] * ny
+        if h > high:
+            high, highest = h, j
+    # the closest pair's time first; then a pair needs its root only if its bound is below
+    # zero by then (where k > 0 the bound is concave: it falls below zero only after its root)
     best = np.inf
-    for i in range(sa, sa + ka):
-        rx = vertices[i, 0] - xa
-        ry = vertices[i, 1] - ya
-        above = vertices[i, 0] * nx + vertices[i, 1] * ny - low
-        rise = (vax - wa * ry) * nx + (vay + wa * rx) * ny
-        bend = wa * wa * math.sqrt(rx * rx + ry * ry) - pull
-        for j in range(sb, sb + kb):
-            qx = vertices[j, 0] - xb
-            qy = vertices[j, 1] - yb
-            below = high - (vertices[j, 0] * nx + vertices[j, 1] * ny)
-            sink = (vbx - wb * qy) * nx + (vby + wb * qx) * ny
-            k = bend + wb * wb * math.sqrt(qx * qx + qy * qy)
-            best = min(best, _first_root(gap + above + below, rise - sink, k))
+    for first in (True, False):
+        for i in range(sa, sa + ka):
+            if first and i != lowest:
+                continue
+            above = vertices[i, 0] * nx + vertices[i, 1] * ny - low
+            rise = (vax - wa * (vertices[i, 1] - ya)) * nx + (vay + wa * (vertices[i, 0] - xa)) * ny
+            for j in range(sb, sb + kb):
+                if first and j != highest:
+                    continue
+                below = high - (vertices[j, 0] * nx + vertices[j, 1] * ny)
+                sink = (vbx - wb * (vertices[j, 1] - yb)) * nx + (
+                    vby + wb * (vertices[j, 0] - xb)
+                ) * ny
+                c = gap + above + below
+                slope = rise - sink
+                if k > 0.0 and c + (slope - 0.5 * k * best) * best >= 0.0:
+                    continue
+                best = min(best, _first_root(c, slope, k))
+    return best
+
+
+@njit(cache=True, inline="always")
+def _facing(
+    pa: int,
+    pb: int,
+    nx: float,
+    ny: float,
+    piece_start: np.ndarray,
+    piece_count: np.ndarray,
+    normals: np.ndarray,
+) -> int:
+    """The face whose normal the direction ``n`` (from B to A) is, to 1e-6: ``row + 1`` for
+    a face of pb, ``-(row + 1)`` for one of pa facing the other way; 0 if neither (two corners
+    closest, or a circle)."""
+    for side in (1, -1):
+        p = pb if side == 1 else pa
+        if piece_count[p] < 3:
+            continue
+        for j in range(piece_start[p], piece_start[p] + piece_count[p]):
+            if side * (normals[j, 0] * nx + normals[j, 1] * ny) > 1.0 - 1e-6:
+                return side * (j + 1)
+    return 0
+
+
+@leaf
+def _face_step(
+    fp: int,
+    f: int,
+    wp: int,
+    w: int,
+    t: float,
+    nx: float,
+    ny: float,
+    target: float,
+    horizon: float,
+    x: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    accel: np.ndarray,
+    piece_start: np.ndarray,
+    piece_count: np.ndarray,
+    piece_reach: np.ndarray,
+    vertices: np.ndarray,
+) -> float:
+    """A step [s] in which the separation of piece ``wp``'s core (of body ``w``) from piece
+    ``fp``'s (of body ``f``) along the normal ``n`` of a face of ``fp``, the normal turning with its
+    body, cannot fall to ``target`` [m] (pieces placed at ``t``; ``horizon`` [s] the
+    search's); 0 if it is not above it now.
+
+    As Box2D's time of impact follows a face in its body's frame, so here: ``fp``'s extent
+    along its own face normal is fixed, and each corner of ``wp`` has a height above it whose
+    first derivative is known now and whose second is bounded over the horizon (the relative
+    acceleration, the corner's turning, the normal's turning, its Coriolis coupling with the
+    relative velocity). A face turning under a corner does not count as a corner of its own
+    rising at the face's end, as a fixed direction would have it."""
+    xfx = x[f, 0] + (v[f, 0] + 0.5 * accel[f, 0] * t) * t
+    xfy = x[f, 1] + (v[f, 1] + 0.5 * accel[f, 1] * t) * t
+    xwx = x[w, 0] + (v[w, 0] + 0.5 * accel[w, 0] * t) * t
+    xwy = x[w, 1] + (v[w, 1] + 0.5 * accel[w, 1] * t) * t
+    vfx = v[f, 0] + accel[f, 0] * t
+    vfy = v[f, 1] + accel[f, 1] * t
+    vwx = v[w, 0] + accel[w, 0] * t
+    vwy = v[w, 1] + accel[w, 1] * t
+    of = omega[f]
+    ow = omega[w]
+    reach = piece_reach[wp]
+    dv = math.hypot(vwx - vfx, vwy - vfy)
+    da = math.hypot(accel[w, 0] - accel[f, 0], accel[w, 1] - accel[f, 1])
+    apart = math.hypot(xwx - xfx, xwy - xfy)
+    span = horizon - t
+    # the least the heights' second derivative can be over the horizon, negated
+    k = (
+        da
+        + ow * ow * reach
+        + 2.0 * abs(of) * (dv + da * span + abs(ow) * reach)
+        + of * of * (apart + reach + dv * span + 0.5 * da * span * span)
+    )
+    top = -np.inf  # fp's extent along its normal, from its centre (fixed in its frame)
+    for j in range(piece_start[fp], piece_start[fp] + piece_count[fp]):
+        top = max(top, (vertices[j, 0] - xfx) * nx + (vertices[j, 1] - xfy) * ny)
+    best = np.inf
+    for i in range(piece_start[wp], piece_start[wp] + piece_count[wp]):
+        rx = vertices[i, 0] - xfx
+        ry = vertices[i, 1] - xfy
+        c = rx * nx + ry * ny - top - target  # how far this corner may sink [m]
+        if c <= 0.0:
+            return 0.0
+        # d/dt (r . n): the corner's velocity relative to f's centre along n, plus r along
+        # the normal's turn (omega_f perp(n))
+        ux = vwx - ow * (vertices[i, 1] - xwy) - vfx
+        uy = vwy + ow * (vertices[i, 0] - xwx) - vfy
+        slope = ux * nx + uy * ny + of * (ry * nx - rx * ny)
+        if c + (slope - 0.5 * k * best) * best >= 0.0:
+            continue
+        best = min(best, _first_root(c, slope, k))
     return best
 
 
@@ -273,9 +386,22 @@ def time_of_impact(
         if wx != 0.0 or wy != 0.0:
             curved = _curved_step(
                 pa, pb, a, b, t, wx, wy, gap, x, v, omega, accel, piece_start, piece_count,
-                vertices,
+                piece_reach, vertices,
             )  # fmt: skip
-            if curved * closing > gap:  # the longer of two safe steps
+            face = _facing(pa, pb, wx, wy, piece_start, piece_count, normals)
+            if face != 0:  # the gap runs along a face's normal: follow the face as it turns
+                fp, f, wp, w = (pb, b, pa, a) if face > 0 else (pa, a, pb, b)
+                row = abs(face) - 1
+                # the cores' separation the step must keep above [m]
+                core = d - gap + piece_radius[pa] + piece_radius[pb]
+                curved = max(
+                    curved,
+                    _face_step(
+                        fp, f, wp, w, t, normals[row, 0], normals[row, 1], core, horizon,
+                        x, v, omega, accel, piece_start, piece_count, piece_reach, vertices,
+                    ),
+                )  # fmt: skip
+            if curved * closing > gap:  # the longest of the safe steps
                 closing = gap / curved
         done, t, state = advance(state, t, d + allow, closing, tol, horizon)
         if done:
