@@ -627,8 +627,8 @@ class SteppedEngine:
         more, the work done by a kinematic partner."""
         d = self.DIMS
         partner = log[:, 2].astype(np.int64)
-        lost = float(np.sum(log[:, 5 + 2 * d]))
-        work = float(np.sum(log[:, 6 + 2 * d])) if log.shape[1] > 6 + 2 * d else 0.0
+        lost = float(log[:, 5 + 2 * d].sum())
+        work = float(log[:, 6 + 2 * d].sum()) if log.shape[1] > 6 + 2 * d else 0.0
         against = self._count(partner, lost, work)
         if sink is None:
             return
@@ -1020,8 +1020,9 @@ class SteppedEngine:
         """Count exact impacts against ``partner`` rows and add their ledger; return what
         each partner is (PARTNER_BODY, PARTNER_WALL, PARTNER_PLANE)."""
         against = self.partners.kind[partner]
-        self._wall_collisions += int(np.count_nonzero(against != PARTNER_BODY))
-        self._collisions += int(np.count_nonzero(against == PARTNER_BODY))
+        bodies = int(np.count_nonzero(against == PARTNER_BODY))
+        self._collisions += bodies
+        self._wall_collisions += against.shape[0] - bodies
         self._energy_lost += lost
         self._work_done += work
         return against
