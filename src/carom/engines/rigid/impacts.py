@@ -232,7 +232,7 @@ def _curved_step(
                 ) * ny
                 c = gap + above + below
                 slope = rise - sink
-                if k > 0.0 and c + (slope - 0.5 * k * best) * best >= 0.0:
+                if k > 0.0 and best < np.inf and c + (slope - 0.5 * k * best) * best >= 0.0:
                     continue
                 best = min(best, _first_root(c, slope, k))
     return best
@@ -329,7 +329,7 @@ def _face_step(
         ux = vwx - ow * (vertices[i, 1] - xwy) - vfx
         uy = vwy + ow * (vertices[i, 0] - xwx) - vfy
         slope = ux * nx + uy * ny + of * (ry * nx - rx * ny)
-        if c + (slope - 0.5 * k * best) * best >= 0.0:
+        if best < np.inf and c + (slope - 0.5 * k * best) * best >= 0.0:
             continue
         best = min(best, _first_root(c, slope, k))
     return best
@@ -401,7 +401,8 @@ def time_of_impact(
                         x, v, omega, accel, piece_start, piece_count, piece_reach, vertices,
                     ),
                 )  # fmt: skip
-            if curved * closing > gap:  # the longest of the safe steps
+            # the longest of the safe steps (inf: the pieces cannot touch)
+            if closing > 0.0 and curved > gap / closing:
                 closing = gap / curved
         done, t, state = advance(state, t, d + allow, closing, tol, horizon)
         if done:
