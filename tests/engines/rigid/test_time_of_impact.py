@@ -57,6 +57,16 @@ class Pair:
                 self.normals,
             )  # fmt: skip
 
+    def time_of_impact(self, tol: float) -> float:
+        """The search's first touch within 1 s [s] (``tol`` [m]), from a new meeting."""
+        t: float = time_of_impact(
+            0, 1, 0, 1, 1.0, tol, NEW, self.x, self.angle, self.v, self.omega, self.accel,
+            self.piece_start, self.piece_count, self.piece_radius, self.piece_reach,
+            self.local_vertices, self.local_normals, self.vertices, self.normals, np.zeros(8),
+            np.zeros(2, np.int64),
+        )  # fmt: skip
+        return t
+
     def separation(self, n: np.ndarray) -> float:
         """A's lowest corner along ``n`` less B's highest [m]."""
         k = self.piece_count[0]
@@ -160,12 +170,7 @@ def test_a_box_turning_about_a_corner_that_nearly_touches_finds_its_next_impact(
     pair.omega[:] = [omega, 0.0]
     pair.v[0] = omega * np.array([-r[1], r[0]])
     tol = 1e-9 * float(pair.piece_reach.sum())
-    t = time_of_impact(
-        0, 1, 0, 1, 1.0, tol, NEW, pair.x, pair.angle, pair.v, pair.omega, pair.accel,
-        pair.piece_start, pair.piece_count, pair.piece_radius, pair.piece_reach,
-        pair.local_vertices, pair.local_normals, pair.vertices, pair.normals, np.zeros(8),
-        np.zeros(2, np.int64),
-    )  # fmt: skip
+    t = pair.time_of_impact(tol)
     corners = _box(0.5, 0.5)
 
     def lowest(tau: float) -> float:
@@ -228,12 +233,7 @@ def test_a_corner_over_a_face_that_turns_under_it_finds_the_touch_at_once() -> N
     pair.angle[:] = [math.pi / 4, 0.0]
     pair.omega[:] = [0.0, omega]
     tol = 1e-9 * float(pair.piece_reach.sum())
-    t = time_of_impact(
-        0, 1, 0, 1, 1.0, tol, NEW, pair.x, pair.angle, pair.v, pair.omega, pair.accel,
-        pair.piece_start, pair.piece_count, pair.piece_radius, pair.piece_reach,
-        pair.local_vertices, pair.local_normals, pair.vertices, pair.normals, np.zeros(8),
-        np.zeros(2, np.int64),
-    )  # fmt: skip
+    t = pair.time_of_impact(tol)
 
     def height(tau: float) -> float:
         return (0.5 + lift) * math.cos(omega * tau) - 0.5

@@ -156,6 +156,19 @@ def _first_root(c: float, b: float, k: float) -> float:
     return np.inf
 
 
+@njit(cache=True, inline="always")
+def _flown(
+    body: int, t: float, x: np.ndarray, v: np.ndarray, accel: np.ndarray
+) -> tuple[float, float, float, float]:
+    """A body's centre [m] and velocity [m/s] after ``t`` [s] of free flight."""
+    return (
+        x[body, 0] + (v[body, 0] + 0.5 * accel[body, 0] * t) * t,
+        x[body, 1] + (v[body, 1] + 0.5 * accel[body, 1] * t) * t,
+        v[body, 0] + accel[body, 0] * t,
+        v[body, 1] + accel[body, 1] * t,
+    )
+
+
 @leaf
 def _curved_step(
     pa: int,
@@ -188,14 +201,8 @@ def _curved_step(
     touches, or sliding along a face, is not held to steps of the gap over its fastest
     corner's speed.
     """
-    xa = x[a, 0] + (v[a, 0] + 0.5 * accel[a, 0] * t) * t
-    ya = x[a, 1] + (v[a, 1] + 0.5 * accel[a, 1] * t) * t
-    xb = x[b, 0] + (v[b, 0] + 0.5 * accel[b, 0] * t) * t
-    yb = x[b, 1] + (v[b, 1] + 0.5 * accel[b, 1] * t) * t
-    vax = v[a, 0] + accel[a, 0] * t
-    vay = v[a, 1] + accel[a, 1] * t
-    vbx = v[b, 0] + accel[b, 0] * t
-    vby = v[b, 1] + accel[b, 1] * t
+    xa, ya, vax, vay = _flown(a, t, x, v, accel)
+    xb, yb, vbx, vby = _flown(b, t, x, v, accel)
     wa = omega[a]
     wb = omega[b]
     pull = (accel[a, 0] - accel[b, 0]) * nx + (accel[a, 1] - accel[b, 1]) * ny
@@ -292,14 +299,8 @@ def _face_step(
     acceleration, the corner's turning, the normal's turning, its Coriolis coupling with the
     relative velocity). A face turning under a corner does not count as a corner of its own
     rising at the face's end, as a fixed direction would have it."""
-    xfx = x[f, 0] + (v[f, 0] + 0.5 * accel[f, 0] * t) * t
-    xfy = x[f, 1] + (v[f, 1] + 0.5 * accel[f, 1] * t) * t
-    xwx = x[w, 0] + (v[w, 0] + 0.5 * accel[w, 0] * t) * t
-    xwy = x[w, 1] + (v[w, 1] + 0.5 * accel[w, 1] * t) * t
-    vfx = v[f, 0] + accel[f, 0] * t
-    vfy = v[f, 1] + accel[f, 1] * t
-    vwx = v[w, 0] + accel[w, 0] * t
-    vwy = v[w, 1] + accel[w, 1] * t
+    xfx, xfy, vfx, vfy = _flown(f, t, x, v, accel)
+    xwx, xwy, vwx, vwy = _flown(w, t, x, v, accel)
     of = omega[f]
     ow = omega[w]
     reach = piece_reach[wp]
