@@ -169,6 +169,17 @@ def _flown(
     )
 
 
+@njit(cache=True, inline="always")
+def _corner_rise(
+    row: int, vertices: np.ndarray, cx: float, cy: float, vx: float, vy: float, w: float,
+    nx: float, ny: float,
+) -> float:  # fmt: skip
+    """The velocity along ``n`` [m/s] of corner ``row`` of a body centred at ``(cx, cy)`` [m],
+    moving at ``(vx, vy)`` [m/s] and turning at ``w`` [rad/s]."""
+    rise: float = (vx - w * (vertices[row, 1] - cy)) * nx + (vy + w * (vertices[row, 0] - cx)) * ny
+    return rise
+
+
 @leaf
 def _curved_step(
     pa: int,
@@ -223,25 +234,22 @@ def _curved_step(
             high, highest = h, j
     # the closest pair's time first; then a pair needs its root only if its bound is below
     # zero by then (where k > 0 the bound is concave: it falls below zero only after its root)
-    best = np.inf
-    for first in (True, False):
-        for i in range(sa, sa + ka):
-            if first and i != lowest:
+    best = _first_root(
+        gap,
+        _corner_rise(lowest, vertices, xa, ya, vax, vay, wa, nx, ny)
+        - _corner_rise(highest, vertices, xb, yb, vbx, vby, wb, nx, ny),
+        k,
+    )
+    for i in range(sa, sa + ka):
+        above = vertices[i, 0] * nx + vertices[i, 1] * ny - low
+        rise = _corner_rise(i, vertices, xa, ya, vax, vay, wa, nx, ny)
+        for j in range(sb, sb + kb):
+            below = high - (vertices[j, 0] * nx + vertices[j, 1] * ny)
+            c = gap + above + below
+            slope = rise - _corner_rise(j, vertices, xb, yb, vbx, vby, wb, nx, ny)
+            if k > 0.0 and best < np.inf and c + (slope - 0.5 * k * best) * best >= 0.0:
                 continue
-            above = vertices[i, 0] * nx + vertices[i, 1] * ny - low
-            rise = (vax - wa * (vertices[i, 1] - ya)) * nx + (vay + wa * (vertices[i, 0] - xa)) * ny
-            for j in range(sb, sb + kb):
-                if first and j != highest:
-                    continue
-                below = high - (vertices[j, 0] * nx + vertices[j, 1] * ny)
-                sink = (vbx - wb * (vertices[j, 1] - yb)) * nx + (
-                    vby + wb * (vertices[j, 0] - xb)
-                ) * ny
-                c = gap + above + below
-                slope = rise - sink
-                if k > 0.0 and best < np.inf and c + (slope - 0.5 * k * best) * best >= 0.0:
-                    continue
-                best = min(best, _first_root(c, slope, k))
+            best = min(best, _first_root(c, slope, k))
     return best
 
 
