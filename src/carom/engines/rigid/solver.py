@@ -492,10 +492,13 @@ def _impacts_first(
                 vn, gap, rax, ray, rbx, rby = _closing(cf, m, point_offset(p), a, b, state, shift)
                 if vn >= -least:
                     continue
-                tau = -gap / (vn * h)
-                if tau > 1.0:
+                # the fraction of the substep where the gap closes, -gap / (vn h), in [0, 1];
+                # compared before dividing (a speed of 1e-310 m/s closes in no substep, and
+                # its vn h may round to zero)
+                closes = -vn * h
+                if gap > closes:
                     continue
-                tau = max(tau, 0.0)
+                tau = gap / closes if gap > 0.0 else 0.0
                 if _held(joined, state, a, b, nx, ny):
                     continue  # the soft step solves it with the joints
                 rna = rax * ny - ray * nx
