@@ -677,6 +677,15 @@ def _rigid(world: _Running, why: str = "") -> SteppedEngine:
     return engine
 
 
+def kept_overlap(engine: Engine) -> float:
+    """The deepest overlap [m] a running rigid engine has now (0 for another engine): the
+    engine built in its place (bodies added, kinds or settings changed between steps) takes
+    overlaps up to it, which the solver made and will resolve, and refuses deeper ones, which
+    only what changed can have made."""
+    deepest = getattr(engine, "deepest_overlap", None)
+    return float(deepest()[2]) if deepest is not None and engine.time > 0.0 else 0.0
+
+
 def rigid_if_built(world: Any) -> SteppedEngine | None:
     """The world's engine when it is built, None while it is not and will be a rigid one
     (what is set now, it takes when built); else a CaromError."""

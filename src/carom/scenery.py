@@ -167,6 +167,39 @@ class Scenery:
         self._invalidate()
         return len(self.materials) - 1
 
+    def set_material(self, index: int, material: Material) -> None:
+        """Replace material ``index`` (as :meth:`add_material` returned it) by ``material``:
+        every body and plane of that material takes it from the next step (a built engine is
+        built again then, the state kept; warm starts and sleep are not).
+
+        Raises
+        ------
+        CaromError
+            No material ``index``, or not a Material. Nothing has changed then.
+        """
+        if isinstance(index, bool) or not isinstance(index, int | np.integer):
+            raise CaromError(f"index must be a material's index; got {index!r}")
+        if not 0 <= index < len(self.materials):
+            raise CaromError(f"no material {index}; add it with add_material first")
+        if not isinstance(material, Material):
+            raise CaromError(f"expected a carom.Material; got {material!r}")
+        self.materials[int(index)] = material
+        self._invalidate()
+
+    def set_gravity(self, gravity: ArrayLike) -> None:
+        """Change gravity (d,) [m/s^2] from the next step on (a built engine is built again
+        then, the state kept; warm starts and sleep are not): Box2D's ``b2World_SetGravity``.
+
+        Raises
+        ------
+        CaromError
+            Not d finite numbers, or beyond the world's limits. Nothing has changed then.
+        """
+        self.gravity = check_magnitude(
+            "gravity", vector("gravity", gravity, self.dim, "m/s^2"), "m/s^2"
+        )
+        self._invalidate()
+
     def set_pair(self, material_a: int, material_b: int, restitution: float) -> None:
         """Override the combined restitution of one material pair [-]."""
         if not 0.0 <= restitution <= 1.0:

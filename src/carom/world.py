@@ -35,7 +35,7 @@ from carom.collision_log import LOG_LIMIT, CollisionLog
 from carom.engines import registry
 from carom.engines.base import Counters, Engine, FrameArrays, describe_partner
 from carom.errors import CaromError
-from carom.gameloop import GameLoop
+from carom.gameloop import GameLoop, kept_overlap
 from carom.joints import Joints
 from carom.kinds import Kinds
 from carom.limits import check_body_count
@@ -114,6 +114,8 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
         # totals of the engines dropped so far (adding bodies or materials rebuilds it)
         self._counters_before = Counters(0, 0, 0, 0, 0, 0.0, 0.0, 0, 0.0, 0.0)
         self.stats = Stats(self)
+        #: the deepest overlap the engine dropped last had [m]: its successor refuses deeper
+        self.overlap_kept = 0.0
 
     # -- building ---------------------------------------------------------------------------
 
@@ -281,6 +283,7 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
             self.bodies.set_state(*self._engine.sample())
             self._counters_before = self.counters()
             self._loads_kept = getattr(self._engine, "loads_now", lambda: None)()  # (rebuilt)
+            self.overlap_kept = kept_overlap(self._engine)
         self._engine = None
 
     # -- the engine -------------------------------------------------------------------------

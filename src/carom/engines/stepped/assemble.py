@@ -175,7 +175,9 @@ def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
     (:meth:`carom.World.set_sensor`) and joints (:meth:`carom.World.add_joint`) are the
     engine's first: a pair they keep apart may start overlapping; so are the forces and
     torques given for the next step to an engine the world dropped (bodies added or switched
-    between steps)."""
+    between steps). An engine built in place of a running one (bodies added, kinds or
+    settings changed) takes the overlaps the running one had (``world.overlap_kept``, the
+    deepest of them), which its solver made and resolves."""
     table = getattr(world, "collision_filters", None)
     if table is not None and len(table):
         engine.use_filters(np.asarray(table, np.int64))
@@ -195,13 +197,19 @@ def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
         engine.retire(np.flatnonzero(~np.asarray(alive)))
     a, b, depth = engine.deepest_overlap()
     slop = settings_of(world).linear_slop
-    if depth > slop:
+    kept = float(getattr(world, "overlap_kept", 0.0))
+    if depth > max(slop, kept):
         names = [
             describe_partner(int(partners.kind[body]), int(partners.number[body]))
             for body in (a, b)
         ]
+        most = (
+            f"the deepest overlap the running engine had, {kept:.3g} m"
+            if kept > slop
+            else f"the linear slop, {slop:g} m"
+        )
         raise CaromError(
             f"{names[0]} and {names[1]} overlap by {depth:.3g} m at the start (more than "
-            f"the linear slop, {slop:g} m): move them apart"
+            f"{most}): move them apart"
         )
     return engine

@@ -403,6 +403,40 @@ class SteppedEngine:
         self.n_contacts = nc
         self.steps += 1
 
+    # -- what a debug drawing shows (carom play) ---------------------------------------------
+
+    def awake_islands(self) -> int:
+        """The awake islands at the last step: dynamic bodies joined by contacts or joints,
+        one island each group (a lone awake body is one)."""
+        awake = self._dynamic & self.memory.awake
+        return int(np.unique(self._parent[awake]).size)
+
+    def contact_points(self) -> FloatArray:
+        """Every contact point of the last step (C, 2 d + 1): the point [m], the unit normal
+        (from B to A) and the normal impulse it took over the step [N s]."""
+        rows, d, nc = self.ROWS, self.DIMS, self.n_contacts
+        at, total = point_layout(d).at, point_layout(d).total
+        cf, count = self._cf[:nc], self._ci[:nc, I_COUNT]
+        parts = []
+        for j in range(rows.MAX_POINTS):
+            has = count > j
+            start = rows.POINT0 + j * rows.POINT_FLOATS
+            parts.append(
+                np.hstack(
+                    (
+                        cf[has, start + at : start + at + d],
+                        cf[has, rows.F_NX : rows.F_NX + d],
+                        cf[has, start + total : start + total + 1],
+                    )
+                )
+            )
+        return np.concatenate(parts) if parts else np.zeros((0, 2 * d + 1))
+
+    def fat_boxes(self) -> FloatArray:
+        """The broad phase's boxes (P, 2 d) [m], one a piece: lower corner, upper corner (each
+        grown around the piece's swept box, as Box2D's enlarged boxes)."""
+        return np.array(self._kept.fat, dtype=float)
+
     def _load(self) -> Loaded:
         """Take the loads given for this step (:mod:`.loads`): each dynamic body's acceleration
         gains ``F / m``, its points' reach the load's pull, its spin the torque; return the
