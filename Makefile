@@ -24,11 +24,11 @@ $(BIN)/python:
 
 # One stamp per set of extras: reinstall only when pyproject.toml changes.
 $(VENV)/.stamp-demo: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[viz,io,sweep,rigid3d]'
+	$(BIN)/python -m pip install --quiet -e '.[viz,io,sweep,rigid3d,play]'
 	@touch $@
 
 $(VENV)/.stamp-dev: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[viz,io,view,compare,rigid3d,sweep,parquet,dev]'
+	$(BIN)/python -m pip install --quiet -e '.[viz,io,view,compare,rigid3d,sweep,parquet,play,dev]'
 	@touch $@ $(VENV)/.stamp-demo
 
 demo: $(VENV)/.stamp-demo

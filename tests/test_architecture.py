@@ -45,7 +45,7 @@ LAYERS = [
     {"io"},
     {"viz"},
     {"compare", "sweeps"},
-    {"run"},
+    {"run", "play"},
     {"cli", "__init__"},
     {"__main__"},
 ]

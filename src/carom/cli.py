@@ -156,6 +156,30 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     view.set_defaults(handler=_cmd_view)
 
+    play = commands.add_parser(
+        "play",
+        help="run a scene live in the browser: drag bodies, shoot balls, tune it as it runs",
+        description=(
+            "Start a local server that runs SCENE (a built-in scene's name or a scene file; "
+            "default pyramid) in real time and serves a page that draws it: drag bodies "
+            "with the mouse, shoot balls, pause, step, slow down, reset, pick another scene, "
+            "change gravity, restitution, friction and substeps as it runs, and draw "
+            "contacts, joints, islands and the broad phase's boxes (docs/play.md). Bound to "
+            "this machine (127.0.0.1) unless --host says otherwise; Ctrl-C stops it. Needs "
+            "the play extra: pip install 'carom[play]'."
+        ),
+    )
+    play.add_argument("scene", nargs="?", default="pyramid", metavar="SCENE")
+    play.add_argument("--port", type=int, default=8765, help="default 8765; 0 picks a free one")
+    play.add_argument(
+        "--host",
+        default="127.0.0.1",
+        metavar="ADDR",
+        help="the address to listen on (default 127.0.0.1; 0.0.0.0 lets other machines in)",
+    )
+    play.add_argument("--no-open", action="store_true", help="do not open the page in a browser")
+    play.set_defaults(handler=_cmd_play)
+
     compare = commands.add_parser(
         "compare",
         help="the same scene in carom, pymunk, pybullet and MuJoCo, measured side by side",
@@ -328,6 +352,38 @@ def _cmd_showcase(args: argparse.Namespace) -> int:
 
     page = build_showcase(args.out, force=args.force)
     print(f"\nopen {page} in a browser")
+    return 0
+
+
+def _cmd_play(args: argparse.Namespace) -> int:
+    from carom.play.server import PlayServer, need_websockets, run
+
+    need_websockets()
+    if not 0 <= args.port <= 65535:
+        raise CaromError(f"--port must be a port number from 0 to 65535; got {args.port}")
+    from carom.play.live import Live
+
+    print(f"carom play: loading {args.scene} (the first time compiles the engine's kernels)")
+    server = PlayServer(Live(args.scene), args.host, args.port)
+
+    def ready(url: str) -> None:
+        where = "" if args.host in ("127.0.0.1", "localhost", "::1") else " (open to the network)"
+        print(f"carom play: serving {args.scene} at {url}{where}; Ctrl-C stops it", flush=True)
+        if not args.no_open:
+            import webbrowser
+
+            webbrowser.open(url)
+
+    try:
+        run(server, ready)
+    except OSError as error:
+        raise CaromError(
+            f"cannot listen on {args.host}:{args.port} ({error.strerror or error}); "
+            "pass another --port (0 picks a free one) or --host"
+        ) from None
+    if server.errors:
+        raise CaromError(f"the world stopped: {server.errors[0]}")
+    print("carom play: stopped")
     return 0
 
 
