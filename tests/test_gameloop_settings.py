@@ -48,7 +48,7 @@ def test_a_material_is_replaced_for_every_body_of_it() -> None:
     world.step()  # built again with it
     with pytest.raises(CaromError, match="no material 3"):
         world.set_material(3, Material(0.5))
-    with pytest.raises(CaromError, match="a carom.Material"):
+    with pytest.raises(CaromError, match=r"a carom\.Material"):
         world.set_material(0, 0.5)  # type: ignore[arg-type]
 
 
