@@ -9,7 +9,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 OUT    := out
 
-.PHONY: demo test lint unit unit-nojit clean help
+.PHONY: demo test lint browser unit unit-nojit clean help
 
 help:
 	@echo "make demo   set up .venv and run the showcase (results under $(OUT)/)"
@@ -55,7 +55,18 @@ KERNEL_TESTS := tests/engines tests/geometry tests/laws tests/reference tests/re
 unit-nojit: $(VENV)/.stamp-dev
 	NUMBA_DISABLE_JIT=1 $(PYTEST) -q $(KERNEL_TESTS)
 
-test: lint unit unit-nojit
+# Debian's chromium for the browser tests of carom play (playwright, from PyPI, drives it: its
+# own browser download cannot work here). apt-get installs it once, as root or through sudo;
+# where neither can, the browser tests say what is missing (and fail under CI=true).
+browser:
+	@command -v chromium >/dev/null 2>&1 || { \
+		echo "installing Debian's chromium for the browser tests (apt-get)"; \
+		if [ "$$(id -u)" -eq 0 ]; then SUDO=""; else SUDO="sudo -n"; fi; \
+		$$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install \
+			-y -qq --no-install-recommends chromium >/dev/null; \
+	} || echo "could not install chromium; the browser tests will say so"
+
+test: lint browser unit unit-nojit
 
 clean:
 	rm -rf $(VENV) $(OUT)

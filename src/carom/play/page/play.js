@@ -486,10 +486,9 @@
     }
   }
   function fitToBodies(F) {
-    // the first frame of a scene: the view holds its moving bodies (and its box, walled)
+    // the first frame of a scene: the view holds its box and its moving bodies
     const H = state.shapeHeader, S = state.shapes, d = H.dim;
-    const lo = H.boundary === "open" ? [Infinity, Infinity, Infinity] : H.box[0].slice();
-    const hi = H.boundary === "open" ? [-Infinity, -Infinity, -Infinity] : H.box[1].slice();
+    const lo = H.box[0].slice(), hi = H.box[1].slice();
     for (let i = 0; i < F.speed.length; i++) {
       if (S.still[i] || !(F.state[i] & 1)) continue;
       for (let k = 0; k < d; k++) {
