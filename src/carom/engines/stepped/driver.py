@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
+from time import perf_counter
 from typing import Any, NamedTuple, Self
 
 import numpy as np
@@ -54,10 +55,13 @@ from carom.engines.stepped.settings import RigidSettings
 from carom.geometry.bvh import build_bvh, empty_bvh
 from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC
 
-__all__ = ["STOP_CHECK_STEPS", "Isolated", "SteppedEngine"]
+__all__ = ["STAGES", "STOP_CHECK_STEPS", "Isolated", "SteppedEngine"]
 
 FloatArray = NDArray[np.float64]
 
+#: the stages of a step as :attr:`SteppedEngine.stage_seconds` times them (module docstring:
+#: 1-3, 4, 5, 6, 7, 8)
+STAGES = ("contacts", "islands", "exact impacts", "free flight", "solver", "store and sleep")
 #: steps between looks at a run's stop request
 STOP_CHECK_STEPS = 64
 
@@ -201,6 +205,8 @@ class SteppedEngine:
         self._nowhere = np.zeros((0, dims))  # no points: impulses at the centres
         self._g = float(np.linalg.norm(model.gravity))
         self.n_contacts = 0
+        #: the wall time [s] the last step spent in each of :data:`STAGES`
+        self.stage_seconds = (0.0,) * len(STAGES)
         self._n_pairs = 0  # the broad phase's pairs at the last step, the filters' kept
         self._n_found = 0  # (and all it found: sensors look through them)
         # what every step reads the same way: the rows' columns the shared kernels take, a
@@ -319,12 +325,14 @@ class SteppedEngine:
         """Advance one step of ``dt`` [s]: stages 1 to 8 (module docstring)."""
         m, mem, st = self.model, self.memory, self.settings
         rows = self.ROWS
+        t0 = perf_counter()
         loaded = self._load() if self._loads.on else None
         nc = self._contacts()
         if st.sleep and islands.wake(
             self._ci, nc, m.kind, mem.awake, self._moving(), mem.clock, mem.island, self._links
         ):
             nc = self._contacts()
+        t1 = perf_counter()
         n = m.kind.shape[0]
         isolated = np.zeros(max(nc, 1), np.int64)
         island_first = np.zeros(n + 1, np.int64)
@@ -336,6 +344,7 @@ class SteppedEngine:
             self._parent,
             self._role, isolated, island_first, self._island_of,
         )  # fmt: skip
+        t2 = perf_counter()
         met = self._no_impacts
         if n_iso:
             todo = Isolated(isolated, island_first, n_iso)
@@ -347,6 +356,7 @@ class SteppedEngine:
             if logged:
                 met = log[:logged]
                 self._book(met, sink)
+        t3 = perf_counter()
         free = np.flatnonzero(self._role == islands.ROLE_FREE)
         if loaded is None:
             self._fly(free)
@@ -355,6 +365,7 @@ class SteppedEngine:
             before = self._energy(pushed)
             self._fly(free)
             self._work_done += self._energy(pushed) - before
+        t4 = perf_counter()
         bodies = self._solver_bodies()
         before = self._energy(bodies)
         work = np.zeros(1)  # by kinematic bodies on the others, this step [J]
@@ -370,6 +381,7 @@ class SteppedEngine:
             self._energy_lost -= change
         else:
             self._energy_given += change
+        t5 = perf_counter()
         if mem.cache_keys.shape[0] < nc:
             size = max(nc, 2 * mem.cache_keys.shape[0])
             self.memory = mem = mem._replace(
@@ -402,6 +414,8 @@ class SteppedEngine:
             self._settle(nc)
         self.n_contacts = nc
         self.steps += 1
+        t6 = perf_counter()
+        self.stage_seconds = (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5)
 
     # -- what a debug drawing shows (carom play) ---------------------------------------------
 

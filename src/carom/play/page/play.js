@@ -394,7 +394,8 @@
       ["lost in impacts [J]", fmt(e.lost)], ["given by solver [J]", fmt(e.given)], ["work done [J]", fmt(e.work)],
       ["ledger misses [J]", fmt(miss, 3)], ["behind real time [s]", fmt(H.behind, 3)],
     ];
-    if (H.stages) for (const [name, ms] of Object.entries(H.stages)) rows.splice(3, 0, ["  " + name + " [ms]", fmt(ms, 3)]);
+    // the step's stages under its time, in their order
+    if (H.stages) Object.entries(H.stages).reverse().forEach(([name, ms]) => rows.splice(3, 0, ["\u2003" + name, fmt(ms, 3)]));
     $("stats").innerHTML = rows.map(([k, v]) => `<tr><td>${k}</td><td>${v}</td></tr>`).join("");
     $("pause").textContent = H.paused ? "play" : "pause";
     $("slow").value = String(H.slow);
