@@ -31,7 +31,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.stepped.driver import SteppedEngine
+from carom.engines.stepped.driver import STAGES, SteppedEngine
+from carom.gameloop import rigid_if_built
 from carom.joints import Target
 from carom.laws.kinds import KIND_DYNAMIC
 from carom.materials import Material
@@ -109,6 +110,7 @@ class Live:
         self._balls: list[int] = []
         self._e0 = self._energies()[0] + self._energies()[1]
         self.step_seconds = 0.0  # a running mean of one step's wall time
+        self.stage_seconds = np.zeros(len(STAGES))  # (the rigid engines': each stage's)
         self.behind = 0.0  # real time dropped [s]
         self._frames = 0
         self._shape_cache: dict[str, NDArray[Any]] | None = None
@@ -166,9 +168,12 @@ class Live:
         start = time.perf_counter()
         self.world.step(dt)
         spent = time.perf_counter() - start
-        self.step_seconds = (
-            spent if self.step_seconds == 0.0 else 0.9 * self.step_seconds + 0.1 * spent
-        )
+        fresh = self.step_seconds == 0.0
+        self.step_seconds = spent if fresh else 0.9 * self.step_seconds + 0.1 * spent
+        engine = rigid_if_built(self.world)
+        if engine is not None:  # each stage's time, a running mean as well
+            now = np.array(engine.stage_seconds)
+            self.stage_seconds = now if fresh else 0.9 * self.stage_seconds + 0.1 * now
 
     # -- commands ---------------------------------------------------------------------------
 
@@ -385,6 +390,11 @@ class Live:
             "paused": self.paused,
             "slow": self.slow,
             "step_ms": 1e3 * self.step_seconds,
+            "stages": (
+                {name: 1e3 * float(t) for name, t in zip(STAGES, self.stage_seconds, strict=True)}
+                if self.rigid
+                else {}
+            ),
             "behind": self.behind,
             "bodies": int(np.count_nonzero(alive)),
             "contacts": int(engine.n_contacts) if isinstance(engine, SteppedEngine) else 0,
