@@ -44,8 +44,9 @@ LAYERS = [
     {"studies"},
     {"io"},
     {"viz"},
+    {"play"},
     {"compare", "sweeps"},
-    {"run", "play"},
+    {"run"},
     {"cli", "__init__"},
     {"__main__"},
 ]

@@ -602,6 +602,11 @@ class _Run:
             name = f"animation.{outputs.animation}"
             write_animation(trajectory, self.work / name, title=title)
             written.append(name)
+        if trajectory.exists():  # the page that replays it from the file system
+            from carom.play.replay import REPLAY, write_replay
+
+            write_replay(self.work, title=title)
+            written.append(REPLAY)
         if not outputs.trajectory and trajectory.exists():
             trajectory.unlink()
         (self.work / CHECKPOINT).unlink(missing_ok=True)

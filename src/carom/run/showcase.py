@@ -292,6 +292,11 @@ def _scene_section(root: Path, scene: str, folder: Path, written: list[str]) -> 
         )
     elif "animation.gif" in written:
         parts.append(f'<img src="{rel}/animation.gif" alt="animation">')
+    if "replay.html" in written:
+        parts.append(
+            f'<p><a href="{rel}/replay.html">interactive replay</a>: scrub the timeline, '
+            "orbit in 3D, click a body for its speed and energy (opens from the file)</p>"
+        )
     parts.append(_figures(rel, written))
     summary = json.loads((folder / "summary.json").read_text())
     energy = summary["energy"]

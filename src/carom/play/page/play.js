@@ -386,6 +386,14 @@
     const total = e.kinetic + e.potential;
     // the ledger closes as E0 + work = E + lost - given: what it misses
     const miss = total + e.lost - e.given - e.start - e.work;
+    if (state.replay) {
+      $("stats").innerHTML = [
+        ["time [s]", fmt(H.time)], ["bodies", H.bodies],
+        ["kinetic [J]", fmt(e.kinetic)], ["potential [J]", fmt(e.potential)], ["lost in impacts [J]", fmt(e.lost)],
+        ["given by solver [J]", fmt(e.given)], ["work done [J]", fmt(e.work)], ["ledger misses [J]", fmt(miss, 3)],
+      ].map(([k, v]) => `<tr><td>${k}</td><td>${v}</td></tr>`).join("");
+      return;
+    }
     const rows = [
       ["time [s]", fmt(H.time)], ["steps", H.steps],
       ["ms a step", fmt(H.step_ms, 3)], ["frames a second", fmt(state.fps, 3)],
@@ -483,7 +491,8 @@
         input.value = value; $(name + "-out").textContent = fmt(value, 3);
         input.disabled = state.replay !== null || (name === "substeps" && header.engine === "edmd") || (name === "friction" && header.engine === "edmd");
       }
-      $("hint").textContent = `${header.title}: ${header.engine} engine, ${header.dim}D`;
+      $("hint").textContent = header.engine === "replay" ? `${header.title}: a replay, ${header.dim}D`
+        : `${header.title}: ${header.engine} engine, ${header.dim}D`;
     }
   }
   function fitToBodies(F) {
@@ -563,7 +572,8 @@
     return Math.min(5 * length, H.top_speed * 0.999);
   }
   function onDown(event) {
-    if (state.replay || !state.shapeHeader) { if (state.dim === 3) gesture = { kind: event.button === 2 ? "pan" : "orbit", x: event.clientX, y: event.clientY }; return; }
+    state.lastMoved = 0;
+    if (state.replay || !state.shapeHeader) { gesture = { kind: state.dim === 3 && event.button !== 2 ? "orbit" : "pan", x: event.clientX, y: event.clientY }; return; }
     const rect = event.target.getBoundingClientRect();
     const sx = event.clientX - rect.left, sy = event.clientY - rect.top;
     event.target.setPointerCapture(event.pointerId);
@@ -582,6 +592,7 @@
   }
   function onMove(event) {
     if (!gesture) return;
+    if (gesture.x !== undefined) state.lastMoved += Math.abs(event.clientX - gesture.x) + Math.abs(event.clientY - gesture.y);
     const rect = event.target.getBoundingClientRect();
     const sx = event.clientX - rect.left, sy = event.clientY - rect.top;
     if (gesture.kind === "pan") {
@@ -724,31 +735,44 @@
     $("scene").disabled = true;
     $("sliders").classList.add("hidden");
     $("drawings").classList.add("hidden");
+    $("help").textContent = "scrub the timeline; click a body for its speed and energy; wheel zooms; "
+      + "drag pans (3D: turns the view, right-drag pans); space plays and pauses, s steps";
     function show() {
       take(frames[replay.index]);
       scrub.value = String(replay.index);
-      $("frameno").textContent = `frame ${replay.index + 1} of ${frames.length}, t = ${fmt(replay.times[replay.index])} s`;
+      $("frameno").textContent = `frame ${replay.index + 1} of ${frames.length}${data.note || ""}, t = ${fmt(replay.times[replay.index])} s`;
       $("pause").textContent = replay.playing ? "pause" : "play";
     }
     take(decode(data.shapes));
     show();
   }
 
-  // a body picked in a replay: its speed and energy in the status line
+  // a body picked in a replay: its speed and energy in the status line (2D: the body whose
+  // bounding circle holds the point; 3D: the first whose bounding sphere the ray meets)
   function pickInReplay(event) {
-    if (!state.replay || !state.frame || state.dim !== 2) return;
-    const rect = canvas.getBoundingClientRect();
-    const p = toWorld(event.clientX - rect.left, event.clientY - rect.top);
-    const F = state.frame, S = state.shapes;
-    let best = -1, gap = Infinity;
-    for (let i = 0; i < F.speed.length; i++) {
-      const d = Math.hypot(F.x[2 * i] - p[0], F.x[2 * i + 1] - p[1]) - S.radius[i];
-      if (d < gap) { gap = d; best = i; }
+    if (!state.replay || !state.frame || state.lastMoved > 3) return;
+    const rect = canvas.getBoundingClientRect(), sx = event.clientX - rect.left, sy = event.clientY - rect.top;
+    const F = state.frame, S = state.shapes, d = state.dim;
+    let best = -1, depth = Infinity;
+    if (d === 2) {
+      const p = toWorld(sx, sy);
+      for (let i = 0; i < F.speed.length; i++) {
+        const gap = Math.hypot(F.x[2 * i] - p[0], F.x[2 * i + 1] - p[1]) - S.radius[i];
+        if (gap <= 0 && gap < depth && !S.still[i]) { depth = gap; best = i; }
+      }
+    } else {
+      const ray = pointerRay(sx, sy);
+      for (let i = 0; i < F.speed.length; i++) {
+        if (S.still[i]) continue;
+        const rel = sub([F.x[3 * i], F.x[3 * i + 1], F.x[3 * i + 2]], ray.origin);
+        const along = dot(rel, ray.direction), miss = dot(rel, rel) - along * along, r = S.radius[i];
+        if (along > 0 && miss <= r * r && along - Math.sqrt(r * r - miss) < depth) { depth = along - Math.sqrt(r * r - miss); best = i; }
+      }
     }
-    if (best >= 0 && gap <= 0.5 * state.shapeHeader.size) {
-      const m = S.mass[best], v = F.speed[best];
-      say(`body ${best}: speed ${fmt(v)} m/s, kinetic energy (of its centre) ${m > 0 ? fmt(0.5 * m * v * v) + " J" : "(static)"}`, 8);
-    }
+    if (best < 0) return;
+    const m = S.mass[best], v = F.speed[best];
+    state.picked = best;
+    say(`body ${best}: speed ${fmt(v)} m/s, mass ${fmt(m)} kg, kinetic energy of its centre ${fmt(0.5 * m * v * v)} J`, 12);
   }
   canvas.addEventListener("click", pickInReplay);
 
