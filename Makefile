@@ -9,10 +9,11 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 OUT    := out
 
-.PHONY: demo test lint browser unit unit-nojit clean help
+.PHONY: demo play test lint browser unit unit-nojit clean help
 
 help:
 	@echo "make demo   set up .venv and run the showcase (results under $(OUT)/)"
+	@echo "make play   the live testbed in the browser (SCENE=name or file; default pyramid)"
 	@echo "make test   set up .venv with the dev tools and run lint, type checks and all tests"
 	@echo "            (on every core; the kernels' own tests once more without the JIT)"
 	@echo "make clean  remove .venv and $(OUT)/"
@@ -33,6 +34,12 @@ $(VENV)/.stamp-dev: pyproject.toml | $(BIN)/python
 
 demo: $(VENV)/.stamp-demo
 	$(BIN)/carom showcase --out $(OUT) --force
+	@echo "play with a scene live in the browser: make play  (or $(BIN)/carom play SCENE)"
+
+# the live testbed (docs/play.md): serves http://127.0.0.1:8765/ and opens it; Ctrl-C stops it
+SCENE ?= pyramid
+play: $(VENV)/.stamp-demo
+	$(BIN)/carom play $(SCENE)
 
 lint: $(VENV)/.stamp-dev
 	$(BIN)/ruff check .

@@ -20,7 +20,7 @@ import pytest
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import connect
 
-from carom.play.server import MOST_COMMANDS, PlayServer
+from carom.play.server import ACK, MOST_COMMANDS, PlayServer
 from carom.play.wire import unpack
 
 
@@ -39,6 +39,8 @@ def messages(ws, seconds: float):  # type: ignore[no-untyped-def]
             break
         if isinstance(m, bytes):
             headers.append(unpack(m)[0])
+            if headers[-1]["type"] == "frame":
+                ws.send(ACK)  # as the page does: the next frame may come
         else:
             replies.append(json.loads(m))
     return headers, replies

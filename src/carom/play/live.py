@@ -32,7 +32,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from carom.engines.stepped.driver import STAGES, SteppedEngine
-from carom.gameloop import rigid_if_built
 from carom.joints import Target
 from carom.laws.kinds import KIND_DYNAMIC
 from carom.materials import Material
@@ -170,8 +169,8 @@ class Live:
         spent = time.perf_counter() - start
         fresh = self.step_seconds == 0.0
         self.step_seconds = spent if fresh else 0.9 * self.step_seconds + 0.1 * spent
-        engine = rigid_if_built(self.world)
-        if engine is not None:  # each stage's time, a running mean as well
+        engine: object = self.world.engine
+        if isinstance(engine, SteppedEngine):  # each stage's time, a running mean as well
             now = np.array(engine.stage_seconds)
             self.stage_seconds = now if fresh else 0.9 * self.stage_seconds + 0.1 * now
 

@@ -42,6 +42,11 @@ MOST_COMMANDS = 240
 #: refused commands (less :data:`MOST_COMMANDS` a second) after which a page is
 #: disconnected: it keeps sending many times faster than it may
 MOST_REFUSED = 2000
+#: frames sent to a page and not yet acknowledged, at most: a page that draws slowly gets
+#: fewer, newer frames (nothing queues up in the socket's buffers behind its back)
+IN_FLIGHT = 4
+#: the page's acknowledgement of a frame, as it sends it
+ACK = '{"op":"ack"}'
 #: pages connected at once
 MOST_PAGES = 16
 #: the page's files and their types
@@ -86,6 +91,8 @@ class _Page:
     tokens: float = float(MOST_COMMANDS)
     refill: float = field(default_factory=time.monotonic)
     flooding: float = 0.0  # refused commands, less MOST_COMMANDS a second since
+    in_flight: int = 0  # frames sent that the page has not acknowledged yet
+    frame_sent: int = -1  # the number of the last frame sent
     frames: int = 0
 
 
@@ -111,6 +118,7 @@ class PlayServer:
         self._stop = threading.Event()
         self._loop: asyncio.AbstractEventLoop | None = None
         self._frame = b""
+        self._frame_no = 0
         self._shapes = b""
         self._version = -1
         self._lock = threading.Lock()
@@ -127,10 +135,13 @@ class PlayServer:
         while not self._stop.is_set():
             self._obey_all()
             live.advance()
+            # a frame is packed when a page can take one (none in flight beyond the limit)
+            wanted = not self._frame or any(p.in_flight < IN_FLIGHT for p in list(self._pages))
             with self._lock:
                 if live.version != self._version:
                     self._shapes, self._version = live.shapes(), live.version
-                self._frame = live.frame()
+                if wanted:
+                    self._frame, self._frame_no = live.frame(), self._frame_no + 1
             self.ticks += 1
             loop.call_soon_threadsafe(self._wake_all)
             next_tick += self.tick
@@ -240,6 +251,10 @@ class PlayServer:
             page.flooding += 1.0
             return
         page.tokens -= 1.0
+        if message == ACK:  # the page has drawn a frame: the newest may go
+            page.in_flight = max(page.in_flight - 1, 0)
+            page.wake.set()
+            return
         if not isinstance(message, str):
             self._owe(page, json.dumps({"op": "refused", "why": "commands are JSON text"}))
             return
@@ -253,11 +268,14 @@ class PlayServer:
             while page.replies:
                 await socket.send(page.replies.pop(0))
             with self._lock:
-                shapes, version, frame = self._shapes, self._version, self._frame
+                shapes, version = self._shapes, self._version
+                frame, number = self._frame, self._frame_no
             if version != page.shapes_sent and shapes:
                 await socket.send(shapes)
                 page.shapes_sent = version
-            if frame:
+            if frame and number > page.frame_sent and page.in_flight < IN_FLIGHT:
+                page.in_flight += 1
+                page.frame_sent = number
                 await socket.send(frame)
                 page.frames += 1
                 self.frames_sent += 1

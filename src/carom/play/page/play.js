@@ -548,6 +548,8 @@
         return;
       }
       take(event.data);
+      // drawn: the server may send the next frame (it keeps at most two in flight)
+      if (state.socket) state.socket.send('{"op":"ack"}');
     };
     socket.onclose = () => {
       state.socket = null;
@@ -700,7 +702,9 @@
 
   function render() {
     if (state.replay) state.replay.tick();
+    const t0 = performance.now();
     draw();
+    state.drawMs = 0.9 * (state.drawMs || 0) + 0.1 * (performance.now() - t0);
     if (state.status && performance.now() > state.statusUntil) { state.status = ""; $("status").textContent = ""; }
     requestAnimationFrame(render);
   }
