@@ -44,7 +44,7 @@
   const state = {
     shapes: null, shapeHeader: null, frame: null, header: null, dim: 2,
     speedScale: 0, energy: [], framesSeen: 0, fps: 0, fpsCount: 0, fpsSince: performance.now(),
-    drawings: new Set(["joints"]), held: -1, socket: null, replay: null, status: "", statusUntil: 0,
+    drawings: new Set(["joints"]), options: { resolution: 1, edges: true, adaptive: true }, held: -1, socket: null, replay: null, status: "", statusUntil: 0,
   };
 
   // -- the view: one WebGL2 canvas for 2D and 3D ---------------------------------------------
@@ -274,7 +274,7 @@
 
   function draw() {
     if (!gl && !setup()) return;
-    const dpr = window.devicePixelRatio || 1;
+    const dpr = (window.devicePixelRatio || 1) * state.options.resolution;
     const w = canvas.clientWidth, h = canvas.clientHeight;
     if (canvas.width !== Math.round(w * dpr) || canvas.height !== Math.round(h * dpr)) {
       canvas.width = Math.round(w * dpr); canvas.height = Math.round(h * dpr);
@@ -312,7 +312,7 @@
     gl.uniform4f(flat, 0, 0, 0, 0); gl.uniform1i(lit, d === 3 ? 1 : 0);
     gl.bindVertexArray(G.fill.vao);
     gl.drawArrays(gl.TRIANGLES, 0, G.fill.count);
-    if (d === 2) {
+    if (d === 2 && state.options.edges) {
       gl.uniform4f(flat, 0.04, 0.04, 0.055, 1); gl.uniform1i(lit, 0);
       gl.bindVertexArray(G.edges.vao);
       gl.drawArrays(gl.LINES, 0, G.edges.count);
@@ -700,11 +700,25 @@
     else if (e.key === "r") $("reset").onclick();
   });
 
+  // dynamic resolution: where the browser draws slowly (no GPU: software WebGL), the view is
+  // drawn with fewer pixels (down to half on each side) until it keeps up, and back up after
+  let lastDraw = 0, slowSince = 0, fastSince = 0;
+  function adapt(now) {
+    const gap = lastDraw ? now - lastDraw : 16;
+    lastDraw = now;
+    const o = state.options;
+    if (!o.adaptive) return;
+    if (gap > 30) { fastSince = 0; slowSince = slowSince || now; } else if (gap < 20) { slowSince = 0; fastSince = fastSince || now; }
+    if (slowSince && now - slowSince > 1000 && o.resolution > 0.5) { o.resolution = Math.max(0.5, 0.8 * o.resolution); slowSince = 0; }
+    if (fastSince && now - fastSince > 3000 && o.resolution < 1) { o.resolution = Math.min(1, o.resolution / 0.8); fastSince = 0; }
+  }
+
   function render() {
     if (state.replay) state.replay.tick();
     const t0 = performance.now();
     draw();
     state.drawMs = 0.9 * (state.drawMs || 0) + 0.1 * (performance.now() - t0);
+    adapt(t0);
     if (state.status && performance.now() > state.statusUntil) { state.status = ""; $("status").textContent = ""; }
     requestAnimationFrame(render);
   }
