@@ -263,3 +263,33 @@ def test_the_gas_takes_hands_too() -> None:
     # elastic gas, no gravity, nothing held: kinetic energy is kept to round-off
     assert ke_after == pytest.approx(ke, rel=1e-12)
     assert after.collisions > before.collisions
+
+
+def test_the_ledger_closes_through_what_the_hands_do(small: tuple[Live, Clock]) -> None:
+    # E0 + work = E + lost - given (docs/engine.md): a ball shot and a change of gravity
+    # move the ledger's start by the energy they add by hand (the ball's kinetic and
+    # potential energy; every body's potential energy), a drag's target joint does work
+    live, _ = small
+
+    def miss() -> float:
+        e = unpack(live.frame())[0]["energy"]
+        total = e["kinetic"] + e["potential"] + e["lost"] - e["given"] - e["start"] - e["work"]
+        return float(total / e["start"])
+
+    for _ in range(10):
+        live.single_step()
+    live.obey(cmd("shoot", point=[2.0, 9.0], velocity=[3.0, 1.0]))
+    assert abs(miss()) < 1e-12
+    for _ in range(10):
+        live.single_step()
+    live.obey(cmd("set", name="gravity", value=4.0))
+    live.single_step()
+    assert abs(miss()) < 1e-12
+    top = live.world.n_bodies - 2  # (the pyramid's top box; the ball is last)
+    x = live.world.positions[top]
+    live.obey(cmd("grab", point=list(x)))
+    live.obey(cmd("drag", target=list(x + np.array([0.0, 2.0]))))
+    for _ in range(30):
+        live.single_step()
+    # (round-off of sums of a few hundred joules over 50 steps)
+    assert abs(miss()) < 1e-12

@@ -22,6 +22,7 @@ from websockets.sync.client import connect
 
 from carom.play.server import ACK, MOST_COMMANDS, PlayServer
 from carom.play.wire import unpack
+from tests.processes import from_a_terminal
 
 
 def ws_url(server: PlayServer) -> str:
@@ -169,7 +170,7 @@ def _other_address() -> str | None:
 def _carom(*args: str) -> subprocess.Popen[str]:
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     return subprocess.Popen(
-        [sys.executable, "-m", "carom", *args],
+        from_a_terminal([sys.executable, "-m", "carom", *args]),
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -181,21 +182,26 @@ def _carom(*args: str) -> subprocess.Popen[str]:
 def test_the_command_serves_and_ctrl_c_stops_it(small_pyramid: Path) -> None:
     port = _free_port()
     proc = _carom("play", str(small_pyramid), "--port", str(port), "--no-open")
-    assert proc.stdout is not None
-    line = ""
-    deadline = time.monotonic() + 300
-    while "serving" not in line and time.monotonic() < deadline:
-        line = proc.stdout.readline()
-    assert f"http://127.0.0.1:{port}/" in line
-    with urllib.request.urlopen(f"http://127.0.0.1:{port}/") as r:
-        assert r.status == 200
-    # bound to the loopback address only: another address of this machine is not served
-    other = _other_address()
-    if other is not None:
-        with pytest.raises(ConnectionRefusedError), socket.create_connection((other, port), 5):
-            pass
-    proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=60)
+    try:
+        assert proc.stdout is not None
+        line = ""
+        deadline = time.monotonic() + 600  # (a fresh machine compiles the kernels first)
+        while "serving" not in line and time.monotonic() < deadline:
+            line = proc.stdout.readline()
+        assert f"http://127.0.0.1:{port}/" in line
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/") as r:
+            assert r.status == 200
+        # bound to the loopback address only: another address of this machine is not served
+        other = _other_address()
+        if other is not None:
+            with pytest.raises(ConnectionRefusedError), socket.create_connection((other, port), 5):
+                pass
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:  # (never left running: the test failed above)
+            proc.kill()
+            proc.communicate()
     assert proc.returncode == 0, err
     assert "stopped" in out
     assert "Traceback" not in err
@@ -212,7 +218,7 @@ def test_the_command_serves_and_ctrl_c_stops_it(small_pyramid: Path) -> None:
 )
 def test_the_command_refuses_bad_input(args: list[str], says: str) -> None:
     proc = _carom("play", *args, "--no-open")
-    out, err = proc.communicate(timeout=300)
+    out, err = proc.communicate(timeout=600)
     assert proc.returncode == 2, (out, err)
     assert says in err
     assert "Traceback" not in err
@@ -226,7 +232,7 @@ def test_a_port_in_use_is_refused(small_pyramid: Path) -> None:
         taken.listen()
         port = taken.getsockname()[1]
         proc = _carom("play", str(small_pyramid), "--port", str(port), "--no-open")
-        out, err = proc.communicate(timeout=300)
+        out, err = proc.communicate(timeout=600)
     assert proc.returncode == 2, (out, err)
     assert f"cannot listen on 127.0.0.1:{port}" in err
     assert "Traceback" not in err

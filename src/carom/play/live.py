@@ -107,11 +107,10 @@ class Live:
         self._held: tuple[int, int] | None = None  # (body, joint) dragged
         self._pull: FloatArray | None = None  # (event-driven) the pointer a sphere follows
         self._balls: list[int] = []
-        self._e0 = self._energies()[0] + self._energies()[1]
+        self._e0 = sum(self._energies())
         self.step_seconds = 0.0  # a running mean of one step's wall time
         self.stage_seconds = np.zeros(len(STAGES))  # (the rigid engines': each stage's)
         self.behind = 0.0  # real time dropped [s]
-        self._frames = 0
         self._shape_cache: dict[str, NDArray[Any]] | None = None
         self.version += 1
         g = np.asarray(world.gravity, float)
@@ -207,15 +206,24 @@ class Live:
         elif op == "release":
             self.release()
         elif op == "shoot":
-            return {"op": "shot", "body": self._shoot(f["point"], f["velocity"])}
+            return {"op": "shot", "body": self._rebased(self._shoot, f["point"], f["velocity"])}
         elif op == "set":
-            self._set(f["name"], check_setting(f["name"], f["value"]))
+            self._rebased(self._set, f["name"], check_setting(f["name"], f["value"]))
         elif op == "draw":
             if f["on"]:
                 self.drawings.add(f["name"])
             else:
                 self.drawings.discard(f["name"])
         return None
+
+    def _rebased(self, change: Callable[..., Any], *args: Any) -> Any:
+        """``change(*args)``, the energy it adds to the world by hand (a ball shot, gravity
+        changed: its potential energy) added to the ledger's start, so that the ledger the
+        panel shows still closes."""
+        before = sum(self._energies())
+        out = change(*args)
+        self._e0 += sum(self._energies()) - before
+        return out
 
     def _grab(self, point: FloatArray, direction: FloatArray | None) -> dict[str, Any]:
         self.release()
@@ -397,7 +405,7 @@ class Live:
             "behind": self.behind,
             "bodies": int(np.count_nonzero(alive)),
             "contacts": int(engine.n_contacts) if isinstance(engine, SteppedEngine) else 0,
-            "awake": int(np.count_nonzero(state & 2 & (state << 1))),
+            "awake": int(np.count_nonzero(alive & awake)),
             "islands": engine.awake_islands() if isinstance(engine, SteppedEngine) else 0,
             "energy": {
                 "kinetic": kinetic,
@@ -417,7 +425,6 @@ class Live:
             "state": state,
         }
         arrays.update(self._debug(engine))
-        self._frames += 1
         return pack(header, arrays)
 
     def _energies(self, fr: Any = None) -> tuple[float, float]:

@@ -704,8 +704,7 @@
   // drawn with fewer pixels (down to half on each side) until it keeps up, and back up after
   let lastDraw = 0, slowSince = 0, fastSince = 0;
   function adapt(now) {
-    const gap = lastDraw ? now - lastDraw : 16;
-    lastDraw = now;
+    const gap = now - lastDraw;
     const o = state.options;
     if (!o.adaptive) return;
     if (gap > 30) { fastSince = 0; slowSince = slowSince || now; } else if (gap < 20) { slowSince = 0; fastSince = fastSince || now; }
@@ -713,12 +712,27 @@
     if (fastSince && now - fastSince > 3000 && o.resolution < 1) { o.resolution = Math.min(1, o.resolution / 0.8); fastSince = 0; }
   }
 
+  // the view is drawn again only when something in it changed: a new frame, the camera, the
+  // canvas, a gesture, a switch (a browser drawing without a GPU has no time to waste)
+  let drawnKey = "", drewLast = false;
+  function viewKey() {
+    const g = gesture ? JSON.stringify([gesture.target, gesture.now, gesture.kind]) : "";
+    return [state.framesSeen, camera2.cx, camera2.cy, camera2.scale, camera3.yaw, camera3.pitch,
+      camera3.distance, ...camera3.target, canvas.clientWidth, canvas.clientHeight,
+      state.options.resolution, state.options.edges, [...state.drawings].join(), g].join("|");
+  }
   function render() {
     if (state.replay) state.replay.tick();
     const t0 = performance.now();
-    draw();
-    state.drawMs = 0.9 * (state.drawMs || 0) + 0.1 * (performance.now() - t0);
-    adapt(t0);
+    if (drewLast) adapt(t0);  // (how long the last drawing took to reach the screen)
+    const key = viewKey();
+    drewLast = key !== drawnKey;
+    if (drewLast) {
+      lastDraw = t0;
+      draw();
+      drawnKey = key;
+      state.drawMs = 0.9 * (state.drawMs || 0) + 0.1 * (performance.now() - t0);
+    }
     if (state.status && performance.now() > state.statusUntil) { state.status = ""; $("status").textContent = ""; }
     requestAnimationFrame(render);
   }
