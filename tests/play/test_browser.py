@@ -198,3 +198,25 @@ def test_the_page_comes_back_when_the_server_does(browser: Any, small_pyramid: P
         page.page.close()
         again.stop()
         thread.join(timeout=20)
+
+
+def test_sliders_and_switches_reach_the_server(served_page: tuple[PlayServer, Page]) -> None:
+    server, page = served_page
+    live = server.live
+    # a slider applies when let go (its change event): gravity 2.5 m/s^2 downward
+    page.page.eval_on_selector(
+        "#gravity",
+        "(e) => { e.value = '2.5'; e.dispatchEvent(new Event('input')); "
+        "e.dispatchEvent(new Event('change')); }",
+    )
+    assert until(lambda: live.world.gravity[1] == -2.5, 10)
+    assert page.page.inner_text("#gravity-out") == "2.5"
+    # a switch: the server sends the contact points from then on, and the page has them
+    page.page.check('[data-draw="contacts"]')
+    assert until(lambda: "contacts" in live.drawings, 10)
+    page.wait_for(
+        "carom.state.frame.contacts !== undefined && carom.state.frame.contacts.length > 0", 10
+    )
+    page.page.uncheck('[data-draw="contacts"]')
+    assert until(lambda: "contacts" not in live.drawings, 10)
+    assert page.errors == []

@@ -293,3 +293,18 @@ def test_the_ledger_closes_through_what_the_hands_do(small: tuple[Live, Clock]) 
         live.single_step()
     # (round-off of sums of a few hundred joules over 50 steps)
     assert abs(miss()) < 1e-12
+
+
+def test_joints_and_sleeping_islands_are_drawn() -> None:
+    # the ragdoll pile: ten bodies and nine revolute joints a ragdoll; its bodies sleep
+    live = Live("ragdoll-pile", clock=Clock())
+    live.obey(cmd("draw", name="joints", on=True))
+    live.obey(cmd("draw", name="sleeping", on=True))
+    live.single_step()
+    _, arrays = unpack(live.frame())
+    ints, _ = live.world.joint_rows
+    # each joint's two anchors (J, 2, 2), where the engine has them now
+    assert arrays["joints"].shape == (ints.shape[0], 2, 2)
+    np.testing.assert_allclose(arrays["joints"], live.world.joint_anchors(), rtol=1e-6, atol=1e-6)
+    # each body's island (the root a sleeping body sleeps under; its own index otherwise)
+    assert arrays["island"].shape == (live.world.n_bodies,)
