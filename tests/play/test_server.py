@@ -137,6 +137,10 @@ def test_a_page_that_goes_away_lets_go(served: PlayServer) -> None:
         joints = live.world.joint_rows[0]
         assert joints.shape[0] == 1
         assert joints[0, 0] >= 0
+        with connect(ws_url(served)) as other:  # another page comes and goes: the hold stays
+            messages(other, 0.3)
+        time.sleep(0.5)
+        assert live.world.joint_rows[0][0, 0] >= 0
     time.sleep(0.5)  # (the physics thread takes the release at its next tick)
     assert live.world.joint_rows[0][0, 0] < 0  # removed
 

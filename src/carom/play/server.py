@@ -24,6 +24,7 @@ import http
 import json
 import queue
 import signal
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -47,6 +48,8 @@ MOST_REFUSED = 2000
 IN_FLIGHT = 4
 #: the page's acknowledgement of a frame, as it sends it
 ACK = '{"op":"ack"}'
+#: what the physics thread is told when a page goes away
+GONE = "gone"
 #: pages connected at once
 MOST_PAGES = 16
 #: the page's files and their types
@@ -119,6 +122,7 @@ class PlayServer:
         self._loop: asyncio.AbstractEventLoop | None = None
         self._frame = b""
         self._frame_no = 0
+        self._holder: _Page | None = None  # the page holding a body
         self._shapes = b""
         self._version = -1
         self._lock = threading.Lock()
@@ -157,21 +161,32 @@ class PlayServer:
                 page, text = self._commands.get_nowait()
             except queue.Empty:
                 return
+            if text == GONE:  # a page went away: what it held is let go
+                if self._holder is page:
+                    self.live.release()
+                    self._holder = None
+                continue
             reply = self._obey(page, text)
             if reply is not None:
                 self._reply(page, reply)
 
-    def _obey(self, page: _Page | None, text: str) -> dict[str, Any] | None:
+    def _obey(self, page: _Page, text: str) -> dict[str, Any] | None:
         live = self.live
         try:
             command = read_command(text, live.dim, live.reach, live.top_speed)
-            if command.op == "release" and page is None:
-                return None
-            return live.obey(command)
+            reply = live.obey(command)
         except Refused as why:
             return {"op": "refused", "why": str(why)}
         except CaromError as why:  # the world refused it; it is as it was
             return {"op": "refused", "why": str(why)}
+        except Exception as error:  # (a fault of carom's: said, and the server stays)
+            print(f"carom play: {text[:200]!r} failed: {error!r}", file=sys.stderr)
+            return {"op": "refused", "why": f"carom failed on it ({type(error).__name__})"}
+        if command.op == "grab" and reply is not None and reply.get("body", -1) >= 0:
+            self._holder = page
+        elif command.op in ("release", "scene", "reset"):
+            self._holder = None
+        return reply
 
     def _reply(self, page: _Page, reply: dict[str, Any]) -> None:
         loop = self._loop
@@ -234,7 +249,7 @@ class PlayServer:
             sender.cancel()
             self._pages.discard(page)
             # what the page held, let go (the next page finds the world free)
-            self._commands.put((page, json.dumps({"op": "release"})))
+            self._commands.put((page, GONE))
 
     def _take(self, page: _Page, message: Any) -> None:
         now = time.monotonic()
