@@ -308,3 +308,21 @@ def test_joints_and_sleeping_islands_are_drawn() -> None:
     np.testing.assert_allclose(arrays["joints"], live.world.joint_anchors(), rtol=1e-6, atol=1e-6)
     # each body's island (the root a sleeping body sleeps under; its own index otherwise)
     assert arrays["island"].shape == (live.world.n_bodies,)
+
+
+def test_a_3d_grab_casts_a_ray_and_drags() -> None:
+    # the 3D page sends the eye and the pointer's direction; the first body the ray meets is
+    # held at the point it meets, and pulled toward the targets that follow
+    live = Live("pyramid-3d", clock=Clock())
+    x = live.world.positions
+    top = int(np.argmax(x[:, 2]))
+    eye = x[top] + np.array([0.0, 0.0, 5.0])
+    reply = live.obey(cmd("grab", point=list(eye), direction=[0.0, 0.0, -1.0]))
+    assert reply is not None
+    assert reply["body"] == top
+    # the point met: the top face of the top box (unit boxes), straight below the eye
+    assert reply["point"][2] == pytest.approx(x[top, 2] + 0.5, abs=1e-9)
+    live.obey(cmd("drag", target=list(x[top] + np.array([0.0, 0.0, 2.5]))))
+    for _ in range(120):
+        live.single_step()
+    assert live.world.positions[top, 2] > x[top, 2] + 1.5
