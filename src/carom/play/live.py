@@ -35,6 +35,7 @@ from carom.engines.stepped.driver import STAGES, SteppedEngine
 from carom.joints import Target
 from carom.laws.kinds import KIND_DYNAMIC
 from carom.materials import Material
+from carom.observables import kinetic_energy, potential_energy
 from carom.play.drawn import shape_arrays
 from carom.play.wire import Command, Refused, check_setting, pack
 from carom.scene import builtin_scenes, find_scene, load_scene
@@ -242,14 +243,14 @@ class Live:
     def _pick(self, point: FloatArray, direction: FloatArray | None) -> tuple[int, FloatArray]:
         world = self.world
         if direction is not None:  # 3D: the first body the ray meets
-            hit = world.ray_cast(point, direction) if self.rigid else None
-            if hit is None and not self.rigid:
-                hit_body, at = _sphere_ray(world, point, direction)
-                if hit_body >= 0:
-                    return self._dynamic(hit_body), at
-            if hit is None:
+            if self.rigid:
+                hit = world.ray_cast(point, direction)
+                met, at = (-1, point) if hit is None else (int(hit.body), hit.point)
+            else:  # (the event-driven engine's spheres: no ray casts of its own)
+                met, at = _sphere_ray(world, point, direction)
+            if met < 0:
                 raise Refused("grab: the ray meets no body")
-            return self._dynamic(int(hit.body)), np.asarray(hit.point, float)
+            return self._dynamic(met), np.asarray(at, float)
         if self.rigid:
             inside = [int(i) for i in world.overlap_point(point) if i >= 0]
         else:
@@ -428,8 +429,6 @@ class Live:
         return pack(header, arrays)
 
     def _energies(self, fr: Any = None) -> tuple[float, float]:
-        from carom.observables import kinetic_energy, potential_energy
-
         world = self.world
         fr = world.frame() if fr is None else fr
         turn = fr.orientations if self.dim == 3 else None

@@ -175,9 +175,7 @@ class PlayServer:
         try:
             command = read_command(text, live.dim, live.reach, live.top_speed)
             reply = live.obey(command)
-        except Refused as why:
-            return {"op": "refused", "why": str(why)}
-        except CaromError as why:  # the world refused it; it is as it was
+        except (Refused, CaromError) as why:  # refused by the checks or the world: as it was
             return {"op": "refused", "why": str(why)}
         except Exception as error:  # (a fault of carom's: said, and the server stays)
             print(f"carom play: {text[:200]!r} failed: {error!r}", file=sys.stderr)
