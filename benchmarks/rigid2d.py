@@ -1,172 +1,200 @@
-"""carom's rigid-body engine beside pymunk and Box2D 2.3 on Box2D's benchmark stacks, in one run.
+"""carom's 2D rigid engine beside Box2D v3 (C), pymunk and Box2D 2.3 on Box2D's benchmark
+pyramids: ms per step on one core, interleaved round by round, and how steady the pyramid is.
 
 The scenes are the built-in ``large-pyramid`` (100 rows, 5050 unit boxes, 60 Hz, carom at 4
-substeps, 10 s) and ``many-pyramids`` (400 pyramids of 10 rows, 22,000 boxes, 5 s), no sleep,
-run through ``carom compare``: each engine builds the same bodies and is set up as its
-documentation recommends (docs/compare.md); ms per step is the time inside the engines' step
-calls only, on one core. Each engine runs once per round; rounds alternate the order.
+substeps, 10 s) and ``many-pyramids`` (400 pyramids of 10 rows, 22,000 boxes, 5 s), sleep off.
+Each engine is set up as its documentation recommends (docs/compare.md; Box2D v3 as its own
+benchmark app sets it up, 60 Hz, 4 substeps, continuous on).
 
-Targets (issue 13):
-* large pyramid: carom's ms per step at most a third of pymunk's, with carom's pyramid
-  standing (top box moved < 1% of its size, no box turned more than 1 degree, after 10 s);
-* within 2x of Box2D v3 in C, which takes about 5 ms a step on this machine class. Box2D v3 is
-  not on PyPI: given its source tree (``--box2d-v3 DIR``, e.g. a clone of erincatto/box2d),
-  this script builds it with cmake and runs benchmarks/box2d_v3/pyramid.c, carom's own harness
-  around its C API, on the same pyramid in the same run (without it, the issue's ~5 ms).
+**Timing** (benchmarks/steppers.py): this process and every engine in it are pinned to one
+core; each timed run steps the scene bare, only the step calls timed and nothing read between
+steps; every engine runs once a round, the order rotating round by round; ``--rounds`` rounds
+(5 by default). Box2D v3 is not on PyPI: given its source tree (``--box2d-v3 DIR``, a clone of
+erincatto/box2d), this script builds it with cmake twice, its default (SSE2) build and its
+``BOX2D_AVX2=ON`` build where the processor has AVX2, and runs carom's harness around its C
+API (benchmarks/box2d_v3/pyramid.c) as a child process on the same core, interleaved with the
+others. Reported: each engine's median ms per step and spread, and carom / peer round by round
+(median, least-greatest): below 1 carom is faster.
 
-Run:  python benchmarks/rigid2d.py                     (appends to benchmarks/RESULTS.md)
-      python benchmarks/rigid2d.py --box2d-v3 ~/src/box2d
-      python benchmarks/rigid2d.py --scenes large-pyramid --until 2 --no-record
+**Accuracy**: one more run of the Python engines under ``carom compare``'s monitor (untimed
+here: the monitor's reads between steps slow the next step, differently for each engine), and
+Box2D v3's pyramid at the end of its run.
+
+**Steadiness** (``--steady SECONDS``, the large pyramid; issue 46 item 4): the top box's
+path in carom and in Box2D v3 (AVX2 build), step by step: how far it moved in all, its sideways
+sway and its height's range after settling, where it settles off centre, and at the end the
+largest turn and the largest speed of any box.
+
+Run:  python benchmarks/rigid2d.py --box2d-v3 ~/src/box2d      (appends to RESULTS.md)
+      python benchmarks/rigid2d.py --box2d-v3 ~/src/box2d --steady 20
+      python benchmarks/rigid2d.py --scenes large-pyramid --until 2 --rounds 3 --no-record
 Needs the compare extra: pip install -e '.[compare]'.
 """
 
 from __future__ import annotations
 
 import argparse
-import shutil
-import statistics
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from edmd import record
+from steppers import Box2DV3, bare_ms, interleave, one_core, ratios, spread
 
 from carom.compare import compare, peer_scene
 from carom.compare.engines import ENGINES
 from carom.compare.report import format_table
 
 ENGINE_NAMES = ["carom", "pymunk", "box2d"]
-#: Box2D v3's own benchmark on the large pyramid, on this machine class (issue 13) [ms]
-BOX2D_V3_MS = 5.0
-#: the pyramid stands: the top box moves less than this fraction of its size, and no box turns
-#: more than this many degrees (issue 13)
-STANDS_DRIFT, STANDS_TURN = 0.01, 1.0
+#: the harness's name for each scene Box2D v3 runs
+BOX2D_SCENES = {"large-pyramid": "large", "many-pyramids": "many"}
+#: after these times [s] the pyramid has settled: sway is measured from SWAY_FROM to
+#: SWAY_UNTIL, the height's range from HEIGHT_FROM to the end (issue 46)
+SWAY_FROM, SWAY_UNTIL, HEIGHT_FROM = 2.0, 10.0, 3.0
+#: Box2D v3's top box of the large pyramid at the start [m]: row 99, over its ground's centre
+BOX2D_TOP = (0.0, 99.5)
 
 
-def stands(metrics: dict[str, Any]) -> bool:
-    """Whether a stack stood by the issue's measure."""
-    return bool(
-        metrics["top_drift_per_size"] < STANDS_DRIFT and metrics["final_rotation_deg"] < STANDS_TURN
-    )
+def time_scene(name: str, until: float | None, rounds: int, v3: Box2DV3 | None) -> list[str]:
+    """Time ``name`` in every engine, interleaved; return the table's rows and the verdict."""
+    scene = peer_scene(name, until)
+    compare(peer_scene(name, 0.1), ["carom"])  # compile the kernels, untimed
+    runs: dict[str, Any] = {e: (lambda e=e: bare_ms(e, scene)) for e in ENGINE_NAMES}
+    if v3 is not None and name in BOX2D_SCENES:
+        for kind in v3.builds:
+            args = (BOX2D_SCENES[name], str(scene.until), "1")
+            runs[f"box2d-v3 {kind}"] = lambda k=kind, a=args: v3.run(k, *a)["ms_per_step"]
+    times = interleave(runs, rounds)
+    ratio = ratios(times)
+    lines = [f"| {name} | carom | {spread(times['carom'])} | 1 |"]
+    for peer, (mid, low, high) in ratio.items():
+        lines.append(
+            f"| {name} | {peer} | {spread(times[peer])} | {mid:.3g} ({low:.3g}-{high:.3g}) |"
+        )
+    return lines
 
 
-def build_box2d_v3(source: Path, harness: str, build: Path) -> Path:
-    """Build Box2D v3 from ``source`` (Release, its default options) in ``build`` and link
-    carom's harness ``benchmarks/box2d_v3/<harness>.c`` to it; return the executable."""
-    if shutil.which("cmake") is None or shutil.which("cc") is None:
-        sys.exit("--box2d-v3 needs cmake and a C compiler")
-    quiet = {"check": True, "stdout": subprocess.DEVNULL}
-    subprocess.run(
-        ["cmake", "-S", str(source), "-B", str(build), "-DCMAKE_BUILD_TYPE=Release",
-         "-DBOX2D_SAMPLES=OFF", "-DBOX2D_UNIT_TESTS=OFF", "-DBOX2D_BENCHMARKS=OFF"],
-        **quiet,
-    )  # fmt: skip
-    subprocess.run(["cmake", "--build", str(build), "-j2", "--target", "box2d"], **quiet)
-    program = build / harness
-    library = next(build.rglob("libbox2d.a"))
-    subprocess.run(
-        ["cc", "-O2", "-std=c17", "-I", str(source / "include"),
-         str(Path(__file__).parent / "box2d_v3" / f"{harness}.c"), str(library), "-lm",
-         "-lpthread", "-o", str(program)],
-        check=True,
-    )  # fmt: skip
-    return program
+def accuracy(name: str, until: float | None, v3: Box2DV3 | None) -> list[str]:
+    """One monitored run of the Python engines (and Box2D v3's end state): their rows."""
+    scene = peer_scene(name, until)
+    result = compare(scene, ENGINE_NAMES)
+    print(format_table(result) + "\n", flush=True)
+    rows = []
+    for engine, run in result.engines.items():
+        m = run["metrics"]
+        rows.append(
+            f"| {name} | {engine} {run['version']} | {m['top_drift_m']:.3g} | "
+            f"{m['final_rotation_deg']:.3g} | {m['max_overlap_m']:.3g} |"
+        )
+    if v3 is not None and name == "large-pyramid":
+        end = v3.run(v3.builds[-1], "large", str(scene.until), "1")
+        rows.append(
+            f"| {name} | Box2D v3 {v3.version} | {end['top_moved_m']:.3g} | "
+            f"{end['max_turn_deg']:.3g} | - |"
+        )
+    return rows
 
 
-def box2d_v3(source: Path, until: float) -> dict[str, float]:
-    """Build Box2D v3 from ``source`` and run carom's pyramid harness on it for ``until`` s.
+def carom_path(seconds: float) -> tuple[np.ndarray, tuple[float, float], float, float]:
+    """carom's large pyramid for ``seconds``: the top box's ``t x y angle`` after each step,
+    where it started [m], and at the end the largest turn of any box [deg] and the largest
+    speed [m/s]."""
+    scene = peer_scene("large-pyramid", seconds)
+    sim = ENGINES["carom"].start(scene)
+    path = []
+    for k in range(scene.steps(sim.dt)):
+        sim.step()
+        x, _, turn, _ = sim.state()
+        path.append((sim.dt * (k + 1), x[-1, 0], x[-1, 1], turn[-1]))
+    x, v, turn, _ = sim.state()
+    dynamic = scene.model.inv_mass > 0.0
+    largest_turn = float(np.degrees(np.abs(turn[dynamic]).max()))
+    top = (float(scene.start.x[-1, 0]), float(scene.start.x[-1, 1]))
+    return np.array(path), top, largest_turn, float(np.linalg.norm(v[dynamic], axis=1).max())
 
-    Returns ms per step, the top box's move [m] and the largest turn at the end [deg]."""
-    build = Path(tempfile.mkdtemp(prefix="box2d-v3-"))
-    harness = build_box2d_v3(source, "pyramid", build)
-    out = subprocess.run([str(harness), "100", str(until)], check=True, capture_output=True)
-    words = out.stdout.decode().split()
-    found = dict(zip(words[::2], words[1::2], strict=True))
-    shutil.rmtree(build)
+
+def measures(
+    path: np.ndarray, start: tuple[float, float], turn_deg: float, speed: float
+) -> dict[str, float]:
+    """The steadiness measures of a top box's path (rows ``t x y angle``) from ``start``."""
+    t, x, y = path[:, 0], path[:, 1], path[:, 2]
+    swaying = (t >= SWAY_FROM) & (t <= SWAY_UNTIL)
+    settled = t >= HEIGHT_FROM
     return {
-        "ms_per_step": float(found["ms_per_step"]),
-        "top_moved_m": float(found["top_moved_m"]),
-        "max_turn_deg": float(found["max_turn_deg"]),
+        "moved [m]": float(np.hypot(x[-1] - start[0], y[-1] - start[1])),
+        f"sway {SWAY_FROM:g}-{SWAY_UNTIL:g} s [m]": float(np.ptp(x[swaying])),
+        f"height's range {HEIGHT_FROM:g} s on [mm]": 1e3 * float(np.ptp(y[settled])),
+        "off centre at the end [m]": float(abs(x[-1] - start[0])),
+        "largest turn at the end [deg]": turn_deg,
+        "largest speed at the end [m/s]": speed,
     }
+
+
+def steadiness(seconds: float, v3: Box2DV3 | None) -> str:
+    """The large pyramid's steadiness in carom and Box2D v3, as a table."""
+    found = {"carom": measures(*carom_path(seconds))}
+    if v3 is not None:
+        kind = v3.builds[-1]
+        path = np.array(v3.trace(kind, "large", str(seconds), "1"))
+        end = v3.run(kind, "large", str(seconds), "1")
+        found[f"Box2D v3 {kind}"] = measures(
+            path, BOX2D_TOP, end["max_turn_deg"], end["max_speed_m_s"]
+        )
+    names = list(found)
+    lines = [f"| measure (large pyramid, {seconds:g} s) | " + " | ".join(names) + " |"]
+    lines.append("|---" * (len(names) + 1) + "|")
+    for key in found["carom"]:
+        lines.append(f"| {key} | " + " | ".join(f"{found[n][key]:.3g}" for n in names) + " |")
+    return "\n".join(lines)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenes", nargs="+", default=["large-pyramid", "many-pyramids"])
     parser.add_argument("--until", type=float, help="simulated time [s]; default the scene's")
-    parser.add_argument("--rounds", type=int, default=1, help="runs of each engine per scene")
+    parser.add_argument("--rounds", type=int, default=5, help="timed runs of each engine")
     parser.add_argument("--box2d-v3", type=Path, metavar="DIR", help="a Box2D v3 source tree")
+    parser.add_argument("--steady", type=float, metavar="SECONDS", help="steadiness run [s]")
     parser.add_argument("--no-record", action="store_true", help="do not append to RESULTS.md")
     args = parser.parse_args()
     missing = [ENGINES[n].missing() for n in ENGINE_NAMES if ENGINES[n].missing() is not None]
     if missing:
         sys.exit("; ".join(str(m) for m in missing))
-
-    rows: list[str] = []
-    verdict: list[str] = []
-    for name in args.scenes:
-        scene = peer_scene(name, args.until)
-        compare(peer_scene(name, 0.1), ["carom"])  # compile the kernels, untimed
-        times: dict[str, list[float]] = {e: [] for e in ENGINE_NAMES}
-        last: dict[str, dict[str, Any]] = {}
-        for k in range(args.rounds):
-            order = ENGINE_NAMES if k % 2 == 0 else ENGINE_NAMES[::-1]
-            result = compare(scene, order)
-            print(format_table(result) + "\n", flush=True)
-            for engine, run in result.engines.items():
-                times[engine].append(run["ms_per_step"])
-                last[engine] = run
-        ms = {e: statistics.median(t) for e, t in times.items()}
-        for engine in ENGINE_NAMES:
-            m = last[engine]["metrics"]
-            rows.append(
-                f"| {name} | {engine} {last[engine]['version']} | {ms[engine]:.3g} | "
-                f"{ms[engine] / ms['carom']:.3g} | {m['top_drift_m']:.3g} | "
-                f"{m['final_rotation_deg']:.3g} | {m['max_overlap_m']:.3g} | "
-                f"{'yes' if stands(m) else 'no'} |"
-            )
-        carom = last["carom"]["metrics"]
-        v3_ms = BOX2D_V3_MS
-        if name == "large-pyramid" and args.box2d_v3 is not None:
-            v3 = box2d_v3(args.box2d_v3.expanduser(), scene.until)
-            v3_ms = v3["ms_per_step"]
-            # the pyramid's boxes are 1 m: the drift in metres is the drift per size
-            upright = v3["top_moved_m"] < STANDS_DRIFT and v3["max_turn_deg"] < STANDS_TURN
-            rows.append(
-                f"| {name} | Box2D v3 (C) | {v3_ms:.3g} | {v3_ms / ms['carom']:.3g} | "
-                f"{v3['top_moved_m']:.3g} | {v3['max_turn_deg']:.3g} | - | "
-                f"{'yes' if upright else 'no'} |"
-            )
-        if name == "large-pyramid":
-            ratio = ms["carom"] / ms["pymunk"]
-            ok = ratio <= 1.0 / 3.0 and stands(carom)
-            verdict.append(
-                f"- large pyramid: carom / pymunk = {ratio:.3g} ms per step (target <= 0.333 "
-                f"with carom's pyramid standing: top moved {carom['top_drift_m']:.3g} m, "
-                f"largest turn at the end {carom['final_rotation_deg']:.3g} deg): "
-                f"{'met' if ok else 'missed'}"
-            )
-            verdict.append(
-                f"- large pyramid: carom {ms['carom']:.3g} ms per step against Box2D v3's "
-                f"{v3_ms:.3g} ms (target within 2x, <= {2 * v3_ms:.3g} ms): "
-                f"{'met' if ms['carom'] <= 2 * v3_ms else 'missed'}"
-            )
-    table = "\n".join(
+    core = one_core()
+    with tempfile.TemporaryDirectory(prefix="box2d-v3-") as build:
+        v3 = Box2DV3(args.box2d_v3, Path(build)) if args.box2d_v3 else None
+        timing, checks = [], []
+        for name in args.scenes:
+            timing += time_scene(name, args.until, args.rounds, v3)
+            checks += accuracy(name, args.until, v3)
+        steady = steadiness(args.steady, v3) if args.steady else ""
+    body = "\n".join(
         [
-            "| scene | engine | ms / step | / carom | top moved [m] | largest turn [deg] "
-            "| deepest overlap [m] | stands |",
-            "|---|---|---|---|---|---|---|---|",
-            *rows,
+            f"ms per step on core {core}, {args.rounds} rounds interleaved, bare steps "
+            "(median (least-greatest)); carom / peer round by round (below 1: carom faster):",
+            "",
+            "| scene | engine | ms / step | carom / engine |",
+            "|---|---|---|---|",
+            *timing,
+            "",
+            "The same scenes under the monitor (one run, untimed):",
+            "",
+            "| scene | engine | top moved [m] | largest turn at the end [deg] "
+            "| deepest overlap [m] |",
+            "|---|---|---|---|---|",
+            *checks,
+            "",
+            steady,
         ]
     )
-    print(table + "\n\n" + "\n".join(verdict))
-    if args.no_record:
-        return
-    record("rigid2d: carom beside pymunk and Box2D 2.3", table + "\n\n" + "\n".join(verdict) + "\n")
+    print(body)
+    if not args.no_record:
+        record("rigid2d: carom beside Box2D v3, pymunk and Box2D 2.3", body.rstrip() + "\n")
 
 
 if __name__ == "__main__":

@@ -23,8 +23,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import shutil
-import subprocess
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -103,22 +101,12 @@ def rapier_stack(n: int, until: float) -> dict[str, float]:
 
 
 def box2d_stacks(source: Path, boxes: list[int], until: float) -> dict[int, dict[str, float]]:
-    """The stacks in Box2D v3 (2D), built from ``source``."""
-    from rigid2d import build_box2d_v3
+    """The stacks in Box2D v3 (2D, its default build), built from ``source``."""
+    from steppers import Box2DV3
 
-    build = Path(tempfile.mkdtemp(prefix="box2d-v3-"))
-    try:
-        program = build_box2d_v3(source, "stack", build)
-        found = {}
-        for n in boxes:
-            out = subprocess.run(
-                [str(program), str(n), str(until)], check=True, capture_output=True
-            )
-            words = out.stdout.decode().split()
-            found[n] = {k: float(v) for k, v in zip(words[::2], words[1::2], strict=True)}
-        return found
-    finally:
-        shutil.rmtree(build)
+    with tempfile.TemporaryDirectory(prefix="box2d-v3-") as build:
+        v3 = Box2DV3(source, Path(build), "stack")
+        return {n: v3.run("sse2", str(n), str(until)) for n in boxes}
 
 
 def main() -> None:
