@@ -10,7 +10,7 @@ then timed for about 3e5 collisions, best of ``--repeats``. Only API that every 
 the first engine has is used, so any two commits can be compared.
 
 ``--workload rigid`` measures the time-stepped rigid engines instead: the built-in scenes
-``pyramid`` (2D) and ``pyramid-3d``, built, their kernels loaded, then stepped for a simulated
+``pyramid`` (2D) and ``pyramid-3d`` (or ``--scenes``), built, their kernels loaded, then stepped for a simulated
 second (60 steps), best of ``--repeats``, in steps per second; ``--dims`` picks the scenes.
 
 Run:  git worktree add /tmp/base REV     (or: git archive REV | tar -x -C /tmp/base)
@@ -60,8 +60,7 @@ print(json.dumps({"collisions_per_s": best, "n": world.n_bodies}))
 RIGID = """
 import json, sys, time
 from carom.scene import find_scene, load_scene
-dim, repeats = int(sys.argv[1]), int(sys.argv[3])
-name = "pyramid" if dim == 2 else "pyramid-3d"
+dim, repeats, name = int(sys.argv[1]), int(sys.argv[3]), sys.argv[4]
 best = 0.0
 for _ in range(repeats):
     world = load_scene(find_scene(name)).build()
@@ -74,13 +73,15 @@ print(json.dumps({"collisions_per_s": best, "n": world.n_bodies}))
 #: what is timed: the event-driven gas (collisions/s) or the rigid pyramids (steps/s)
 WORKLOADS = {"edmd": SNIPPET, "rigid": RIGID}
 WORKLOAD = ["edmd"]
+#: the rigid workload's scene in 2D and in 3D (``--scenes``)
+SCENES = {2: "pyramid", 3: "pyramid-3d"}
 
 
 def _start(src: Path, dim: int, n: int, repeats: int, cpu: int | None) -> subprocess.Popen[str]:
     pin = ["taskset", "-c", str(cpu)] if cpu is not None else []
     snippet = WORKLOADS[WORKLOAD[0]]
     return subprocess.Popen(
-        [*pin, sys.executable, "-c", snippet, str(dim), str(n), str(repeats)],
+        [*pin, sys.executable, "-c", snippet, str(dim), str(n), str(repeats), SCENES[dim]],
         stdout=subprocess.PIPE,
         text=True,
         env={**os.environ, "PYTHONPATH": str(src)},
@@ -119,8 +120,13 @@ def main() -> None:
     )
     parser.add_argument("--record", action="store_true", help="append to benchmarks/RESULTS.md")
     parser.add_argument("--workload", choices=sorted(WORKLOADS), default="edmd")
+    parser.add_argument(
+        "--scenes", nargs=2, metavar=("SCENE_2D", "SCENE_3D"), help="the rigid workload's scenes"
+    )
     args = parser.parse_args()
     WORKLOAD[0] = args.workload
+    if args.scenes:
+        SCENES.update({2: args.scenes[0], 3: args.scenes[1]})
     if args.workload == "rigid":
         args.sizes = [1]  # the scene is the size
     for src in (SRC, args.other):  # compile (or load) each tree's kernels before timing
