@@ -10,8 +10,9 @@ then timed for about 3e5 collisions, best of ``--repeats``. Only API that every 
 the first engine has is used, so any two commits can be compared.
 
 ``--workload rigid`` measures the time-stepped rigid engines instead: the built-in scenes
-``pyramid`` (2D) and ``pyramid-3d`` (or ``--scenes``), built, their kernels loaded, then stepped for a simulated
-second (60 steps), best of ``--repeats``, in steps per second; ``--dims`` picks the scenes.
+``pyramid`` (2D) and ``pyramid-3d`` (or ``--scenes``), built, their kernels loaded, then
+stepped for a simulated second (60 steps), best of ``--repeats``, in steps per second;
+``--dims`` picks the scenes.
 
 Run:  git worktree add /tmp/base REV     (or: git archive REV | tar -x -C /tmp/base)
       python benchmarks/ab.py /tmp/base/src --rounds 3 --sizes 1000 10000

@@ -146,6 +146,16 @@ def touches(
 
 
 @njit(cache=True)
+def _stable_order(keys: np.ndarray) -> np.ndarray:
+    """The stable sorting order of ``keys`` (k,): one pass when they are sorted already, as
+    a step's contacts come when each body is one piece (their pairs are sorted)."""
+    for i in range(1, keys.shape[0]):
+        if keys[i] < keys[i - 1]:
+            return np.argsort(keys, kind="mergesort")
+    return np.arange(keys.shape[0])
+
+
+@njit(cache=True)
 def compare(
     keys: np.ndarray, last: np.ndarray, moving: np.ndarray, n: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -156,7 +166,7 @@ def compare(
     (a last pair of which neither moves still touches: it sleeps); ``n`` the keys' base.
     Returns this step's pairs sorted and unique, those that began with the row of ``keys``
     each came from, and those that ended."""
-    order = np.argsort(keys, kind="mergesort")  # (the first row of a pair kept: stable)
+    order = _stable_order(keys)  # (the first row of a pair kept)
     unique = np.empty(keys.shape[0] + last.shape[0], np.int64)
     began = np.empty(keys.shape[0], np.int64)
     row = np.empty(keys.shape[0], np.int64)
