@@ -21,22 +21,20 @@ Friction is Coulomb's, ``|j_t| <= mu j_n`` per point, solved after the normal im
 **Layout: colours and lanes** (as Box2D v3's graph colouring and wide solver). The contacts
 are coloured so that no two of one colour share a body that impulses move (static and
 kinematic bodies take no colour: they are only read). Each colour is cut into groups of
-``LANES = 16`` contacts, the *lanes*; a pass works on a group in place, its bodies'
-velocities gathered into rows of its own, and every stage runs over the sixteen lanes at once,
-which the compiler turns into vector instructions (two 8-wide registers a row with AVX-512:
-two independent chains, which keeps the core busier than one; 8 lanes solve a pass 15%
-slower).
+``LANES = 16`` contacts, the *lanes*; a group is copied into one small buffer, its body
+velocities gathered beside it, and every stage runs over the sixteen lanes at once, which the
+compiler turns into vector instructions (two 8-wide registers a row with AVX-512: two
+independent chains, which keeps the core busier than one; 8 lanes solve a pass 15% slower).
 The lanes of a group are independent, so this is Gauss-Seidel in colour order: the same
 arithmetic as one contact after another, in that order. A contact whose bodies have used all
 64 colours gets a group to itself. Padding lanes join a dummy body that
 nothing moves.
 
-Every group is flat: row ``r`` of a group is ``LANES`` numbers from ``r * LANES`` on, with
-``r`` a constant, so each row is one vector load. A group's rows (its contacts and both
-bodies' inverse masses, fixed for the step) are read where they are (copying them into a
-working buffer each pass moved 2.4 MB a pass on the large pyramid, a third of the solver's
-time). Each body's velocity, move and turn since the step began share one row of the solver's
-state (one cache line), gathered lane by lane.
+Every buffer is flat: row ``r`` of a group is ``LANES`` numbers from ``r * LANES`` on, with ``r``
+a constant, so each row is one vector load; the group's rows (its contacts and both bodies'
+inverse masses, fixed for the step) are copied as one run. Each body's velocity, move and turn
+since the step began share one row of the solver's state (one cache line), gathered lane by
+lane.
 """
 
 from __future__ import annotations
@@ -99,7 +97,7 @@ Q_JT = 8
 Q_TOTAL = 9
 POINT_ROWS = 10
 GROUP_ROWS = R_POINT + 2 * POINT_ROWS
-# ... then its two bodies' velocities and moves, gathered by each pass
+# ... then, in the working buffer only, its two bodies' velocities and moves
 B_VAX = GROUP_ROWS
 B_VAY = GROUP_ROWS + 1
 B_WA = GROUP_ROWS + 2
@@ -201,9 +199,12 @@ def _pack(
 
 
 @njit(cache=True, inline="always")
-def _gather(buf: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray) -> None:
-    """Group g's bodies' velocities into its rows ``buf`` (``group[g]``): the passes work on
-    the group in place, so only the bodies are copied in and out."""
+def _gather(
+    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray
+) -> None:
+    """Group g and its bodies' velocities into the working buffer (BUFFER_ROWS * LANES)."""
+    for k in range(GROUP_ROWS * LANES):  # one flat run: the compiler moves it in vectors
+        buf[k] = group[g, k]
     for lane in range(LANES):
         a = pair[g, lane]
         b = pair[g, LANES + lane]
@@ -216,9 +217,12 @@ def _gather(buf: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray) -> Non
 
 
 @njit(cache=True, inline="always")
-def _gather_all(buf: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray) -> None:
-    """Group g's bodies' velocities, moves and turns since the step began into its rows."""
-    _gather(buf, pair, g, state)
+def _gather_all(
+    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray
+) -> None:
+    """Group g and its bodies' velocities, moves and turns since the step began into the
+    working buffer."""
+    _gather(buf, group, pair, g, state)
     for lane in range(LANES):
         a = pair[g, lane]
         b = pair[g, LANES + lane]
@@ -231,9 +235,17 @@ def _gather_all(buf: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray) ->
 
 
 @njit(cache=True, inline="always")
-def _scatter(buf: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray) -> None:
-    """The velocities back to group g's bodies. Lanes sharing a body of infinite mass write
-    back the value they all read."""
+def _scatter(
+    buf: np.ndarray, group: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray
+) -> None:
+    """The impulses back to group g, the velocities back to its bodies. Lanes sharing a body
+    of infinite mass write back the value they all read."""
+    for p in range(2):
+        q = R_POINT + p * POINT_ROWS
+        for lane in range(LANES):
+            group[g, (q + Q_JN) * LANES + lane] = buf[(q + Q_JN) * LANES + lane]
+            group[g, (q + Q_JT) * LANES + lane] = buf[(q + Q_JT) * LANES + lane]
+            group[g, (q + Q_TOTAL) * LANES + lane] = buf[(q + Q_TOTAL) * LANES + lane]
     for lane in range(LANES):
         a = pair[g, lane]
         b = pair[g, LANES + lane]
@@ -243,17 +255,6 @@ def _scatter(buf: np.ndarray, pair: np.ndarray, g: int, state: np.ndarray) -> No
         state[b, S_VX] = buf[B_VBX * LANES + lane]
         state[b, S_VY] = buf[B_VBY * LANES + lane]
         state[b, S_W] = buf[B_WB * LANES + lane]
-
-
-@njit(cache=True, inline="always")
-def _impulses(buf: np.ndarray, before: np.ndarray) -> None:
-    """Group rows ``buf``'s point impulses (normal, tangent) into ``before`` (4 * LANES), to
-    tell what a pass added."""
-    for p in range(2):
-        q = R_POINT + p * POINT_ROWS
-        for lane in range(LANES):
-            before[2 * p * LANES + lane] = buf[(q + Q_JN) * LANES + lane]
-            before[(2 * p + 1) * LANES + lane] = buf[(q + Q_JT) * LANES + lane]
 
 
 @njit(cache=True, inline="always")
@@ -290,11 +291,11 @@ def _slip(buf: np.ndarray, lane: int, q: int) -> tuple[float, float]:
 
 
 @leaf
-def _group_work(buf: np.ndarray, before: np.ndarray, warm: bool) -> float:
-    """Work [J] done on the group in rows ``buf`` by its bodies of infinite mass, for the
-    impulses it holds beyond those in ``before`` (:func:`_impulses`; all of them, if
-    ``warm``): the impulse on the other body times the fixed body's velocity at the point
-    (:func:`.motion.fixed_work`); such a body's velocity is the same before and after."""
+def _group_work(buf: np.ndarray, group: np.ndarray, g: int, warm: bool) -> float:
+    """Work [J] done on group g's lanes by their bodies of infinite mass, for the impulses
+    the buffer holds beyond what ``group`` held (all of them, if ``warm``): the impulse on
+    the other body times the fixed body's velocity at the point (:func:`.motion.fixed_work`);
+    such a body's velocity is the same before and after."""
     total = 0.0
     for lane in range(LANES):
         nx = buf[R_NX * LANES + lane]
@@ -304,8 +305,8 @@ def _group_work(buf: np.ndarray, before: np.ndarray, warm: bool) -> float:
             dn = buf[(q + Q_JN) * LANES + lane]
             dt = buf[(q + Q_JT) * LANES + lane]
             if not warm:
-                dn -= before[2 * p * LANES + lane]
-                dt -= before[(2 * p + 1) * LANES + lane]
+                dn -= group[g, (q + Q_JN) * LANES + lane]
+                dt -= group[g, (q + Q_JT) * LANES + lane]
             px = dn * nx + dt * ny
             py = dn * ny - dt * nx
             if buf[R_IMA * LANES + lane] == 0.0:
@@ -328,13 +329,12 @@ def _warm_start(
     kinematic: np.ndarray,
     state: np.ndarray,
     work: np.ndarray,
-    before: np.ndarray,
+    buf: np.ndarray,
 ) -> None:
-    """Apply every point's impulse from the last substep (or step) again (``before``: room
-    for a group's impulses, 4 * LANES, for the work of its bodies of infinite mass)."""
+    """Apply every point's impulse from the last substep (or step) again (``buf``: room for
+    one group, ``BUFFER_ROWS * LANES``)."""
     for g in range(group.shape[0]):
-        buf = group[g]
-        _gather(buf, pair, g, state)
+        _gather(buf, group, pair, g, state)
         for p in range(2):
             q = R_POINT + p * POINT_ROWS
             for lane in range(LANES):
@@ -345,8 +345,8 @@ def _warm_start(
                 buf[(q + Q_TOTAL) * LANES + lane] += jn
                 _push(buf, lane, q, jn * nx + jt * ny, jn * ny - jt * nx)
         if kinematic[g]:
-            work[0] += _group_work(buf, before, True)
-        _scatter(buf, pair, g, state)
+            work[0] += _group_work(buf, group, g, True)
+        _scatter(buf, group, pair, g, state)
 
 
 @leaf(fastmath=LANE_MATH)
@@ -359,17 +359,14 @@ def _solve(
     use_bias: bool,
     push_speed: float,
     work: np.ndarray,
-    before: np.ndarray,
+    buf: np.ndarray,
 ) -> None:
     """One Gauss-Seidel pass over the groups: normal impulses, then friction, lane by lane.
     ``state`` (N+1, STATE_COLS: velocity, angular velocity, move and the cos and sin of the
     turn since the step began) has a row for each body and one for the padding lanes' dummy;
-    ``work[0]`` gathers what kinematic bodies do; ``before`` as :func:`_warm_start`'s."""
+    ``work[0]`` gathers what kinematic bodies do; ``buf`` as :func:`_warm_start`'s."""
     for g in range(group.shape[0]):
-        buf = group[g]
-        _gather_all(buf, pair, g, state)
-        if kinematic[g]:
-            _impulses(buf, before)
+        _gather_all(buf, group, pair, g, state)
         for p in range(2):
             q = R_POINT + p * POINT_ROWS
             for lane in range(LANES):
@@ -411,8 +408,8 @@ def _solve(
                 buf[(q + Q_JT) * LANES + lane] = new
                 _push(buf, lane, q, dj * tx, dj * ty)
         if kinematic[g]:
-            work[0] += _group_work(buf, before, False)
-        _scatter(buf, pair, g, state)
+            work[0] += _group_work(buf, group, g, False)
+        _scatter(buf, group, pair, g, state)
 
 
 @njit(cache=True)
@@ -710,13 +707,13 @@ def solve_step(
     state[:n, S_VY] = v[:, 1]
     state[:n, S_W] = omega
     state[:, S_COS] = 1.0
-    lanes, group, pair, kinematic = shared.groups_of(ci, nc, inv_mass, I_FLAGS, BUFFER_ROWS)
+    lanes, group, pair, kinematic = shared.groups_of(ci, nc, inv_mass, I_FLAGS, GROUP_ROWS)
     _pack(
         cf, ci, lanes, inv_mass, inv_inertia, state, soft_moving, soft_fixed, group, pair, kinematic
     )
     slots = _slots(lanes, nc) if first.shape[0] else np.zeros(1, np.int64)
     spared = np.empty((2 * first.shape[0], 2))
-    before = np.empty(4 * LANES)  # (a group's impulses, for the leaf kernels)
+    buf = np.empty(BUFFER_ROWS * LANES)  # (room for one group, for the leaf kernels)
     for _ in range(substeps):
         for i in bodies:
             state[i, S_VX] += h * accel[i, 0]
@@ -728,9 +725,9 @@ def solve_step(
                 joined,
             )  # fmt: skip
         joints.warm_start(jf, ji, active, prep, rows, state)
-        _warm_start(group, pair, kinematic, state, work, before)
+        _warm_start(group, pair, kinematic, state, work, buf)
         joints.solve(jf, ji, active, prep, rows, state, h, soft_joint, True)
-        _solve(group, pair, kinematic, state, 1.0 / h, True, push_speed, work, before)
+        _solve(group, pair, kinematic, state, 1.0 / h, True, push_speed, work, buf)
         for i in bodies:
             # (shift: what an impact taken first within the substep took from the move)
             mx = h * state[i, S_VX] + shift[i, 0]
@@ -756,7 +753,7 @@ def solve_step(
                 cf, ci, first, slots, group, state, shift, h, impact_speed, spared, joined
             )
         joints.solve(jf, ji, active, prep, rows, state, h, soft_joint, False)
-        _solve(group, pair, kinematic, state, 1.0 / h, False, push_speed, work, before)
+        _solve(group, pair, kinematic, state, 1.0 / h, False, push_speed, work, buf)
         if held:
             _give_back(group, spared, held)
     joints.reactions(jf, ji, active, prep, rows, state, h)
