@@ -45,11 +45,10 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from edmd import record
-from steppers import Box2DV3, bare_ms, interleave, one_core, ratios, spread
+from steppers import Box2DV3, bare_ms, interleave, monitored, one_core, ratios, spread
 
 from carom.compare import compare, peer_scene
 from carom.compare.engines import ENGINES
-from carom.compare.report import format_table
 from carom.scene import Scene, find_scene
 
 ENGINE_NAMES = ["carom", "pymunk", "box2d"]
@@ -84,15 +83,8 @@ def time_scene(name: str, until: float | None, rounds: int, v3: Box2DV3 | None) 
 def accuracy(name: str, until: float | None, v3: Box2DV3 | None) -> list[str]:
     """One monitored run of the Python engines (and Box2D v3's end state): their rows."""
     scene = peer_scene(name, until)
-    result = compare(scene, ENGINE_NAMES)
-    print(format_table(result) + "\n", flush=True)
-    rows = []
-    for engine, run in result.engines.items():
-        m = run["metrics"]
-        rows.append(
-            f"| {name} | {engine} {run['version']} | {m['top_drift_m']:.3g} | "
-            f"{m['final_rotation_deg']:.3g} | {m['max_overlap_m']:.3g} |"
-        )
+    fields = ["top_drift_m", "final_rotation_deg", "max_overlap_m"]
+    rows, _ = monitored(name, ENGINE_NAMES, until, fields)
     if v3 is not None and name == "large-pyramid":
         end = v3.run(v3.builds[-1], "large", str(scene.until), "1")
         rows.append(

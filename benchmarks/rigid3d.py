@@ -37,11 +37,10 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from edmd import record
-from steppers import bare_ms, interleave, one_core, spread
+from steppers import bare_ms, interleave, monitored, one_core, spread
 
 from carom.compare import compare, peer_scene
 from carom.compare.engines import ENGINES
-from carom.compare.report import format_table
 
 ENGINE_NAMES = ["carom", "pybullet", "mujoco", "rapier3d"]
 #: the engines each scene runs in unless ``--engines`` says
@@ -71,17 +70,9 @@ def time_scene(name: str, names: list[str], until: float | None, rounds: int) ->
 
 def accuracy(name: str, names: list[str], until: float | None) -> tuple[list[str], bool]:
     """One monitored run of every engine: its rows, and whether carom's pyramid stands."""
-    result = compare(peer_scene(name, until), names)
-    print(format_table(result) + "\n", flush=True)
-    rows = []
-    for e, run in result.engines.items():
-        m = run["metrics"]
-        rows.append(
-            f"| {name} | {e} {run['version']} | {m['top_drift_m']:.3g} | "
-            f"{m['max_rotation_deg']:.3g} | {m['max_overlap_m']:.3g} | "
-            f"{m['bodies_through_static']} |"
-        )
-    stands = result.engines["carom"]["metrics"]["top_drift_per_size"] < STANDS_DRIFT
+    fields = ["top_drift_m", "max_rotation_deg", "max_overlap_m", "bodies_through_static"]
+    rows, runs = monitored(name, names, until, fields)
+    stands = runs["carom"]["metrics"]["top_drift_per_size"] < STANDS_DRIFT
     return rows, stands
 
 

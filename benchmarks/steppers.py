@@ -12,6 +12,8 @@ What the rigid benchmarks (rigid2d.py, rigid3d.py) share:
 * :func:`interleave` runs every engine once a round, the order rotating round by round, with
   a garbage collection and a pause before each run so that nothing of carom's runs inside or
   just before a peer's timed window;
+* :func:`monitored` runs the engines once more under ``carom compare``'s monitor, for the
+  accuracy columns;
 * :func:`ratios` summarises carom / peer round by round: the median and the spread (least,
   greatest).
 """
@@ -29,7 +31,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from carom.compare import compare, peer_scene
 from carom.compare.engines import ENGINES
+from carom.compare.report import format_table
 
 HARNESSES = Path(__file__).resolve().parent / "box2d_v3"
 #: a pause before each timed run [s], so that one engine's tail does not fall in the next's
@@ -157,3 +161,21 @@ def ratios(times: dict[str, list[float]], ours: str = "carom") -> dict[str, tupl
 def spread(values: list[float]) -> str:
     """``median (least-greatest)`` to 3 figures."""
     return f"{statistics.median(values):.3g} ({min(values):.3g}-{max(values):.3g})"
+
+
+def monitored(
+    name: str, engines: list[str], until: float | None, fields: list[str]
+) -> tuple[list[str], dict[str, dict[str, Any]]]:
+    """One run of ``engines`` on scene ``name`` under ``carom compare``'s monitor (untimed
+    here): a table row per engine (scene, engine and version, then the metrics ``fields``) and
+    the runs."""
+    result = compare(peer_scene(name, until), engines)
+    print(format_table(result) + "\n", flush=True)
+    rows = []
+    for engine, run in result.engines.items():
+        values = " | ".join(
+            f"{v:.3g}" if isinstance(v, float) else str(v)
+            for v in (run["metrics"][f] for f in fields)
+        )
+        rows.append(f"| {name} | {engine} {run['version']} | {values} |")
+    return rows, result.engines
