@@ -39,8 +39,8 @@ _TIE = 0.1
 
 @njit(cache=True, inline="always")
 def _next(i: int, k: int) -> int:
-    """The corner after corner ``i`` of ``k`` (``(i + 1) % k`` for ``0 <= i < k``, without the
-    integer division: a dozen of them took a third of a box pair's manifold)."""
+    """The corner after corner ``i`` of ``k`` (``(i + 1) % k`` for ``0 <= i < k``), without an
+    integer division (the manifold has up to a dozen: a box pair's 5% faster without them)."""
     return i + 1 if i + 1 < k else 0
 
 
@@ -224,7 +224,7 @@ def _max_separation(
     edge = 0
     for i in range(k1):
         # (unsigned rows: Numba checks a signed index for a negative one to wrap, at every
-        # load; these 32 loads are most of a box pair's manifold)
+        # load; the two searches, 40% of a box pair's manifold, ran 20% faster without it)
         r = uint64(s1 + i)
         nx = normals[r, 0]
         ny = normals[r, 1]
