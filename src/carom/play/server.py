@@ -48,8 +48,9 @@ MOST_REFUSED = 2000
 IN_FLIGHT = 4
 #: the page's acknowledgement of a frame, as it sends it
 ACK = '{"op":"ack"}'
-#: what the physics thread is told when a page goes away
-GONE = "gone"
+#: what the physics thread is told when a page goes away, in place of a command's text (no
+#: text a page can send)
+GONE = None
 #: pages connected at once
 MOST_PAGES = 16
 #: the page's files and their types
@@ -117,7 +118,7 @@ class PlayServer:
     def __init__(self, live: Live, host: str = "127.0.0.1", port: int = 8765, tick: float = 1 / 60):
         self.live, self.host, self.port, self.tick = live, host, port, tick
         self._pages: set[_Page] = set()
-        self._commands: queue.Queue[tuple[_Page, str]] = queue.Queue()
+        self._commands: queue.Queue[tuple[_Page, str | None]] = queue.Queue()
         self._stop = threading.Event()
         self._loop: asyncio.AbstractEventLoop | None = None
         self._frame = b""
@@ -161,7 +162,7 @@ class PlayServer:
                 page, text = self._commands.get_nowait()
             except queue.Empty:
                 return
-            if text == GONE:  # a page went away: what it held is let go
+            if text is GONE:  # a page went away: what it held is let go
                 if self._holder is page:
                     self.live.release()
                     self._holder = None
