@@ -62,7 +62,7 @@ BOX2D_TOP = (0.0, 99.5)
 
 
 def time_scene(name: str, until: float | None, rounds: int, v3: Box2DV3 | None) -> list[str]:
-    """Time ``name`` in every engine, interleaved; return the table's rows and the verdict."""
+    """Time ``name`` in every engine, interleaved; return the table's rows."""
     scene = peer_scene(name, until)
     compare(peer_scene(name, 0.1), ["carom"])  # compile the kernels, untimed
     runs: dict[str, Any] = {e: (lambda e=e: bare_ms(e, scene)) for e in ENGINE_NAMES}
@@ -71,22 +71,19 @@ def time_scene(name: str, until: float | None, rounds: int, v3: Box2DV3 | None) 
             args = (BOX2D_SCENES[name], str(scene.until), "1")
             runs[f"box2d-v3 {kind}"] = lambda k=kind, a=args: v3.run(k, *a)["ms_per_step"]
     times = interleave(runs, rounds)
-    ratio = ratios(times)
-    lines = [f"| {name} | carom | {spread(times['carom'])} | 1 |"]
-    for peer, (mid, low, high) in ratio.items():
-        lines.append(
-            f"| {name} | {peer} | {spread(times[peer])} | {mid:.3g} ({low:.3g}-{high:.3g}) |"
-        )
-    return lines
+    return [
+        f"| {name} | {e} | {spread(times[e])} | {spread(each)} |"
+        for e, each in ratios(times).items()
+    ]
 
 
 def accuracy(name: str, until: float | None, v3: Box2DV3 | None) -> list[str]:
     """One monitored run of the Python engines (and Box2D v3's end state): their rows."""
-    scene = peer_scene(name, until)
     fields = ["top_drift_m", "final_rotation_deg", "max_overlap_m"]
-    rows, _ = monitored(name, ENGINE_NAMES, until, fields)
+    rows, runs = monitored(name, ENGINE_NAMES, until, fields)
     if v3 is not None and name == "large-pyramid":
-        end = v3.run(v3.builds[-1], "large", str(scene.until), "1")
+        seconds = str(runs["carom"]["simulated_s"])
+        end = v3.run(v3.builds[-1], "large", seconds, "1")
         rows.append(
             f"| {name} | Box2D v3 {v3.version} | {end['top_moved_m']:.3g} | "
             f"{end['max_turn_deg']:.3g} | - |"

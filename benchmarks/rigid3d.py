@@ -37,7 +37,7 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from edmd import record
-from steppers import bare_ms, interleave, monitored, one_core, spread
+from steppers import bare_ms, interleave, monitored, one_core, ratios, spread
 
 from carom.compare import compare, peer_scene
 from carom.compare.engines import ENGINES
@@ -56,8 +56,7 @@ def time_scene(name: str, names: list[str], until: float | None, rounds: int) ->
     steps = {e: ENGINES[e].rigid_dt(scene) for e in names}  # [s]
     times = interleave({e: (lambda e=e: bare_ms(e, scene)) for e in names}, rounds)
     rows = []
-    for e in names:
-        per_step = [a / b for a, b in zip(times["carom"], times[e], strict=True)]
+    for e, per_step in ratios(times).items():
         # per simulated second: ms / dt, carom's over the peer's
         per_second = [r * steps[e] / steps["carom"] for r in per_step]
         rows.append(

@@ -14,8 +14,8 @@ What the rigid benchmarks (rigid2d.py, rigid3d.py) share:
   just before a peer's timed window;
 * :func:`monitored` runs the engines once more under ``carom compare``'s monitor, for the
   accuracy columns;
-* :func:`ratios` summarises carom / peer round by round: the median and the spread (least,
-  greatest).
+* :func:`ratios` gives carom / peer round by round, and :func:`spread` their median and
+  spread (least, greatest).
 """
 
 from __future__ import annotations
@@ -146,16 +146,12 @@ def interleave(runs: dict[str, Callable[[], float]], rounds: int) -> dict[str, l
     return times
 
 
-def ratios(times: dict[str, list[float]], ours: str = "carom") -> dict[str, tuple[float, ...]]:
-    """For each peer: carom's ms / the peer's, round by round, summarised as (median, least,
-    greatest)."""
-    out = {}
-    for name, peer in times.items():
-        if name == ours:
-            continue
-        each = [a / b for a, b in zip(times[ours], peer, strict=True)]
-        out[name] = (statistics.median(each), min(each), max(each))
-    return out
+def ratios(times: dict[str, list[float]], ours: str = "carom") -> dict[str, list[float]]:
+    """For each engine of ``times``: carom's ms / its ms, round by round (carom's own: 1)."""
+    return {
+        name: [a / b for a, b in zip(times[ours], each, strict=True)]
+        for name, each in times.items()
+    }
 
 
 def spread(values: list[float]) -> str:

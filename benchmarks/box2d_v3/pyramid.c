@@ -8,8 +8,8 @@
  * "many": Box2D's own CreateManyPyramids (400 pyramids of 10 rows on 20 shelves, from its
  * shared/benchmarks.c). Both with sleep off, Box2D's default world (continuous on), stepped at
  * 60 Hz with 4 substeps on `workers` threads of Box2D's own scheduler (1: the calling thread
- * only). Every step is timed, the first too (as carom's are), and nothing else runs between
- * two steps unless `trace` is given.
+ * only). Every step is timed, the first too (as carom's are); between two steps only Box2D's
+ * own profile is read (a copy of a few floats), and with `trace` the top box's pose.
  *
  * Prints one line of `name value` pairs: ms_per_step, the sums of Box2D's own profile
  * (collide_ms, solve_ms per step), and for the large pyramid the top box's move, the largest
