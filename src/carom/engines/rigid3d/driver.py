@@ -17,11 +17,21 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from carom.engines.rigid3d import broadphase, contacts, impacts, joints, motion, queries, solver
+from carom.engines.rigid3d import (
+    broadphase,
+    cloth,
+    contacts,
+    impacts,
+    joints,
+    motion,
+    queries,
+    solver,
+)
 from carom.engines.rigid3d.model import Model3D, State3D, empty_manifolds
 from carom.engines.stepped import islands
 from carom.engines.stepped.driver import Isolated, SteppedEngine
 from carom.engines.stepped.joints import rod_rows
+from carom.engines.stepped.loads import Loaded
 from carom.engines.stepped.settings import RigidSettings
 from carom.geometry.rotation import turn
 from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
@@ -294,6 +304,36 @@ class RigidEngine3D(SteppedEngine):
             m.local_vertices, m.local_normals, m.face_first, m.corners, m.edges,
             self.filters[:, 0], mask, self._ray_room, hit,
         )  # fmt: skip
+
+    def _roll_cloth(
+        self, nc: int, closest: FloatArray, closing: FloatArray, loaded: Loaded | None
+    ) -> None:
+        m, s, st = self.model, self.state, self.settings
+        n = m.kind.shape[0]
+        balls = np.empty(n, np.int64)
+        rows = np.empty(n, np.int64)
+        pushed = self._loads.none_torqued if loaded is None else loaded.on
+        found = cloth.select(
+            self._ci, self._cf, nc, closest, closing, m.kind, self._role, m.body_pieces,
+            m.piece_kind, m.piece_vcount, m.piece_radius, m.mass, m.inertia, self._accel,
+            pushed, self._links, 0.1 * st.linear_slop, self.dt, 4.0 * st.linear_slop, s.normals,
+            m.piece_fstart, balls, rows,
+        )  # fmt: skip
+        if not found:
+            return
+        balls, rows = balls[:found], rows[:found]
+        before = self._energy(balls)
+        plane_at = (s.vertices, s.normals, np.stack((m.piece_vstart, m.piece_fstart), axis=1))
+        cloth.roll_all(
+            balls, rows, self._cf, self._ci, self.dt, st.substeps, s.x, s.q, s.v, s.w,
+            self._accel, m.mass, m.inertia, m.inv_inertia, m.body_pieces, m.piece_radius,
+            plane_at,
+        )  # fmt: skip
+        change = self._energy(balls) - before  # friction's, and the dropped normal speed's
+        if change < 0.0:
+            self._energy_lost -= change
+        else:
+            self._energy_given += change
 
     def _solver_bodies(self) -> NDArray[np.int64]:
         return np.flatnonzero((self._role == islands.ROLE_SOLVER) & self._dynamic)

@@ -365,6 +365,7 @@ class SteppedEngine:
             before = self._energy(pushed)
             self._fly(free)
             self._work_done += self._energy(pushed) - before
+        self._roll_cloth(nc, closest, closing, loaded)
         t4 = perf_counter()
         bodies = self._solver_bodies()
         before = self._energy(bodies)
@@ -539,6 +540,12 @@ class SteppedEngine:
     def _fly(self, free: NDArray[np.int64]) -> None:
         """Stage 6: the bodies ``free`` in free flight through the step."""
         raise NotImplementedError
+
+    def _roll_cloth(
+        self, nc: int, closest: FloatArray, closing: FloatArray, loaded: Loaded | None
+    ) -> None:
+        """Move the balls alone on a level cloth in closed form, their energy lost booked
+        (the 3D engine: :mod:`carom.engines.rigid3d.cloth`; none in 2D)."""
 
     def _solver_bodies(self) -> NDArray[np.int64]:
         """The bodies stage 7 solves."""

@@ -36,6 +36,7 @@ ROLE_ASLEEP = 0  # skipped
 ROLE_FREE = 1  # no contact: exact free flight
 ROLE_EXACT = 2  # in an island solved exactly this step
 ROLE_SOLVER = 3  # in the soft-step solver
+ROLE_CLOTH = 4  # a ball alone on a level cloth: moved in closed form (3D: rigid3d/cloth.py)
 
 #: contacts of an island solved exactly, at the most: a denser cluster is the solver's
 MAX_EXACT_CONTACTS = 32

@@ -1,0 +1,159 @@
+"""A ball alone on a level cloth moves in closed form: the same at any rate, and the same as
+the sliding-then-rolling motion written out (carom.engines.rigid3d.cloth)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import carom
+from carom.engines.stepped import islands
+from carom.engines.stepped.settings import RigidSettings
+from carom.shapes3d import Sphere
+
+G = 9.81
+R = 0.028575  # a pool ball: radius [m], mass [kg]
+M = 0.17
+MU = 0.2  # the billiards-3d scene's cloth: friction [-], rolling resistance [m]
+C = 3e-4
+K = 0.4  # I / (m R^2) of a solid ball
+UP = np.array([0.0, 0.0, 1.0])
+
+#: shots of one ball: its velocity [m/s] and spin [rad/s] as the cue leaves it
+SHOTS = {
+    "stun": ([1.0, 0.0, 0.0], [0.0, 0.0, 0.0]),  # no spin: slides, then rolls at 5/7
+    "follow": ([1.0, 0.0, 0.0], [0.0, 2.5 / R, 0.0]),  # topspin: speeds up to roll
+    "draw": ([1.0, 0.0, 0.0], [0.0, -4.0 / R, 0.0]),  # backspin: stops and comes back
+    "massé": ([0.6, 0.8, 0.0], [12.0, -30.0, 40.0]),  # oblique, with side spin
+}
+
+
+def closed_form(v0: np.ndarray, w0: np.ndarray, t: float) -> tuple[np.ndarray, ...]:
+    """Where a ball on the cloth is after ``t`` [s]: (move, velocity, spin).
+
+    The contact point is at -R n; its slip u = v + R n x w. Sliding, friction mu M g acts
+    against u: M dv/dt = -mu M g u^ and I dw/dt = (-R n) x (-mu M g u^), so
+    du/dt = -mu g (1 + 1/K) u^: u keeps its direction and vanishes at
+    t_s = |u0| / (mu g (1 + 1/K)). Rolling, the torque C M g against the roll slows the ball
+    at a = C g / (R (1 + K)) (carom.Material.rolling), with w in the plane n x v / R, until
+    it stops at |v| / a. The spin about n never changes."""
+    wn = float(w0 @ UP)
+    u0 = v0 + R * np.cross(UP, w0)
+    slip = float(np.linalg.norm(u0))
+    e = u0 / slip
+    t_s = slip / (MU * G * (1.0 + 1.0 / K))
+    ts = min(t, t_s)
+    move = v0 * ts - 0.5 * MU * G * e * ts**2
+    v = v0 - MU * G * e * ts
+    w = w0 + MU * G / (K * R) * np.cross(UP, e) * ts
+    if t <= t_s:
+        return move, v, w
+    a = C * G / (R * (1.0 + K))
+    speed = float(np.linalg.norm(v))
+    tr = min(t - t_s, speed / a)
+    e = v / speed
+    move = move + v * tr - 0.5 * a * e * tr**2
+    v = v - a * e * tr if tr < speed / a else np.zeros(3)
+    return move, v, np.cross(UP, v) / R + wn * UP
+
+
+def shot(rate: float, v0: list[float], w0: list[float], until: float) -> carom.World:
+    """One ball on the cloth, hit at ``v0``, ``w0``, run to ``until`` [s] at ``rate`` [Hz]."""
+    world = carom.World(
+        3, box=[8, 8, 1], boundary="open", gravity=[0, 0, -G],
+        rigid=RigidSettings(rate=rate, sleep=False),
+    )  # fmt: skip
+    world.add_plane([0, 0, 0], [0, 0, 1], material=carom.Material(0.5, friction=MU, rolling=C))
+    world.add_body(
+        Sphere(R), [4.0, 4.0, R], velocity=v0, angular_velocity=w0, mass=M,
+        material=carom.Material(0.95, friction=0.05),
+    )  # fmt: skip
+    world.run(until=until)
+    return world
+
+
+@pytest.mark.needs_jit  # 1800 steps a shot
+@pytest.mark.parametrize("name", list(SHOTS))
+def test_a_shot_on_the_cloth_is_its_closed_form_at_every_rate(name: str) -> None:
+    # 1.3 s takes every shot through sliding into rolling; the 1000 Hz run is 1300 steps. Each
+    # step composes the closed form's pieces, so the rates differ by round-off only: a few
+    # ulps of the speeds (1 m/s, 30 rad/s x R) a step, 1e-12 after 1300 steps; 1e-9 is the
+    # issue's bound.
+    v0, w0 = SHOTS[name]
+    until = 1.3
+    move, v, w = closed_form(np.array(v0), np.array(w0), until)
+    for rate in (60.0, 240.0, 1000.0):
+        world = shot(rate, v0, w0, until)
+        assert world.positions[0] - [4.0, 4.0, R] == pytest.approx(move, abs=1e-9)
+        assert world.velocities[0] == pytest.approx(v, abs=1e-9)
+        assert R * world.angular_velocities[0] == pytest.approx(R * w, abs=1e-9)
+        assert world.positions[0, 2] == R  # held on the cloth, not sunk
+        assert world.engine._role[0] == islands.ROLE_CLOTH
+
+
+def test_the_rolling_ball_stops_where_the_closed_form_says() -> None:
+    # a stun shot at 0.5 m/s: rolls at 5/7 of it after t_s, then stops after another
+    # (5/14) / a seconds; from then on it does not move at all
+    a = C * G / (R * (1.0 + K))
+    v0 = np.array([0.5, 0.0, 0.0])
+    stop = 0.5 / (MU * G * 3.5) + (0.5 / 1.4) / a
+    move, _, _ = closed_form(v0, np.zeros(3), stop)
+    world = shot(60.0, [0.5, 0.0, 0.0], [0.0, 0.0, 0.0], stop + 0.5)
+    assert world.positions[0] - [4.0, 4.0, R] == pytest.approx(move, abs=1e-9)
+    assert np.array_equal(world.velocities[0], np.zeros(3))
+    assert np.array_equal(world.angular_velocities[0], np.zeros(3))
+
+
+def test_the_ledger_books_what_the_cloth_takes() -> None:
+    # Friction and rolling resistance take the ball's kinetic energy: E0 = E + lost, to
+    # round-off of E0 (the ball stays at its height: no potential energy changes)
+    v0, w0 = SHOTS["massé"]
+    world = shot(60.0, v0, w0, 2.0)
+    inertia = K * M * R**2
+    e0 = 0.5 * M * float(np.dot(v0, v0)) + 0.5 * inertia * float(np.dot(w0, w0))
+    v, w = world.velocities[0], world.angular_velocities[0]
+    e = 0.5 * M * float(v @ v) + 0.5 * inertia * float(w @ w)
+    c = world.counters()
+    assert c.energy_given == 0.0
+    assert e + c.energy_lost == pytest.approx(e0, rel=1e-12)
+    assert c.energy_lost > 0.5 * e0
+
+
+def test_a_ball_with_company_or_on_a_slope_is_left_to_the_solver() -> None:
+    # Only a ball alone on a level plane is moved in closed form: two touching balls, or a
+    # ball on an incline, keep the soft step (their motion has no closed form here)
+    world = carom.World(3, box=[4, 4, 1], boundary="open", gravity=[0, 0, -G])
+    world.add_plane([0, 0, 0], [0, 0, 1], material=carom.Material(0.5, friction=MU))
+    world.add_body(Sphere(R), [1.0, 1.0, R], mass=M)
+    world.add_body(Sphere(R), [1.0 + 2 * R, 1.0, R], mass=M)
+    world.add_body(Sphere(R), [2.0, 2.0, R], velocity=[0.1, 0, 0], mass=M)
+    world.run(until=0.2)
+    role = world.engine._role[:3]  # (the plane is a static body after them)
+    assert list(role) == [islands.ROLE_SOLVER, islands.ROLE_SOLVER, islands.ROLE_CLOTH]
+    slope = math.radians(10.0)
+    tilted = carom.World(3, box=[4, 4, 4], boundary="open", gravity=[0, 0, -G])
+    normal = [-math.sin(slope), 0.0, math.cos(slope)]
+    tilted.add_plane([0, 0, 0], normal, material=carom.Material(0.5, friction=MU))
+    tilted.add_body(Sphere(R), np.array(normal) * R, mass=M)
+    tilted.run(until=0.2)
+    assert tilted.engine._role[0] == islands.ROLE_SOLVER
+
+
+def test_a_ball_at_rest_on_the_cloth_stays_exactly_on_it() -> None:
+    # alone on a rough level floor, a ball rests on it exactly: no soft contact, no sink, no
+    # velocity; a ball dropped 1 mm (its impact taken exactly, e = 0: it lands with no
+    # bounce) then rests on it at its radius too, within round-off of the landing
+    world = carom.World(3, box=[4, 4, 1], boundary="open", gravity=[0, 0, -G])
+    floor = carom.Material(0.0, friction=MU, rolling=C)
+    world.add_plane([0, 0, 0], [0, 0, 1], material=floor)
+    world.add_body(Sphere(R), [1.0, 1.0, R], mass=M, material=floor)
+    world.add_body(Sphere(R), [2.0, 2.0, R + 1e-3], mass=M, material=floor)
+    world.run(until=1.0)
+    assert world.positions[0, 2] == R
+    assert np.array_equal(world.velocities[0], np.zeros(3))
+    assert world.positions[1, 2] == pytest.approx(R, abs=1e-15)
+    assert np.abs(world.velocities[1]).max() < 1e-15
+    # (at rest on the cloth for the sleep time, both are asleep by now)
+    assert list(world.engine._role[:2]) == [islands.ROLE_ASLEEP] * 2
