@@ -1,0 +1,177 @@
+"""One ball on the cloth in carom and in pooltool, the event-based billiards simulator.
+
+carom moves a ball alone on a level cloth by the closed form of sliding, then rolling
+(carom.engines.rigid3d.cloth); pooltool (Kiefl, ``pooltool-billiards`` on PyPI) solves the
+same model event by event. This script plays the same shots in both, with the same ball and
+cloth (pooltool's rolling friction ``u_r`` is carom's rolling resistance ``c`` as
+``c / (R (1 + 2/5))``; its spinning friction, which carom does not have, at 1e-9, the least
+it takes), and compares where the ball is, how fast it goes and spins at times before it
+meets a cushion: carom at 60 Hz, each time a whole number of its steps.
+
+pooltool cannot share carom's environment: 0.6.0 pins llvmlite < 0.46 (carom's Numba needs a
+newer one) and, on Linux, a development build of panda3d that is not on PyPI. It is installed
+when asked into its own virtual environment (``--venv``, default ~/.cache/carom/pooltool):
+its pinned dependencies from PyPI with panda3d 1.10.16, then pooltool itself without its pins
+(``pip --no-deps``); the comparison runs there as a child process. Never in ``make test``.
+
+Run:  python benchmarks/pooltool_shots.py [--venv DIR] [--no-record]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+from edmd import record  # benchmarks/edmd.py, beside this file
+
+import carom
+from carom.engines.stepped.settings import RigidSettings
+from carom.shapes3d import Sphere
+
+G = 9.81
+R = 0.028575  # a pool ball's radius [m] and mass [kg], the billiards-3d scene's cloth
+M = 0.17
+MU = 0.2
+C = 3e-4
+RATE = 60.0
+#: times to compare at [s]: whole numbers of carom's 60 Hz steps
+TIMES = (0.1, 0.25, 0.5, 0.75)
+#: velocity [m/s] and spin [rad/s] of each shot as the cue leaves the ball
+SHOTS = {
+    "stun": ([1.0, 0.0, 0.0], [0.0, 0.0, 0.0]),
+    "follow": ([1.0, 0.0, 0.0], [0.0, 2.5 / R, 0.0]),
+    "draw": ([1.0, 0.0, 0.0], [0.0, -4.0 / R, 0.0]),
+    "draw back": ([0.6, 0.0, 0.0], [0.0, -5.0 / R, 0.0]),
+    "oblique": ([0.6, 0.3, 0.0], [8.0, -20.0, 0.0]),
+}
+#: pooltool's dependencies, pinned where its own pins cannot be met from PyPI
+PINNED = [
+    "numba>=0.59,<0.62",
+    "llvmlite<0.46",
+    "numpy",
+    "scipy",
+    "attrs",
+    "cattrs",
+    "msgpack",
+    "msgpack-numpy",
+    "pyyaml",
+    "click",
+    "pillow",
+    "h5py",
+    "rich",
+    "numpy-quaternion",
+    "panda3d==1.10.16",
+    "panda3d-gltf",
+    "panda3d-simplepbr",
+]
+POOLTOOL = "pooltool-billiards==0.6.0"
+
+CHILD = textwrap.dedent(
+    """
+    import json, sys
+    import numpy as np
+    import pooltool as pt
+    from pooltool.objects.ball.params import BallParams
+    R, M, G, MU, C, shots, times = json.loads(sys.argv[1])
+    table = pt.Table.default()
+    found = {}
+    for name, (v0, w0) in shots.items():
+        ball = pt.Ball.create("cue", xy=(0.2 * table.w + 0.1, 0.5 * table.l))
+        ball.params = BallParams(
+            m=M, R=R, u_s=MU, u_r=C / (R * 1.4), u_sp_proportionality=1e-9, g=G
+        )
+        ball.state.rvw[1] = v0
+        ball.state.rvw[2] = w0
+        ball.state.s = 2  # sliding
+        system = pt.System(cue=pt.Cue(cue_ball_id="cue"), table=table, balls={"cue": ball})
+        pt.simulate(system, inplace=True)
+        meets = [e.time for e in system.events if "cushion" in e.event_type.value]
+        until = min(meets, default=float("inf"))
+        rows = [t for t in times if t < until]  # (before the ball meets a cushion)
+        pt.continuize(system, dt=0.05, inplace=True)
+        states = system.balls["cue"].history_cts.states
+        start = system.balls["cue"].history.states[0].rvw[0]
+        out = []
+        for t in rows:
+            near = min(states, key=lambda s: abs(s.t - t))
+            if abs(near.t - t) > 1e-9:
+                continue
+            rvw = np.array(near.rvw)
+            out.append([t, *(rvw[0] - start).tolist(), *rvw[1].tolist(), *(R * rvw[2]).tolist()])
+        found[name] = out
+    print(json.dumps(found))
+    """
+)
+
+
+def venv_python(where: Path) -> Path:
+    """pooltool's own environment at ``where``, made (once) as the module docstring says."""
+    python = where / "bin" / "python"
+    if not (where / ".ready").exists():
+        subprocess.run([sys.executable, "-m", "venv", str(where)], check=True)
+        pip = [str(python), "-m", "pip", "install", "-q"]
+        subprocess.run([*pip, *PINNED], check=True)
+        subprocess.run([*pip, "--no-deps", POOLTOOL], check=True)
+        (where / ".ready").touch()
+    return python
+
+
+def carom_shot(v0: list[float], w0: list[float], t: float) -> np.ndarray:
+    """carom's ball after ``t`` [s]: its move, velocity and ``R`` times its spin (9,)."""
+    world = carom.World(
+        3, box=[8, 8, 1], boundary="open", gravity=[0, 0, -G],
+        rigid=RigidSettings(rate=RATE, sleep=False),
+    )  # fmt: skip
+    world.add_plane([0, 0, 0], [0, 0, 1], material=carom.Material(0.5, friction=MU, rolling=C))
+    start = np.array([4.0, 4.0, R])
+    world.add_body(Sphere(R), start, velocity=v0, angular_velocity=w0, mass=M)
+    world.run(until=t)
+    return np.concatenate(
+        (world.positions[0] - start, world.velocities[0], R * world.angular_velocities[0])
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--venv", type=Path, default=Path.home() / ".cache/carom/pooltool")
+    parser.add_argument("--no-record", action="store_true", help="do not append to RESULTS.md")
+    args = parser.parse_args()
+    python = venv_python(args.venv)
+    given = json.dumps([R, M, G, MU, C, SHOTS, TIMES])
+    ran = subprocess.run(
+        [str(python), "-c", CHILD, given], check=True, capture_output=True, text=True
+    )
+    theirs = json.loads(ran.stdout.strip().splitlines()[-1])
+    lines = [
+        "| shot | t [s] | position [m] | velocity [m/s] | R x spin [m/s] |",
+        "|---|---|---|---|---|",
+    ]
+    worst = 0.0
+    for name, (v0, w0) in SHOTS.items():
+        for row in theirs[name]:
+            t, other = row[0], np.array(row[1:])
+            ours = carom_shot(v0, w0, t)
+            gaps = [float(np.abs(ours[k : k + 3] - other[k : k + 3]).max()) for k in (0, 3, 6)]
+            worst = max(worst, *gaps)
+            lines.append(f"| {name} | {t:g} | " + " | ".join(f"{g:.1e}" for g in gaps) + " |")
+    body = "\n".join(
+        [
+            f"carom at {RATE:g} Hz against pooltool, largest difference of any component:",
+            "",
+            *lines,
+            "",
+            f"largest difference over all: {worst:.1e}",
+        ]
+    )
+    print(body)
+    if not args.no_record:
+        record("pooltool_shots: one ball on the cloth, carom and pooltool", body + "\n")
+
+
+if __name__ == "__main__":
+    main()
