@@ -11,7 +11,7 @@ import pytest
 import carom
 from carom.engines.stepped import islands
 from carom.engines.stepped.settings import RigidSettings
-from carom.shapes3d import Sphere
+from carom.shapes3d import Box, Sphere
 
 G = 9.81
 R = 0.028575  # a pool ball: radius [m], mass [kg]
@@ -157,3 +157,26 @@ def test_a_ball_at_rest_on_the_cloth_stays_exactly_on_it() -> None:
     assert np.abs(world.velocities[1]).max() < 1e-15
     # (at rest on the cloth for the sleep time, both are asleep by now)
     assert list(world.engine._role[:2]) == [islands.ROLE_ASLEEP] * 2
+
+
+def test_a_ball_on_a_static_box_rolls_in_closed_form_and_still_falls_off_its_edge() -> None:
+    # A table's top face is cloth as a plane is, while the ball's contact point cannot leave
+    # it within the step; near the edge the ball goes back to the soft step, and it rolls off
+    # and falls instead of rolling on in the air
+    world = carom.World(3, box=[4, 4, 2], boundary="open", gravity=[0, 0, -G])
+    cloth = carom.Material(0.5, friction=MU, rolling=C)
+    world.add_body(Box([1.0, 1.0, 0.2]), [1.0, 1.0, 0.9], kind="static", material=cloth)
+    top = 1.0
+    world.add_body(
+        Sphere(R), [0.6, 1.0, top + R], velocity=[1.0, 0, 0], angular_velocity=[0, 1.0 / R, 0],
+        mass=M, material=cloth,
+    )  # fmt: skip
+    world.step()
+    assert world.engine._role[1] == islands.ROLE_CLOTH
+    # rolling (no slip), slowed by the rolling resistance only: the closed form's speed
+    a = C * G / (R * (1.0 + K))
+    assert world.velocities[1, 0] == pytest.approx(1.0 - a / 60.0, abs=1e-12)
+    assert world.positions[1, 2] == top + R
+    world.run(until=1.0)  # the edge is 0.9 m on: it left the table after about 0.9 s
+    assert world.positions[1, 0] > 1.5
+    assert world.positions[1, 2] < top + R - 0.01

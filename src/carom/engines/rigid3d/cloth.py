@@ -70,8 +70,10 @@ def select(
     kind: np.ndarray, role: np.ndarray, body_pieces: np.ndarray, piece_kind: np.ndarray,
     piece_vcount: np.ndarray, piece_radius: np.ndarray, mass: np.ndarray, inertia: np.ndarray,
     accel: np.ndarray, pushed: np.ndarray, links: np.ndarray, apart: float, dt: float,
-    speculative: float, normals: np.ndarray, piece_fstart: np.ndarray, balls: np.ndarray,
-    rows: np.ndarray,
+    speculative: float, x: np.ndarray, v: np.ndarray, placed: tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+        np.ndarray, np.ndarray,
+    ], balls: np.ndarray, rows: np.ndarray, support: np.ndarray,
 ) -> int:  # fmt: skip
     """Give the balls on a level cloth this step ROLE_CLOTH, flag their contact rows solved
     exactly (the solver skips them) and write them to ``balls`` and ``rows``; return how many.
@@ -79,8 +81,13 @@ def select(
     ``closest``, ``closing`` (nc,) are each contact's least separation [m] and normal speed
     [m/s] (:func:`carom.engines.stepped.islands.plan`'s), ``role`` (N,) the roles it gave,
     ``accel`` (N, 3) each body's acceleration [m/s^2], ``pushed`` (N,) the bodies with a force
-    or a torque this step, ``links`` (L, 2) the bodies joints join (module docstring),
-    ``normals`` (F, 3) the placed pieces' face normals from ``piece_fstart`` (P,) on.
+    or a torque this step, ``links`` (L, 2) the bodies joints join (module docstring).
+    ``placed``: the placed pieces' vertices (V, 3) and face normals (F, 3), and the model's
+    ``piece_vstart``, ``piece_fstart``, ``piece_fcount``, ``piece_cstart``, ``face_first``,
+    ``face_size`` and ``corners`` (:class:`.model.Model3D`). The cloth is a static plane, or
+    a level face of a static polytope that the ball's contact point cannot leave within the
+    step. ``support`` (k, 6) receives each ball's cloth: its upward normal and a point of
+    it [m].
     ``speculative`` [m] is how far beyond its steady motion a contact is made: friction
     changes a ball's path by at most ``mu g dt^2 / 2`` over the step, which must stay within
     it, so that whatever the ball could reach has a contact (and the ball is not alone).
@@ -114,7 +121,7 @@ def select(
             body_pieces[ball + 1] != piece + 1
             or piece_kind[piece] != PIECE_ROUND
             or piece_vcount[piece] != 1
-            or piece_kind[plane] != PIECE_PLANE
+            or piece_kind[plane] == PIECE_ROUND
         ):
             continue
         k = inertia[ball]
@@ -127,22 +134,18 @@ def select(
             or k[1, 2] != 0.0
         ):
             continue
-        f = piece_fstart[plane]  # the plane's upward normal
-        nx, ny, nz = normals[f, 0], normals[f, 1], normals[f, 2]
-        g = -(accel[ball, 0] * nx + accel[ball, 1] * ny + accel[ball, 2] * nz)
-        if not g > 0.0:
-            continue
-        side = math.sqrt(
-            (accel[ball, 0] + g * nx) ** 2
-            + (accel[ball, 1] + g * ny) ** 2
-            + (accel[ball, 2] + g * nz) ** 2
-        )
-        if side > _LEVEL * g:
-            continue
-        if abs(closest[m]) > apart or abs(closing[m]) > g * dt:
+        g = math.sqrt(accel[ball, 0] ** 2 + accel[ball, 1] ** 2 + accel[ball, 2] ** 2)
+        if not g > 0.0 or abs(closest[m]) > apart or abs(closing[m]) > g * dt:
             continue
         radius = piece_radius[piece]
         mu = cf[m, F_MU]
+        # how far the contact point can go over the step
+        reach = dt * math.sqrt(v[ball, 0] ** 2 + v[ball, 1] ** 2 + v[ball, 2] ** 2)
+        reach += mu * g * dt * dt + apart
+        up = (-accel[ball, 0] / g, -accel[ball, 1] / g, -accel[ball, 2] / g)
+        if not _level_face(plane, up, (x[ball, 0], x[ball, 1], x[ball, 2]), radius, reach,
+                           piece_kind, placed, support[found]):  # fmt: skip
+            continue
         ratio = moment / (mass[ball] * radius * radius)
         if not (mu > 0.0 and cf[m, F_ROLL] <= mu * radius * (1.0 + ratio)):
             continue
@@ -152,8 +155,69 @@ def select(
         ci[m, I_FLAGS] |= FLAG_EXACT
         balls[found] = ball
         rows[found] = m
-        found += 1
+        found += 1  # (support[found] was written by _level_face)
     return found
+
+
+@njit(cache=True)
+def _level_face(
+    plane: int, up: tuple[float, float, float], centre: tuple[float, float, float],
+    radius: float, reach: float, piece_kind: np.ndarray, placed: tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+        np.ndarray, np.ndarray,
+    ], out: np.ndarray,
+) -> bool:  # fmt: skip
+    """Whether static piece ``plane`` holds the ball at ``centre`` on a level face (its
+    outward normal ``up`` within :data:`_LEVEL`) that its contact point stays on while it
+    moves up to ``reach`` [m]; if so, ``out`` (6,) gets the face's normal and a point of it."""
+    vertices, normals, vstart, fstart, fcount, cstart, face_first, face_size, corners = placed
+    flat = piece_kind[plane] == PIECE_PLANE  # (a plane: one face, its point the vertex)
+    best = -1
+    nearest = np.inf
+    for f in range(fstart[plane], fstart[plane] + (1 if flat else fcount[plane])):
+        tilt = (normals[f, 0] - up[0]) ** 2 + (normals[f, 1] - up[1]) ** 2
+        tilt += (normals[f, 2] - up[2]) ** 2
+        if tilt > _LEVEL * _LEVEL:
+            continue
+        c = vstart[plane] + (0 if flat else corners[cstart[plane] + face_first[f]])
+        height = (
+            normals[f, 0] * (centre[0] - vertices[c, 0])
+            + normals[f, 1] * (centre[1] - vertices[c, 1])
+            + normals[f, 2] * (centre[2] - vertices[c, 2])
+        )
+        if abs(height - radius) < nearest:
+            nearest = abs(height - radius)
+            best = f
+    if best < 0:
+        return False
+    f = best
+    nx, ny, nz = normals[f, 0], normals[f, 1], normals[f, 2]
+    if flat:
+        c = vstart[plane]
+    else:
+        # the face is a convex polygon, counter-clockwise seen from outside: the ball's
+        # contact point must stay within it by the reach
+        first = cstart[plane] + face_first[f]
+        size = face_size[f]
+        for j in range(size):
+            a = vstart[plane] + corners[first + j]
+            b = vstart[plane] + corners[first + (j + 1 if j + 1 < size else 0)]
+            ex = vertices[b, 0] - vertices[a, 0]
+            ey = vertices[b, 1] - vertices[a, 1]
+            ez = vertices[b, 2] - vertices[a, 2]
+            ix, iy, iz = _cross_n(nx, ny, nz, ex, ey, ez)  # along the face, inwards
+            size_i = math.sqrt(ix * ix + iy * iy + iz * iz)
+            inside = (
+                ix * (centre[0] - vertices[a, 0])
+                + iy * (centre[1] - vertices[a, 1])
+                + iz * (centre[2] - vertices[a, 2])
+            ) / size_i
+            if not inside > reach:
+                return False
+        c = vstart[plane] + corners[first]
+    out[0], out[1], out[2] = nx, ny, nz
+    out[3], out[4], out[5] = vertices[c, 0], vertices[c, 1], vertices[c, 2]
+    return True
 
 
 @njit(cache=True, inline="always")
@@ -270,31 +334,25 @@ def _turn(
 
 @njit(cache=True)
 def roll_all(
-    balls: np.ndarray, rows: np.ndarray, cf: np.ndarray, ci: np.ndarray, dt: float,
+    balls: np.ndarray, rows: np.ndarray, support: np.ndarray, cf: np.ndarray, dt: float,
     substeps: int, x: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray,
     accel: np.ndarray, mass: np.ndarray, inertia: np.ndarray, inv_inertia: np.ndarray,
     body_pieces: np.ndarray, piece_radius: np.ndarray,
-    plane_at: tuple[np.ndarray, np.ndarray, np.ndarray],
 ) -> None:  # fmt: skip
     """The balls ``balls`` (k,) that :func:`select` found, on the cloth of contact ``rows``
-    (k,), for ``dt`` [s]: each set on the cloth, its centre a radius from the plane, then
-    :func:`roll`; each row's point carries the load ``m g dt`` [N s] as the step's normal
-    impulse (what a contact report reads). ``plane_at``: each piece's first placed vertex
-    and face normal (V, 3), (F, 3) with its start in them (P, 2): a plane's point and upward
-    normal."""
-    vertices, normals, starts = plane_at
+    (k,) given by ``support`` (k, 6: its upward normal and a point of it), for ``dt`` [s]:
+    each set on the cloth, its centre a radius from it, then :func:`roll`; each row's point
+    carries the load ``m g dt`` [N s] as the step's normal impulse (what a contact report
+    reads)."""
     for r in range(balls.shape[0]):
         i = balls[r]
         m = rows[r]
-        plane = ci[m, I_PIECE_B] if ci[m, I_BODY_A] == i else ci[m, I_PIECE_A]
-        f = starts[plane, 1]
-        nx, ny, nz = normals[f, 0], normals[f, 1], normals[f, 2]
-        p = starts[plane, 0]
+        nx, ny, nz = support[r, 0], support[r, 1], support[r, 2]
         radius = piece_radius[body_pieces[i]]
         gap = (
-            nx * (x[i, 0] - vertices[p, 0])
-            + ny * (x[i, 1] - vertices[p, 1])
-            + nz * (x[i, 2] - vertices[p, 2])
+            nx * (x[i, 0] - support[r, 3])
+            + ny * (x[i, 1] - support[r, 4])
+            + nz * (x[i, 2] - support[r, 5])
             - radius
         )
         x[i, 0] -= gap * nx

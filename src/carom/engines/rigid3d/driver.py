@@ -312,22 +312,26 @@ class RigidEngine3D(SteppedEngine):
         n = m.kind.shape[0]
         balls = np.empty(n, np.int64)
         rows = np.empty(n, np.int64)
+        support = np.empty((n, 6))
         pushed = self._loads.none_torqued if loaded is None else loaded.on
+        placed = (
+            s.vertices, s.normals, m.piece_vstart, m.piece_fstart, m.piece_fcount,
+            m.piece_cstart, m.face_first, m.face_size, m.corners,
+        )  # fmt: skip
         found = cloth.select(
             self._ci, self._cf, nc, closest, closing, m.kind, self._role, m.body_pieces,
             m.piece_kind, m.piece_vcount, m.piece_radius, m.mass, m.inertia, self._accel,
-            pushed, self._links, 0.1 * st.linear_slop, self.dt, 4.0 * st.linear_slop, s.normals,
-            m.piece_fstart, balls, rows,
+            pushed, self._links, 0.1 * st.linear_slop, self.dt, 4.0 * st.linear_slop, s.x, s.v,
+            placed, balls, rows, support,
         )  # fmt: skip
         if not found:
             return
-        balls, rows = balls[:found], rows[:found]
+        balls = balls[:found]
         before = self._energy(balls)
-        plane_at = (s.vertices, s.normals, np.stack((m.piece_vstart, m.piece_fstart), axis=1))
         cloth.roll_all(
-            balls, rows, self._cf, self._ci, self.dt, st.substeps, s.x, s.q, s.v, s.w,
-            self._accel, m.mass, m.inertia, m.inv_inertia, m.body_pieces, m.piece_radius,
-            plane_at,
+            balls, rows[:found], support[:found], self._cf, self.dt, st.substeps, s.x, s.q,
+            s.v, s.w, self._accel, m.mass, m.inertia, m.inv_inertia, m.body_pieces,
+            m.piece_radius,
         )  # fmt: skip
         change = self._energy(balls) - before  # friction's, and the dropped normal speed's
         if change < 0.0:
