@@ -14,7 +14,8 @@ names its kernels for the stages that differ (:class:`carom.engines.rigid.driver
 5. **exact impacts**: the islands solved exactly advanced through the step, their impacts
    taken in the order they happen, each at its time of impact
    (:mod:`carom.engines.stepped.impacts`);
-6. **free flight**: bodies with no contact;
+6. **free flight**: bodies with no contact; in 3D, balls alone on a level cloth roll in
+   closed form (:mod:`carom.engines.rigid3d.cloth`);
 7. **solve**: the soft step over the remaining contacts; a solved body that moved far is swept
    against the static geometry its contacts did not hold, and put back at the first touch;
 8. **store** the impulses for the next step, and **sleep** the islands at rest (their bodies
