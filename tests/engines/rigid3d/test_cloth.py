@@ -180,3 +180,19 @@ def test_a_ball_on_a_static_box_rolls_in_closed_form_and_still_falls_off_its_edg
     world.run(until=1.0)  # the edge is 0.9 m on: it left the table after about 0.9 s
     assert world.positions[1, 0] > 1.5
     assert world.positions[1, 2] < top + R - 0.01
+
+
+def test_a_ball_sent_up_off_the_cloth_hops() -> None:
+    # a ball on the cloth given 0.12 m/s upwards leaves it: a hop of u^2 / 2g = 0.73 mm, more
+    # than the touching distance (a tenth of the linear slop, 0.5 mm), is not dropped; after
+    # one step of 1/60 s it has risen u t - g t^2 / 2 (free flight, exact)
+    world = carom.World(3, box=[4, 4, 1], boundary="open", gravity=[0, 0, -G])
+    world.add_plane([0, 0, 0], [0, 0, 1], material=carom.Material(0.5, friction=MU, rolling=C))
+    world.add_body(Sphere(R), [1.0, 1.0, R], mass=M)
+    world.step()
+    assert world.engine._role[0] == islands.ROLE_CLOTH
+    world.set_velocities([0], [[0.0, 0.0, 0.12]])
+    world.step()
+    t = 1.0 / 60.0
+    assert world.positions[0, 2] - R == pytest.approx(0.12 * t - 0.5 * G * t * t, rel=1e-12)
+    assert world.engine._role[0] != islands.ROLE_CLOTH

@@ -27,8 +27,9 @@ the ledger books the energy of both, as it books the friction's. Every ball on t
 then at the same height, so two that meet do so along a level normal.
 
 Who is on the cloth is decided afresh each step (:func:`select`): a ball alone on a level
-static plane, touching it (within the islands' ``apart`` of it) and moving along it (its
-normal speed within what gravity gives in a step), with no force, torque or joint on it, and a
+static plane, touching it (within the islands' ``apart`` of it) and moving along it (not
+falling faster than gravity makes it in a step, not leaving faster than a hop that stays
+within ``apart``), with no force, torque or joint on it, and a
 cloth rough enough to keep it rolling (``c / (R (1 + k)) <= mu``). Anything else near it
 (another ball, a cushion, within the step's reach: the contacts are made for the whole step's
 motion) makes its island the solver's or the exact path's, as before. Rolling resistance acts
@@ -135,7 +136,11 @@ def select(
         ):
             continue
         g = math.sqrt(accel[ball, 0] ** 2 + accel[ball, 1] ** 2 + accel[ball, 2] ** 2)
-        if not g > 0.0 or abs(closest[m]) > apart or abs(closing[m]) > g * dt:
+        # touching, not falling faster than a step of gravity gives, and not leaving faster
+        # than a hop that would stay within the touching distance (``u^2 / 2g <= apart``)
+        if not g > 0.0 or abs(closest[m]) > apart or closing[m] < -g * dt:
+            continue
+        if closing[m] > 0.0 and closing[m] * closing[m] > 2.0 * g * apart:
             continue
         radius = piece_radius[piece]
         mu = cf[m, F_MU]
