@@ -34,7 +34,10 @@ Every buffer is flat: row ``r`` of a group is ``LANES`` numbers from ``r * LANES
 a constant, so each row is one vector load; the group's rows (its contacts and both bodies'
 inverse masses, fixed for the step) are copied as one run. Each body's velocity, move and turn
 since the step began share one row of the solver's state (one cache line), gathered lane by
-lane.
+lane. (Working on the groups in place, as the 3D solver does, was measured: a pass 20% faster
+on the large pyramid, whose groups stay in cache, but a step a third slower on many pyramids,
+60,000 contacts and 14 MB of groups, whose rows the copy streams from memory where the passes
+read in place would fetch them in the arithmetic's order.)
 """
 
 from __future__ import annotations

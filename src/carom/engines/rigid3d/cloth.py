@@ -57,19 +57,37 @@ from carom.engines.stepped.islands import ROLE_CLOTH, ROLE_SOLVER
 from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
 from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
 
-__all__ = ["roll_all", "select"]
+__all__ = ["ball_shaped", "roll_all", "select"]
 
 #: a slip below this many ulps of the ball's speeds is round-off: the ball rolls
 _ROUND = 64.0 * np.finfo(np.float64).eps
-#: the plane is level when gravity's part along it is below this fraction of g
+#: a face is level when its unit normal is within this of gravity's upward direction
 _LEVEL = 1e-12
+
+
+def ball_shaped(
+    kind: np.ndarray, body_pieces: np.ndarray, piece_kind: np.ndarray,
+    piece_vcount: np.ndarray, inertia: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """Which bodies (N,) bool could roll on a cloth: dynamic, one sphere (a round piece of one
+    corner), the same moment of inertia about every axis (fixed for an engine's life: its
+    driver asks once)."""
+    one = np.diff(body_pieces) == 1
+    first = np.minimum(body_pieces[:-1], max(piece_kind.shape[0] - 1, 0))
+    sphere = one & (piece_kind[first] == PIECE_ROUND) & (piece_vcount[first] == 1)
+    diagonal = inertia[:, [0, 1, 2], [0, 1, 2]]
+    isotropic = (diagonal == diagonal[:, :1]).all(axis=1)
+    isotropic &= (inertia[:, 0, 1] == 0.0) & (inertia[:, 0, 2] == 0.0)
+    isotropic &= inertia[:, 1, 2] == 0.0
+    shaped: np.ndarray = (kind == KIND_DYNAMIC) & sphere & isotropic
+    return shaped
 
 
 @njit(cache=True)
 def select(
     ci: np.ndarray, cf: np.ndarray, nc: int, closest: np.ndarray, closing: np.ndarray,
-    kind: np.ndarray, role: np.ndarray, body_pieces: np.ndarray, piece_kind: np.ndarray,
-    piece_vcount: np.ndarray, piece_radius: np.ndarray, mass: np.ndarray, inertia: np.ndarray,
+    kind: np.ndarray, role: np.ndarray, shaped: np.ndarray, body_pieces: np.ndarray,
+    piece_kind: np.ndarray, piece_radius: np.ndarray, mass: np.ndarray, inertia: np.ndarray,
     accel: np.ndarray, pushed: np.ndarray, links: np.ndarray, apart: float, dt: float,
     speculative: float, x: np.ndarray, v: np.ndarray, placed: tuple[
         np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
@@ -81,8 +99,9 @@ def select(
 
     ``closest``, ``closing`` (nc,) are each contact's least separation [m] and normal speed
     [m/s] (:func:`carom.engines.stepped.islands.plan`'s), ``role`` (N,) the roles it gave,
-    ``accel`` (N, 3) each body's acceleration [m/s^2], ``pushed`` (N,) the bodies with a force
-    or a torque this step, ``links`` (L, 2) the bodies joints join (module docstring).
+    ``shaped`` (N,) the bodies :func:`ball_shaped` found, ``accel`` (N, 3) each body's
+    acceleration [m/s^2], ``pushed`` (N,) the bodies with a force or a torque this step,
+    ``links`` (L, 2) the bodies joints join (module docstring).
     ``placed``: the placed pieces' vertices (V, 3) and face normals (F, 3), and the model's
     ``piece_vstart``, ``piece_fstart``, ``piece_fcount``, ``piece_cstart``, ``face_first``,
     ``face_size`` and ``corners`` (:class:`.model.Model3D`). The cloth is a static plane, or
@@ -109,32 +128,18 @@ def select(
         b = ci[m, I_BODY_B]
         if a < 0 or b < 0:
             continue
-        if kind[a] == KIND_DYNAMIC and kind[b] == KIND_STATIC:
+        if shaped[a] and kind[b] == KIND_STATIC:
             ball, plane = a, ci[m, I_PIECE_B]
-        elif kind[b] == KIND_DYNAMIC and kind[a] == KIND_STATIC:
+        elif shaped[b] and kind[a] == KIND_STATIC:
             ball, plane = b, ci[m, I_PIECE_A]
         else:
             continue
         if role[ball] != ROLE_SOLVER or count[ball] != 1 or pushed[ball]:
             continue
+        if piece_kind[plane] == PIECE_ROUND:
+            continue
         piece = body_pieces[ball]
-        if (
-            body_pieces[ball + 1] != piece + 1
-            or piece_kind[piece] != PIECE_ROUND
-            or piece_vcount[piece] != 1
-            or piece_kind[plane] == PIECE_ROUND
-        ):
-            continue
-        k = inertia[ball]
-        moment = k[0, 0]
-        if (
-            k[1, 1] != moment
-            or k[2, 2] != moment
-            or k[0, 1] != 0.0
-            or k[0, 2] != 0.0
-            or k[1, 2] != 0.0
-        ):
-            continue
+        moment = inertia[ball][0, 0]
         g = math.sqrt(accel[ball, 0] ** 2 + accel[ball, 1] ** 2 + accel[ball, 2] ** 2)
         # touching, not falling faster than a step of gravity gives, and not leaving faster
         # than a hop that would stay within the touching distance (``u^2 / 2g <= apart``)
@@ -245,7 +250,6 @@ def roll(
     Row ``i`` of ``x``, ``v``, ``w`` (N, 3) and ``q`` (N, 4) is changed."""
     nx, ny, nz = normal
     g, mu, c, radius, k = cloth
-    moment = inertia[i][0, 0]
     vn = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
     vx, vy, vz = v[i, 0] - vn * nx, v[i, 1] - vn * ny, v[i, 2] - vn * nz
     wn = w[i, 0] * nx + w[i, 1] * ny + w[i, 2] * nz
@@ -263,13 +267,9 @@ def roll(
         t = min(left, t_slide)
         decel = mu * g
         spin_rate = mu * g / (k * radius)  # |dw/dt|, along n x u^
+        _phase(i, t, substeps, x, q, w, inertia, inv_inertia, (vx, vy, vz), (ex, ey, ez),
+               decel, spin_rate, (ax, ay, az, wn), normal)  # fmt: skip
         bx, by, bz = _cross_n(nx, ny, nz, ex, ey, ez)
-        x[i, 0] += t * (vx - 0.5 * t * decel * ex)
-        x[i, 1] += t * (vy - 0.5 * t * decel * ey)
-        x[i, 2] += t * (vz - 0.5 * t * decel * ez)
-        tq = moment * spin_rate
-        spin = (ax, ay, az, wn)
-        _turn(i, t, substeps, q, w, inertia, inv_inertia, spin, normal, (tq * bx, tq * by, tq * bz))
         vx -= t * decel * ex
         vy -= t * decel * ey
         vz -= t * decel * ez
@@ -288,14 +288,9 @@ def roll(
         decel = c * g / (radius * (1.0 + k))
         t_roll = speed / decel if decel > 0.0 else np.inf
         t = min(left, t_roll)
-        bx, by, bz = _cross_n(nx, ny, nz, ex, ey, ez)
-        x[i, 0] += t * (vx - 0.5 * t * decel * ex)
-        x[i, 1] += t * (vy - 0.5 * t * decel * ey)
-        x[i, 2] += t * (vz - 0.5 * t * decel * ez)
-        spin_rate = -decel / radius  # along n x v^
-        tq = moment * spin_rate
-        spin = (ax, ay, az, wn)
-        _turn(i, t, substeps, q, w, inertia, inv_inertia, spin, normal, (tq * bx, tq * by, tq * bz))
+        # the spin in the plane follows the roll: -decel / R along n x v^
+        _phase(i, t, substeps, x, q, w, inertia, inv_inertia, (vx, vy, vz), (ex, ey, ez),
+               decel, -decel / radius, (ax, ay, az, wn), normal)  # fmt: skip
         left -= t
         if t < t_roll:
             vx -= t * decel * ex
@@ -309,6 +304,25 @@ def roll(
         spin = (ax, ay, az, wn)
         _turn(i, left, substeps, q, w, inertia, inv_inertia, spin, normal, (0.0, 0.0, 0.0))
     _write(i, v, w, (vx, vy, vz), (ax, ay, az), wn, normal)
+
+
+@njit(cache=True, inline="always")
+def _phase(
+    i: int, t: float, substeps: int, x: np.ndarray, q: np.ndarray, w: np.ndarray,
+    inertia: np.ndarray, inv_inertia: np.ndarray, lin: tuple[float, float, float],
+    along: tuple[float, float, float], decel: float, spin_rate: float,
+    spin: tuple[float, float, float, float], normal: tuple[float, float, float],
+) -> None:  # fmt: skip
+    """One phase of ``t`` [s]: ball ``i``'s centre moves from velocity ``lin`` slowing at
+    ``decel`` [m/s^2] along ``-along``, and it turns from ``spin`` (in the plane, then about the
+    normal) with its spin changing at ``spin_rate`` [rad/s^2] along ``n x along``."""
+    ex, ey, ez = along
+    x[i, 0] += t * (lin[0] - 0.5 * t * decel * ex)
+    x[i, 1] += t * (lin[1] - 0.5 * t * decel * ey)
+    x[i, 2] += t * (lin[2] - 0.5 * t * decel * ez)
+    bx, by, bz = _cross_n(normal[0], normal[1], normal[2], ex, ey, ez)
+    tq = inertia[i][0, 0] * spin_rate
+    _turn(i, t, substeps, q, w, inertia, inv_inertia, spin, normal, (tq * bx, tq * by, tq * bz))
 
 
 @njit(cache=True, inline="always")

@@ -120,6 +120,10 @@ class RigidEngine3D(SteppedEngine):
             int(m.piece_vcount.max(initial=1)),
             max(1, int(m.piece_fcount.max(initial=1))),
         )
+        #: the bodies that could roll on a cloth (:mod:`.cloth`): none, and no step looks
+        self._ball_shaped = cloth.ball_shaped(
+            m.kind, m.body_pieces, m.piece_kind, m.piece_vcount, m.inertia
+        )
         self._made = _room(self._ci.shape[0])  # this step's manifolds, kept once it is taken
         self._made_count = 0
         self._ints = (
@@ -308,6 +312,8 @@ class RigidEngine3D(SteppedEngine):
     def _roll_cloth(
         self, nc: int, closest: FloatArray, closing: FloatArray, loaded: Loaded | None
     ) -> None:
+        if not self._ball_shaped.any():
+            return
         m, s, st = self.model, self.state, self.settings
         n = m.kind.shape[0]
         balls = np.empty(n, np.int64)
@@ -319,8 +325,8 @@ class RigidEngine3D(SteppedEngine):
             m.piece_cstart, m.face_first, m.face_size, m.corners,
         )  # fmt: skip
         found = cloth.select(
-            self._ci, self._cf, nc, closest, closing, m.kind, self._role, m.body_pieces,
-            m.piece_kind, m.piece_vcount, m.piece_radius, m.mass, m.inertia, self._accel,
+            self._ci, self._cf, nc, closest, closing, m.kind, self._role, self._ball_shaped,
+            m.body_pieces, m.piece_kind, m.piece_radius, m.mass, m.inertia, self._accel,
             pushed, self._links, 0.1 * st.linear_slop, self.dt, 4.0 * st.linear_slop, s.x, s.v,
             placed, balls, rows, support,
         )  # fmt: skip
