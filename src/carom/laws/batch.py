@@ -24,7 +24,7 @@ vectorises it (the vector square roots and divisions are IEEE-exact like the sca
 nothing is reordered or fused: the same bits). Run over the caller's arrays, whose overlaps
 only a check at run time could rule out, the same loop stayed scalar: LLVM gives up past a
 few such checks, and there are about twenty arrays. The middle loop is written once
-(:func:`_law_block`) and inlined by LLVM. A batch of :data:`CASE_PAIRS` pairs or more runs
+(:func:`law_block`) and inlined by LLVM. A batch of :data:`CASE_PAIRS` pairs or more runs
 in a pass compiled for its case alone (2D or 3D; smooth without spins, smooth with, rough,
 Walton's: :func:`case_of`), where the copy carries no branch on them; smaller batches run in
 one pass for any case (case 0), which branches on each pair, so that single pairs and small
@@ -285,7 +285,7 @@ def _huge(x0: float, x1: float, x2: float) -> bool:
 
 
 @kernel_only(error_model="numpy", forceinline=True)
-def _law_block(
+def law_block(
     s: np.ndarray, o: np.ndarray, m: int, d3: bool, law: int, spins: bool, q1: float, q2: float
 ) -> None:
     """The law on the first ``m`` pairs of the scratch block ``s`` (``IN_*`` rows), into
@@ -582,10 +582,10 @@ def _compile_pass(case: int) -> Any:
                 # inside the threads' loop, from the closure's constant), so that the copy has no
                 # branch on them; for case 0, with the arguments'
                 if case == 0:
-                    _law_block(s, o, m, d3, law, spins, q1, q2)
+                    law_block(s, o, m, d3, law, spins, q1, q2)
                 else:
                     case_d3, case_law, case_spins = CASES[case - 1]
-                    _law_block(s, o, m, case_d3, case_law, case_spins, q1, q2)
+                    law_block(s, o, m, case_d3, case_law, case_spins, q1, q2)
                 # out: past the caches, array by array, in a case's own pass (case 0 has no such
                 # code: its batches are far smaller than STREAM_BYTES)
                 if case != 0 and stream:

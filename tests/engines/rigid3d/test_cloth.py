@@ -4,6 +4,7 @@ the sliding-then-rolling motion written out (carom.engines.rigid3d.cloth)."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -42,7 +43,7 @@ def closed_form(v0: np.ndarray, w0: np.ndarray, t: float) -> tuple[np.ndarray, .
     wn = float(w0 @ UP)
     u0 = v0 + R * np.cross(UP, w0)
     slip = float(np.linalg.norm(u0))
-    e = u0 / slip
+    e = u0 / slip if slip > 0.0 else np.zeros(3)  # (no slip: rolling from the start)
     t_s = slip / (MU * G * (1.0 + 1.0 / K))
     ts = min(t, t_s)
     move = v0 * ts - 0.5 * MU * G * e * ts**2
@@ -52,6 +53,8 @@ def closed_form(v0: np.ndarray, w0: np.ndarray, t: float) -> tuple[np.ndarray, .
         return move, v, w
     a = C * G / (R * (1.0 + K))
     speed = float(np.linalg.norm(v))
+    if speed == 0.0:
+        return move, v, wn * UP
     tr = min(t - t_s, speed / a)
     e = v / speed
     move = move + v * tr - 0.5 * a * e * tr**2
@@ -196,3 +199,146 @@ def test_a_ball_sent_up_off_the_cloth_hops() -> None:
     t = 1.0 / 60.0
     assert world.positions[0, 2] - R == pytest.approx(0.12 * t - 0.5 * G * t * t, rel=1e-12)
     assert world.engine._role[0] != islands.ROLE_CLOTH
+
+
+# --- two balls on the cloth: the impact is carom.collide's, at its exact time -------------
+
+GAP = 0.5  # the object ball's centre ahead of the cue ball's [m]
+#: shots at an object ball at rest: the cue ball's velocity [m/s] and spin [rad/s], and the
+#: object ball's offset across the line of the shot [m] (R: a half-ball cut)
+MEETINGS = {
+    "follow": ([2.0, 0.0, 0.0], [0.0, 2.0 / R, 0.0], 0.0),  # rolling: follows through
+    "stun": ([2.0, 0.0, 0.0], [0.0, 0.0, 0.0], 0.0),  # no spin yet, sliding on impact
+    "draw": ([2.0, 0.0, 0.0], [0.0, -2.5 / R, 0.0], 0.0),  # backspin: comes back
+    "cut": ([2.0, 0.0, 0.0], [0.0, 2.0 / R, 0.0], R),  # half-ball, rolling
+}
+BALLS = {"smooth": None, "walton": 0.05}  # ball-ball friction: none, billiards-3d's
+
+
+def _ball_material(friction: float | None) -> carom.Material:
+    return carom.Material(0.95, friction=friction)
+
+
+def meeting(
+    rate: float, name: str, friction: float | None, until: float, *, sink: list | None = None
+) -> carom.World:
+    """The cue ball (body 0) shot at the object ball (1) on the cloth, run to ``until``."""
+    v0, w0, offset = MEETINGS[name]
+    world = carom.World(
+        3, box=[8, 8, 1], boundary="open", gravity=[0, 0, -G],
+        rigid=RigidSettings(rate=rate, sleep=False),
+    )  # fmt: skip
+    world.add_plane([0, 0, 0], [0, 0, 1], material=carom.Material(0.5, friction=MU, rolling=C))
+    ball = _ball_material(friction)
+    world.add_body(
+        Sphere(R), [3.0, 4.0, R], velocity=v0, angular_velocity=w0, mass=M, material=ball
+    )
+    world.add_body(Sphere(R), [3.0 + GAP, 4.0 + offset, R], mass=M, material=ball)
+    world.run(until=until, on_collisions=None if sink is None else sink.append)
+    return world
+
+
+def meeting_closed_form(name: str, friction: float | None, until: float) -> dict[str, Any]:
+    """The shot's piecewise closed form: the cue ball slides and rolls (:func:`closed_form`)
+    until its centre is 2R from the object ball's (the time found by bisection on the closed
+    form: the cue ball moves along x, ever forward until then); carom.collide's impact of
+    the two (Walton's law with the balls' friction, or smooth; I = K m R^2); the velocity
+    across the cloth that the impulse gave dropped (the cloth holds both); then each ball's
+    closed form to ``until``."""
+    v0, w0, offset = MEETINGS[name]
+    v0, w0 = np.array(v0), np.array(w0)
+    reach = GAP - math.sqrt(4.0 * R * R - offset * offset)  # the cue's travel to contact
+    lo, hi = 0.0, 1.0
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if closed_form(v0, w0, mid)[0][0] < reach else (lo, mid)
+    t_hit = lo
+    move, v1, w1 = closed_form(v0, w0, t_hit)
+    x1 = np.array([3.0, 4.0, R]) + move
+    x2 = np.array([3.0 + GAP, 4.0 + offset, R])
+    r = carom.collide(
+        x1, v1, M, x2, np.zeros(3), M, e=0.95, w1=w1, w2=np.zeros(3), radius1=R, radius2=R,
+        friction=friction, q=K,
+    )  # fmt: skip
+    ends = []
+    for x, v, w in ((x1, r.v1, r.w1), (x2, r.v2, r.w2)):
+        v = np.array(v, dtype=float)
+        v[2] = 0.0
+        move, v, w = closed_form(v, np.array(w, dtype=float), until - t_hit)
+        ends.append((x + move, v, w))
+    return {"t_hit": t_hit, "impact": r, "ends": ends}
+
+
+@pytest.mark.needs_jit  # up to 1300 steps a run, 24 runs
+@pytest.mark.parametrize("balls", list(BALLS))
+@pytest.mark.parametrize("name", list(MEETINGS))
+def test_two_balls_meet_as_collide_says_at_every_rate(name: str, balls: str) -> None:
+    # The issue's shots: each ball's position, velocity and spin 1.3 s after the shot (the
+    # impact at about 0.22-0.25 s, every ball rolling again by then) are the same at 60, 240
+    # and 1000 Hz and equal to the piecewise closed form, to 1e-9 (the issue's bound). The
+    # time of impact is found to a billionth of the balls' reaches (5.7e-11 m of gap,
+    # impacts.py): about 3e-11 s at 2 m/s, which moves nothing by 1e-9.
+    until = 1.3
+    expect = meeting_closed_form(name, BALLS[balls], until)
+    for rate in (60.0, 240.0, 1000.0):
+        log: list = []
+        world = meeting(rate, name, BALLS[balls], until, sink=log)
+        records = np.concatenate(log)
+        assert records.shape[0] == 1  # one impact, between the balls, solved exactly
+        assert records["time"][0] == pytest.approx(expect["t_hit"], abs=1e-10)
+        for i, (x, v, w) in enumerate(expect["ends"]):
+            assert world.positions[i] == pytest.approx(x, abs=1e-9)
+            assert world.velocities[i] == pytest.approx(v, abs=1e-9)
+            assert R * world.angular_velocities[i] == pytest.approx(R * w, abs=1e-9)
+        assert list(world.engine._role[:2]) == [islands.ROLE_CLOTH] * 2
+
+
+@pytest.mark.parametrize("balls", list(BALLS))
+def test_an_impact_on_the_cloth_is_collides_to_the_bit(balls: str) -> None:
+    # Two balls touching at the start, the cue ball rolling into the other at 2 m/s: the
+    # impact is at t = 0, from the state given, and its impulse is carom.collide's, the same
+    # bits (the same arithmetic: carom.laws.batch.law_block). After the step each ball has
+    # rolled on from collide's velocities and spins, its velocity across the cloth dropped:
+    # the closed form to round-off.
+    friction = BALLS[balls]
+    world = carom.World(3, box=[4, 4, 1], boundary="open", gravity=[0, 0, -G])
+    world.add_plane([0, 0, 0], [0, 0, 1], material=carom.Material(0.5, friction=MU, rolling=C))
+    ball = _ball_material(friction)
+    x1, x2 = np.array([1.0, 1.0, R]), np.array([1.0 + 2.0 * R, 1.0, R])
+    v1, w1 = np.array([2.0, 0.0, 0.0]), np.array([0.0, 2.0 / R, 0.0])
+    world.add_body(Sphere(R), x1, velocity=v1, angular_velocity=w1, mass=M, material=ball)
+    world.add_body(Sphere(R), x2, mass=M, material=ball)
+    log: list = []
+    world.run(until=1.0 / 60.0, on_collisions=log.append)
+    records = np.concatenate(log)
+    assert records.shape[0] == 1
+    assert records["time"][0] == 0.0
+    q = world.engine.model.inertia[0][0, 0] / (M * R * R)  # the ball's own I / (m R^2)
+    r = carom.collide(
+        x1, v1, M, x2, np.zeros(3), M, e=0.95, w1=w1, w2=np.zeros(3), radius1=R, radius2=R,
+        friction=friction, q=q,
+    )  # fmt: skip
+    assert np.array_equal(records["impulse"][0], r.impulse)
+    if friction is not None:  # topspin against the object ball: friction lifts the cue ball
+        assert r.v1[2] > 0.0
+        assert r.v2[2] < 0.0
+    for i, (v, w) in enumerate(((r.v1, r.w1), (r.v2, r.w2))):
+        v = np.array(v, dtype=float)
+        v[2] = 0.0
+        _, v_end, w_end = closed_form(v, np.array(w, dtype=float), 1.0 / 60.0)
+        assert world.velocities[i] == pytest.approx(v_end, abs=1e-12)
+        assert R * world.angular_velocities[i] == pytest.approx(R * w_end, abs=1e-12)
+        assert world.positions[i, 2] == R
+
+
+def test_the_ledger_closes_over_an_impact_on_the_cloth() -> None:
+    # E0 = E + lost - given, to round-off of E0: the impact's loss (its log), the friction
+    # before and after it, and the velocity across the cloth the impulse gave (dropped)
+    world = meeting(60.0, "follow", 0.05, 1.3)
+    inertia = K * M * R**2
+    v0, w0, _ = MEETINGS["follow"]
+    e0 = 0.5 * M * float(np.dot(v0, v0)) + 0.5 * inertia * float(np.dot(w0, w0))
+    v, w = world.velocities, world.angular_velocities
+    e = 0.5 * M * float((v * v).sum()) + 0.5 * inertia * float((w * w).sum())
+    c = world.counters()
+    assert e + c.energy_lost - c.energy_given == pytest.approx(e0, rel=1e-12)

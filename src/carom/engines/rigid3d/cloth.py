@@ -53,11 +53,49 @@ from carom.engines.rigid3d.contacts import (
 )
 from carom.engines.rigid3d.model import PIECE_PLANE, PIECE_ROUND
 from carom.engines.rigid3d.motion import turn_under
-from carom.engines.stepped.islands import ROLE_CLOTH, ROLE_SOLVER
 from carom.engines.stepped.rows import FLAG_EXACT, I_BODY_A, I_BODY_B, I_PIECE_A, I_PIECE_B
+from carom.laws.batch import (
+    IN_BETA,
+    IN_E,
+    IN_FRICTION,
+    IN_M1,
+    IN_M2,
+    IN_R1,
+    IN_R2,
+    IN_ROWS,
+    IN_V1,
+    IN_V2,
+    IN_W1,
+    IN_W2,
+    IN_X1,
+    IN_X2,
+    OUT_APPLIED,
+    OUT_APPROACH,
+    OUT_J,
+    OUT_KE_AFTER,
+    OUT_KE_BEFORE,
+    OUT_N,
+    OUT_ROWS,
+    OUT_SEPARATION,
+    OUT_V1,
+    OUT_V2,
+    OUT_W1,
+    OUT_W2,
+    law_block,
+)
+from carom.laws.kernels import LAW_WALTON
 from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
 
-__all__ = ["ball_shaped", "roll_all", "select"]
+__all__ = [
+    "SUPPORT",
+    "ball_impact",
+    "ball_shaped",
+    "candidates",
+    "loaded",
+    "roll",
+    "roll_all",
+    "seat",
+]
 
 #: a slip below this many ulps of the ball's speeds is round-off: the ball rolls
 _ROUND = 64.0 * np.finfo(np.float64).eps
@@ -83,46 +121,78 @@ def ball_shaped(
     return shaped
 
 
+#: columns of a ball's cloth (:func:`candidates`'s ``support``): its upward unit normal (3), a
+#: point of it (3) [m], gravity across it g [m/s^2], friction mu [-], rolling resistance c [m],
+#: the ball's radius R [m] and I / (m R^2) [-]
+S_NORMAL, S_POINT, S_G, S_MU, S_ROLL, S_RADIUS, S_RATIO = 0, 3, 6, 7, 8, 9, 10
+SUPPORT = 11
+
+
 @njit(cache=True)
-def select(
+def candidates(
     ci: np.ndarray, cf: np.ndarray, nc: int, closest: np.ndarray, closing: np.ndarray,
-    kind: np.ndarray, role: np.ndarray, shaped: np.ndarray, body_pieces: np.ndarray,
+    kind: np.ndarray, awake: np.ndarray, shaped: np.ndarray, body_pieces: np.ndarray,
     piece_kind: np.ndarray, piece_radius: np.ndarray, mass: np.ndarray, inertia: np.ndarray,
-    accel: np.ndarray, pushed: np.ndarray, links: np.ndarray, apart: float, dt: float,
-    speculative: float, x: np.ndarray, v: np.ndarray, placed: tuple[
+    accel: np.ndarray, pushed: np.ndarray, links: np.ndarray,
+    limits: tuple[float, float, float, float, float], x: np.ndarray, v: np.ndarray,
+    placed: tuple[
         np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
         np.ndarray, np.ndarray,
-    ], balls: np.ndarray, rows: np.ndarray, support: np.ndarray,
+    ], skip: np.ndarray, held: np.ndarray, support: np.ndarray,
 ) -> int:  # fmt: skip
-    """Give the balls on a level cloth this step ROLE_CLOTH, flag their contact rows solved
-    exactly (the solver skips them) and write them to ``balls`` and ``rows``; return how many.
+    """Find the balls on a level cloth this step; return how many.
 
-    ``closest``, ``closing`` (nc,) are each contact's least separation [m] and normal speed
-    [m/s] (:func:`carom.engines.stepped.islands.plan`'s), ``role`` (N,) the roles it gave,
-    ``shaped`` (N,) the bodies :func:`ball_shaped` found, ``accel`` (N, 3) each body's
-    acceleration [m/s^2], ``pushed`` (N,) the bodies with a force or a torque this step,
-    ``links`` (L, 2) the bodies joints join (module docstring).
-    ``placed``: the placed pieces' vertices (V, 3) and face normals (F, 3), and the model's
-    ``piece_vstart``, ``piece_fstart``, ``piece_fcount``, ``piece_cstart``, ``face_first``,
-    ``face_size`` and ``corners`` (:class:`.model.Model3D`). The cloth is a static plane, or
-    a level face of a static polytope that the ball's contact point cannot leave within the
-    step. ``support`` (k, 6) receives each ball's cloth: its upward normal and a point of
-    it [m].
-    ``speculative`` [m] is how far beyond its steady motion a contact is made: friction
-    changes a ball's path by at most ``mu g dt^2 / 2`` over the step, which must stay within
-    it, so that whatever the ball could reach has a contact (and the ball is not alone).
+    Each gets ``held[i]`` = (its cloth's contact row, the cloth's piece) (-1, -1 for every
+    other body), ``support[i]`` its cloth (columns ``S_*``), and its cloth's row is marked in
+    ``skip`` (nc,): :func:`carom.engines.stepped.islands.plan` leaves it out, so that a ball
+    with nothing else near is free (and rolls, :func:`roll_all`) and balls about to meet are
+    an island solved exactly (:mod:`.impacts`, which rolls them between impacts).
+
+    A ball is on the cloth when (module docstring):
+
+    - its only contact with anything not dynamic is a level face of a static piece (a plane,
+      or a polytope's face its contact point cannot leave within the step), touching it
+      (within ``apart``), not falling faster than a step of gravity gives nor leaving faster
+      than a hop within ``apart``; the cloth rough enough to keep it rolling
+      (``c <= mu R (1 + k)``) and ``mu g dt^2 / 2`` within ``speculative``: the contacts are
+      made for the step's steady motion, and friction must not take the ball beyond them;
+    - it is awake, no force, torque (``pushed`` (N,)) or joint (``links`` (L, 2)) acts on it;
+    - every other contact it has is with a ball on the cloth, and is an impact still to
+      happen (apart, closing faster than ``fast`` or leaving faster than ``leaving``: the
+      islands' test): balls resting against each other are the solver's, and so is a ball
+      touching anything else.
+
+    ``closest``, ``closing`` (nc,): each contact's least separation [m] and normal speed
+    [m/s]; ``shaped`` (N,): :func:`ball_shaped`; ``accel`` (N, 3) [m/s^2]; ``limits``:
+    ``(apart, fast, leaving, dt, speculative)``; ``placed``: the placed pieces' vertices
+    (V, 3) and face normals (F, 3), and the model's ``piece_vstart``, ``piece_fstart``,
+    ``piece_fcount``, ``piece_cstart``, ``face_first``, ``face_size`` and ``corners``
+    (:class:`.model.Model3D`).
     """
+    apart, fast, leaving, dt, speculative = limits
     n = kind.shape[0]
-    count = np.zeros(n, np.int64)
-    for m in range(nc):
-        for body in (ci[m, I_BODY_A], ci[m, I_BODY_B]):
-            if body >= 0:
-                count[body] += 1
+    others = np.zeros(n, np.int64)  # contacts with anything not dynamic
+    barred = np.zeros(n, np.bool_)
+    for i in range(n):
+        held[i, 0] = -1
+        held[i, 1] = -1
     for m in range(links.shape[0]):
         for body in (links[m, 0], links[m, 1]):
             if body >= 0:
-                count[body] += 1
-    found = 0
+                barred[body] = True
+    for m in range(nc):
+        skip[m] = False
+        a = ci[m, I_BODY_A]
+        b = ci[m, I_BODY_B]
+        for body, other in ((a, b), (b, a)):
+            if body < 0 or not shaped[body]:
+                continue
+            if other < 0 or kind[other] != KIND_DYNAMIC:
+                others[body] += 1
+            elif not shaped[other]:
+                barred[body] = True
+            elif closest[m] <= apart and -fast <= closing[m] <= leaving:
+                barred[body] = True  # resting against another ball
     for m in range(nc):
         a = ci[m, I_BODY_A]
         b = ci[m, I_BODY_B]
@@ -134,7 +204,7 @@ def select(
             ball, plane = b, ci[m, I_PIECE_A]
         else:
             continue
-        if role[ball] != ROLE_SOLVER or count[ball] != 1 or pushed[ball]:
+        if barred[ball] or others[ball] != 1 or pushed[ball] or not awake[ball]:
             continue
         if piece_kind[plane] == PIECE_ROUND:
             continue
@@ -154,18 +224,39 @@ def select(
         reach += mu * g * dt * dt + apart
         up = (-accel[ball, 0] / g, -accel[ball, 1] / g, -accel[ball, 2] / g)
         if not _level_face(plane, up, (x[ball, 0], x[ball, 1], x[ball, 2]), radius, reach,
-                           piece_kind, placed, support[found]):  # fmt: skip
+                           piece_kind, placed, support[ball]):  # fmt: skip
             continue
         ratio = moment / (mass[ball] * radius * radius)
         if not (mu > 0.0 and cf[m, F_ROLL] <= mu * radius * (1.0 + ratio)):
             continue
         if 0.5 * mu * g * dt * dt > speculative:
             continue  # (friction could take it beyond the contacts made for the step)
-        role[ball] = ROLE_CLOTH
-        ci[m, I_FLAGS] |= FLAG_EXACT
-        balls[found] = ball
-        rows[found] = m
-        found += 1  # (support[found] was written by _level_face)
+        held[ball, 0] = m
+        held[ball, 1] = plane
+        support[ball, S_G] = g
+        support[ball, S_MU] = mu
+        support[ball, S_ROLL] = cf[m, F_ROLL]
+        support[ball, S_RADIUS] = radius
+        support[ball, S_RATIO] = ratio
+    # a ball whose partner is not on the cloth leaves it too (the pair is the solver's)
+    changed = True
+    while changed:
+        changed = False
+        for m in range(nc):
+            a = ci[m, I_BODY_A]
+            b = ci[m, I_BODY_B]
+            if a < 0 or b < 0 or kind[a] != KIND_DYNAMIC or kind[b] != KIND_DYNAMIC:
+                continue
+            if (held[a, 0] >= 0) != (held[b, 0] >= 0):
+                for body in (a, b):
+                    held[body, 0] = -1
+                    held[body, 1] = -1
+                changed = True
+    found = 0
+    for i in range(n):
+        if held[i, 0] >= 0:
+            skip[held[i, 0]] = True
+            found += 1
     return found
 
 
@@ -240,16 +331,18 @@ def _cross_n(
 
 @njit(cache=True)
 def roll(
-    i: int, dt: float, substeps: int, normal: tuple[float, float, float],
-    cloth: tuple[float, float, float, float, float], x: np.ndarray, q: np.ndarray,
+    i: int, dt: float, substeps: int, cloth: np.ndarray, x: np.ndarray, q: np.ndarray,
     v: np.ndarray, w: np.ndarray, inertia: np.ndarray, inv_inertia: np.ndarray,
 ) -> None:  # fmt: skip
-    """Ball ``i`` on the cloth for ``dt`` [s] in closed form (module docstring): ``normal``
-    the plane's upward unit normal, ``cloth`` its ``(g, mu, c, R, k)``: gravity [m/s^2],
-    friction [-], rolling resistance [m], the ball's radius [m] and ``I / (m R^2)`` [-].
-    Row ``i`` of ``x``, ``v``, ``w`` (N, 3) and ``q`` (N, 4) is changed."""
-    nx, ny, nz = normal
-    g, mu, c, radius, k = cloth
+    """Ball ``i`` on the cloth for ``dt`` [s] in closed form (module docstring); ``cloth``
+    (:data:`SUPPORT`,) its cloth (columns ``S_*``: the upward unit normal, gravity, friction,
+    rolling resistance, the ball's radius and ``I / (m R^2)``). Row ``i`` of ``x``, ``v``,
+    ``w`` (N, 3) and ``q`` (N, 4) is changed; a velocity across the cloth is dropped (the
+    cloth holds the ball)."""
+    nx, ny, nz = cloth[S_NORMAL], cloth[S_NORMAL + 1], cloth[S_NORMAL + 2]
+    normal = (nx, ny, nz)
+    g, mu, c = cloth[S_G], cloth[S_MU], cloth[S_ROLL]
+    radius, k = cloth[S_RADIUS], cloth[S_RATIO]
     vn = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
     vx, vy, vz = v[i, 0] - vn * nx, v[i, 1] - vn * ny, v[i, 2] - vn * nz
     wn = w[i, 0] * nx + w[i, 1] * ny + w[i, 2] * nz
@@ -351,36 +444,109 @@ def _turn(
     turn_under(i, t, substeps, q, w, inertia, inv_inertia, torque[0], torque[1], torque[2])
 
 
+@njit(cache=True, inline="always")
+def seat(i: int, cloth: np.ndarray, x: np.ndarray) -> None:
+    """Set ball ``i`` on its cloth (``cloth``: :data:`SUPPORT`,): its centre a radius from
+    the cloth's plane, along the normal."""
+    nx, ny, nz = cloth[S_NORMAL], cloth[S_NORMAL + 1], cloth[S_NORMAL + 2]
+    gap = (
+        nx * (x[i, 0] - cloth[S_POINT])
+        + ny * (x[i, 1] - cloth[S_POINT + 1])
+        + nz * (x[i, 2] - cloth[S_POINT + 2])
+        - cloth[S_RADIUS]
+    )
+    x[i, 0] -= gap * nx
+    x[i, 1] -= gap * ny
+    x[i, 2] -= gap * nz
+
+
 @njit(cache=True)
 def roll_all(
-    balls: np.ndarray, rows: np.ndarray, support: np.ndarray, cf: np.ndarray, dt: float,
+    balls: np.ndarray, held: np.ndarray, support: np.ndarray, ci: np.ndarray, cf: np.ndarray,
+    dt: float,
     substeps: int, x: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray,
-    accel: np.ndarray, mass: np.ndarray, inertia: np.ndarray, inv_inertia: np.ndarray,
-    body_pieces: np.ndarray, piece_radius: np.ndarray,
+    mass: np.ndarray, inertia: np.ndarray, inv_inertia: np.ndarray,
 ) -> None:  # fmt: skip
-    """The balls ``balls`` (k,) that :func:`select` found, on the cloth of contact ``rows``
-    (k,) given by ``support`` (k, 6: its upward normal and a point of it), for ``dt`` [s]:
-    each set on the cloth, its centre a radius from it, then :func:`roll`; each row's point
-    carries the load ``m g dt`` [N s] as the step's normal impulse (what a contact report
-    reads)."""
+    """The balls ``balls`` (k,) that :func:`candidates` found alone on their cloth
+    (``held``, ``support``), for ``dt`` [s]: each set on the cloth (:func:`seat`), then
+    :func:`roll`."""
     for r in range(balls.shape[0]):
         i = balls[r]
-        m = rows[r]
-        nx, ny, nz = support[r, 0], support[r, 1], support[r, 2]
-        radius = piece_radius[body_pieces[i]]
-        gap = (
-            nx * (x[i, 0] - support[r, 3])
-            + ny * (x[i, 1] - support[r, 4])
-            + nz * (x[i, 2] - support[r, 5])
-            - radius
-        )
-        x[i, 0] -= gap * nx
-        x[i, 1] -= gap * ny
-        x[i, 2] -= gap * nz
-        g = -(accel[i, 0] * nx + accel[i, 1] * ny + accel[i, 2] * nz)
-        k = inertia[i][0, 0] / (mass[i] * radius * radius)
-        roll(
-            i, dt, substeps, (nx, ny, nz), (g, cf[m, F_MU], cf[m, F_ROLL], radius, k), x, q, v,
-            w, inertia, inv_inertia,
-        )  # fmt: skip
-        cf[m, point_offset(0) + P_TOTAL] = mass[i] * g * dt
+        seat(i, support[i], x)
+        roll(i, dt, substeps, support[i], x, q, v, w, inertia, inv_inertia)
+    loaded(balls, held, support, ci, cf, dt, mass)
+
+
+@njit(cache=True)
+def loaded(
+    balls: np.ndarray, held: np.ndarray, support: np.ndarray, ci: np.ndarray, cf: np.ndarray,
+    dt: float, mass: np.ndarray,
+) -> None:  # fmt: skip
+    """Flag the cloth rows of ``balls`` (k,) solved exactly (the solver skips them), and give
+    each row's point the load ``m g dt`` [N s] as the step's normal impulse (what a contact
+    report reads)."""
+    for r in range(balls.shape[0]):
+        i = balls[r]
+        m = held[i, 0]
+        ci[m, I_FLAGS] |= FLAG_EXACT
+        cf[m, point_offset(0) + P_TOTAL] = mass[i] * support[i, S_G] * dt
+
+
+@njit(cache=True)
+def ball_impact(
+    a: int,
+    b: int,
+    support: np.ndarray,
+    e: float,
+    mu: float,
+    x: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    mass: np.ndarray,
+    record: np.ndarray,
+) -> bool:
+    """The impact of balls ``a`` and ``b`` on the cloth, touching now: :func:`carom.collide`'s,
+    the same arithmetic (:func:`carom.laws.batch.law_block`, one pair): Walton's law with
+    Coulomb friction ``mu`` [-] and no sticking restitution (a smooth one when ``mu`` is 0: the
+    same bits), restitution ``e`` [-], the balls' masses, radii and ``I / (m R^2)``. Their
+    velocities and spins (N, 3) are set to its results; ``record`` (:data:`.impacts.IMPACT_FIELDS`,)
+    gets the impact (columns 1 to 15). Returns False, changing nothing, when they do not
+    approach.
+
+    The impulse's part across the cloth (friction's, from topspin or draw: at most
+    ``mu (1 + e) / 2`` of the approach speed) is the cloth's to answer: the balls stay on it,
+    and :func:`roll` drops the velocity across it, as pooltool does (module docstring)."""
+    s = np.zeros((IN_ROWS, 1))
+    o = np.empty((OUT_ROWS, 1))
+    for c in range(3):
+        s[IN_X1 + c, 0] = x[a, c]
+        s[IN_X2 + c, 0] = x[b, c]
+        s[IN_V1 + c, 0] = v[a, c]
+        s[IN_V2 + c, 0] = v[b, c]
+        s[IN_W1 + c, 0] = w[a, c]
+        s[IN_W2 + c, 0] = w[b, c]
+    s[IN_M1, 0] = mass[a]
+    s[IN_M2, 0] = mass[b]
+    s[IN_E, 0] = e
+    s[IN_R1, 0] = support[a, S_RADIUS]
+    s[IN_R2, 0] = support[b, S_RADIUS]
+    s[IN_BETA, 0] = 0.0
+    s[IN_FRICTION, 0] = mu
+    law_block(s, o, 1, True, LAW_WALTON, True, support[a, S_RATIO], support[b, S_RATIO])
+    if o[OUT_APPLIED, 0] == 0.0:
+        return False
+    for c in range(3):
+        v[a, c] = o[OUT_V1 + c, 0]
+        v[b, c] = o[OUT_V2 + c, 0]
+        w[a, c] = o[OUT_W1 + c, 0]
+        w[b, c] = o[OUT_W2 + c, 0]
+        record[3 + c] = o[OUT_J + c, 0]
+        record[8 + c] = x[a, c] - support[a, S_RADIUS] * o[OUT_N + c, 0]
+        record[13 + c] = o[OUT_N + c, 0]
+    record[1] = a
+    record[2] = b
+    record[6] = -o[OUT_APPROACH, 0]
+    record[7] = o[OUT_SEPARATION, 0]
+    record[11] = o[OUT_KE_BEFORE, 0] - o[OUT_KE_AFTER, 0]
+    record[12] = 0.0
+    return True

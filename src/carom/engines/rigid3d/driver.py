@@ -124,6 +124,11 @@ class RigidEngine3D(SteppedEngine):
         self._ball_shaped = cloth.ball_shaped(
             m.kind, m.body_pieces, m.piece_kind, m.piece_vcount, m.inertia
         )
+        #: this step's balls on a cloth: each body's (contact row, cloth piece) or -1, and
+        #: its cloth (:func:`.cloth.candidates`)
+        self._held = np.full((n, 2), -1, np.int64)
+        self._support = np.zeros((n, cloth.SUPPORT))
+        self._n_held = 0
         self._made = _room(self._ci.shape[0])  # this step's manifolds, kept once it is taken
         self._made_count = 0
         self._ints = (
@@ -200,6 +205,10 @@ class RigidEngine3D(SteppedEngine):
 
     def _impact_kernel(self, todo: Isolated) -> tuple[FloatArray, int]:
         m, s, st = self.model, self.state, self.settings
+        rolled = np.empty(0, np.int64)
+        if self._n_held:
+            rolled = np.flatnonzero((self._held[:, 0] >= 0) & (self._role == islands.ROLE_EXACT))
+        before = self._energy(rolled) if rolled.size else 0.0
         log, logged = impacts.exact_impacts(
             (todo.rows, todo.first, todo.n, self._island_of), self._now, self._n_pairs,
             self._boxes, self._reach, self._ci, s.x, s.q, s.v, s.w, self._accel, m.kind,
@@ -208,8 +217,19 @@ class RigidEngine3D(SteppedEngine):
             m.piece_reach, m.local_vertices, m.local_normals, m.face_first, m.face_size,
             m.corners, m.edges, s.vertices, s.normals, self.dt, st.substeps,
             1e-3 * st.linear_slop, 4.0 * st.linear_slop,
-            self._closing_fast,
+            self._closing_fast, (self._support, self._held), m.mass,
         )  # fmt: skip
+        if rolled.size:
+            # the balls that rolled between their impacts (an island handed back to the
+            # solver is as it was): the cloth's friction and the velocity across it that an
+            # impact gave took what the impacts' own losses do not account for
+            rolled = rolled[self._island_of[rolled] >= 0]
+            cloth.loaded(rolled, self._held, self._support, self._ci, self._cf, self.dt, m.mass)
+            met = log[:logged]
+            theirs = np.isin(met[:, 1].astype(np.int64), rolled) | np.isin(
+                met[:, 2].astype(np.int64), rolled
+            )
+            self._book_cloth(self._energy(rolled) - before + float(met[theirs, 11].sum()))
         return log, int(logged)
 
     def _poses(self) -> tuple[FloatArray, FloatArray]:
@@ -309,37 +329,49 @@ class RigidEngine3D(SteppedEngine):
             self.filters[:, 0], mask, self._ray_room, hit,
         )  # fmt: skip
 
-    def _roll_cloth(
+    def _on_cloth(
         self, nc: int, closest: FloatArray, closing: FloatArray, loaded: Loaded | None
-    ) -> None:
+    ) -> NDArray[np.bool_]:
+        skip = np.zeros(max(nc, 1), np.bool_)
+        self._n_held = 0
         if not self._ball_shaped.any():
-            return
+            return skip
         m, s, st = self.model, self.state, self.settings
-        n = m.kind.shape[0]
-        balls = np.empty(n, np.int64)
-        rows = np.empty(n, np.int64)
-        support = np.empty((n, 6))
         pushed = self._loads.none_torqued if loaded is None else loaded.on
         placed = (
             s.vertices, s.normals, m.piece_vstart, m.piece_fstart, m.piece_fcount,
             m.piece_cstart, m.face_first, m.face_size, m.corners,
         )  # fmt: skip
-        found = cloth.select(
-            self._ci, self._cf, nc, closest, closing, m.kind, self._role, self._ball_shaped,
-            m.body_pieces, m.piece_kind, m.piece_radius, m.mass, m.inertia, self._accel,
-            pushed, self._links, 0.1 * st.linear_slop, self.dt, 4.0 * st.linear_slop, s.x, s.v,
-            placed, balls, rows, support,
+        limits = (
+            0.1 * st.linear_slop, self._closing_fast, self._leaving, self.dt,
+            4.0 * st.linear_slop,
         )  # fmt: skip
-        if not found:
+        self._n_held = cloth.candidates(
+            self._ci, self._cf, nc, closest, closing, m.kind, self.memory.awake,
+            self._ball_shaped, m.body_pieces, m.piece_kind, m.piece_radius, m.mass, m.inertia,
+            self._accel, pushed, self._links, limits, s.x, s.v, placed, skip, self._held,
+            self._support,
+        )  # fmt: skip
+        return skip
+
+    def _roll_cloth(self) -> None:
+        if not self._n_held:
             return
-        balls = balls[:found]
+        m, s, st = self.model, self.state, self.settings
+        balls = np.flatnonzero((self._held[:, 0] >= 0) & (self._role == islands.ROLE_FREE))
+        if not balls.size:
+            return
+        self._role[balls] = islands.ROLE_CLOTH
         before = self._energy(balls)
         cloth.roll_all(
-            balls, rows[:found], support[:found], self._cf, self.dt, st.substeps, s.x, s.q,
-            s.v, s.w, self._accel, m.mass, m.inertia, m.inv_inertia, m.body_pieces,
-            m.piece_radius,
+            balls, self._held, self._support, self._ci, self._cf, self.dt, st.substeps, s.x,
+            s.q, s.v, s.w, m.mass, m.inertia, m.inv_inertia,
         )  # fmt: skip
-        change = self._energy(balls) - before  # friction's, and the dropped normal speed's
+        self._book_cloth(self._energy(balls) - before)
+
+    def _book_cloth(self, change: float) -> None:
+        """Book the energy ``change`` [J] of balls on the cloth that no impact accounts for:
+        friction's, and the dropped velocity across the cloth's."""
         if change < 0.0:
             self._energy_lost -= change
         else:

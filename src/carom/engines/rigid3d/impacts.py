@@ -31,6 +31,7 @@ import numpy as np
 from numba import njit
 
 from carom.engines.rigid3d.broadphase import sweep_box
+from carom.engines.rigid3d.cloth import S_G, S_MU, SUPPORT, ball_impact, roll, seat
 from carom.engines.rigid3d.contacts import (
     I_FLAGS,
     collide_pieces,
@@ -79,6 +80,12 @@ IMPACT_FIELDS = 16
 #: rounds of a shape cast's advancement against one piece (each up to the search's own
 #: many steps, then on from the furthest time known safe)
 CAST_ROUNDS = 16
+
+
+@njit(cache=True)
+def _flying(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``cloth`` of :func:`_move` for ``n`` bodies none of which is on a cloth."""
+    return np.zeros((0, SUPPORT)), np.full((n, 2), -1, np.int64)
 
 
 @njit(cache=True, inline="always")
@@ -347,10 +354,12 @@ def _gap(
     piece_radius: np.ndarray, local_vertices: np.ndarray, local_normals: np.ndarray,
     face_first: np.ndarray, face_size: np.ndarray, corners: np.ndarray, edges: np.ndarray,
     vertices: np.ndarray, normals: np.ndarray, out: np.ndarray, ids: np.ndarray,
+    cloth: tuple[np.ndarray, np.ndarray], seen: np.ndarray,
 ) -> tuple[float, float, float, float]:  # fmt: skip
-    """Signed gap [m] between pieces pa (of body a) and pb (of b) after both fly ``tau`` [s]
-    (in substeps of at most ``h``), and the unit direction from B to A it is measured along:
-    their exact distance when apart, the deepest point of their manifold when not."""
+    """Signed gap [m] between pieces pa (of body a) and pb (of b) after both move ``tau``
+    [s] (:func:`_move`, in substeps of at most ``h``), and the unit direction from B to A it
+    is measured along: their exact distance when apart, the deepest point of their manifold
+    when not. ``seen`` (2, 3) gets the two bodies' velocities then [m/s]."""
     (
         _, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount,
         piece_cstart, piece_ccount, piece_estart, piece_ecount,
@@ -359,17 +368,17 @@ def _gap(
     qs = np.empty((1, 4))
     vs = np.empty((1, 3))
     ws = np.empty((1, 3))
-    for body, piece in ((a, pa), (b, pb)):
+    for j, (body, piece) in enumerate(((a, pa), (b, pb))):
         xs[0] = x[body]
         qs[0] = q[body]
         vs[0] = v[body]
         ws[0] = w[body]
         if tau > 0.0 and np.isfinite(inertia[body, 0, 0]):
-            steps = _pieces_of(tau, h)
-            fly(
-                0, tau, steps, xs, qs, vs, ws, accel[body, 0], accel[body, 1], accel[body, 2],
-                inertia[body : body + 1], inv_inertia[body : body + 1],
+            _move(
+                0, body, tau, _pieces_of(tau, h), xs, qs, vs, ws, accel,
+                inertia[body : body + 1], inv_inertia[body : body + 1], cloth,
             )  # fmt: skip
+        seen[j] = vs[0]
         place_piece(
             piece, xs, qs, 0, piece_vstart, piece_vcount, piece_fstart, piece_fcount,
             local_vertices, local_normals, vertices, normals,
@@ -466,6 +475,8 @@ def exact_impacts(
     touch: float,
     margin: float,
     slow: float,
+    cloth: tuple[np.ndarray, np.ndarray],
+    mass: np.ndarray,
 ) -> tuple[np.ndarray, int]:  # fmt: skip
     """Advance each island solved exactly through the step, its impacts taken in the order
     they happen (:mod:`carom.engines.stepped.impacts`), as the 2D engine's
@@ -473,12 +484,18 @@ def exact_impacts(
     ``reach``, ``margin``, ``slow`` alike); ``coefficients``: each body's material, the restitution
     and friction tables. Free flight goes in substeps of at most ``dt / substeps``. Returns
     the impacts' log (rows of :data:`IMPACT_FIELDS`) and how many rows it holds.
+
+    Balls on a level cloth (``cloth``: their ``support`` and ``held``,
+    :func:`.cloth.candidates`) are set on it and roll in closed form between impacts
+    (:func:`.cloth.roll`); two of them meet by :func:`carom.collide`'s law
+    (:func:`.cloth.ball_impact`, with the bodies' ``mass`` (N,) [kg]).
     """
     isolated, island_first, n_islands, island_of = islands
     material, e_table, mu_table = coefficients
     piece_body = model_ints[0]
     out = np.empty(OUT_SIZE)
     ids = np.empty(MAX_POINTS, np.int64)
+    seen = np.empty((2, 3))
     h = dt / substeps
     iw = np.zeros((x.shape[0], 9))
     cand_first, cand, watch_first, watch = gather(
@@ -492,6 +509,9 @@ def exact_impacts(
         for r in range(lo, hi):
             take_isolated(ci, isolated[r], I_FLAGS)
         kept = keep_island(ci, isolated, lo, hi, island_of, x, q, v, w)
+        for body in kept[0]:
+            if cloth[1][body, 0] >= 0:
+                seat(body, cloth[0][body], x)
         logged_before = logged
         cp, n = island_candidates(cand, cand_first[k], cand_first[k + 1], pairs)
         hit = np.empty(cp.shape[0])  # each candidate's time of impact into the step [s]
@@ -506,7 +526,7 @@ def exact_impacts(
                 cp[c, 0], cp[c, 1], 0.0, dt, NEW, h, clock, island_of, x, q, v, w, accel,
                 inv_mass, inertia, inv_inertia, min_moment, iw, model_ints, piece_radius,
                 piece_reach, local_vertices, local_normals, face_first, face_size, corners,
-                edges, vertices, normals, out, ids,
+                edges, vertices, normals, out, ids, cloth,
             )  # fmt: skip
         now = 0.0
         taken = 0
@@ -522,12 +542,12 @@ def exact_impacts(
                 break
             pa, pb = cp[c, 0], cp[c, 1]
             a, b = piece_body[pa], piece_body[pb]
-            _sync(a, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia)
-            _sync(b, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia)
+            _sync(a, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia, cloth)
+            _sync(b, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia, cloth)
             gap = _gap(
                 pa, pb, a, b, 0.0, h, x, q, v, w, accel, inertia, inv_inertia, model_ints,
                 piece_radius, local_vertices, local_normals, face_first, face_size, corners,
-                edges, vertices, normals, out, ids,
+                edges, vertices, normals, out, ids, cloth, seen,
             )  # fmt: skip
             (
                 _, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount,
@@ -545,10 +565,17 @@ def exact_impacts(
             parting[c] = HELD
             for body in (a, b):
                 world_inverse_row(body, q, inv_inertia, iw)
-            if count == 0 or not _impact(
-                a, b, count, out, touch, e_table[ma, mb], mu_table[ma, mb], x, v, w,
-                inv_mass, iw, log[logged],
-            ):  # fmt: skip
+            if cloth[1][a, 0] >= 0 and cloth[1][b, 0] >= 0:
+                met = ball_impact(
+                    a, b, cloth[0], e_table[ma, mb], mu_table[ma, mb], x, v, w, mass,
+                    log[logged],
+                )  # fmt: skip
+            else:
+                met = count > 0 and _impact(
+                    a, b, count, out, touch, e_table[ma, mb], mu_table[ma, mb], x, v, w,
+                    inv_mass, iw, log[logged],
+                )  # fmt: skip
+            if not met:
                 # touching, not approaching: wait for the gap to open (or close past touch)
                 looks[c] += 1
                 sunk[c] = max(sunk[c], -gap[0])
@@ -556,7 +583,7 @@ def exact_impacts(
                     pa, pb, now, dt, HELD, h, clock, island_of, x, q, v, w, accel, inv_mass,
                     inertia, inv_inertia, min_moment, iw, model_ints, piece_radius,
                     piece_reach, local_vertices, local_normals, face_first, face_size,
-                    corners, edges, vertices, normals, out, ids, sunk[c],
+                    corners, edges, vertices, normals, out, ids, cloth, sunk[c],
                 )  # fmt: skip
                 continue
             sunk[c] = 0.0
@@ -574,7 +601,7 @@ def exact_impacts(
                         body, k, now, dt, cp, n, island_of, pairs, boxes, reach, watch,
                         watch_first, body_pieces, model_ints, x, q, v, w, accel, dynamic,
                         piece_radius, piece_reach, local_vertices, local_normals, vertices,
-                        normals, margin,
+                        normals, margin, cloth,
                     )  # fmt: skip
             if stopped:
                 break
@@ -592,7 +619,7 @@ def exact_impacts(
                         v, w, accel, inv_mass, inertia, inv_inertia, min_moment, iw,
                         model_ints, piece_radius, piece_reach, local_vertices, local_normals,
                         face_first, face_size, corners, edges, vertices, normals, out, ids,
-                        sunk[d],
+                        cloth, sunk[d],
                     )  # fmt: skip
         else:
             stopped = True  # (as many looks as impacts allowed, twice over)
@@ -604,7 +631,10 @@ def exact_impacts(
         end = now if stopped else dt
         for r in range(lo, hi):
             for body in (ci[isolated[r], I_BODY_A], ci[isolated[r], I_BODY_B]):
-                _sync(body, end, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia)
+                _sync(
+                    body, end, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia,
+                    cloth,
+                )  # fmt: skip
     return log, logged
 
 
@@ -621,17 +651,35 @@ def _tolerance(pa: int, pb: int, piece_reach: np.ndarray) -> float:
 def _sync(
     body: int, t: float, h: float, clock: np.ndarray, island_of: np.ndarray, x: np.ndarray,
     q: np.ndarray, v: np.ndarray, w: np.ndarray, accel: np.ndarray, inertia: np.ndarray,
-    inv_inertia: np.ndarray,
+    inv_inertia: np.ndarray, cloth: tuple[np.ndarray, np.ndarray],
 ) -> None:  # fmt: skip
-    """Fly a body of an island from its own clock to ``t`` [s] into the step, in substeps
-    of at most ``h`` (a static body stays)."""
+    """Move a body of an island from its own clock to ``t`` [s] into the step, in substeps
+    of at most ``h``: in free flight, or rolling on its cloth (``cloth``: the balls'
+    ``support`` and ``held``, :func:`.cloth.candidates`); a static body stays."""
     if island_of[body] >= 0 and t > clock[body]:
         tau = t - clock[body]
-        fly(
-            body, tau, _pieces_of(tau, h), x, q, v, w, accel[body, 0], accel[body, 1],
-            accel[body, 2], inertia, inv_inertia,
-        )  # fmt: skip
+        _move(body, body, tau, _pieces_of(tau, h), x, q, v, w, accel, inertia, inv_inertia, cloth)
         clock[body] = t
+
+
+@njit(cache=True, inline="always")
+def _move(
+    row: int, body: int, tau: float, steps: int, x: np.ndarray, q: np.ndarray, v: np.ndarray,
+    w: np.ndarray, accel: np.ndarray, inertia: np.ndarray, inv_inertia: np.ndarray,
+    cloth: tuple[np.ndarray, np.ndarray],
+) -> None:  # fmt: skip
+    """Body ``body`` on for ``tau`` [s] in ``steps`` substeps, its state in row ``row`` of
+    ``x``, ``q``, ``v``, ``w``, ``inertia`` and ``inv_inertia``: rolling on its cloth
+    (:func:`.cloth.roll`) or in free flight (:func:`.motion.fly`). ``accel`` and the balls'
+    ``cloth`` rows are the body's."""
+    support, held = cloth
+    if held[body, 0] >= 0:
+        roll(row, tau, steps, support[body], x, q, v, w, inertia, inv_inertia)
+    else:
+        fly(
+            row, tau, steps, x, q, v, w, accel[body, 0], accel[body, 1], accel[body, 2],
+            inertia, inv_inertia,
+        )  # fmt: skip
 
 
 @njit(cache=True)
@@ -646,26 +694,33 @@ def _next_impact(
     piece_radius: np.ndarray, piece_reach: np.ndarray, local_vertices: np.ndarray,
     local_normals: np.ndarray, face_first: np.ndarray, face_size: np.ndarray,
     corners: np.ndarray, edges: np.ndarray, vertices: np.ndarray, normals: np.ndarray,
-    out: np.ndarray, ids: np.ndarray, allow: float = 0.0,
+    out: np.ndarray, ids: np.ndarray, cloth: tuple[np.ndarray, np.ndarray],
+    allow: float = 0.0,
 ) -> float:  # fmt: skip
     """Time into the step [s] of pieces pa and pb's next impact after ``now`` (their
-    overlapping by more than ``allow`` [m]), before the step's end ``dt``; inf if none.
-    Their bodies are flown to ``now`` first."""
+    overlapping by more than ``allow`` [m]), before the step's end ``dt``; inf if none, and
+    for a ball and the cloth that holds it (``cloth``: the balls' ``support`` and ``held``).
+    Their bodies are moved to ``now`` first."""
     piece_body = model_ints[0]
     a, b = piece_body[pa], piece_body[pb]
-    _sync(a, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia)
-    _sync(b, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia)
+    held = cloth[1]
+    if (a >= 0 and held[a, 1] == pb) or (b >= 0 and held[b, 1] == pa):
+        return np.inf
+    _sync(a, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia, cloth)
+    _sync(b, now, h, clock, island_of, x, q, v, w, accel, inertia, inv_inertia, cloth)
     for body in (a, b):
         world_inverse_row(body, q, inv_inertia, iw)
-    reach_a = piece_reach[pa] if math.isfinite(piece_reach[pa]) else 0.0
-    reach_b = piece_reach[pb] if math.isfinite(piece_reach[pb]) else 0.0
+    # (a ball's turn about its centre does not move its surface; a ball on the cloth is not
+    # free, and its spin is not bounded by its energy)
+    reach_a = piece_reach[pa] if math.isfinite(piece_reach[pa]) and held[a, 0] < 0 else 0.0
+    reach_b = piece_reach[pb] if math.isfinite(piece_reach[pb]) and held[b, 0] < 0 else 0.0
     spin = _top_spin(a, w, inv_mass, iw, min_moment) * reach_a
     spin += _top_spin(b, w, inv_mass, iw, min_moment) * reach_b
     t = _time_of_impact(
         pa, pb, a, b, dt - now, _tolerance(pa, pb, piece_reach), parting, spin, h, x, q, v,
         w, accel, inertia, inv_inertia, model_ints, piece_radius, local_vertices,
         local_normals, face_first, face_size, corners, edges, vertices, normals, out, ids,
-        allow,
+        cloth, allow,
     )  # fmt: skip
     return now + t if t >= 0.0 else np.inf
 
@@ -684,15 +739,23 @@ def _reach(
     x: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray, accel: np.ndarray,
     dynamic: np.ndarray, piece_radius: np.ndarray, piece_reach: np.ndarray,
     local_vertices: np.ndarray, local_normals: np.ndarray, vertices: np.ndarray,
-    normals: np.ndarray, margin: float,
+    normals: np.ndarray, margin: float, cloth: tuple[np.ndarray, np.ndarray],
 ) -> tuple[np.ndarray, int, bool]:  # fmt: skip
     """After an impact turned ``body`` (of island ``k``, at ``now``): each of its pieces'
     swept box from now to the step's end ``dt``; beyond the box its pairs were found in, the
     statics there join the candidates ``cp[:n]``
     (:func:`carom.engines.stepped.impacts.look_around`). Returns the candidates, their
-    count, and whether the island must stop (a body moving otherwise in reach)."""
+    count, and whether the island must stop (a body moving otherwise in reach). A ball on
+    the cloth (``cloth``: the balls' ``support`` and ``held``) has no gravity across it, and
+    at most its friction ``mu g`` in it."""
     piece_body, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount = model_ints[:6]
+    support, held = cloth
     box = np.empty(6)
+    pull = 0.0
+    g = accel[body]
+    if held[body, 0] >= 0:
+        pull = support[body, S_MU] * support[body, S_G]
+        g = np.zeros(3)
     for p in range(body_pieces[body], body_pieces[body + 1]):
         place_piece(
             p, x, q, body, piece_vstart, piece_vcount, piece_fstart, piece_fcount,
@@ -700,7 +763,7 @@ def _reach(
         )  # fmt: skip
         sweep_box(
             p, body, vertices, normals, piece_kind, piece_vstart, piece_vcount, piece_fstart,
-            piece_radius, piece_reach, v, w, dynamic, accel[body], 0.0, dt - now, margin, box,
+            piece_radius, piece_reach, v, w, dynamic, g, pull, dt - now, margin, box,
         )  # fmt: skip
         cp, n, stop = look_around(
             p, k, box, boxes, island_of, piece_body, reach, (pairs, watch, watch_first), cp, n
@@ -721,7 +784,7 @@ def _time_of_impact(
     piece_radius: np.ndarray, local_vertices: np.ndarray, local_normals: np.ndarray,
     face_first: np.ndarray, face_size: np.ndarray, corners: np.ndarray, edges: np.ndarray,
     vertices: np.ndarray, normals: np.ndarray, out: np.ndarray, ids: np.ndarray,
-    allow: float = 0.0,
+    cloth: tuple[np.ndarray, np.ndarray], allow: float = 0.0,
 ) -> float:  # fmt: skip
     """First time in ``[0, horizon]`` [s] at which the pieces come within ``tol`` [m] of
     touching (of overlapping by ``allow`` [m], if given), by conservative advancement; -1 if
@@ -729,24 +792,44 @@ def _time_of_impact(
     ``spin`` bounds how fast turning can close the gap [m/s]; ``parting``: how the pair
     was left at its last meeting (``NEW``, ``HELD`` or ``BOUNCED`` of
     :mod:`carom.engines.stepped.impacts`); unless ``NEW``, the search first lets the gap open
-    beyond ``tol``."""
-    gx = accel[a, 0] - accel[b, 0]
-    gy = accel[a, 1] - accel[b, 1]
-    gz = accel[a, 2] - accel[b, 2]
+    beyond ``tol``.
+
+    A ball on the cloth (``cloth``: the balls' ``support`` and ``held``) moves by its closed
+    form (:func:`.cloth.roll`): its velocity at ``t`` is the look-ahead's, it has no gravity
+    across the cloth, and its acceleration in it is at most its friction ``mu g`` (rolling
+    resistance is less, :func:`.cloth.candidates`): the relative acceleration along any
+    direction is bounded below by the others' gravity less both balls' friction."""
+    support, held = cloth
+    rolled = (held[a, 0] >= 0, held[b, 0] >= 0)
+    ga = np.zeros(3) if rolled[0] else accel[a]
+    gb = np.zeros(3) if rolled[1] else accel[b]
+    gx, gy, gz = ga[0] - gb[0], ga[1] - gb[1], ga[2] - gb[2]
+    friction = 0.0
+    for body, on in ((a, rolled[0]), (b, rolled[1])):
+        if on:
+            friction += support[body, S_MU] * support[body, S_G]
+    seen = np.empty((2, 3))
     state = search(parting)
     t = 0.0
     while True:
         d, wx, wy, wz = _gap(
             pa, pb, a, b, t, h, x, q, v, w, accel, inertia, inv_inertia, model_ints,
             piece_radius, local_vertices, local_normals, face_first, face_size, corners,
-            edges, vertices, normals, out, ids,
+            edges, vertices, normals, out, ids, cloth, seen,
         )  # fmt: skip
         # how fast the gap can close until it could first be closed
         ux = (v[a, 0] + accel[a, 0] * t) - (v[b, 0] + accel[b, 0] * t)
         uy = (v[a, 1] + accel[a, 1] * t) - (v[b, 1] + accel[b, 1] * t)
         uz = (v[a, 2] + accel[a, 2] * t) - (v[b, 2] + accel[b, 2] * t)
+        if rolled[0] or rolled[1]:
+            ux = seen[0, 0] - seen[1, 0]
+            uy = seen[0, 1] - seen[1, 1]
+            uz = seen[0, 2] - seen[1, 2]
         closing = closing_bound(
-            max(d + allow, tol), ux * wx + uy * wy + uz * wz, gx * wx + gy * wy + gz * wz, spin
+            max(d + allow, tol),
+            ux * wx + uy * wy + uz * wz,
+            gx * wx + gy * wy + gz * wz - friction,
+            spin,
         )
         done, t, state = advance(state, t, d + allow, closing, tol, horizon)
         if done:
@@ -778,6 +861,7 @@ def continuous(
     tree, open_statics, _, filters = reach
     piece_body, piece_kind, piece_vstart, piece_vcount, piece_fstart, piece_fcount = model_ints[:6]
     n_pieces = piece_body.shape[0]
+    flying = _flying(x.shape[0])
     # (made at the first body that moved far: most steps have none)
     keys = np.empty(0, np.int64)
     still = np.zeros((0, 3))
@@ -823,7 +907,7 @@ def continuous(
                         p, other, b, piece_body[other], dt, _tolerance(p, other, piece_reach),
                         NEW, 0.0, dt, x, q, v, w, still, inertia, inv_inertia, model_ints,
                         piece_radius, local_vertices, local_normals, face_first, face_size,
-                        corners, edges, vertices, normals, out, ids, allow,
+                        corners, edges, vertices, normals, out, ids, flying, allow,
                     )  # fmt: skip
                     if t <= 0.0 or not near:
                         break
@@ -867,6 +951,8 @@ def cast_shape(
     out = np.empty(OUT_SIZE)
     ids = np.empty(MAX_POINTS, np.int64)
     cb = piece_body[cast_pieces[0]]
+    flying = _flying(x.shape[0])
+    seen = np.empty((2, 3))
     start = x[cb].copy()
     best = 1.0
     found = -1
@@ -884,14 +970,14 @@ def cast_shape(
                     c, p, cb, b, best - done, tol, NEW, 0.0, 1.0, x, q, v, w, accel,
                     inertia, inv_inertia, model_ints, piece_radius, local_vertices,
                     local_normals, face_first, face_size, corners, edges, vertices, normals,
-                    out, ids,
+                    out, ids, flying,
                 )  # fmt: skip
                 if t < 0.0:
                     break
                 d, nx, ny, nz = _gap(
                     c, p, cb, b, t, 1.0, x, q, v, w, accel, inertia, inv_inertia, model_ints,
                     piece_radius, local_vertices, local_normals, face_first, face_size,
-                    corners, edges, vertices, normals, out, ids,
+                    corners, edges, vertices, normals, out, ids, flying, seen,
                 )  # fmt: skip
                 if d <= tol:
                     if done + t < best or found < 0:

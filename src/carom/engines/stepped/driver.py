@@ -338,8 +338,9 @@ class SteppedEngine:
         isolated = np.zeros(max(nc, 1), np.int64)
         island_first = np.zeros(n + 1, np.int64)
         closest, closing = extremes(self._cf, self._ci, nc, self._extremes_layout)
+        skip = self._on_cloth(nc, closest, closing, loaded)
         n_iso = islands.plan(
-            self._ci, nc, closest, closing, m.kind, mem.awake, st.exact_impacts,
+            self._ci, nc, closest, closing, skip, m.kind, mem.awake, st.exact_impacts,
             0.1 * st.linear_slop, self._closing_fast, self._leaving,
             self._loads.none_torqued if loaded is None else loaded.torqued, self._links,
             self._parent,
@@ -358,6 +359,7 @@ class SteppedEngine:
                 met = log[:logged]
                 self._book(met, sink)
         t3 = perf_counter()
+        self._roll_cloth()
         free = np.flatnonzero(self._role == islands.ROLE_FREE)
         if loaded is None:
             self._fly(free)
@@ -366,7 +368,6 @@ class SteppedEngine:
             before = self._energy(pushed)
             self._fly(free)
             self._work_done += self._energy(pushed) - before
-        self._roll_cloth(nc, closest, closing, loaded)
         t4 = perf_counter()
         bodies = self._solver_bodies()
         before = self._energy(bodies)
@@ -542,11 +543,17 @@ class SteppedEngine:
         """Stage 6: the bodies ``free`` in free flight through the step."""
         raise NotImplementedError
 
-    def _roll_cloth(
+    def _on_cloth(
         self, nc: int, closest: FloatArray, closing: FloatArray, loaded: Loaded | None
-    ) -> None:
-        """Move the balls alone on a level cloth in closed form, their energy lost booked
-        (the 3D engine: :mod:`carom.engines.rigid3d.cloth`; none in 2D)."""
+    ) -> NDArray[np.bool_]:
+        """The contacts (nc,) that islands leave out: the cloth under each ball on a level
+        cloth this step (the 3D engine: :func:`carom.engines.rigid3d.cloth.candidates`;
+        none in 2D)."""
+        return np.zeros(max(nc, 1), np.bool_)
+
+    def _roll_cloth(self) -> None:
+        """Stage 6: move the balls alone on a level cloth in closed form, their energy lost
+        booked (the 3D engine: :mod:`carom.engines.rigid3d.cloth`; none in 2D)."""
 
     def _solver_bodies(self) -> NDArray[np.int64]:
         """The bodies stage 7 solves."""

@@ -70,6 +70,7 @@ def plan(
     nc: int,
     closest: np.ndarray,
     closing: np.ndarray,
+    skip: np.ndarray,
     kind: np.ndarray,
     awake: np.ndarray,
     exact: bool,
@@ -93,6 +94,11 @@ def plan(
     closest, closing : (nc,) float64
         Each contact's least separation [m] and least normal relative speed [m/s] over its
         points at the start of the step (the 2D and 3D engines lay their rows out apart).
+    skip : (nc,) bool
+        Contacts left out: a ball's cloth, which holds it while it moves in closed form
+        (:mod:`carom.engines.rigid3d.cloth`). They join nothing (their other body is static)
+        and count for nothing: a ball with only its cloth flies free (the 3D engine rolls it),
+        two balls on the cloth about to meet are an island solved exactly.
     kind : (N,) int64
         KIND_DYNAMIC, KIND_STATIC or KIND_KINEMATIC.
     awake : (N,) bool
@@ -145,6 +151,8 @@ def plan(
                 contacts[r] += 1
                 solver_only[r] = True
     for m in range(nc):
+        if skip[m]:
+            continue
         a = ci[m, I_BODY_A]
         b = ci[m, I_BODY_B]
         owner = a if kind[a] == KIND_DYNAMIC else b
@@ -183,6 +191,8 @@ def plan(
         island_first[k + 1] += island_first[k]
     filled = island_first[:count].copy()
     for m in range(nc):
+        if skip[m]:
+            continue
         a = ci[m, I_BODY_A]
         owner = a if kind[a] == KIND_DYNAMIC else ci[m, I_BODY_B]
         k = number[parent[owner]]
