@@ -112,6 +112,7 @@ def build_world(scene: Scene, *, engine: bool = True) -> World:
                     radius=b["radius"],
                     mass=1.0 if b["mass"] is None else b["mass"],
                     material=material,
+                    angular_velocities=_sphere_spins(b, world.dim),
                 )
         except CaromError as exc:
             raise where.error([table], str(exc), "", index) from None
@@ -468,6 +469,21 @@ def _turning_3d(b: Mapping[str, Any], n: int) -> tuple[dict[str, Any], Callable[
         {"orientations": turns, "angular_velocities": spins},
         lambda i: {"orientation": one(turns, i), "angular_velocity": one(spins, i)},
     )
+
+
+def _sphere_spins(b: Mapping[str, Any], dim: int) -> Any:
+    """A sphere entry's ``angular_velocities`` as :meth:`carom.World.add_spheres` takes them
+    (one for all, or one each; None when not spinning)."""
+    spins = b.get("angular_velocities")
+    if spins is None or (isinstance(spins, int | float) and spins == 0):
+        return None
+    n = len(b["positions"])
+    value = np.asarray(spins, dtype=float)
+    if dim == 3 and value.shape == (3,):
+        return np.tile(value, (n, 1))
+    if dim == 2 and value.ndim == 0:
+        return np.full(n, float(value))
+    return value
 
 
 def _per_body(key: str, value: Any, n: int) -> list[Any]:
