@@ -42,6 +42,7 @@ RIGID = {
 #: the bullets are carom compare's, tests/compare/test_rigid3d_compare.py)
 RIGID3D = {
     "billiards-3d",
+    "billiards-shots",
     "bowl",
     "box-corner-3d",
     "box-edge-3d",
