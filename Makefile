@@ -9,7 +9,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 OUT    := out
 
-.PHONY: demo play test lint browser unit unit-nojit clean help
+.PHONY: pooltool demo play test lint browser unit unit-nojit clean help
 
 help:
 	@echo "make demo   set up .venv and run the showcase (results under $(OUT)/)"
@@ -35,6 +35,11 @@ $(VENV)/.stamp-dev: pyproject.toml | $(BIN)/python
 demo: $(VENV)/.stamp-demo
 	$(BIN)/carom showcase --out $(OUT) --force
 	@echo "play with a scene live in the browser: make play  (or $(BIN)/carom play SCENE)"
+
+# pooltool, carom compare's billiards reference, in its own environment (its pins conflict with
+# carom's Numba; docs/compare.md): ~/.cache/carom/pooltool, or $CAROM_POOLTOOL
+pooltool: $(VENV)/.stamp-dev
+	$(BIN)/python -m carom.compare.engines.pooltool_engine
 
 # the live testbed (docs/play.md): serves http://127.0.0.1:8765/ and opens it; Ctrl-C stops it
 SCENE ?= pyramid

@@ -1,4 +1,4 @@
-"""One ball on the cloth in carom and in pooltool, the event-based billiards simulator.
+"""Shots on the cloth in carom and in pooltool, the event-based billiards simulator.
 
 carom moves a ball alone on a level cloth by the closed form of sliding, then rolling
 (carom.engines.rigid3d.cloth); pooltool (Kiefl, ``pooltool-billiards`` on PyPI) solves the
@@ -6,13 +6,14 @@ same model event by event. This script plays the same shots in both, with the sa
 cloth (pooltool's rolling friction ``u_r`` is carom's rolling resistance ``c`` as
 ``c / (R (1 + 2/5))``; its spinning friction, which carom does not have, at 1e-9, the least
 it takes), and compares where the ball is, how fast it goes and spins at times before it
-meets a cushion: carom at 60 Hz, each time a whole number of its steps.
+meets a cushion: carom at 60 Hz, each time a whole number of its steps. Then the two-ball
+shot scenes (follow-shot, stun-shot, draw-shot, cut-shot) through ``carom compare``, as the
+scenes are (e = 0.95) and with elastic balls (e = 1), where pooltool's ball-ball law and
+carom's (Walton's, carom.collide) coincide (docs/compare.md).
 
-pooltool cannot share carom's environment: 0.6.0 pins llvmlite < 0.46 (carom's Numba needs a
-newer one) and, on Linux, a development build of panda3d that is not on PyPI. It is installed
-when asked into its own virtual environment (``--venv``, default ~/.cache/carom/pooltool):
-its pinned dependencies from PyPI with panda3d 1.10.16, then pooltool itself without its pins
-(``pip --no-deps``); the comparison runs there as a child process. Never in ``make test``.
+pooltool cannot share carom's environment; it is installed when asked into its own
+(:mod:`carom.compare.engines.pooltool_engine`, ``make pooltool``; ``--venv``, default
+~/.cache/carom/pooltool) and runs there as a child process. Never in ``make test``.
 
 Run:  python benchmarks/pooltool_shots.py [--venv DIR] [--no-record]
 """
@@ -21,8 +22,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
-import sys
 import textwrap
 from pathlib import Path
 
@@ -30,7 +31,10 @@ import numpy as np
 from edmd import record  # benchmarks/edmd.py, beside this file
 
 import carom
+from carom.compare import compare
+from carom.compare.engines.pooltool_engine import build, where
 from carom.engines.stepped.settings import RigidSettings
+from carom.scene import find_scene
 from carom.shapes3d import Sphere
 
 G = 9.81
@@ -49,27 +53,8 @@ SHOTS = {
     "draw back": ([0.6, 0.0, 0.0], [0.0, -5.0 / R, 0.0]),
     "oblique": ([0.6, 0.3, 0.0], [8.0, -20.0, 0.0]),
 }
-#: pooltool's dependencies, pinned where its own pins cannot be met from PyPI
-PINNED = [
-    "numba>=0.59,<0.62",
-    "llvmlite<0.46",
-    "numpy",
-    "scipy",
-    "attrs",
-    "cattrs",
-    "msgpack",
-    "msgpack-numpy",
-    "pyyaml",
-    "click",
-    "pillow",
-    "h5py",
-    "rich",
-    "numpy-quaternion",
-    "panda3d==1.10.16",
-    "panda3d-gltf",
-    "panda3d-simplepbr",
-]
-POOLTOOL = "pooltool-billiards==0.6.0"
+#: the two-ball scenes, held to pooltool by carom compare
+SCENES = ("follow-shot", "stun-shot", "draw-shot", "cut-shot")
 
 CHILD = textwrap.dedent(
     """
@@ -77,6 +62,8 @@ CHILD = textwrap.dedent(
     import numpy as np
     import pooltool as pt
     from pooltool.objects.ball.params import BallParams
+    from pooltool.physics.engine import PhysicsEngine
+    from pooltool.physics.resolve.resolver import default_resolver
     R, M, G, MU, C, shots, times = json.loads(sys.argv[1])
     table = pt.Table.default()
     found = {}
@@ -89,7 +76,8 @@ CHILD = textwrap.dedent(
         ball.state.rvw[2] = w0
         ball.state.s = 2  # sliding
         system = pt.System(cue=pt.Cue(cue_ball_id="cue"), table=table, balls={"cue": ball})
-        pt.simulate(system, inplace=True)
+        # (an explicit engine: Resolver.default() would write ~/.config/pooltool)
+        pt.simulate(system, engine=PhysicsEngine(resolver=default_resolver()), inplace=True)
         meets = [e.time for e in system.events if "cushion" in e.event_type.value]
         until = min(meets, default=float("inf"))
         rows = [t for t in times if t < until]  # (before the ball meets a cushion)
@@ -107,18 +95,6 @@ CHILD = textwrap.dedent(
     print(json.dumps(found))
     """
 )
-
-
-def venv_python(where: Path) -> Path:
-    """pooltool's own environment at ``where``, made (once) as the module docstring says."""
-    python = where / "bin" / "python"
-    if not (where / ".ready").exists():
-        subprocess.run([sys.executable, "-m", "venv", str(where)], check=True)
-        pip = [str(python), "-m", "pip", "install", "-q"]
-        subprocess.run([*pip, *PINNED], check=True)
-        subprocess.run([*pip, "--no-deps", POOLTOOL], check=True)
-        (where / ".ready").touch()
-    return python
 
 
 def carom_shot(v0: list[float], w0: list[float], times: list[float]) -> list[np.ndarray]:
@@ -142,12 +118,38 @@ def carom_shot(v0: list[float], w0: list[float], times: list[float]) -> list[np.
     return found
 
 
+def two_balls() -> list[str]:
+    """The two-ball scenes through carom compare, as they are and with elastic balls: the
+    largest difference from pooltool of any ball's position, velocity and angular velocity
+    over the run (accuracy only: one run each is no measure of speed)."""
+    lines = [
+        "Two balls (carom compare SCENE --engines carom,pooltool), held to pooltool state by "
+        "state at carom's 60 Hz steps to 1.5 s:",
+        "",
+        "| scene | balls | position [m] | velocity [m/s] | spin [rad/s] |",
+        "|---|---|---|---|---|",
+    ]
+    for name in SCENES:
+        text = find_scene(name).read_text()
+        for label, e in (("e = 0.95", None), ("e = 1", "restitution = 1.0")):
+            path = Path(os.environ.get("TMPDIR", "/tmp")) / f"pooltool-{name}-{label[4:]}.toml"
+            path.write_text(text if e is None else text.replace("restitution = 0.95", e))
+            result = compare(path, ["carom", "pooltool"])
+            held = result.engines["carom"]["metrics"]["reference"]
+            lines.append(
+                f"| {name} | {label} | {held['position_m']:.2g} | {held['velocity_m_s']:.2g} | "
+                f"{held['omega_rad_s']:.2g} |"
+            )
+    return lines
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--venv", type=Path, default=Path.home() / ".cache/carom/pooltool")
+    parser.add_argument("--venv", type=Path, default=where())
     parser.add_argument("--no-record", action="store_true", help="do not append to RESULTS.md")
     args = parser.parse_args()
-    python = venv_python(args.venv)
+    python = build(args.venv)
+    os.environ["CAROM_POOLTOOL"] = str(args.venv)  # (carom compare's pooltool: the same)
     given = json.dumps([R, M, G, MU, C, SHOTS, TIMES])
     ran = subprocess.run(
         [str(python), "-c", CHILD, given], check=True, capture_output=True, text=True
@@ -167,16 +169,19 @@ def main() -> None:
             lines.append(f"| {name} | {t:g} | " + " | ".join(f"{g:.1e}" for g in gaps) + " |")
     body = "\n".join(
         [
-            f"carom at {RATE:g} Hz against pooltool, largest difference of any component:",
+            f"One ball: carom at {RATE:g} Hz against pooltool, largest difference of any "
+            "component:",
             "",
             *lines,
             "",
             f"largest difference over all: {worst:.1e}",
+            "",
+            *two_balls(),
         ]
     )
     print(body)
     if not args.no_record:
-        record("pooltool_shots: one ball on the cloth, carom and pooltool", body + "\n")
+        record("pooltool_shots: shots on the cloth, carom and pooltool", body + "\n")
 
 
 if __name__ == "__main__":

@@ -42,16 +42,19 @@ RIGID = {
 #: the bullets are carom compare's, tests/compare/test_rigid3d_compare.py)
 RIGID3D = {
     "billiards-3d",
-    "billiards-shots",
     "bowl",
     "box-corner-3d",
     "box-edge-3d",
     "bullet-3d",
+    "cut-shot",
+    "draw-shot",
     "dominoes-3d",
+    "follow-shot",
     "pyramid-3d",
     "ring-toss",
     "rod-drop-3d",
     "spin-ball-3d",
+    "stun-shot",
     "tumbler-3d",
     "wall-and-ball",
 }

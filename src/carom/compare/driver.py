@@ -88,7 +88,8 @@ def _runs_json(engines: dict[str, dict[str, Any]], skipped: dict[str, str]) -> d
     return {
         "machine": {"python": platform.python_version(), "processor": platform.machine()},
         "engines": {
-            name: {k: v for k, v in run.items() if k != "series"} for name, run in engines.items()
+            name: {k: v for k, v in run.items() if k not in ("series", "trace")}
+            for name, run in engines.items()
         },
         "skipped": skipped,
     }
@@ -266,6 +267,8 @@ def compare(
                 if asked or e.name == "carom":
                     raise
                 skipped[e.name] = str(refused)
+        if REFERENCE in rigid:
+            against_reference(rigid)
         return RigidComparison(spec, check, rigid, skipped)
     expected = expectation(spec)
     runs = {}
@@ -283,6 +286,43 @@ def run_engine(
 
 #: a scene of more bodies than this is looked at ten times a simulated second, not every step
 DENSE_BODIES = 1000
+#: the engine the others are held to, state by state, when it runs: pooltool, event-based,
+#: whose billiards model carom's cloth shares (:mod:`carom.compare.engines.pooltool_engine`)
+REFERENCE = "pooltool"
+#: the states of a scene of at most this many bodies are kept for that
+TRACED_BODIES = 64
+
+
+def against_reference(runs: dict[str, dict[str, Any]]) -> None:
+    """Add to each engine's metrics how far its states are from the reference's
+    (:data:`REFERENCE`) at the times both observed, up to the reference's first event that
+    the others model otherwise (pooltool: a ball meeting a cushion): ``reference`` with the
+    largest difference of any body's position [m], velocity [m/s] and angular velocity
+    [rad/s], and the time compared to [s]."""
+    ref = runs[REFERENCE]
+    times = {round(t, 9): k for k, t in enumerate(ref["trace"]["time"])}
+    until = ref.get("reference_until_s")
+    for run in runs.values():
+        trace = run.get("trace")
+        if trace is None:
+            continue
+        worst = [0.0, 0.0, 0.0]
+        last = 0.0
+        for k, t in enumerate(trace["time"]):
+            j = times.get(round(t, 9))
+            if j is None or (until is not None and t > until):
+                continue
+            last = max(last, t)
+            for c, key in enumerate(("x", "v", "w")):
+                gap = np.abs(trace[key][k] - ref["trace"][key][j]).max(initial=0.0)
+                worst[c] = max(worst[c], float(gap))
+        run["metrics"]["reference"] = {
+            "engine": REFERENCE,
+            "position_m": worst[0],
+            "velocity_m_s": worst[1],
+            "omega_rad_s": worst[2],
+            "until_s": last,
+        }
 
 
 def run_rigid(
@@ -322,10 +362,22 @@ def _run(
     began = time.perf_counter()
     sim = e.start(scene)
     setup = time.perf_counter() - began
+    traced = isinstance(scene, RigidScene | RigidScene3D) and scene.n <= TRACED_BODIES
+    trace: dict[str, list[Any]] = {"time": [], "x": [], "v": [], "w": []}
+
+    def look(t: float) -> None:
+        state = sim.state()
+        monitor.observe(t, *state)
+        if traced:
+            trace["time"].append(t)
+            trace["x"].append(np.array(state[0], float))
+            trace["v"].append(np.array(state[1], float))
+            trace["w"].append(np.array(state[3], float))
+
     try:
         steps = scene.steps(sim.dt)
         monitor = watch(sim.dt * stride)
-        monitor.observe(0.0, *sim.state())
+        look(0.0)
         wall = 0.0
         bar = tqdm(
             total=steps,
@@ -341,11 +393,18 @@ def _run(
                 sim.step()
                 wall += time.perf_counter() - began
                 if k % stride == 0 or k == steps:
-                    monitor.observe(k * sim.dt, *sim.state())
+                    look(k * sim.dt)
                 bar.update()
     finally:
         sim.close()
+    # an engine that solved the whole run as it started (pooltool, in its own process) says
+    # how long its own solving took: its steps only read the answer
+    wall = float(getattr(sim, "solved_in", wall))
+    extra: dict[str, Any] = {"trace": trace} if traced else {}
+    if getattr(sim, "cushion_s", None) is not None:
+        extra["reference_until_s"] = float(sim.cushion_s)
     return {
+        **extra,
         "version": e.version(),
         "dt_s": sim.dt,
         "settings": sim.settings,

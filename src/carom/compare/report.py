@@ -120,6 +120,20 @@ def format_rigid_table(comparison: RigidComparison) -> str:
         lines.append(row + f"{run['ms_per_step']:>8.3g} {ratio:>7}")
     for name, why in comparison.skipped.items():
         lines.append(f"{name:<9} skipped: {why}")
+    held = {n: r["metrics"].get("reference") for n, r in comparison.engines.items()}
+    held = {n: ref for n, ref in held.items() if ref is not None and n != ref["engine"]}
+    if held:
+        first = next(iter(held.values()))
+        lines += [
+            "",
+            f"against {first['engine']}, state by state to {first['until_s']:g} s (its first "
+            "ball-cushion event, if any, ends the comparison):",
+        ]
+        for name, ref in held.items():
+            lines.append(
+                f"{name:<9} position {ref['position_m']:.2g} m, velocity "
+                f"{ref['velocity_m_s']:.2g} m/s, angular velocity {ref['omega_rad_s']:.2g} rad/s"
+            )
     joints = (
         "joint gap: the largest break of any joint over the run [m] (a pin's anchors apart, a "
         "rod's length off, a rope past its length, a slider off its axis); form err: the "

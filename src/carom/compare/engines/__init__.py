@@ -76,6 +76,9 @@ class EngineEntry:
         Whether it is given a rigid scene's joints (:mod:`carom.compare.jointed`).
     jointed_dims : tuple of int
         Dimensions of the rigid scenes with joints it takes (default: ``rigid_dims``).
+    own_env : bool
+        Installed in its own environment, not carom's (pooltool): its module's ``missing()``
+        and ``version()`` say whether it is there and which.
     """
 
     name: str
@@ -87,9 +90,13 @@ class EngineEntry:
     rigid_dims: tuple[int, ...] = ()
     joints: bool = False
     jointed_dims: tuple[int, ...] = ()
+    own_env: bool = False
 
     def missing(self) -> str | None:
         """None when installed, else why not and how to install it."""
+        if self.own_env:
+            said: str | None = importlib.import_module(self.module).missing()
+            return said
         if importlib.util.find_spec(self.import_name or self.distribution) is None:
             return f"{self.name} is not installed; pip install 'carom[compare]'"
         return None
@@ -132,6 +139,8 @@ class EngineEntry:
         return float(getattr(module, "RIGID_DT", scene.dt))
 
     def version(self) -> str:
+        if self.own_env:
+            return str(importlib.import_module(self.module).version())
         return importlib.metadata.version(self.distribution)
 
     def start(self, scene: PeerScene | RigidScene | RigidScene3D) -> Any:
@@ -202,6 +211,14 @@ ENGINES: dict[str, EngineEntry] = {
             ("rigid",),
             "Box2D",
             joints=True,
+        ),
+        EngineEntry(
+            "pooltool",
+            "pooltool-billiards",
+            (3,),
+            "carom.compare.engines.pooltool_engine",
+            ("rigid",),
+            own_env=True,
         ),
     )
 }
