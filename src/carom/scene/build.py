@@ -43,6 +43,7 @@ class Scene(Protocol):
     lattice: list[dict[str, Any]]
     pegs: list[dict[str, Any]]
     pyramid: list[dict[str, Any]]
+    cushions: list[dict[str, Any]]
     gas: list[dict[str, Any]]
     joints: list[dict[str, Any]]
     settings: dict[str, Any]
@@ -499,6 +500,7 @@ def count_bodies(scene: Scene) -> int:
     n = sum(len(b["positions"]) for b in scene.bodies)
     n += sum(r["count"] for r in scene.row)
     n += sum(r["rows"] * (r["rows"] + 1) // 2 for r in scene.rack)
+    n += 4 * len(scene.cushions)
     n += sum(math.prod(lattice["shape"]) for lattice in scene.lattice)
     for p in scene.pegs:
         rows = p["rows"]
@@ -520,8 +522,11 @@ def _placed_bodies(scene: Scene) -> Iterator[tuple[str, int, dict[str, Any]]]:
         yield "bodies", index, entry
     for index, entry in enumerate(scene.pyramid):
         yield "pyramid", index, _pyramid(entry, dim)
+    for index, entry in enumerate(scene.cushions):
+        for rail in _cushions(entry, dim):
+            yield "cushions", index, rail
     for table in GENERATORS:
-        if table == "pyramid":
+        if table in ("pyramid", "cushions"):
             continue
         for index, entry in enumerate(getattr(scene, table)):
             positions = _generated_positions(table, entry, dim)
@@ -548,6 +553,34 @@ def _placed_bodies(scene: Scene) -> Iterator[tuple[str, int, dict[str, Any]]]:
                 placed |= {"radius": body.get("radius"), "size": body.get("size")}
                 placed |= {"shape": body["shape"], "vertices": body.get("vertices")}
             yield table, index, placed
+
+
+def _cushions(entry: Mapping[str, Any], dim: int) -> list[dict[str, Any]]:
+    """A ``[[cushions]]`` table as four ``[[bodies]]`` entries: the static rails of a billiards
+    table around ``area`` (:func:`carom.scene.layouts.cushion_rails`), their noses ``height``
+    above the cloth at z = ``cloth``."""
+    if dim != 3:
+        raise CaromError(
+            "cushions are 3D rails (their nose above the ball's centre); use walls in 2D"
+        )
+    low, high = entry["area"]
+    if len(low) != 2 or len(high) != 2:
+        raise CaromError(f"area is [[x0, y0], [x1, y1]] on the cloth [m]; got {entry['area']!r}")
+    rails = layouts.cushion_rails(low, high, entry["height"], entry["width"], entry["cloth"])
+    return [
+        {
+            "shape": "hull",
+            "vertices": points.tolist(),
+            "positions": [position.tolist()],
+            "orientations": orientation.tolist(),
+            "velocities": None,
+            "mass": None,
+            "material": entry["material"],
+            "kind": "static",
+            "static": True,
+        }
+        for points, position, orientation in rails
+    ]
 
 
 def _pyramid(entry: Mapping[str, Any], dim: int = 2) -> dict[str, Any]:

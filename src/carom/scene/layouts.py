@@ -13,6 +13,7 @@ from carom.errors import CaromError
 from carom.world import World
 
 __all__ = [
+    "cushion_rails",
     "lattice_gas",
     "lattice_positions",
     "maxwell_velocities",
@@ -202,6 +203,56 @@ def peg_positions(
             p[1] -= r * dy
             pegs.append(p)
     return np.array(pegs)
+
+
+def cushion_rails(
+    low: ArrayLike, high: ArrayLike, height: float, width: float = 0.05, cloth: float = 0.0
+) -> list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]]:
+    """The four cushions of a billiards table: static rails whose noses, ``height`` [m] above
+    the cloth (the plane z = ``cloth``), run along the rectangle ``low`` to ``high`` ((2,)
+    [m], x and y) that bounds the playing area.
+
+    A rail is a prism ``width`` [m] deep: its top is level with the nose, and its face below
+    the nose leans back at 45 degrees (a real cushion's rubber is undercut), so that a ball
+    meets the nose first wherever it comes from, as long as the nose is above the ball's
+    centre by less than ``R sin 45``: the contact normal then points from the nose to the
+    ball's centre, tilted down by ``asin(height / R - 1)`` (Han 2005; Mathavan et al. 2010).
+
+    Returns
+    -------
+    list of (points, position, orientation)
+        Each rail's convex hull points in its own frame (8, 3) [m] (its nose along +y from
+        the origin at the nose's height, the rail behind it towards +x), where that origin is
+        (3,) [m], and its turn about z, a unit quaternion (w, x, y, z): the right, top, left
+        and bottom rails.
+    """
+    lo = np.asarray(low, dtype=float)
+    hi = np.asarray(high, dtype=float)
+    if lo.shape != (2,) or hi.shape != (2,) or not np.all(hi > lo):
+        raise CaromError(
+            f"a table's playing area is [[x0, y0], [x1, y1]] with x1 > x0 and y1 > y0; got "
+            f"{np.asarray(low).tolist()!r} to {np.asarray(high).tolist()!r}"
+        )
+    if not (height > 0.0 and width > 0.0):
+        raise CaromError(f"a cushion's height and width must be > 0; got {height}, {width} m")
+
+    def rail(length: float) -> NDArray[np.float64]:
+        profile = [(0.0, height), (width, height), (width, 0.0), (min(height, width), 0.0)]
+        return np.array(
+            [[x, y, z - height] for y in (0.0, length) for x, z in profile], dtype=float
+        )
+
+    def yaw(angle: float) -> NDArray[np.float64]:
+        return np.array([math.cos(angle / 2.0), 0.0, 0.0, math.sin(angle / 2.0)])
+
+    z = cloth + height
+    (x0, y0), (x1, y1) = lo, hi
+    return [
+        (rail(y1 - y0), np.array([x1, y0, z]), yaw(0.0)),  # facing -x
+        (rail(x1 - x0), np.array([x1, y1, z]), yaw(0.5 * math.pi)),  # facing -y
+        (rail(y1 - y0), np.array([x0, y1, z]), yaw(math.pi)),  # facing +x
+        (rail(x1 - x0), np.array([x0, y0, z]), yaw(-0.5 * math.pi)),  # facing +y
+    ]
 
 
 def maxwell_velocities(

@@ -40,10 +40,10 @@ class Scene:
         The optional ``[scene]`` table: ``title`` and ``description``.
     world : dict
         The ``[world]`` table, defaults filled in.
-    materials, bodies, row, rack, lattice, pegs, pyramid, gas : list of dict
+    materials, bodies, row, rack, lattice, pegs, pyramid, cushions, gas : list of dict
         The ``[[materials]]``, ``[[bodies]]``, generator (``[[row]]``, ``[[rack]]``,
-        ``[[lattice]]``, ``[[pegs]]``, ``[[pyramid]]``) and ``[[gas]]`` tables, defaults
-        filled in.
+        ``[[lattice]]``, ``[[pegs]]``, ``[[pyramid]]``, ``[[cushions]]``) and ``[[gas]]``
+        tables, defaults filled in.
     joints : list of dict
         The ``[[joints]]`` tables (:mod:`carom.joints`), defaults filled in; each joins
         bodies by their index in the order the scene places them.
@@ -67,6 +67,7 @@ class Scene:
     lattice: list[dict[str, Any]] = field(default_factory=list)
     pegs: list[dict[str, Any]] = field(default_factory=list)
     pyramid: list[dict[str, Any]] = field(default_factory=list)
+    cushions: list[dict[str, Any]] = field(default_factory=list)
     gas: list[dict[str, Any]] = field(default_factory=list)
     joints: list[dict[str, Any]] = field(default_factory=list)
     run: dict[str, Any] = field(default_factory=dict)

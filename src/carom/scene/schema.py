@@ -416,6 +416,13 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
         "pitch": (_vector, False, None),
         "material": (_text, False, None),
     },
+    "cushions": {
+        "area": (_region, True, None),
+        "height": (_positive, True, None),
+        "width": (_positive, False, 0.05),
+        "cloth": (_number, False, 0.0),
+        "material": (_text, False, None),
+    },
     "gas": {
         "count": (_count, True, None),
         "packing": (_positive, True, None),
@@ -472,7 +479,7 @@ SCHEMA: dict[str, dict[str, tuple[Check, bool, Any]]] = {
 }
 #: tables that may repeat ([[name]]); the generators place bodies in this order, after
 #: [[bodies]] and before [[gas]] (which avoids everything placed before it)
-GENERATORS = ("row", "rack", "lattice", "pegs", "pyramid")
+GENERATORS = ("row", "rack", "lattice", "pegs", "pyramid", "cushions")
 #: keys that carom once read under another name: table -> old key -> new key
 RENAMED = {"world": {"wall_restitution": "walls", "tc": "t_c"}}
 ARRAYS = ("materials", "bodies", *GENERATORS, "gas", "joints")

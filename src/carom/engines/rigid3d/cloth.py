@@ -84,7 +84,7 @@ from carom.laws.batch import (
     law_block,
 )
 from carom.laws.kernels import LAW_WALTON
-from carom.laws.kinds import KIND_DYNAMIC, KIND_STATIC
+from carom.laws.kinds import KIND_DYNAMIC, KIND_KINEMATIC, KIND_STATIC
 
 __all__ = [
     "SUPPORT",
@@ -150,17 +150,18 @@ def candidates(
 
     A ball is on the cloth when (module docstring):
 
-    - its only contact with anything not dynamic is a level face of a static piece (a plane,
-      or a polytope's face its contact point cannot leave within the step), touching it
+    - the only static body it rests on is a level face of a static piece (a plane, or a
+      polytope's face its contact point cannot leave within the step), touching it
       (within ``apart``), not falling faster than a step of gravity gives nor leaving faster
       than a hop within ``apart``; the cloth rough enough to keep it rolling
       (``c <= mu R (1 + k)``) and ``mu g dt^2 / 2`` within ``speculative``: the contacts are
       made for the step's steady motion, and friction must not take the ball beyond them;
     - it is awake, no force, torque (``pushed`` (N,)) or joint (``links`` (L, 2)) acts on it;
-    - every other contact it has is with a ball on the cloth, and is an impact still to
-      happen (apart, closing faster than ``fast`` or leaving faster than ``leaving``: the
-      islands' test): balls resting against each other are the solver's, and so is a ball
-      touching anything else.
+    - every other contact it has is an impact still to happen (apart, closing faster than
+      ``fast`` or leaving faster than ``leaving``: the islands' test), with a static body (a
+      cushion: the exact path meets it) or with a ball on the cloth: balls resting against
+      each other or on a cushion are the solver's, and so is a ball touching a kinematic body
+      or a dynamic one that is not a ball.
 
     ``closest``, ``closing`` (nc,): each contact's least separation [m] and normal speed
     [m/s]; ``shaped`` (N,): :func:`ball_shaped`; ``accel`` (N, 3) [m/s^2]; ``limits``:
@@ -184,15 +185,17 @@ def candidates(
         skip[m] = False
         a = ci[m, I_BODY_A]
         b = ci[m, I_BODY_B]
+        resting = closest[m] <= apart and -fast <= closing[m] <= leaving
         for body, other in ((a, b), (b, a)):
             if body < 0 or not shaped[body]:
                 continue
-            if other < 0 or kind[other] != KIND_DYNAMIC:
-                others[body] += 1
-            elif not shaped[other]:
+            if other < 0 or kind[other] == KIND_KINEMATIC:
                 barred[body] = True
-            elif closest[m] <= apart and -fast <= closing[m] <= leaving:
-                barred[body] = True  # resting against another ball
+            elif kind[other] == KIND_STATIC:
+                if resting:  # (a cushion ahead is an impact still to happen)
+                    others[body] += 1
+            elif not shaped[other] or resting:
+                barred[body] = True  # touching a body that is not a ball, or resting on one
     for m in range(nc):
         a = ci[m, I_BODY_A]
         b = ci[m, I_BODY_B]
