@@ -55,6 +55,7 @@ RIGID3D = {
     "rod-drop-3d",
     "spin-ball-3d",
     "stun-shot",
+    "three-cushion",
     "tumbler-3d",
     "wall-and-ball",
 }

@@ -596,6 +596,9 @@ class _Run:
             from carom.viz.run import write_run_plots
 
             written += write_run_plots(self.work, world, h)
+            from carom.viz.table import write_table_plot
+
+            written += write_table_plot(self.work, world, trajectory)
         if outputs.animation != "none":
             from carom.viz.animate import write_animation
 

@@ -48,6 +48,7 @@ SHOWCASE_SCENES = (
     "pyramid-3d",
     "ring-toss",
     "billiards-3d",
+    "three-cushion",
 )
 #: the parameter sweeps shown (carom sweep, on a local Dask cluster: the sweep extra)
 SHOWCASE_SWEEPS = ("eos-2d",)

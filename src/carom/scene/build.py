@@ -522,9 +522,6 @@ def _placed_bodies(scene: Scene) -> Iterator[tuple[str, int, dict[str, Any]]]:
         yield "bodies", index, entry
     for index, entry in enumerate(scene.pyramid):
         yield "pyramid", index, _pyramid(entry, dim)
-    for index, entry in enumerate(scene.cushions):
-        for rail in _cushions(entry, dim):
-            yield "cushions", index, rail
     for table in GENERATORS:
         if table in ("pyramid", "cushions"):
             continue
@@ -553,6 +550,9 @@ def _placed_bodies(scene: Scene) -> Iterator[tuple[str, int, dict[str, Any]]]:
                 placed |= {"radius": body.get("radius"), "size": body.get("size")}
                 placed |= {"shape": body["shape"], "vertices": body.get("vertices")}
             yield table, index, placed
+    for index, entry in enumerate(scene.cushions):  # (the rails after every ball)
+        for rail in _cushions(entry, dim):
+            yield "cushions", index, rail
 
 
 def _cushions(entry: Mapping[str, Any], dim: int) -> list[dict[str, Any]]:
