@@ -1,10 +1,10 @@
 """Balls on a level cloth, moved in closed form within the step (the billiards model).
 
 A ball (one sphere, the same moment of inertia ``I = k m R^2`` about every axis) resting on a
-level static plane, touching nothing else, is not given to the soft step: its motion over the
-step is the closed form of a ball on cloth (Leckie and Greenspan 2005; Kiefl's pooltool,
-2024), so it is the same at any rate. With ``n`` the plane's upward normal, gravity ``-g n``,
-the contact point at ``-R n`` from the centre and the slip there ``u = v - R w x n``:
+level static plane is not given to the soft step: its motion over the step is the closed form
+of a ball on cloth (Leckie and Greenspan 2005; Kiefl's pooltool, 2024), so it is the same at
+any rate. With ``n`` the plane's upward normal, gravity ``-g n``, the contact point at
+``-R n`` from the centre and the slip there ``u = v - R w x n``:
 
 - **sliding** (``u != 0``): friction ``mu m g`` against the slip. ``dv/dt = -mu g u^``,
   ``dw/dt = (mu g / (k R)) n x u^``, so ``du/dt = -mu g (1 + 1/k) u^``: the slip keeps its
@@ -26,15 +26,19 @@ default stiffness), its normal velocity (a round-off of the resting contact) is 
 the ledger books the energy of both, as it books the friction's. Every ball on the cloth is
 then at the same height, so two that meet do so along a level normal.
 
-Who is on the cloth is decided afresh each step (:func:`select`): a ball alone on a level
-static plane, touching it (within the islands' ``apart`` of it) and moving along it (not
-falling faster than gravity makes it in a step, not leaving faster than a hop that stays
-within ``apart``), with no force, torque or joint on it, and a
-cloth rough enough to keep it rolling (``c / (R (1 + k)) <= mu``). Anything else near it
-(another ball, a cushion, within the step's reach: the contacts are made for the whole step's
-motion) makes its island the solver's or the exact path's, as before. Rolling resistance acts
-here only while the ball rolls, as in the billiards model; the soft step also applies it while
-a ball slides.
+Who is on the cloth is decided afresh each step (:func:`candidates`): a ball on a level static
+plane, touching it (within the islands' ``apart`` of it) and moving along it (not falling
+faster than gravity makes it in a step, not leaving faster than a hop that stays within
+``apart``), with no force, torque or joint on it, and a cloth rough enough to keep it rolling
+(``c / (R (1 + k)) <= mu``). Its cloth is then left out of the islands
+(:func:`carom.engines.stepped.islands.plan`): a ball with nothing else near rolls alone
+(:func:`roll_all`); balls about to meet each other or a cushion (their contacts apart, or
+closing or leaving fast) are an island solved exactly (:mod:`.impacts`), which rolls them in
+closed form between impacts, meets two balls by :func:`carom.collide`'s law
+(:func:`ball_impact`) and a ball and a cushion at the cushion's nose. A ball resting against
+another or against a cushion, or touching anything else, stays with the soft step. Rolling
+resistance acts here only while the ball rolls, as in the billiards model; the soft step also
+applies it while a ball slides.
 """
 
 from __future__ import annotations

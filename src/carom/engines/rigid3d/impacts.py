@@ -21,6 +21,10 @@ At the contact, the impulse is Newton's restitution with the bodies' full inerti
   active sets; then friction per point, clamped to its cone.
 
 The pair then flies on to the end of the step, and may meet again within it.
+
+A ball on a level cloth (:mod:`.cloth`) rolls in closed form instead of flying: the time of
+impact bounds its acceleration in the cloth's plane by its friction ``mu g``, and two balls on
+the cloth meet by :func:`carom.collide`'s law (:func:`.cloth.ball_impact`).
 """
 
 from __future__ import annotations

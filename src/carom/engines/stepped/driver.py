@@ -10,12 +10,13 @@ names its kernels for the stages that differ (:class:`carom.engines.rigid.driver
 3. **narrow phase**: their manifolds, warm-started from the last step; an awake body touching
    a sleeping island wakes it, and the phases run again;
 4. **islands**: each body's role: free flight, an island solved exactly, or the solver
-   (:mod:`carom.engines.stepped.islands`);
+   (:mod:`carom.engines.stepped.islands`); in 3D a ball on a level cloth has its cloth left
+   out (:mod:`carom.engines.rigid3d.cloth`);
 5. **exact impacts**: the islands solved exactly advanced through the step, their impacts
    taken in the order they happen, each at its time of impact
-   (:mod:`carom.engines.stepped.impacts`);
+   (:mod:`carom.engines.stepped.impacts`; balls on the cloth roll in closed form between);
 6. **free flight**: bodies with no contact; in 3D, balls alone on a level cloth roll in
-   closed form (:mod:`carom.engines.rigid3d.cloth`);
+   closed form;
 7. **solve**: the soft step over the remaining contacts; a solved body that moved far is swept
    against the static geometry its contacts did not hold, and put back at the first touch;
 8. **store** the impulses for the next step, and **sleep** the islands at rest (their bodies
