@@ -79,7 +79,9 @@ def cast_rays(
     out = np.empty(2)
     for r in range(origins.shape[0]):
         o, d = origins[r], directions[r]
-        inv[0], inv[1] = 1.0 / d[0], 1.0 / d[1]
+        # (IEEE's 1 / +-0 = +-inf, written out: plain Python warns where the kernel does not)
+        inv[0] = 1.0 / d[0] if d[0] != 0.0 else math.copysign(math.inf, d[0])
+        inv[1] = 1.0 / d[1] if d[1] != 0.0 else math.copysign(math.inf, d[1])
         best = lengths[r]
         distance[r] = math.inf
         piece[r] = -1

@@ -76,7 +76,9 @@ def cast_rays(
     for r in range(origins.shape[0]):
         o, d = origins[r], directions[r]
         for k in range(3):
-            inv[k] = 1.0 / d[k]
+            # (IEEE's 1 / +-0 = +-inf, the slab test's axis the ray runs along; written out,
+            # as plain Python warns where the compiled kernel does not)
+            inv[k] = 1.0 / d[k] if d[k] != 0.0 else math.copysign(math.inf, d[k])
         best = lengths[r]
         distance[r] = math.inf
         piece[r] = -1
