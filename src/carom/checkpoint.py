@@ -35,10 +35,13 @@ __all__ = ["FORMAT", "VERSION", "load_world", "save_world"]
 
 FORMAT = "carom-checkpoint"
 #: bumped whenever the layout of the file or of an engine's arrays changes
-VERSION = 13
+VERSION = 14
 #: older versions this carom still reads: 12 kept the two built-in engines' settings under
-#: "settings" and "rigid" where 13 keeps every engine's under "engine_settings"
-READS = (12, VERSION)
+#: "settings" and "rigid" where 13 keeps every engine's under "engine_settings"; 13 kept the
+#: event-driven engine's collision counters as the schedule's fourth column and its
+#: calendar's four per-body arrays apart, where 14 keeps ``state.counter`` and
+#: ``state.cal_body`` (its ``restore`` reads either)
+READS = (12, 13, VERSION)
 #: the body table's motion, and its other fields (read as they are)
 MOTION_FIELDS = ("position", "velocity", "orientation", "angular_velocity")
 BODY_FIELDS = ("shape", "radius", "mass", "inertia_factor", "material", "kind")

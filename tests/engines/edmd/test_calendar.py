@@ -30,15 +30,19 @@ def calendar_next(cal, k):  # type: ignore[no-untyped-def]
 
 
 def empty_calendar(n: int) -> Calendar:
-    """A calendar for ``n`` bodies as the engine allocates it, before any event is filed."""
+    """A calendar for ``n`` bodies as the engine allocates it, before any event is filed
+    (each body's links, place and heap node one record: ``State.cal_body``)."""
+    records = np.empty((n, calendar_kernels.CAL_WIDTH), np.int32)
+    records[:] = np.array(calendar_kernels.CAL_EMPTY, np.int32)
+    cal_next, cal_prev, cal_loc, cur_where = calendar_kernels.calendar_views(records)
     return (
         np.full(n + 1, -1, np.int32),  # cal_head
-        np.full(n, -1, np.int32),  # cal_next
-        np.full(n, -1, np.int32),  # cal_prev
-        np.full(n, -2, np.int32),  # cal_loc
+        cal_next,
+        cal_prev,
+        cal_loc,
         np.zeros(n, np.int32),  # cur_heap
         np.full(n, np.inf),  # cur_key
-        np.zeros(n, np.int32),  # cur_where
+        cur_where,
         np.array([0.0, 1.0]),  # cal_f
         np.zeros(4, np.int64),  # cal_i
     )

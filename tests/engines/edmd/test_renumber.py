@@ -131,8 +131,10 @@ def _as_caller_sees(engine: EdmdEngine) -> dict[str, Any]:
     for name in ("mobile", "radius", "mass", "inv_mass", "q", "material"):
         seen["model." + name] = rows(getattr(model, name))
     for name in ("kin", "acc", "support", "w", "orient", "orient_t", "last_coll", "shell",
-                 "nbr_count", "nbr_mark", "cell", "slot", "ev_time", "cal_loc"):  # fmt: skip
+                 "nbr_count", "nbr_mark", "cell", "slot", "ev_time", "counter"):  # fmt: skip
         seen[name] = rows(getattr(state, name))
+    cal_next, cal_prev, cal_loc, cur_where = (state.cal_body[:, k] for k in range(4))
+    seen["cal_loc"] = rows(cal_loc)
     sched = state.sched.copy()
     pair = sched[:, SCHED_KIND] == EV_PAIR
     sched[pair, SCHED_OTHER] = order[sched[pair, SCHED_OTHER]]
@@ -149,16 +151,16 @@ def _as_caller_sees(engine: EdmdEngine) -> dict[str, Any]:
     for head in state.cal_head:
         bucket, previous, body = [], -1, int(head)
         while body >= 0:
-            assert state.cal_prev[body] == previous
-            assert state.cal_loc[body] not in (IN_HEAP, NOWHERE)
+            assert cal_prev[body] == previous
+            assert cal_loc[body] not in (IN_HEAP, NOWHERE)
             bucket.append(int(order[body]))
-            previous, body = body, int(state.cal_next[body])
+            previous, body = body, int(cal_next[body])
         buckets.append(bucket)
     seen["buckets"] = buckets
     size = int(state.cal_i[I_SIZE])
     heap = state.cur_heap[:size]
-    np.testing.assert_array_equal(state.cur_where[heap], np.arange(size))
-    assert (state.cal_loc[heap] == IN_HEAP).all()
+    np.testing.assert_array_equal(cur_where[heap], np.arange(size))
+    assert (cal_loc[heap] == IN_HEAP).all()
     seen["heap"] = sorted(zip(state.cur_key[:size].tolist(), order[heap].tolist(), strict=True))
     seen["top"] = float(state.cur_key[0]) if size else np.inf  # (equal times: either body)
     seen["scalars"] = (state.cal_f.tolist(), state.cal_i.tolist(), state.counts.tolist())

@@ -20,6 +20,12 @@ event is: a bucket, ``IN_HEAP``, or ``NOWHERE``; ``cur_heap`` (N,) int32, ``cur_
 float64 and ``cur_where`` (N,) int32 the current bucket's heap and each body's node in it;
 ``cal_f`` (2,) float64 ``[base, width]``; ``cal_i`` (4,) int64 ``[current bucket, heap size,
 events in the calendar, events popped this year]``.
+
+In the engine ``cal_next``, ``cal_prev``, ``cal_loc`` and ``cur_where`` are the columns
+``CAL_NEXT`` .. ``CAL_WHERE`` of one (N, 4) int32 array (``State.cal_body``,
+:func:`calendar_views`): a body's four are then one 16-byte record, one cache line where
+four arrays took four. At large N each is a miss, and pouring a bucket, filing an event or
+taking one out reads them body by body along a bucket's list.
 """
 
 from __future__ import annotations
@@ -33,6 +39,15 @@ from carom.engines.edmd.jitflags import njit_inlined
 
 IN_HEAP = -1
 NOWHERE = -2
+
+# columns of ``State.cal_body``: a body's calendar record (module docstring)
+CAL_NEXT = 0
+CAL_PREV = 1
+CAL_LOC = 2
+CAL_WHERE = 3
+CAL_WIDTH = 4
+#: what a record holds with no event filed (no list neighbours, filed nowhere, heap node 0)
+CAL_EMPTY = (-1, -1, NOWHERE, 0)
 
 F_BASE = 0
 F_WIDTH = 1
@@ -52,6 +67,18 @@ Calendar = tuple[
     np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
     np.ndarray,
 ]  # fmt: skip
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def calendar_views(cal_body: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``cal_next``, ``cal_prev``, ``cal_loc`` and ``cur_where``, (N,) each: the columns of
+    the records ``cal_body`` (N, 4) int32 (in Python or in compiled code: the same views)."""
+    return (
+        cal_body[:, CAL_NEXT],
+        cal_body[:, CAL_PREV],
+        cal_body[:, CAL_LOC],
+        cal_body[:, CAL_WHERE],
+    )
 
 
 @njit_inlined

@@ -27,7 +27,14 @@ from carom.engines.base import (
     Sink,
 )
 from carom.engines.edmd import aside, codes, loop, neighbours
-from carom.engines.edmd.calendar import Calendar, calendar_build
+from carom.engines.edmd.calendar import (
+    CAL_LOC,
+    CAL_NEXT,
+    CAL_PREV,
+    CAL_WHERE,
+    Calendar,
+    calendar_build,
+)
 from carom.engines.edmd.events import EdmdEvents
 from carom.engines.edmd.handle import new_handle, sample_motion_now, sample_now
 from carom.engines.edmd.model import Environment, Model
@@ -39,6 +46,8 @@ from carom.engines.edmd.settings import SHELL_DEFAULT, EdmdSettings
 from carom.engines.edmd.state import (
     KIN_V,
     N_SUMS,
+    SCHED_STAMP,
+    SCHED_WIDTH,
     Records,
     State,
     aligned_records,
@@ -863,6 +872,23 @@ class EdmdEngine:
             fields[name] = (
                 value if name != "kin" or value is None else aligned_records(len(value), value)
             )
+        if fields["cal_body"] is None and all(
+            f"state.{name}" in arrays for name in ("cal_next", "cal_prev", "cal_loc", "cur_where")
+        ):  # (saved when the calendar's four per-body arrays were apart)
+            fields["cal_body"] = np.stack(
+                [
+                    arrays[f"state.{name}"]
+                    for name in ("cal_next", "cal_prev", "cal_loc", "cur_where")
+                ],
+                axis=1,
+            ).astype(np.int32)
+        sched = fields["sched"]
+        if fields["counter"] is None and sched is not None and sched.shape[1] == 4:
+            # (saved when the counters were the schedule's fourth column; stamps as they
+            # compare with 4-byte counters)
+            fields["counter"] = sched[:, 3].astype(np.int32)
+            fields["sched"] = sched[:, :SCHED_WIDTH].copy()
+            fields["sched"][:, SCHED_STAMP] = sched[:, SCHED_STAMP].astype(np.int32)
         missing = [name for name, v in fields.items() if v is None and name not in OPTIONAL]
         for group in (GRAVITY_FIELDS, SPIN_FIELDS):  # each all there or all absent
             there = [fields[name] is not None for name in group]
@@ -972,7 +998,8 @@ def _fit_lists(
 def _calendar(s: State) -> Calendar:
     """The event calendar's arrays of state ``s``, as ``predict.calendar_of`` gives them to
     the kernels."""
+    records = s.cal_body  # (the views calendar.calendar_views gives compiled code)
     return (
-        s.cal_head, s.cal_next, s.cal_prev, s.cal_loc, s.cur_heap, s.cur_key, s.cur_where,
-        s.cal_f, s.cal_i,
+        s.cal_head, records[:, CAL_NEXT], records[:, CAL_PREV], records[:, CAL_LOC], s.cur_heap,
+        s.cur_key, records[:, CAL_WHERE], s.cal_f, s.cal_i,
     )  # fmt: skip

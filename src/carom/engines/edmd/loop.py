@@ -83,7 +83,8 @@ def initialise(lo: int, hi: int, m, s) -> int:  # type: ignore[no-untyped-def]
     scratch is its own.
     """
     x, v, t = kinematic_views(s.kin, m.box.shape[0])
-    ev_kind, ev_other, ev_stamp, counter = schedule_views(s.sched)
+    ev_kind, ev_other, ev_stamp = schedule_views(s.sched)
+    counter = s.counter
     near = np.empty_like(s.near)
     T = s.clock[0]
     for i in range(lo, hi):
@@ -156,7 +157,8 @@ def run_frames(  # type: ignore[no-untyped-def]
     scan, scan_body = s.scan, s.scan_body
     ev_time = s.ev_time
     sched = s.sched
-    ev_kind, ev_other, ev_stamp, counter = schedule_views(sched)
+    ev_kind, ev_other, ev_stamp = schedule_views(sched)
+    counter = s.counter
     cal = calendar_of(s)
     counts, sums = s.counts, s.sums
     # grouped as tuples for the inlined callees (a call takes at most 30 arguments there)

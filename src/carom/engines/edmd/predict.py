@@ -12,6 +12,7 @@ import math
 import numpy as np
 from numba import njit
 
+from carom.engines.edmd.calendar import calendar_views
 from carom.engines.edmd.codes import EV_NONE, EV_PAIR, EV_SHELL, EV_WALL, SHELL_MARGIN
 from carom.engines.edmd.jitflags import njit_inlined
 from carom.engines.edmd.prefetch import prefetch_row
@@ -20,7 +21,6 @@ from carom.engines.edmd.state import (
     KIN_T,
     KIN_V,
     KIN_WIDTH,
-    SCHED_COUNTER,
     SCHED_KIND,
     SCHED_OTHER,
     SCHED_STAMP,
@@ -74,30 +74,24 @@ def kinematic_views(kin: np.ndarray, dim: int) -> tuple[np.ndarray, np.ndarray, 
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def schedule_views(
-    sched: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Event kinds, partners, stamps and collision counters, (N,) each: views into ``sched``."""
-    return (
-        sched[:, SCHED_KIND],
-        sched[:, SCHED_OTHER],
-        sched[:, SCHED_STAMP],
-        sched[:, SCHED_COUNTER],
-    )
+def schedule_views(sched: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Event kinds, partners and stamps, (N,) each: views into ``sched``."""
+    return sched[:, SCHED_KIND], sched[:, SCHED_OTHER], sched[:, SCHED_STAMP]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def calendar_of(s):  # type: ignore[no-untyped-def]
     """The event calendar's arrays of state ``s``, as :mod:`carom.engines.edmd.calendar`
     takes them."""
+    cal_next, cal_prev, cal_loc, cur_where = calendar_views(s.cal_body)
     return (
         s.cal_head,
-        s.cal_next,
-        s.cal_prev,
-        s.cal_loc,
+        cal_next,
+        cal_prev,
+        cal_loc,
         s.cur_heap,
         s.cur_key,
-        s.cur_where,
+        cur_where,
         s.cal_f,
         s.cal_i,
     )

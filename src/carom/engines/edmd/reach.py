@@ -81,7 +81,7 @@ def set_bodies(h, rows, x_new, v_new, orient_new, w_new, moved) -> int:  # type:
     dim = m.box.shape[0]
     kin = s.kin
     x, v, t = kinematic_views(kin, dim)
-    counter = schedule_views(s.sched)[3]
+    counter = s.counter
     T = s.clock[0]
     for r in range(rows.shape[0]):
         i = rows[r]
@@ -118,7 +118,7 @@ def set_pulls(h, rows, extra) -> None:  # type: ignore[no-untyped-def]
     m, s = h.model, h.state
     dim = m.box.shape[0]
     x, v, t = kinematic_views(s.kin, dim)
-    counter = schedule_views(s.sched)[3]
+    counter = s.counter
     pull, support, acc, gravity = s.pull, s.support, s.acc, m.gravity
     T = s.clock[0]
     for r in range(rows.shape[0]):
@@ -144,7 +144,8 @@ def _predict_rows(h, rows) -> None:  # type: ignore[no-untyped-def]
     the calendar."""
     m, s = h.model, h.state
     x, v, t = kinematic_views(s.kin, m.box.shape[0])
-    ev_kind, ev_other, ev_stamp, counter = schedule_views(s.sched)
+    ev_kind, ev_other, ev_stamp = schedule_views(s.sched)
+    counter = s.counter
     T = s.clock[0]
     cal = calendar_of(s)
     for r in range(rows.shape[0]):
@@ -199,7 +200,7 @@ def retire_bodies(h, rows) -> int:  # type: ignore[no-untyped-def]
     dim = m.box.shape[0]
     kin = s.kin
     x, v, t = kinematic_views(kin, dim)
-    counter = schedule_views(s.sched)[3]
+    counter = s.counter
     T = s.clock[0]
     for r in range(rows.shape[0]):
         i = rows[r]

@@ -26,7 +26,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from carom.engines.edmd.calendar import I_SIZE
+from carom.engines.edmd.calendar import CAL_NEXT, CAL_PREV, CAL_WHERE, I_SIZE
 from carom.engines.edmd.codes import EV_PAIR
 from carom.engines.edmd.model import Model
 from carom.engines.edmd.ordering import KEY_ROWS, morton_keys
@@ -35,7 +35,7 @@ from carom.engines.edmd.state import SCHED_KIND, SCHED_OTHER, State
 __all__ = ["cell_ranks", "renumber"]
 
 #: Arrays of rows of 4-byte words that one renumbering moves at most (all of a state's)
-MOVED_ARRAYS = 28
+MOVED_ARRAYS = 25
 #: Rows of the schedule whose partners are mapped to new numbers at a time
 MAP_ROWS = 1 << 16
 
@@ -184,15 +184,17 @@ def renumber(
         model.mobile, model.radius, model.mass, model.inv_mass, model.q, model.material,
         state.kin, state.acc, state.pull, wraps, state.support, state.w, state.orient,
         state.orient_t, state.last_coll, state.shell, state.nbr, state.nbr_count,
-        state.nbr_mark, state.cell, state.slot, state.ev_time, state.sched, state.cal_next,
-        state.cal_prev, state.cal_loc, state.cur_where, order,
+        state.nbr_mark, state.cell, state.slot, state.ev_time, state.sched, state.counter,
+        state.cal_body, order,
     )  # fmt: skip
     _move(per_body, number)
     # the arrays that hold body numbers; places past a list's or a row's count are spare,
     # and hold numbers of bodies too (or zeros): they are mapped like the rest
-    for numbers in (state.nbr, state.cell_body, state.cal_head, state.cal_next, state.cal_prev):
+    for numbers in (state.nbr, state.cell_body, state.cal_head):
         assert numbers.flags.c_contiguous  # (so that the flat view below is no copy)
         _map_numbers(numbers.reshape(-1), number)
+    for column in (CAL_NEXT, CAL_PREV):  # (the calendar's lists; the records' other two
+        _map_numbers(state.cal_body[:, column], number)  # columns are places, not bodies)
     sched = state.sched
     for a in range(0, n, MAP_ROWS):
         rows = sched[a : a + MAP_ROWS]
@@ -206,5 +208,5 @@ def renumber(
     by = np.lexsort((bodies, key[:size]))
     heap[:size] = bodies[by]
     key[:size] = key[:size][by]
-    state.cur_where[heap[:size]] = np.arange(size, dtype=state.cur_where.dtype)
+    state.cal_body[heap[:size], CAL_WHERE] = np.arange(size, dtype=np.int32)
     return True

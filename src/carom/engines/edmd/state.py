@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from carom.bodies import Bodies
+from carom.engines.edmd.calendar import CAL_EMPTY, CAL_WIDTH
 from carom.engines.edmd.model import Model
 from carom.engines.edmd.neighbours import SCAN_ROWS, scan_size
 
@@ -24,10 +25,10 @@ __all__ = [
     "KIN_T",
     "KIN_V",
     "KIN_WIDTH",
-    "SCHED_COUNTER",
     "SCHED_KIND",
     "SCHED_OTHER",
     "SCHED_STAMP",
+    "SCHED_WIDTH",
     "Records",
     "State",
     "aligned_records",
@@ -50,7 +51,7 @@ KIN_WIDTH = 8
 SCHED_KIND = 0
 SCHED_OTHER = 1
 SCHED_STAMP = 2
-SCHED_COUNTER = 3
+SCHED_WIDTH = 3
 
 
 class State(NamedTuple):
@@ -108,13 +109,20 @@ class State(NamedTuple):
         body ``i`` is in cell ``cell[i]`` at place ``slot[i]``.
     ev_time : (N,) float64
         Each body's next event time [s].
-    sched : (N, 4) int64
+    sched : (N, 3) int64
         One record per body: its next event's kind, partner (or face), and the partner's
         collision counter when predicted (columns ``SCHED_KIND``, ``SCHED_OTHER``,
-        ``SCHED_STAMP``), and its own collision counter (``SCHED_COUNTER``; a prediction
-        whose stamp no longer matches its partner's counter is stale).
-    cal_head, cal_next, cal_prev, cal_loc, cur_heap, cur_key, cur_where, cal_f, cal_i
-        The event calendar (:mod:`carom.engines.edmd.calendar` describes each array).
+        ``SCHED_STAMP``).
+    counter : (N,) int32
+        Each body's collision counter: a prediction whose stamp no longer matches its
+        partner's counter is stale. Kept apart from ``sched`` and 4 bytes wide, so that the
+        counters of a body's neighbours (read for the best partner of each prediction, and
+        for the partner of each event taken) share a few cache lines; it wraps after 2^32
+        collisions of one body, and is only ever compared for equality.
+    cal_head, cal_body, cur_heap, cur_key, cal_f, cal_i
+        The event calendar (:mod:`carom.engines.edmd.calendar` describes each array;
+        ``cal_body`` (N, 4) int32 holds each body's ``cal_next``, ``cal_prev``, ``cal_loc``
+        and ``cur_where``, one record a body).
     clock : (1,) float64
         Simulation time [s].
     counts : (8,) int64; sums : (4,) float64
@@ -147,13 +155,11 @@ class State(NamedTuple):
     cell_body: NDArray[np.int32]
     ev_time: NDArray[np.float64]
     sched: NDArray[np.int64]
+    counter: NDArray[np.int32]
     cal_head: NDArray[np.int32]
-    cal_next: NDArray[np.int32]
-    cal_prev: NDArray[np.int32]
-    cal_loc: NDArray[np.int32]
+    cal_body: NDArray[np.int32]
     cur_heap: NDArray[np.int32]
     cur_key: NDArray[np.float64]
-    cur_where: NDArray[np.int32]
     cal_f: NDArray[np.float64]
     cal_i: NDArray[np.int64]
     clock: NDArray[np.float64]
@@ -242,7 +248,7 @@ def allocate_state(
     orient_t = np.empty(n) if spinning else None
     nbr = np.empty((n, capacity), np.int32)  # first written by the build, row by row
     # the arrays that start at one value each and are written through at the build, filled
-    # beside the records (below); nbr_mark, cur_heap and cur_where stay untouched zeros until
+    # beside the records (below); nbr_mark and cur_heap stay untouched zeros until
     # used (a rebuild's marks; the heap holds a bucket's few events)
     constant: dict[str, tuple[NDArray[Any], float]] = {
         "last_coll": (np.empty(n), -np.inf),
@@ -252,11 +258,10 @@ def allocate_state(
         "cell_count": (np.empty(n_cells, np.int32), 0),
         "cell_body": (np.empty((n_cells, cell_capacity), np.int32), 0),
         "ev_time": (np.empty(n), np.inf),
-        "sched": (np.empty((n, 4), np.int64), 0),
+        "sched": (np.empty((n, SCHED_WIDTH), np.int64), 0),
+        "counter": (np.empty(n, np.int32), 0),
         "cal_head": (np.empty(n + 1, np.int32), -1),
-        "cal_next": (np.empty(n, np.int32), -1),
-        "cal_prev": (np.empty(n, np.int32), -1),
-        "cal_loc": (np.empty(n, np.int32), -2),
+        "cal_body": (np.empty((n, CAL_WIDTH), np.int32), 0),
         "cur_key": (np.empty(n), np.inf),
     }
 
@@ -264,6 +269,7 @@ def allocate_state(
         for array, value in constant.values():
             array.fill(value)
         constant["sched"][0][:, SCHED_OTHER] = -1
+        constant["cal_body"][0][:] = np.array(CAL_EMPTY, np.int32)
 
     # Above FILL_THREAD_BODIES a second thread fills those while this one copies the bodies
     # in: a build's first writes to new memory are much of its time (on a virtual machine
@@ -312,7 +318,6 @@ def allocate_state(
         **{name: array for name, (array, _) in constant.items()},
         nbr_mark=np.zeros(n, np.int64),
         cur_heap=np.zeros(n, np.int32),
-        cur_where=np.zeros(n, np.int32),
         **scratch(dim, capacity, cell_capacity),
         cal_f=np.array([0.0, 1.0]),
         cal_i=np.zeros(4, np.int64),
