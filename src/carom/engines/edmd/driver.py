@@ -51,6 +51,7 @@ from carom.engines.edmd.state import (
     Records,
     State,
     aligned_records,
+    aligned_rows,
     allocate_state,
     scratch,
 )
@@ -869,9 +870,13 @@ class EdmdEngine:
         fields: dict[str, Any] = {}
         for name in State._fields:  # (kin first)
             value = arrays.get(f"state.{name}")
-            fields[name] = (
-                value if name != "kin" or value is None else aligned_records(len(value), value)
-            )
+            if value is not None and name == "kin":
+                value = aligned_records(len(value), value)
+            elif value is not None and name == "nbr":  # (its rows on cache lines too)
+                aligned = aligned_rows(value.shape[0], value.shape[1], np.int32)
+                aligned[...] = value
+                value = aligned
+            fields[name] = value
         if fields["cal_body"] is None and all(
             f"state.{name}" in arrays for name in ("cal_next", "cal_prev", "cal_loc", "cur_where")
         ):  # (saved when the calendar's four per-body arrays were apart)
@@ -951,7 +956,7 @@ def with_capacities(state: State, dim: int, capacity: int, cell_capacity: int) -
     and cell rows of ``cell_capacity`` (and scratch to match), to be filled again
     (``build_all``, which zeroes each list's row as it first writes it)."""
     return state._replace(
-        nbr=np.empty((state.kin.shape[0], capacity), np.int32),
+        nbr=aligned_rows(state.kin.shape[0], capacity, np.int32),
         cell_body=np.zeros((state.cell_count.shape[0], cell_capacity), np.int32),
         **scratch(dim, capacity, cell_capacity),
     )

@@ -62,13 +62,15 @@ from carom.engines.edmd.predict import (
     predict,
     schedule_views,
 )
-from carom.engines.edmd.prefetch import prefetch_row
+from carom.engines.edmd.prefetch import prefetch_item, prefetch_row
 from carom.geometry.rotation import turn
 from carom.geometry.toi import INF
 
 # bodies above which the loop prefetches the next events' data (the state, ~500 bytes a body,
 # no longer fits a core's 2 MB cache)
 LOOKAHEAD_BODIES = 4096
+# 4-byte entries of a neighbour list on one 64-byte cache line (a 3D list of 32 is two lines)
+LIST_LINE = 16
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -156,6 +158,9 @@ def run_frames(  # type: ignore[no-untyped-def]
     nbr, nbr_count, nbr_mark, nbr_old, near = s.nbr, s.nbr_count, s.nbr_mark, s.nbr_old, s.near
     scan, scan_body = s.scan, s.scan_body
     ev_time = s.ev_time
+    cal_body = s.cal_body
+    # a list's entry on its second cache line (rows start on lines: 16 4-byte entries a line)
+    list_line = min(LIST_LINE, nbr.shape[1] - 1)
     sched = s.sched
     ev_kind, ev_other, ev_stamp = schedule_views(sched)
     counter = s.counter
@@ -211,6 +216,7 @@ def run_frames(  # type: ignore[no-untyped-def]
         prefetch_row(sched, i)
         prefetch_row(kin, i)
         prefetch_row(nbr, i)
+        prefetch_item(nbr, i, list_line)
         if lookahead:
             # and what the next events will read: at large N each is a miss; asked for now,
             # they arrive while this event is processed
@@ -220,7 +226,9 @@ def run_frames(  # type: ignore[no-untyped-def]
                     prefetch_row(sched, b)
                     prefetch_row(kin, b)
                     prefetch_row(nbr, b)
+                    prefetch_item(nbr, b, list_line)
                     prefetch_row(nbr_count, b)
+                    prefetch_row(cal_body, b)
                     prefetch_row(shell, b)
                     prefetch_row(ev_time, b)
                     prefetch_row(last_coll, b)
@@ -240,6 +248,10 @@ def run_frames(  # type: ignore[no-untyped-def]
             j = ev_other[i]
             prefetch_row(kin, j)
             prefetch_row(nbr, j)
+            prefetch_item(nbr, j, list_line)
+            prefetch_row(cal_body, j)
+            prefetch_row(last_coll, j)
+            prefetch_row(inv_mass, j)
             if counter[j] != ev_stamp[i]:
                 counts[C_STALE] += 1
                 j = -1  # stale: the partner collided since; just re-predict

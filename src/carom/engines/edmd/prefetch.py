@@ -44,7 +44,38 @@ def _prefetch_row(typingctx: Any, array: Any, row: Any) -> Any:
     return types.void(array, row), codegen
 
 
+@intrinsic
+def _prefetch_item(typingctx: Any, array: Any, row: Any, column: Any) -> Any:
+    if not isinstance(array, types.Array) or array.ndim != 2:
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        array_type, row_type, column_type = signature.args
+        ary = context.make_array(array_type)(context, builder, args[0])
+        indices = [
+            context.cast(builder, args[1], row_type, types.intp),
+            context.cast(builder, args[2], column_type, types.intp),
+        ]
+        ptr = cgutils.get_item_pointer(  # type: ignore[no-untyped-call]
+            context, builder, array_type, ary, indices, wraparound=False
+        )
+        i8p = llvm_ir.IntType(8).as_pointer()
+        i32 = llvm_ir.IntType(32)
+        fnty = llvm_ir.FunctionType(llvm_ir.VoidType(), [i8p, i32, i32, i32])
+        fn = cgutils.get_or_insert_function(  # type: ignore[no-untyped-call]
+            builder.module, fnty, "llvm.prefetch.p0"
+        )
+        builder.call(fn, [builder.bitcast(ptr, i8p), i32(0), i32(3), i32(1)])
+        return context.get_dummy_value()
+
+    return types.void(array, row, column), codegen
+
+
 def _no_prefetch(array: Any, row: int) -> None:
+    """Nothing to do without the JIT."""
+
+
+def _no_prefetch_item(array: Any, row: int, column: int) -> None:
     """Nothing to do without the JIT."""
 
 
@@ -52,4 +83,11 @@ prefetch_row: Callable[[Any, int], None] = (
     _no_prefetch
     if config.DISABLE_JIT  # type: ignore[attr-defined]
     else cast(Callable[[Any, int], None], _prefetch_row)
+)
+#: ``prefetch_item(array, row, column)``: the cache line of one element of a 2-D array (the
+#: rest of a row longer than a line, as neighbour lists are)
+prefetch_item: Callable[[Any, int, int], None] = (
+    _no_prefetch_item
+    if config.DISABLE_JIT  # type: ignore[attr-defined]
+    else cast(Callable[[Any, int, int], None], _prefetch_item)
 )

@@ -32,6 +32,7 @@ __all__ = [
     "Records",
     "State",
     "aligned_records",
+    "aligned_rows",
     "allocate_state",
     "scratch",
 ]
@@ -175,6 +176,16 @@ class State(NamedTuple):
     log_n: NDArray[np.int64]
 
 
+def aligned_rows(n: int, width: int, dtype: type[np.int32]) -> NDArray[np.int32]:
+    """An uninitialised (n, width) array whose first row starts on a 64-byte cache line, so
+    that a neighbour list of 32 4-byte entries is two lines, never three."""
+    item = np.dtype(dtype).itemsize
+    buffer = np.empty(n * width + 64 // item, dtype)
+    start = (-buffer.ctypes.data % 64) // item
+    rows: NDArray[np.int32] = buffer[start : start + n * width].reshape(n, width)
+    return rows
+
+
 def aligned_records(n: int, values: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
     """An (n, KIN_WIDTH) float64 array whose rows start on 64-byte cache lines (zeros, or a
     copy of ``values``)."""
@@ -246,7 +257,7 @@ def allocate_state(
     w = np.empty((n, 3)) if spinning else None
     orient = np.zeros((n, 4)) if spinning else None
     orient_t = np.empty(n) if spinning else None
-    nbr = np.empty((n, capacity), np.int32)  # first written by the build, row by row
+    nbr = aligned_rows(n, capacity, np.int32)  # first written by the build, row by row
     # the arrays that start at one value each and are written through at the build, filled
     # beside the records (below); nbr_mark and cur_heap stay untouched zeros until
     # used (a rebuild's marks; the heap holds a bucket's few events)
