@@ -12,7 +12,8 @@ as a miss where it is read), so the counts measure traffic, not the latency that
 hides.
 
 A periodic FCC gas of hard spheres of unit diameter (N = 4 cells^3, packing ``--phi``) is
-built and melted once by this tree (``--melt`` collisions a sphere) and saved; each tree
+built and melted once (``--melt`` collisions a sphere) and saved, by the other tree if one is
+given (the older, as a rule: a newer carom reads an older checkpoint); each tree
 then loads it under Valgrind with the instrumentation off, runs a few events (kernels loaded),
 and counts ``--events`` events with it on (``callgrind_control -i on``). Both trees run the
 same events to the bit (a checkpoint of an older layout is read by the newer tree).
@@ -136,7 +137,9 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         checkpoint = folder / "melted.npz"
-        env = os.environ | {"PYTHONPATH": str(SRC)}
+        # melted and saved by the other tree when there is one: a newer carom reads an older
+        # checkpoint, not the other way round
+        env = os.environ | {"PYTHONPATH": str(trees[-1][1])}
         subprocess.run(
             [sys.executable, "-c", MELT, str(args.cells), str(args.phi), str(args.melt),
              str(checkpoint)],
