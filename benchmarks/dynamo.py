@@ -19,9 +19,14 @@ Boost (program_options, filesystem, system, test, iostreams), bzip2 and Eigen 3 
 ``apt-get install libboost-program-options-dev libboost-filesystem-dev libboost-system-dev
 libboost-test-dev libboost-iostreams-dev libbz2-dev libeigen3-dev``). Never in ``make test``.
 
+In 2D DynamO has no mode: ``--disks`` times carom's own hard disks (packing ``--eta``, a
+square lattice of SIDE^2 disks) the same way, for the growth of their cost per collision
+against DynamO's in 3D.
+
 Run:  python benchmarks/dynamo.py --build ~/src/dynamo          (once)
       python benchmarks/dynamo.py --dynamo ~/src/dynamo/build [--cells 7 20 40 63]
             [--phi 0.3 0.45] [--rounds 3] [--core 1] [--no-record]
+      python benchmarks/dynamo.py --disks [32 180 508 1000] [--eta 0.5] [--rounds 3]
 """
 
 from __future__ import annotations
@@ -77,6 +82,39 @@ CAROM = textwrap.dedent(
     world.run(until=world.time + 1.0, log=False)
     per_time = world.stats.collisions / 1.0
     span = window / per_time
+    world.stats.reset()
+    start = time.perf_counter()
+    world.run(until=world.time + span, log=False)
+    elapsed = time.perf_counter() - start
+    print(json.dumps({"n": n, "collisions": world.stats.collisions, "seconds": elapsed}))
+    """
+)
+
+#: carom's hard disks of unit diameter at packing ``eta`` (2D: DynamO has no such mode), on a
+#: square lattice of ``side``^2 disks, melted and timed as the spheres are
+DISKS = textwrap.dedent(
+    """
+    import json, math, sys, time
+    import numpy as np
+    import carom
+    side, eta, melt, window = json.loads(sys.argv[1])
+    a = math.sqrt(math.pi / (4.0 * eta))  # the lattice spacing: eta = pi / (4 a^2)
+    grid = np.stack(np.meshgrid(*[np.arange(side)] * 2, indexing="ij"), -1).reshape(-1, 2)
+    x = (grid + 0.5) * a
+    n = x.shape[0]
+    rng = np.random.default_rng(1)
+    v = rng.standard_normal((n, 2))
+    v -= v.mean(axis=0)
+    v *= math.sqrt(2.0 * (n - 1) / (v * v).sum())  # T = 1, no drift
+    world = carom.World(2, [side * a] * 2, "periodic")
+    world.add_spheres(x, v, radius=0.5)
+    world.run_events(1)
+    world.stats.reset()
+    while world.stats.collisions < melt * n / 2:
+        world.run(until=world.time + 1.0, log=False)
+    world.stats.reset()
+    world.run(until=world.time + 1.0, log=False)
+    span = window / world.stats.collisions
     world.stats.reset()
     start = time.perf_counter()
     world.run(until=world.time + span, log=False)
@@ -157,6 +195,38 @@ def carom_window(cells: int, phi: float, window: int, core: int) -> dict:
     return out
 
 
+def disks(sides: list[int], eta: float, rounds: int, core: int) -> list[str]:
+    """carom's hard disks at ``eta``, each size in ``rounds`` pinned processes (rounds
+    interleaved over the sizes); table lines with the cost per collision and its growth."""
+    seconds: dict[int, list[float]] = {side: [] for side in sides}
+    n_of: dict[int, int] = {}
+    for _ in range(rounds):
+        for side in sides:
+            n = side * side
+            window = max(WINDOW_MIN, WINDOW_PER_SPHERE * n)
+            ran = subprocess.run(
+                [*pinned(core), sys.executable, "-c", DISKS,
+                 json.dumps([side, eta, MELT, window])],
+                check=True, capture_output=True, text=True,
+            )  # fmt: skip
+            out = json.loads(ran.stdout.strip().splitlines()[-1])
+            n_of[side] = out["n"]
+            seconds[side].append(out["seconds"] / out["collisions"])
+    first = statistics.median(seconds[sides[0]])
+    lines = [
+        "| eta | N | carom us/coll (median, range) | growth from the first N |",
+        "|---|---|---|---|",
+    ]
+    for side in sides:
+        cost = statistics.median(seconds[side])
+        lines.append(
+            f"| {eta} | {n_of[side]} | {1e6 * cost:.2f} ({1e6 * min(seconds[side]):.2f}-"
+            f"{1e6 * max(seconds[side]):.2f}) | x{cost / first:.2f} |"
+        )
+        print(lines[-1], flush=True)
+    return lines
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--build", type=Path, help="clone and build DynamO there, then stop")
@@ -166,9 +236,32 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--core", type=int, default=1)
     parser.add_argument("--no-record", action="store_true")
+    parser.add_argument(
+        "--disks", type=int, nargs="*", metavar="SIDE",
+        help="instead: carom's hard disks (2D) on SIDE^2 lattices (default 32 180 508 1000)",
+    )  # fmt: skip
+    parser.add_argument("--eta", type=float, default=0.5, help="the disks' packing")
     args = parser.parse_args()
     if args.build is not None:
         print(build(args.build))
+        return
+    if args.disks is not None:
+        sides = args.disks or [32, 180, 508, 1000]
+        lines = disks(sides, args.eta, args.rounds, args.core)
+        body = "\n".join(
+            [
+                f"carom's hard disks, {args.rounds} rounds (each size in its own process, "
+                f"core {args.core}); windows of max({WINDOW_MIN:,}, {WINDOW_PER_SPHERE} N) "
+                f"collisions after {MELT} a disk:",
+                "",
+                *lines,
+            ]
+        )
+        if not args.no_record:
+            record(
+                "dynamo --disks: carom's hard disks, the growth of the cost per collision",
+                body + "\n",
+            )
         return
     if args.dynamo is None:
         parser.error("give --dynamo BUILD_FOLDER (or --build DIR first)")

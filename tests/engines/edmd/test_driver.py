@@ -75,6 +75,26 @@ def test_neighbour_lists_grow_without_changing_the_physics() -> None:
     np.testing.assert_array_equal(cramped.positions, roomy.positions)
 
 
+def test_records_and_lists_start_on_cache_lines(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # Each body's kinematic record is one 64-byte line and its neighbour list whole lines
+    # (the loop asks for a list's second line where its 17th entry starts), after a build,
+    # after the lists grow, and after a checkpoint is read (numpy reads them anywhere).
+    def on_lines(engine: EdmdEngine) -> bool:
+        kin, nbr = engine.state.kin, engine.state.nbr
+        return kin.ctypes.data % 64 == 0 and nbr.ctypes.data % 64 == 0
+
+    world = gas(3, 6, 0.3, seed=3)
+    engine = world.build()
+    assert on_lines(engine)
+    engine.resize_grid(engine.capacity + 3, engine.cell_capacity)  # (an odd row length)
+    assert engine.state.nbr.shape[1] == engine.capacity
+    world.run(until=2.0)
+    assert on_lines(engine)
+    world.save(tmp_path / "gas.npz")
+    loaded = carom.World.load(tmp_path / "gas.npz")
+    assert on_lines(loaded.build())
+
+
 def test_cell_rows_grow_without_changing_the_physics() -> None:
     # The same for the cell grid's rows: cells filled to the brim at the start overflow as a
     # dissipative gas clusters.
