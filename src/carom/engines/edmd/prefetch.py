@@ -17,58 +17,41 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 
+def _prefetch_element(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+    """The code of a prefetch of ``args[0][args[1:]]``, missing trailing indices 0."""
+    array_type, *index_types = signature.args
+    ary = context.make_array(array_type)(context, builder, args[0])
+    indices = [
+        context.cast(builder, value, kind, types.intp)
+        for value, kind in zip(args[1:], index_types, strict=True)
+    ]
+    indices += [context.get_constant(types.intp, 0)] * (array_type.ndim - len(indices))
+    ptr = cgutils.get_item_pointer(  # type: ignore[no-untyped-call]
+        context, builder, array_type, ary, indices, wraparound=False
+    )
+    i8p = llvm_ir.IntType(8).as_pointer()
+    i32 = llvm_ir.IntType(32)
+    fnty = llvm_ir.FunctionType(llvm_ir.VoidType(), [i8p, i32, i32, i32])
+    fn = cgutils.get_or_insert_function(  # type: ignore[no-untyped-call]
+        builder.module, fnty, "llvm.prefetch.p0"
+    )
+    # a read (0), to be kept in every cache level (3), of data (1)
+    builder.call(fn, [builder.bitcast(ptr, i8p), i32(0), i32(3), i32(1)])
+    return context.get_dummy_value()
+
+
 @intrinsic
 def _prefetch_row(typingctx: Any, array: Any, row: Any) -> Any:
     if not isinstance(array, types.Array) or array.ndim not in (1, 2):
         return None
-
-    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
-        array_type, row_type = signature.args
-        ary = context.make_array(array_type)(context, builder, args[0])
-        index = context.cast(builder, args[1], row_type, types.intp)
-        zero = context.get_constant(types.intp, 0)
-        indices = [index, zero] if array_type.ndim == 2 else [index]
-        ptr = cgutils.get_item_pointer(  # type: ignore[no-untyped-call]
-            context, builder, array_type, ary, indices, wraparound=False
-        )
-        i8p = llvm_ir.IntType(8).as_pointer()
-        i32 = llvm_ir.IntType(32)
-        fnty = llvm_ir.FunctionType(llvm_ir.VoidType(), [i8p, i32, i32, i32])
-        fn = cgutils.get_or_insert_function(  # type: ignore[no-untyped-call]
-            builder.module, fnty, "llvm.prefetch.p0"
-        )
-        # a read (0), to be kept in every cache level (3), of data (1)
-        builder.call(fn, [builder.bitcast(ptr, i8p), i32(0), i32(3), i32(1)])
-        return context.get_dummy_value()
-
-    return types.void(array, row), codegen
+    return types.void(array, row), _prefetch_element
 
 
 @intrinsic
 def _prefetch_item(typingctx: Any, array: Any, row: Any, column: Any) -> Any:
     if not isinstance(array, types.Array) or array.ndim != 2:
         return None
-
-    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
-        array_type, row_type, column_type = signature.args
-        ary = context.make_array(array_type)(context, builder, args[0])
-        indices = [
-            context.cast(builder, args[1], row_type, types.intp),
-            context.cast(builder, args[2], column_type, types.intp),
-        ]
-        ptr = cgutils.get_item_pointer(  # type: ignore[no-untyped-call]
-            context, builder, array_type, ary, indices, wraparound=False
-        )
-        i8p = llvm_ir.IntType(8).as_pointer()
-        i32 = llvm_ir.IntType(32)
-        fnty = llvm_ir.FunctionType(llvm_ir.VoidType(), [i8p, i32, i32, i32])
-        fn = cgutils.get_or_insert_function(  # type: ignore[no-untyped-call]
-            builder.module, fnty, "llvm.prefetch.p0"
-        )
-        builder.call(fn, [builder.bitcast(ptr, i8p), i32(0), i32(3), i32(1)])
-        return context.get_dummy_value()
-
-    return types.void(array, row, column), codegen
+    return types.void(array, row, column), _prefetch_element
 
 
 def _no_prefetch(array: Any, row: int) -> None:
