@@ -54,27 +54,33 @@ MELT = 20
 WINDOW_PER_SPHERE = 5
 WINDOW_MIN = 2_000_000
 
+#: carom's run, in its own process: spheres of unit diameter on an FCC lattice of ``cells``^3
+#: cells at packing ``phi`` (3D), or disks on a square lattice of ``cells``^2 (2D, where
+#: DynamO has no mode), melted, then timed over a window of collisions
 CAROM = textwrap.dedent(
     """
     import json, math, sys, time
     import numpy as np
     import carom
-    cells, phi, melt, window = json.loads(sys.argv[1])
-    rho = 6.0 * phi / math.pi  # spheres of unit diameter: phi = pi rho / 6
-    a = (4.0 / rho) ** (1.0 / 3.0)  # the FCC cell's side
-    base = np.array([[0, 0, 0], [0.5, 0.5, 0], [0.5, 0, 0.5], [0, 0.5, 0.5]])
-    grid = np.stack(np.meshgrid(*[np.arange(cells)] * 3, indexing="ij"), -1).reshape(-1, 1, 3)
-    x = ((grid + base[None]).reshape(-1, 3) + 0.25) * a
+    dim, cells, phi, melt, window = json.loads(sys.argv[1])
+    if dim == 3:
+        rho = 6.0 * phi / math.pi  # spheres of unit diameter: phi = pi rho / 6
+        a = (4.0 / rho) ** (1.0 / 3.0)  # the FCC cell's side
+        base = np.array([[0, 0, 0], [0.5, 0.5, 0], [0.5, 0, 0.5], [0, 0.5, 0.5]]) + 0.25
+    else:
+        a = math.sqrt(math.pi / (4.0 * phi))  # the lattice spacing: eta = pi / (4 a^2)
+        base = np.array([[0.5, 0.5]])
+    grid = np.stack(np.meshgrid(*[np.arange(cells)] * dim, indexing="ij"), -1)
+    x = (grid.reshape(-1, 1, dim) + base[None]).reshape(-1, dim) * a
     n = x.shape[0]
     rng = np.random.default_rng(1)
-    v = rng.standard_normal((n, 3))
+    v = rng.standard_normal((n, dim))
     v -= v.mean(axis=0)
-    v *= math.sqrt(3.0 * (n - 1) / (v * v).sum())  # T = 1, no drift
-    world = carom.World(3, [cells * a] * 3, "periodic")
+    v *= math.sqrt(dim * (n - 1) / (v * v).sum())  # T = 1, no drift
+    world = carom.World(dim, [cells * a] * dim, "periodic")
     world.add_spheres(x, v, radius=0.5)
     world.run_events(1)  # (the engine built, its kernels loaded)
-    # melt: collisions come at about 6 phi g(1) sqrt(T / pi) a sphere per unit time; step the
-    # clock until the count is reached
+    # melt: step the clock until the count is reached
     world.stats.reset()
     while world.stats.collisions < melt * n / 2:
         world.run(until=world.time + 1.0, log=False)
@@ -82,39 +88,6 @@ CAROM = textwrap.dedent(
     world.run(until=world.time + 1.0, log=False)
     per_time = world.stats.collisions / 1.0
     span = window / per_time
-    world.stats.reset()
-    start = time.perf_counter()
-    world.run(until=world.time + span, log=False)
-    elapsed = time.perf_counter() - start
-    print(json.dumps({"n": n, "collisions": world.stats.collisions, "seconds": elapsed}))
-    """
-)
-
-#: carom's hard disks of unit diameter at packing ``eta`` (2D: DynamO has no such mode), on a
-#: square lattice of ``side``^2 disks, melted and timed as the spheres are
-DISKS = textwrap.dedent(
-    """
-    import json, math, sys, time
-    import numpy as np
-    import carom
-    side, eta, melt, window = json.loads(sys.argv[1])
-    a = math.sqrt(math.pi / (4.0 * eta))  # the lattice spacing: eta = pi / (4 a^2)
-    grid = np.stack(np.meshgrid(*[np.arange(side)] * 2, indexing="ij"), -1).reshape(-1, 2)
-    x = (grid + 0.5) * a
-    n = x.shape[0]
-    rng = np.random.default_rng(1)
-    v = rng.standard_normal((n, 2))
-    v -= v.mean(axis=0)
-    v *= math.sqrt(2.0 * (n - 1) / (v * v).sum())  # T = 1, no drift
-    world = carom.World(2, [side * a] * 2, "periodic")
-    world.add_spheres(x, v, radius=0.5)
-    world.run_events(1)
-    world.stats.reset()
-    while world.stats.collisions < melt * n / 2:
-        world.run(until=world.time + 1.0, log=False)
-    world.stats.reset()
-    world.run(until=world.time + 1.0, log=False)
-    span = window / world.stats.collisions
     world.stats.reset()
     start = time.perf_counter()
     world.run(until=world.time + span, log=False)
@@ -185,10 +158,12 @@ def dynamo_window(programs: Path, melted: Path, window: int, folder: Path, core:
     }
 
 
-def carom_window(cells: int, phi: float, window: int, core: int) -> dict:
-    """One timed window of carom, in its own pinned process (melted there first)."""
+def carom_window(cells: int, phi: float, window: int, core: int, dim: int = 3) -> dict:
+    """One timed window of carom (``CAROM``), in its own pinned process (melted there
+    first)."""
     ran = subprocess.run(
-        [*pinned(core), sys.executable, "-c", CAROM, json.dumps([cells, phi, MELT, window])],
+        [*pinned(core), sys.executable, "-c", CAROM,
+         json.dumps([dim, cells, phi, MELT, window])],
         check=True, capture_output=True, text=True,
     )  # fmt: skip
     out: dict = json.loads(ran.stdout.strip().splitlines()[-1])
@@ -204,12 +179,7 @@ def disks(sides: list[int], eta: float, rounds: int, core: int) -> list[str]:
         for side in sides:
             n = side * side
             window = max(WINDOW_MIN, WINDOW_PER_SPHERE * n)
-            ran = subprocess.run(
-                [*pinned(core), sys.executable, "-c", DISKS,
-                 json.dumps([side, eta, MELT, window])],
-                check=True, capture_output=True, text=True,
-            )  # fmt: skip
-            out = json.loads(ran.stdout.strip().splitlines()[-1])
+            out = carom_window(side, eta, window, core, dim=2)
             n_of[side] = out["n"]
             seconds[side].append(out["seconds"] / out["collisions"])
     first = statistics.median(seconds[sides[0]])

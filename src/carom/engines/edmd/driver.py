@@ -27,14 +27,7 @@ from carom.engines.base import (
     Sink,
 )
 from carom.engines.edmd import aside, codes, loop, neighbours
-from carom.engines.edmd.calendar import (
-    CAL_LOC,
-    CAL_NEXT,
-    CAL_PREV,
-    CAL_WHERE,
-    Calendar,
-    calendar_build,
-)
+from carom.engines.edmd.calendar import Calendar, calendar_build, calendar_views
 from carom.engines.edmd.events import EdmdEvents
 from carom.engines.edmd.handle import new_handle, sample_motion_now, sample_now
 from carom.engines.edmd.model import Environment, Model
@@ -877,16 +870,10 @@ class EdmdEngine:
                 aligned[...] = value
                 value = aligned
             fields[name] = value
-        if fields["cal_body"] is None and all(
-            f"state.{name}" in arrays for name in ("cal_next", "cal_prev", "cal_loc", "cur_where")
-        ):  # (saved when the calendar's four per-body arrays were apart)
-            fields["cal_body"] = np.stack(
-                [
-                    arrays[f"state.{name}"]
-                    for name in ("cal_next", "cal_prev", "cal_loc", "cur_where")
-                ],
-                axis=1,
-            ).astype(np.int32)
+        apart = [f"state.{name}" for name in ("cal_next", "cal_prev", "cal_loc", "cur_where")]
+        if fields["cal_body"] is None and all(name in arrays for name in apart):
+            # (saved when the calendar's four per-body arrays were apart)
+            fields["cal_body"] = np.stack([arrays[name] for name in apart], axis=1).astype(np.int32)
         sched = fields["sched"]
         if fields["counter"] is None and sched is not None and sched.shape[1] == 4:
             # (saved when the counters were the schedule's fourth column; stamps as they
@@ -1003,8 +990,8 @@ def _fit_lists(
 def _calendar(s: State) -> Calendar:
     """The event calendar's arrays of state ``s``, as ``predict.calendar_of`` gives them to
     the kernels."""
-    records = s.cal_body  # (the views calendar.calendar_views gives compiled code)
+    cal_next, cal_prev, cal_loc, cur_where = calendar_views(s.cal_body)
     return (
-        s.cal_head, records[:, CAL_NEXT], records[:, CAL_PREV], records[:, CAL_LOC], s.cur_heap,
-        s.cur_key, records[:, CAL_WHERE], s.cal_f, s.cal_i,
+        s.cal_head, cal_next, cal_prev, cal_loc, s.cur_heap, s.cur_key, cur_where, s.cal_f,
+        s.cal_i,
     )  # fmt: skip

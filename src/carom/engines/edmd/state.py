@@ -176,23 +176,20 @@ class State(NamedTuple):
     log_n: NDArray[np.int64]
 
 
-def aligned_rows(n: int, width: int, dtype: type[np.int32]) -> NDArray[np.int32]:
-    """An uninitialised (n, width) array whose first row starts on a 64-byte cache line, so
-    that a neighbour list of 32 4-byte entries is two lines, never three."""
+def aligned_rows(n: int, width: int, dtype: Any, zeroed: bool = False) -> NDArray[Any]:
+    """An (n, width) array whose first row starts on a 64-byte cache line, uninitialised
+    (or zeros): a neighbour list of 32 4-byte entries is then two lines, never three."""
     item = np.dtype(dtype).itemsize
-    buffer = np.empty(n * width + 64 // item, dtype)
+    buffer = (np.zeros if zeroed else np.empty)(n * width + 64 // item, dtype)
     start = (-buffer.ctypes.data % 64) // item
-    rows: NDArray[np.int32] = buffer[start : start + n * width].reshape(n, width)
+    rows: NDArray[Any] = buffer[start : start + n * width].reshape(n, width)
     return rows
 
 
 def aligned_records(n: int, values: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
     """An (n, KIN_WIDTH) float64 array whose rows start on 64-byte cache lines (zeros, or a
     copy of ``values``)."""
-    line = 64 // 8
-    buffer = np.zeros(n * KIN_WIDTH + line)
-    start = (-buffer.ctypes.data % 64) // 8
-    kin = buffer[start : start + n * KIN_WIDTH].reshape(n, KIN_WIDTH)
+    kin = aligned_rows(n, KIN_WIDTH, np.float64, zeroed=values is None)
     if values is not None:
         kin[...] = values
     return kin
