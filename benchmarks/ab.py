@@ -14,6 +14,12 @@ the first engine has is used, so any two commits can be compared.
 stepped for a simulated second (60 steps), best of ``--repeats``, in steps per second;
 ``--dims`` picks the scenes.
 
+``--workload melted`` times the gas where the large-N costs show: a periodic FCC gas of hard
+spheres at packing 0.3 and N about ``--sizes`` (4 cells^3), melted 10 collisions a sphere by
+the other tree (benchmarks/edmd_misses.py's gas) and saved; each measurement loads it, runs
+20000 events, then times ``--events`` events, best of ``--repeats``. Both trees run the same
+events to the bit.
+
 Run:  git worktree add /tmp/base REV     (or: git archive REV | tar -x -C /tmp/base)
       python benchmarks/ab.py /tmp/base/src --rounds 3 --sizes 1000 10000
       python benchmarks/ab.py /tmp/base/src --workload rigid --rounds 5 --concurrent
@@ -28,9 +34,11 @@ import os
 import statistics
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 from edmd import commit, machine  # benchmarks/edmd.py, beside this file
+from edmd_misses import MELT
 
 HERE = Path(__file__).resolve().parent
 SRC = HERE.parent / "src"
@@ -71,8 +79,26 @@ for _ in range(repeats):
     best = max(best, world.counters()[0] / (time.perf_counter() - start))
 print(json.dumps({"collisions_per_s": best, "n": world.n_bodies}))
 """
-#: what is timed: the event-driven gas (collisions/s) or the rigid pyramids (steps/s)
-WORKLOADS = {"edmd": SNIPPET, "rigid": RIGID}
+MELTED = """
+import json, sys, time
+import carom
+repeats, path, events = int(sys.argv[3]), sys.argv[4], int(sys.argv[5])
+world = carom.World.load(path)
+world.run_events(20_000)  # (the engine built, its kernels loaded, the caches warm)
+best = 0.0
+for _ in range(repeats):
+    world.stats.reset()
+    start = time.perf_counter()
+    world.run_events(events)
+    best = max(best, world.stats.collisions / (time.perf_counter() - start))
+print(json.dumps({"collisions_per_s": best, "n": world.n_bodies}))
+"""
+#: what is timed: the event-driven gas (collisions/s), the same from a melted checkpoint, or
+#: the rigid pyramids (steps/s)
+WORKLOADS = {"edmd": SNIPPET, "melted": MELTED, "rigid": RIGID}
+#: the melted workload's checkpoint for each N, and events timed a repeat (``--events``)
+CHECKPOINTS: dict[int, Path] = {}
+EVENTS = [1_000_000]
 WORKLOAD = ["edmd"]
 #: the rigid workload's scene in 2D and in 3D (``--scenes``)
 SCENES = {2: "pyramid", 3: "pyramid-3d"}
@@ -82,7 +108,8 @@ def _start(src: Path, dim: int, n: int, repeats: int, cpu: int | None) -> subpro
     pin = ["taskset", "-c", str(cpu)] if cpu is not None else []
     snippet = WORKLOADS[WORKLOAD[0]]
     return subprocess.Popen(
-        [*pin, sys.executable, "-c", snippet, str(dim), str(n), str(repeats), SCENES[dim]],
+        [*pin, sys.executable, "-c", snippet, str(dim), str(n), str(repeats)]
+        + ([str(CHECKPOINTS[n]), str(EVENTS[0])] if n in CHECKPOINTS else [SCENES[dim]]),
         stdout=subprocess.PIPE,
         text=True,
         env={**os.environ, "PYTHONPATH": str(src)},
@@ -121,6 +148,7 @@ def main() -> None:
     )
     parser.add_argument("--record", action="store_true", help="append to benchmarks/RESULTS.md")
     parser.add_argument("--workload", choices=sorted(WORKLOADS), default="edmd")
+    parser.add_argument("--events", type=int, default=EVENTS[0], help="melted: events timed")
     parser.add_argument(
         "--scenes", nargs=2, metavar=("SCENE_2D", "SCENE_3D"), help="the rigid workload's scenes"
     )
@@ -130,11 +158,26 @@ def main() -> None:
         SCENES.update({2: args.scenes[0], 3: args.scenes[1]})
     if args.workload == "rigid":
         args.sizes = [1]  # the scene is the size
+    if args.workload == "melted":
+        args.dims = [3]
+        EVENTS[0] = args.events
+        args.sizes = [4 * round((n / 4) ** (1 / 3)) ** 3 for n in args.sizes]
+        folder = Path(tempfile.mkdtemp(prefix="carom-ab-"))
+        for n in args.sizes:
+            CHECKPOINTS[n] = folder / f"melted-{n}.npz"
+            cells = str(round((n / 4) ** (1 / 3)))
+            subprocess.run(
+                [sys.executable, "-c", MELT, cells, "0.3", "10", str(CHECKPOINTS[n])],
+                check=True,
+                env={**os.environ, "PYTHONPATH": str(args.other)},
+            )
     for src in (SRC, args.other):  # compile (or load) each tree's kernels before timing
-        measure(src, 3, 1000, 1)
-        measure(src, 2, 1000, 1)
+        if args.workload != "melted":
+            measure(src, 3, 1000, 1)
+            measure(src, 2, 1000, 1)
     rows = []
     for r in range(args.rounds):
+        what = "steps" if args.workload == "rigid" else "collisions"
         for dim in args.dims:
             for n in args.sizes:
                 order = [("this", SRC), ("other", args.other)]
@@ -148,7 +191,7 @@ def main() -> None:
                 rows.append((r + 1, dim, n, got["this"], got["other"], ratio))
                 print(
                     f"round {r + 1}, {dim}D, N = {n}: this {got['this']:.3g}, other "
-                    f"{got['other']:.3g} {'collisions' if args.workload == 'edmd' else 'steps'}/s, "
+                    f"{got['other']:.3g} {what}/s, "
                     f"ratio {ratio:.3f}",
                     flush=True,
                 )
@@ -163,7 +206,7 @@ def main() -> None:
                 f"(from {ratios[0]:.3f} to {ratios[-1]:.3f} over {len(ratios)} rounds)"
             )
     if args.record:
-        unit = "coll/s" if args.workload == "edmd" else "steps/s"
+        unit = "steps/s" if args.workload == "rigid" else "coll/s"
         stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
         lines = [
             f"\n## {args.workload} interleaved A/B, {stamp}\n",

@@ -9,6 +9,7 @@ predictions, calendar updates, and the rest. It is a development tool; its figur
 recorded in RESULTS.md.
 
 Run:  python benchmarks/profile_edmd.py [--sizes 1000 10000 100000] [--dim 3] [--packing 0.3]
+      python benchmarks/profile_edmd.py --checkpoints melted.npz   (a saved gas, as it is)
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from __future__ import annotations
 import argparse
 import inspect
 import time
+from pathlib import Path
 from typing import Any
 
 import llvmlite.ir as llvm_ir
@@ -24,6 +26,7 @@ from numba import njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from carom import World
 from carom.engines.edmd import codes, loop, neighbours
 from carom.scene import layouts
 
@@ -122,6 +125,9 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[1_000, 10_000, 100_000])
     parser.add_argument("--dim", type=int, default=3)
     parser.add_argument("--packing", type=float, default=0.3)
+    parser.add_argument(
+        "--checkpoints", type=Path, nargs="+", default=[], help="saved gases, instead of --sizes"
+    )
     args = parser.parse_args()
     run_prof = instrumented_run()
     cycles()
@@ -132,9 +138,14 @@ def main() -> None:
         "predictions",
         "event calendar",
     ]
-    for n in args.sizes:
-        world = layouts.lattice_gas(args.dim, round(n ** (1 / args.dim)), args.packing, seed=1)
-        world.run(until=0.3, log=False)
+    worlds = [lambda path=path: World.load(path) for path in args.checkpoints] or [
+        lambda n=n: layouts.lattice_gas(args.dim, round(n ** (1 / args.dim)), args.packing, seed=1)
+        for n in args.sizes
+    ]
+    for make in worlds:
+        world = make()
+        world.run(until=world.time + 0.3, log=False)
+        n = world.n_bodies
         engine = world.build()
         state = engine.state
         counters = np.zeros(8, np.int64)

@@ -3,9 +3,9 @@
 ``settings`` (what a user may set), ``model`` and ``state`` (the constants and the changing
 arrays), ``predict`` (the next event of a body), ``collide`` (what an event does), ``loop``
 (events in time order), ``calendar`` (the event queue), ``neighbours`` (shells and the cell
-grid), ``renumber`` (bodies near in space put near in memory), ``prefetch``, ``reach`` (new
-motion given between calls), and ``driver`` (the :class:`carom.engines.base.Engine` that a
-World runs).
+grid), ``renumber`` (bodies near in space put near in memory), ``prefetch`` and ``lookahead``
+(what the loop asks for before it reads it), ``reach`` (new motion given between calls),
+and ``driver`` (the :class:`carom.engines.base.Engine` that a World runs).
 """
 
 from carom.jit import kernel_cache

@@ -39,7 +39,13 @@ import math
 import numpy as np
 from numba import njit
 
-from carom.engines.edmd.calendar import calendar_next, calendar_top, calendar_update
+from carom.engines.edmd.calendar import (
+    I_CUR,
+    I_SIZE,
+    calendar_next,
+    calendar_top,
+    calendar_update,
+)
 from carom.engines.edmd.codes import (
     C_EVENTS,
     C_SHELL,
@@ -47,6 +53,7 @@ from carom.engines.edmd.codes import (
     CELLS_FULL,
     DONE,
     EV_PAIR,
+    EV_SHELL,
     EV_WALL,
     LISTS_FULL,
     LOG_FULL,
@@ -54,6 +61,13 @@ from carom.engines.edmd.codes import (
 )
 from carom.engines.edmd.collide import collide_face, collide_pair
 from carom.engines.edmd.jitflags import njit_inlined, njit_without_refcounting
+from carom.engines.edmd.lookahead import (
+    ask_for_body,
+    ask_for_cells,
+    ask_for_neighbours,
+    ask_for_next,
+    ask_for_pour,
+)
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, rebuild_shell
 from carom.engines.edmd.predict import (
     calendar_of,
@@ -185,6 +199,11 @@ def run_frames(  # type: ignore[no-untyped-def]
     # prefetch the next events' data only where it misses the core's own caches (measured:
     # 1.06 to 1.13x from 1e5 bodies on, 4% slower at 1e3, where everything is in cache)
     lookahead = x.shape[0] > LOOKAHEAD_BODIES
+    pour_bucket, pour_body = -1, -1  # a walk along the list of the bucket poured next
+    poured = -1  # the last bucket whose bodies' rows were asked for
+    # the bodies, and their events' times, whose events' data were last asked for
+    asked, asked_t = np.full(2, -1, np.int64), np.full(2, -1.0)
+    cal_i, cur_heap = cal[8], cal[4]
     processed = 0
     log_cap = log_time.shape[0]
     if done[0] >= times.shape[0]:
@@ -218,27 +237,31 @@ def run_frames(  # type: ignore[no-untyped-def]
         prefetch_row(nbr, i)
         prefetch_item(nbr, i, list_line)
         if lookahead:
-            # and what the next events will read: at large N each is a miss; asked for now,
-            # they arrive while this event is processed
+            # and what the next events will read (carom.engines.edmd.lookahead)
+            if cal_i[I_CUR] != poured:  # a bucket was just poured: its bodies' rows
+                poured = cal_i[I_CUR]
+                for node in range(cal_i[I_SIZE]):
+                    b = cur_heap[node]
+                    ask_for_body(b, kin, nbr, list_line, nbr_count, sched, ev_time, cal_body,
+                                 shell, last_coll, counter, material, inv_mass, radius)  # fmt: skip
+                    if ev_kind[b] == EV_SHELL:
+                        ask_for_cells(b, kin, ev_time, cell_count, cell_body, shell, box,
+                                      periodic, cell_size, ncell, False)  # fmt: skip
+            if not _asked(i, ev_time, asked, asked_t):  # (its rows are, since the pour)
+                ask_for_neighbours(i, kin, nbr, nbr_count, counter)
             for k in range(1, 3):
                 b = calendar_next(cal, k)
-                if b >= 0:
-                    prefetch_row(sched, b)
-                    prefetch_row(kin, b)
-                    prefetch_row(nbr, b)
-                    prefetch_item(nbr, b, list_line)
-                    prefetch_row(nbr_count, b)
-                    prefetch_row(cal_body, b)
-                    prefetch_row(shell, b)
-                    prefetch_row(ev_time, b)
-                    prefetch_row(last_coll, b)
-                    prefetch_row(material, b)
-                    prefetch_row(inv_mass, b)
-                    prefetch_row(radius, b)
-            # i's neighbours' records, which its prediction reads (its list is in cache: it
-            # was asked for an event ago), now rather than after the collision
-            for ahead in range(nbr_count[i]):
-                prefetch_row(kin, nbr[i, ahead])
+                if b >= 0 and not _asked(b, ev_time, asked, asked_t):
+                    ask_for_next(
+                        b, kin, nbr, list_line, nbr_count, sched, ev_time, cal_body, shell,
+                        last_coll, counter, material, inv_mass, radius, cell_count, cell_body,
+                        box, periodic, cell_size, ncell, nbr_mark,
+                    )  # fmt: skip
+                    asked[k - 1] = b
+                    asked_t[k - 1] = ev_time[b]
+            pour_bucket, pour_body = ask_for_pour(
+                pour_bucket, pour_body, cal_body, ev_time, sched, kin, cal
+            )
         s.clock[0] = T
         counts[C_EVENTS] += 1
         kind = ev_kind[i]
@@ -346,6 +369,14 @@ def run_frames(  # type: ignore[no-untyped-def]
                 ev_time, ev_kind, ev_other, ev_stamp,
             )  # fmt: skip
             calendar_update(ev_time, body, cal)
+
+
+@njit_inlined
+def _asked(b, ev_time, asked, asked_t) -> bool:  # type: ignore[no-untyped-def]
+    """Whether body ``b``'s event's data were asked for already."""
+    return bool(
+        (b == asked[0] and ev_time[b] == asked_t[0]) or (b == asked[1] and ev_time[b] == asked_t[1])
+    )
 
 
 @njit_inlined
