@@ -79,11 +79,15 @@ def test_stale_predictions_are_counted_not_processed() -> None:
 
 
 LOOKAHEAD_RUN = """
-import json
+import json, os
 from carom.engines.edmd import loop
-loop.LOOKAHEAD_BODIES = 0  # prefetch the next events' data at every size (read at compile time)
+# prefetch the next events' data at every size (read at compile time), every level a step
+# ahead (deep) or only the next events' rows
+loop.LOOKAHEAD_BODIES = 0
+loop.DEEP_LOOKAHEAD_BODIES = 0 if os.environ["DEPTH"] == "deep" else 1 << 40
 from carom.scene.layouts import lattice_gas
-world = lattice_gas(3, 6, 0.3, seed=4)
+dim = int(os.environ["DIM"])
+world = lattice_gas(dim, 6 if dim == 3 else 15, 0.3 if dim == 3 else 0.5, seed=4)
 world.run(until=3.0, log=False)
 print(json.dumps({"positions": world.positions.tolist(), "velocities": world.velocities.tolist(),
                   "compiled": sum(loop.run_frames.stats.cache_misses.values())}))
@@ -91,16 +95,18 @@ print(json.dumps({"positions": world.positions.tolist(), "velocities": world.vel
 
 
 @pytest.mark.needs_jit
-def test_prefetching_the_next_events_changes_no_bit(tmp_path: Path) -> None:
-    # Above LOOKAHEAD_BODIES the loop asks for the likely next events' data one event ahead.
-    # A prefetch reads nothing into the computation, so a loop compiled to do it at every size
-    # (in a fresh process with an empty kernel cache) must give this process's bits, where
-    # 216 bodies are below the threshold.
-    assert lattice_gas(3, 6, 0.3, seed=4).n_bodies < loop.LOOKAHEAD_BODIES
+@pytest.mark.parametrize(("dim", "depth"), [(3, "deep"), (3, "rows"), (2, "deep")])
+def test_prefetching_the_next_events_changes_no_bit(tmp_path: Path, dim: int, depth: str) -> None:
+    # Above LOOKAHEAD_BODIES the loop asks for the likely next events' data ahead, and above
+    # DEEP_LOOKAHEAD_BODIES for each level of it a step ahead (carom.engines.edmd.lookahead).
+    # A prefetch reads nothing into the computation, so a loop compiled to do either at every
+    # size (in a fresh process with an empty kernel cache) must give this process's bits,
+    # where 216 spheres or 225 disks are below both thresholds.
+    world = lattice_gas(dim, 6 if dim == 3 else 15, 0.3 if dim == 3 else 0.5, seed=4)
+    assert world.n_bodies < loop.LOOKAHEAD_BODIES
     # its own cache: it compiles everything itself, with its setting
-    ahead = fresh_python(LOOKAHEAD_RUN, NUMBA_CACHE_DIR=str(tmp_path))
+    ahead = fresh_python(LOOKAHEAD_RUN, DIM=str(dim), DEPTH=depth, NUMBA_CACHE_DIR=str(tmp_path))
     assert ahead["compiled"] == 1  # its own loop, not this one's from a cache
-    world = lattice_gas(3, 6, 0.3, seed=4)
     world.run(until=3.0, log=False)
     np.testing.assert_array_equal(np.array(ahead["positions"]), world.positions)
     np.testing.assert_array_equal(np.array(ahead["velocities"]), world.velocities)
