@@ -50,6 +50,21 @@ def _build(g: dict[str, np.ndarray]) -> int:
     return int(build_all(*(g[k] for k in g)))
 
 
+def _assert_lists_are_the_overlapping_shells(
+    g: dict[str, np.ndarray], dim: int, periodic: bool
+) -> None:
+    c, a = g["shell"][:, :dim], g["shell"][:, 3]
+    d = c[:, None, :] - c[None, :, :]
+    if periodic:
+        d -= g["box"] * np.floor(d / g["box"] + 0.5)
+    reach = a[:, None] + a[None, :] + 2 * g["delta"]
+    overlap = (np.sum(d * d, axis=2) < reach**2) & ~np.eye(len(a), dtype=bool)
+    for i in range(len(a)):
+        listed = set(g["nbr"][i, : g["count"][i]].tolist())
+        expected = set(np.flatnonzero(overlap[i]).tolist()) if g["mobile"][i] else set()
+        assert listed == expected, i
+
+
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize(
     ("periodic", "n", "delta"),
@@ -65,19 +80,25 @@ def test_lists_are_exactly_the_overlapping_shells(
     g = _grid(dim, n, periodic, seed=dim, delta=delta)
     assert int(g["ncell"][0]) == (2 if delta > 1.0 else 7)
     assert _build(g) == FITS
-    c, a = g["shell"][:, :dim], g["shell"][:, 3]
-    d = c[:, None, :] - c[None, :, :]
-    if periodic:
-        d -= g["box"] * np.floor(d / g["box"] + 0.5)
-    reach = a[:, None] + a[None, :] + 2 * g["delta"]
-    overlap = (np.sum(d * d, axis=2) < reach**2) & ~np.eye(len(a), dtype=bool)
-    for i in range(len(a)):
-        listed = set(g["nbr"][i, : g["count"][i]].tolist())
-        expected = set(np.flatnonzero(overlap[i]).tolist()) if g["mobile"][i] else set()
-        assert listed == expected, i
+    _assert_lists_are_the_overlapping_shells(g, dim, periodic)
     # every body sits in the cell of its centre, at its slot
-    for i in range(len(a)):
+    for i in range(len(g["shell"])):
         assert g["cell_body"][g["cell"][i], g["slot"][i]] == i
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("periodic", [False, True])
+def test_cells_as_wide_as_a_shell_lose_no_pair(dim: int, periodic: bool) -> None:
+    # A scan skips the cells farther from a shell's centre than its radius, twice the
+    # thickness and the largest radius, bounded by half a cell. With spheres of one size in
+    # cells exactly a shell diameter wide (0.5 + 0.5 m: 5 cells of 2 m) that bound is tight:
+    # every pair nearly touching across a corner must still be listed.
+    g = _grid(dim, 400 if dim == 3 else 150, periodic, seed=7 + dim, delta=0.5)
+    g["shell"][:, 3] = 0.5
+    g["ncell"][:] = 5
+    g["cell_size"][:] = 2.0
+    assert _build(g) == FITS
+    _assert_lists_are_the_overlapping_shells(g, dim, periodic)
 
 
 def test_full_lists_and_full_cells_are_reported() -> None:

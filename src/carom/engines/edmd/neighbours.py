@@ -121,18 +121,41 @@ def _axis_cells(c: int, n: int, periodic: bool) -> tuple[int, int, int, int]:
 
 
 @njit_inlined
+def _axis_gaps(o: float, c: int, h: float, n: int, periodic: bool) -> tuple[float, float, float]:
+    """How far a point at ``o`` [m] in cell ``c`` (of side ``h``, ``n`` on the axis) lies from
+    each cell :func:`_axis_cells` gives, in its order (0 for its own cell, and for every cell
+    of a periodic axis of fewer than 3)."""
+    if periodic and n < 3:
+        return 0.0, 0.0, 0.0
+    below = max(o - c * h, 0.0)
+    above = max((c + 1) * h - o, 0.0)
+    if not periodic and c == 0:
+        return 0.0, above, 0.0
+    return below, 0.0, above
+
+
+@njit_inlined
 def _gather_candidates(
     i: int,
+    shell: np.ndarray,
     cell_count: np.ndarray,
     cell_body: np.ndarray,
     cell: np.ndarray,
+    box: np.ndarray,
     periodic: bool,
+    delta: float,
     ncell: np.ndarray,
     scan_body: np.ndarray,
 ) -> int:
     """Copy into ``scan_body`` (M,) int32, M = 27 times the cell capacity, every body filed in
-    the cells around ``i``'s (``i`` itself among them), cell by cell in order, each row in
-    its order; returns how many.
+    the cells around ``i``'s (``i`` itself among them) that a shell overlapping ``i``'s could
+    be centred in, cell by cell in order, each row in its order; returns how many.
+
+    A cell is skipped when it lies farther from ``i``'s shell centre than ``i``'s radius,
+    twice the shell thickness and the largest radius: cells are at least a shell diameter
+    wide (``grid_cells``), so half a cell bounds the largest radius and a thickness. About
+    a quarter of the cells and their candidates go in 3D (a corner cell is needed half the
+    time, an edge cell four times in five); the lists are the same, in the same order.
 
     A loop per cell whose length is the cell's count mispredicts its exit at every cell, 27
     times a rebuild in 3D (measured: half the rebuild's time), so each cell's row is copied
@@ -151,13 +174,24 @@ def _gather_candidates(
     ax0 = _axis_cells(c0, ncell[0], periodic)
     ax1 = _axis_cells(c1, n1, periodic)
     ax2 = _axis_cells(c2, n2, periodic) if three else (1, 0, 0, 0)
+    # the gaps from i's shell centre to each, and the farthest a listed centre can be
+    h0, h1 = box[0] / ncell[0], box[1] / n1
+    h2 = box[2] / n2 if three else h0
+    g0 = _axis_gaps(shell[i, 0], c0, h0, ncell[0], periodic)
+    g1 = _axis_gaps(shell[i, 1], c1, h1, n1, periodic)
+    g2 = _axis_gaps(shell[i, 2], c2, h2, n2, periodic) if three else (0.0, 0.0, 0.0)
+    far = (shell[i, 3] + delta + 0.5 * min(h0, h1, h2)) * (1.0 + 1e-9)  # (round-off)
+    far2 = far * far
     # the candidates, cell by cell (a fixed-length copy; only the first cell_count count)
     head = min(HEAD, cell_body.shape[1])
     m = 0
     for a in range(1, ax0[0] + 1):
         for b in range(1, ax1[0] + 1):
             row = (ax0[a] * n1 + ax1[b]) * n2
+            gap2 = g0[a - 1] * g0[a - 1] + g1[b - 1] * g1[b - 1]
             for c in range(1, ax2[0] + 1):
+                if gap2 + g2[c - 1] * g2[c - 1] > far2:
+                    continue
                 index = row + ax2[c]
                 k = cell_count[index]
                 for s in range(head):
@@ -282,7 +316,9 @@ def link_earlier(
     for i in range(lo, hi):
         for s in range(nbr.shape[1]):
             nbr[i, s] = 0  # (the row's first write: a fresh state leaves it unwritten)
-        m = _gather_candidates(i, cell_count, cell_body, cell, periodic, ncell, scan_body)
+        m = _gather_candidates(
+            i, shell, cell_count, cell_body, cell, box, periodic, delta, ncell, scan_body
+        )
         # only those numbered up to i (the first of each row), in the same order: one flat
         # pass without a branch (a count per cell was 1.5x slower)
         kept = 0
@@ -406,7 +442,9 @@ def rebuild_shell(
         if not cell_insert(i, c, cell_count, cell_body, slot, cell):
             return CELL_FULL
     capacity = nbr.shape[1]
-    m = _gather_candidates(i, cell_count, cell_body, cell, periodic, ncell, scan_body)
+    m = _gather_candidates(
+        i, shell, cell_count, cell_body, cell, box, periodic, delta, ncell, scan_body
+    )
     found = _list_overlapping(i, m, shell, nbr, box, periodic, delta, scan, scan_body)
     if found < 0:
         return LIST_FULL
