@@ -4,14 +4,17 @@ and events in time order."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 import pytest
+from numba import njit
 
 from carom.engines.base import FrameArrays
-from carom.engines.edmd import codes, driver, loop
+from carom.engines.edmd import codes, driver, lookahead, loop
 from carom.engines.edmd.loop import run_frames
+from carom.engines.edmd.state import KIN_V, KIN_WIDTH
 from carom.scene.layouts import lattice_gas
 from tests.processes import fresh_python
 
@@ -110,3 +113,34 @@ def test_prefetching_the_next_events_changes_no_bit(tmp_path: Path, dim: int, de
     world.run(until=3.0, log=False)
     np.testing.assert_array_equal(np.array(ahead["positions"]), world.positions)
     np.testing.assert_array_equal(np.array(ahead["velocities"]), world.velocities)
+
+
+@njit
+def _cell_coordinate(kin, dt, box, periodic, cell_size, ncell):  # type: ignore[no-untyped-def]
+    return lookahead._cell_coordinate(kin, 0, 0, dt, box, periodic, cell_size, ncell)
+
+
+@pytest.mark.parametrize("periodic", [False, True])
+def test_the_cells_asked_for_are_on_the_grid_whatever_the_motion(periodic: bool) -> None:
+    # The deep lookahead reads the counts and rows of the cells around where a body will be
+    # (lookahead.ask_for_cells), extrapolated from its record: the coordinate must name a
+    # cell of the grid whatever the record holds, even motion no engine state holds.
+    kin = np.zeros((1, KIN_WIDTH))
+    box, ncell = np.full(3, 10.0), np.full(3, 5)
+    cell_size = box / ncell  # 2 m cells
+    for x0, v0, dt in [
+        (3.0, 1.0, 0.5),  # at 3.5 m: cell 1
+        (3.0, math.nan, 1.0),
+        (3.0, math.inf, 1.0),
+        (3.0, -math.inf, 1.0),
+        (3.0, 1e308, 1e10),
+        (-50.0, 0.0, 0.0),
+        (50.0, 0.0, 0.0),
+    ]:
+        kin[0, 0], kin[0, KIN_V] = x0, v0
+        with np.errstate(all="ignore"):  # (without the JIT: NumPy scalars, which warn)
+            c = _cell_coordinate(kin, dt, box, periodic, cell_size, ncell)
+        assert 0 <= c < 5, (x0, v0, dt)
+    kin[0, 0], kin[0, KIN_V] = 3.0, 1.0
+    assert _cell_coordinate(kin, 0.5, box, periodic, cell_size, ncell) == 1
+    assert _cell_coordinate(kin, 8.0, box, periodic, cell_size, ncell) == (0 if periodic else 4)

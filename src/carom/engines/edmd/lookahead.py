@@ -23,7 +23,7 @@ them (tests/engines/edmd/test_loop.py). All are no-ops without the JIT.
 
 from __future__ import annotations
 
-import math
+import numpy as np
 
 from carom.engines.edmd.calendar import I_CUR
 from carom.engines.edmd.codes import EV_PAIR, EV_SHELL
@@ -67,11 +67,17 @@ def ask_for_neighbours(b, kin, nbr, nbr_count, counter) -> None:  # type: ignore
 @njit_inlined
 def _cell_coordinate(kin, b, k, dt, box, periodic, cell_size, ncell) -> int:  # type: ignore[no-untyped-def]
     """The cell coordinate on axis ``k`` of body ``b`` ``dt`` [s] after its clock, in a
-    straight line (a hint: clamped to the grid, whatever the motion)."""
+    straight line: a hint, always on the grid (clamped; 0 for a NaN), since the cells it names
+    are read."""
     p = kin[b, k] + kin[b, KIN_V + k] * dt
     if periodic:
-        p -= box[k] * math.floor(p / box[k])
-    return int(min(max(p / cell_size[k], 0.0), ncell[k] - 1.0))
+        p -= box[k] * np.floor(p / box[k])
+    q = p / cell_size[k]
+    if not q >= 1.0:  # (NaN included)
+        return 0
+    if q >= ncell[k] - 1.0:
+        return int(ncell[k] - 1)
+    return int(q)
 
 
 @njit_inlined
