@@ -28,6 +28,7 @@ import numpy as np
 from carom.engines.edmd.calendar import I_CUR
 from carom.engines.edmd.codes import EV_PAIR, EV_SHELL
 from carom.engines.edmd.jitflags import njit_inlined
+from carom.engines.edmd.neighbours import axis_cells
 from carom.engines.edmd.prefetch import prefetch_item, prefetch_row
 from carom.engines.edmd.state import KIN_T, KIN_V, SCHED_KIND, SCHED_OTHER
 
@@ -81,16 +82,6 @@ def _cell_coordinate(kin, b, k, dt, box, periodic, cell_size, ncell) -> int:  # 
 
 
 @njit_inlined
-def _axis_near(c: int, n: int, periodic: bool) -> tuple[int, int]:
-    """The coordinates before and after ``c`` on an axis of ``n`` cells (wrapped when periodic,
-    else clamped)."""
-    lo, hi = c - 1, c + 1
-    if periodic:
-        return (lo + n if lo < 0 else lo), (hi - n if hi >= n else hi)
-    return max(lo, 0), min(hi, n - 1)
-
-
-@njit_inlined
 def ask_for_cells(  # type: ignore[no-untyped-def]
     b, kin, ev_time, cell_count, cell_body, shell, box, periodic, cell_size, ncell, candidates
 ) -> None:
@@ -105,19 +96,20 @@ def ask_for_cells(  # type: ignore[no-untyped-def]
     c2 = _cell_coordinate(kin, b, 2, dt, box, periodic, cell_size, ncell) if three else 0
     n1 = ncell[1]
     n2 = ncell[2] if three else 1
-    lo0, hi0 = _axis_near(c0, ncell[0], periodic)
-    lo1, hi1 = _axis_near(c1, n1, periodic)
-    lo2, hi2 = _axis_near(c2, n2, periodic) if three else (0, 0)
-    for a in (lo0, c0, hi0):
-        for e in (lo1, c1, hi1):
-            row = (a * n1 + e) * n2
-            for c in (lo2, c2, hi2):
+    ax0 = axis_cells(c0, ncell[0], periodic)
+    ax1 = axis_cells(c1, n1, periodic)
+    ax2 = axis_cells(c2, n2, periodic) if three else (1, 0, 0, 0)
+    for a in range(1, ax0[0] + 1):
+        for e in range(1, ax1[0] + 1):
+            row = (ax0[a] * n1 + ax1[e]) * n2
+            for c in range(1, ax2[0] + 1):
+                index = row + ax2[c]
                 if candidates:
-                    for q in range(min(cell_count[row + c], cell_body.shape[1])):
-                        prefetch_row(shell, cell_body[row + c, q])
+                    for q in range(min(cell_count[index], cell_body.shape[1])):
+                        prefetch_row(shell, cell_body[index, q])
                 else:
-                    prefetch_row(cell_count, row + c)
-                    prefetch_row(cell_body, row + c)
+                    prefetch_row(cell_count, index)
+                    prefetch_row(cell_body, index)
 
 
 @njit_inlined
@@ -168,3 +160,13 @@ def ask_for_pour(  # type: ignore[no-untyped-def]
         prefetch_row(sched, body)
         prefetch_row(kin, body)
     return following, body
+
+
+@njit_inlined
+def asked_already(b, ev_time, asked, asked_t) -> bool:  # type: ignore[no-untyped-def]
+    """Whether body ``b``'s coming event's data were asked for already: ``asked`` (2,) int64
+    and ``asked_t`` (2,) float64 hold the last two bodies asked for and their events' times
+    [s]."""
+    return bool(
+        (b == asked[0] and ev_time[b] == asked_t[0]) or (b == asked[1] and ev_time[b] == asked_t[1])
+    )

@@ -67,6 +67,7 @@ from carom.engines.edmd.lookahead import (
     ask_for_neighbours,
     ask_for_next,
     ask_for_pour,
+    asked_already,
 )
 from carom.engines.edmd.neighbours import FITS, LIST_FULL, rebuild_shell
 from carom.engines.edmd.predict import (
@@ -253,11 +254,11 @@ def run_frames(  # type: ignore[no-untyped-def]
                     if ev_kind[b] == EV_SHELL:
                         ask_for_cells(b, kin, ev_time, cell_count, cell_body, shell, box,
                                       periodic, cell_size, ncell, False)  # fmt: skip
-            if not _asked(i, ev_time, asked, asked_t):  # (its rows are, since the pour)
+            if not asked_already(i, ev_time, asked, asked_t):  # (its rows are, since the pour)
                 ask_for_neighbours(i, kin, nbr, nbr_count, counter)
             for k in range(1, 3):
                 b = calendar_next(cal, k)
-                if b >= 0 and not _asked(b, ev_time, asked, asked_t):
+                if b >= 0 and not asked_already(b, ev_time, asked, asked_t):
                     ask_for_next(
                         b, kin, nbr, list_line, nbr_count, sched, ev_time, cal_body, shell,
                         last_coll, counter, material, inv_mass, radius, cell_count, cell_body,
@@ -382,14 +383,6 @@ def run_frames(  # type: ignore[no-untyped-def]
                 ev_time, ev_kind, ev_other, ev_stamp,
             )  # fmt: skip
             calendar_update(ev_time, body, cal)
-
-
-@njit_inlined
-def _asked(b, ev_time, asked, asked_t) -> bool:  # type: ignore[no-untyped-def]
-    """Whether body ``b``'s event's data were asked for already."""
-    return bool(
-        (b == asked[0] and ev_time[b] == asked_t[0]) or (b == asked[1] and ev_time[b] == asked_t[1])
-    )
 
 
 @njit_inlined

@@ -103,7 +103,7 @@ def _list_remove(nbr: np.ndarray, count: np.ndarray, owner: int, body: int) -> N
 
 
 @njit_inlined
-def _axis_cells(c: int, n: int, periodic: bool) -> tuple[int, int, int, int]:
+def axis_cells(c: int, n: int, periodic: bool) -> tuple[int, int, int, int]:
     """The cell coordinates next to ``c`` (itself included) on an axis of ``n`` cells.
 
     Returns ``(m, first, second, third)``, the first ``m`` being meant: 3 inside, 2 at a
@@ -123,7 +123,7 @@ def _axis_cells(c: int, n: int, periodic: bool) -> tuple[int, int, int, int]:
 @njit_inlined
 def _axis_gaps(o: float, c: int, h: float, n: int, periodic: bool) -> tuple[float, float, float]:
     """How far a point at ``o`` [m] in cell ``c`` (of side ``h``, ``n`` on the axis) lies from
-    each cell :func:`_axis_cells` gives, in its order (0 for its own cell, and for every cell
+    each cell :func:`axis_cells` gives, in its order (0 for its own cell, and for every cell
     of a periodic axis of fewer than 3)."""
     if periodic and n < 3:
         return 0.0, 0.0, 0.0
@@ -171,9 +171,9 @@ def _gather_candidates(
     rest //= n2
     c1 = rest % n1
     c0 = rest // n1
-    ax0 = _axis_cells(c0, ncell[0], periodic)
-    ax1 = _axis_cells(c1, n1, periodic)
-    ax2 = _axis_cells(c2, n2, periodic) if three else (1, 0, 0, 0)
+    ax0 = axis_cells(c0, ncell[0], periodic)
+    ax1 = axis_cells(c1, n1, periodic)
+    ax2 = axis_cells(c2, n2, periodic) if three else (1, 0, 0, 0)
     # the gaps from i's shell centre to each, and the farthest a listed centre can be
     h0, h1 = box[0] / ncell[0], box[1] / n1
     h2 = box[2] / n2 if three else h0
