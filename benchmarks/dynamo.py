@@ -21,12 +21,15 @@ libboost-test-dev libboost-iostreams-dev libbz2-dev libeigen3-dev``). Never in `
 
 In 2D DynamO has no mode: ``--disks`` times carom's own hard disks (packing ``--eta``, a
 square lattice of SIDE^2 disks) the same way, for the growth of their cost per collision
-against DynamO's in 3D.
+against DynamO's in 3D. ``--shells D ...`` times carom alone on the same gases with each
+neighbour-shell thickness D [diameters] in turn (rounds interleaved over the thicknesses): the
+default's check at the sizes where memory, not arithmetic, sets the cost.
 
 Run:  python benchmarks/dynamo.py --build ~/src/dynamo          (once)
       python benchmarks/dynamo.py --dynamo ~/src/dynamo/build [--cells 7 20 40 63]
             [--phi 0.3 0.45] [--rounds 3] [--core 1] [--no-record]
       python benchmarks/dynamo.py --disks [32 180 508 1000] [--eta 0.5] [--rounds 3]
+      python benchmarks/dynamo.py --shells 0.35 0.5 0.6 0.8 [--cells 63] [--phi 0.3]
 """
 
 from __future__ import annotations
@@ -62,7 +65,7 @@ CAROM = textwrap.dedent(
     import json, math, sys, time
     import numpy as np
     import carom
-    dim, cells, phi, melt, window = json.loads(sys.argv[1])
+    dim, cells, phi, melt, window, shell = json.loads(sys.argv[1])
     if dim == 3:
         rho = 6.0 * phi / math.pi  # spheres of unit diameter: phi = pi rho / 6
         a = (4.0 / rho) ** (1.0 / 3.0)  # the FCC cell's side
@@ -77,7 +80,7 @@ CAROM = textwrap.dedent(
     v = rng.standard_normal((n, dim))
     v -= v.mean(axis=0)
     v *= math.sqrt(dim * (n - 1) / (v * v).sum())  # T = 1, no drift
-    world = carom.World(dim, [cells * a] * dim, "periodic")
+    world = carom.World(dim, [cells * a] * dim, "periodic", shell_thickness=shell)
     world.add_spheres(x, v, radius=0.5)
     world.run_events(1)  # (the engine built, its kernels loaded)
     # melt: step the clock until the count is reached
@@ -92,7 +95,9 @@ CAROM = textwrap.dedent(
     start = time.perf_counter()
     world.run(until=world.time + span, log=False)
     elapsed = time.perf_counter() - start
-    print(json.dumps({"n": n, "collisions": world.stats.collisions, "seconds": elapsed}))
+    stats = world.stats
+    print(json.dumps({"n": n, "collisions": stats.collisions, "events": stats.events_processed,
+                      "seconds": elapsed}))
     """
 )
 
@@ -158,12 +163,14 @@ def dynamo_window(programs: Path, melted: Path, window: int, folder: Path, core:
     }
 
 
-def carom_window(cells: int, phi: float, window: int, core: int, dim: int = 3) -> dict:
+def carom_window(
+    cells: int, phi: float, window: int, core: int, dim: int = 3, shell: float | None = None
+) -> dict:
     """One timed window of carom (``CAROM``), in its own pinned process (melted there
-    first)."""
+    first), with neighbour shells ``shell`` thick [diameters] (None: the default)."""
     ran = subprocess.run(
         [*pinned(core), sys.executable, "-c", CAROM,
-         json.dumps([dim, cells, phi, MELT, window])],
+         json.dumps([dim, cells, phi, MELT, window, shell])],
         check=True, capture_output=True, text=True,
     )  # fmt: skip
     out: dict = json.loads(ran.stdout.strip().splitlines()[-1])
@@ -197,6 +204,37 @@ def disks(sides: list[int], eta: float, rounds: int, core: int) -> list[str]:
     return lines
 
 
+def shells(
+    thicknesses: list[float], cells: list[int], phis: list[float], rounds: int, core: int
+) -> list[str]:
+    """carom's spheres with each neighbour-shell thickness in turn (each window in its own
+    pinned process; rounds interleaved over the thicknesses); table lines with the cost per
+    collision and the events a collision (shell exits and stale predictions besides)."""
+    lines = [
+        "| phi | N | shell [diameters] | carom us/coll (median, range) | events / collision |",
+        "|---|---|---|---|---|",
+    ]
+    for phi in phis:
+        for side in cells:
+            n = 4 * side**3
+            window = max(WINDOW_MIN, WINDOW_PER_SPHERE * n)
+            seconds: dict[float, list[float]] = {d: [] for d in thicknesses}
+            events: dict[float, list[float]] = {d: [] for d in thicknesses}
+            for _ in range(rounds):
+                for d in thicknesses:
+                    out = carom_window(side, phi, window, core, shell=d)
+                    seconds[d].append(out["seconds"] / out["collisions"])
+                    events[d].append(out["events"] / out["collisions"])
+            for d in thicknesses:
+                lines.append(
+                    f"| {phi} | {n} | {d} | {1e6 * statistics.median(seconds[d]):.2f} "
+                    f"({1e6 * min(seconds[d]):.2f}-{1e6 * max(seconds[d]):.2f}) | "
+                    f"{statistics.median(events[d]):.3f} |"
+                )
+                print(lines[-1], flush=True)
+    return lines
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--build", type=Path, help="clone and build DynamO there, then stop")
@@ -211,9 +249,28 @@ def main() -> None:
         help="instead: carom's hard disks (2D) on SIDE^2 lattices (default 32 180 508 1000)",
     )  # fmt: skip
     parser.add_argument("--eta", type=float, default=0.5, help="the disks' packing")
+    parser.add_argument(
+        "--shells", type=float, nargs="+", metavar="D",
+        help="instead: carom alone with neighbour shells D diameters thick, in turn",
+    )  # fmt: skip
     args = parser.parse_args()
     if args.build is not None:
         print(build(args.build))
+        return
+    if args.shells is not None:
+        lines = shells(args.shells, args.cells, args.phi, args.rounds, args.core)
+        body = "\n".join(
+            [
+                f"carom's spheres with each neighbour-shell thickness, {args.rounds} rounds "
+                f"(each window in its own process, core {args.core}, the thicknesses in turn); "
+                f"windows of max({WINDOW_MIN:,}, {WINDOW_PER_SPHERE} N) collisions after {MELT} "
+                "a sphere:",
+                "",
+                *lines,
+            ]
+        )
+        if not args.no_record:
+            record("dynamo --shells: carom's neighbour-shell thickness at large N", body + "\n")
         return
     if args.disks is not None:
         sides = args.disks or [32, 180, 508, 1000]
