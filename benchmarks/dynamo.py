@@ -177,6 +177,14 @@ def carom_window(
     return out
 
 
+def _spread_us(seconds: list[float]) -> str:
+    """Costs per collision [s] as ``median (min-max)`` in microseconds."""
+    return (
+        f"{1e6 * statistics.median(seconds):.2f} "
+        f"({1e6 * min(seconds):.2f}-{1e6 * max(seconds):.2f})"
+    )
+
+
 def disks(sides: list[int], eta: float, rounds: int, core: int) -> list[str]:
     """carom's hard disks at ``eta``, each size in ``rounds`` pinned processes (rounds
     interleaved over the sizes); table lines with the cost per collision and its growth."""
@@ -197,8 +205,7 @@ def disks(sides: list[int], eta: float, rounds: int, core: int) -> list[str]:
     for side in sides:
         cost = statistics.median(seconds[side])
         lines.append(
-            f"| {eta} | {n_of[side]} | {1e6 * cost:.2f} ({1e6 * min(seconds[side]):.2f}-"
-            f"{1e6 * max(seconds[side]):.2f}) | x{cost / first:.2f} |"
+            f"| {eta} | {n_of[side]} | {_spread_us(seconds[side])} | x{cost / first:.2f} |"
         )
         print(lines[-1], flush=True)
     return lines
@@ -227,8 +234,7 @@ def shells(
                     events[d].append(out["events"] / out["collisions"])
             for d in thicknesses:
                 lines.append(
-                    f"| {phi} | {n} | {d} | {1e6 * statistics.median(seconds[d]):.2f} "
-                    f"({1e6 * min(seconds[d]):.2f}-{1e6 * max(seconds[d]):.2f}) | "
+                    f"| {phi} | {n} | {d} | {_spread_us(seconds[d])} | "
                     f"{statistics.median(events[d]):.3f} |"
                 )
                 print(lines[-1], flush=True)
