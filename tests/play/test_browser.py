@@ -203,7 +203,15 @@ def test_the_page_comes_back_when_the_server_does(browser: Any, small_pyramid: P
 def test_sliders_and_switches_reach_the_server(served_page: tuple[PlayServer, Page]) -> None:
     server, page = served_page
     live = server.live
-    # a slider applies when let go (its change event): gravity 2.5 m/s^2 downward
+    # paused, so that the pyramid cannot fall asleep (and its contacts leave the solver)
+    # between the switch below and the frame the page is asked about, however slow the machine
+    page.page.click("#pause")
+    assert until(lambda: live.paused, 5)
+    # a switch: the server sends the contact points from then on
+    page.page.check('[data-draw="contacts"]')
+    assert until(lambda: "contacts" in live.drawings, 10)
+    # a slider applies when let go (its change event): gravity 2.5 m/s^2 downward; the engine
+    # is built again then, every body awake (World.set_gravity)
     page.page.eval_on_selector(
         "#gravity",
         "(e) => { e.value = '2.5'; e.dispatchEvent(new Event('input')); "
@@ -211,9 +219,10 @@ def test_sliders_and_switches_reach_the_server(served_page: tuple[PlayServer, Pa
     )
     assert until(lambda: live.world.gravity[1] == -2.5, 10)
     assert page.page.inner_text("#gravity-out") == "2.5"
-    # a switch: the server sends the contact points from then on, and the page has them
-    page.page.check('[data-draw="contacts"]')
-    assert until(lambda: "contacts" in live.drawings, 10)
+    # one step: the pyramid rests on the ground, so it has contacts, and the page has them
+    t = live.world.time
+    page.page.click("#step")
+    assert until(lambda: live.world.time > t, 10)
     page.wait_for(
         "carom.state.frame.contacts !== undefined && carom.state.frame.contacts.length > 0", 10
     )
