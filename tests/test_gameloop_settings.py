@@ -71,3 +71,21 @@ def test_a_body_added_beside_a_compressed_stack_is_taken() -> None:
     world.add_body(Box(1.0, 1.0), [20.2, 3.5])
     with pytest.raises(CaromError, match="deepest overlap the running engine had"):
         world.step()
+
+
+def test_a_sleeping_compressed_stack_takes_a_new_gravity() -> None:
+    # the stack settles deeper than the linear slop and falls asleep: its overlaps are the
+    # running engine's all the same, so the engine built again under a new gravity (which
+    # wakes it) takes them; it once refused them ("overlap by 0.0133 m ... move them apart")
+    world = _stack(20)
+    world.run(until=4.0)
+    engine = world.engine
+    assert engine is not None
+    assert not any(world.body(i).awake for i in range(1, 21))
+    assert engine.deepest_overlap()[2] == 0.0  # type: ignore[attr-defined]  # (asleep)
+    depth = engine.deepest_overlap(asleep=True)[2]  # type: ignore[attr-defined]
+    assert depth > world.rigid_settings.linear_slop  # (the case)
+    world.set_gravity([0.0, -12.0])
+    world.step()
+    assert world.overlap_kept == depth
+    assert all(world.body(i).awake for i in range(1, 21))

@@ -37,6 +37,7 @@ from carom.engines.edmd.driver import EdmdEngine
 from carom.engines.stepped.driver import SteppedEngine
 from carom.engines.stepped.events import EventArrays
 from carom.engines.stepped.filters import bits64, default_filters, whole_number
+from carom.engines.stepped.memory import Remembered
 from carom.errors import CaromError
 from carom.laws.kinds import KIND_DYNAMIC, KIND_NAMES
 from carom.limits import LARGEST
@@ -80,6 +81,8 @@ _THRESHOLD = "_hit_threshold"
 _ASKED = "_events_asked"
 #: the attribute in which a world keeps the loads of an engine it dropped (World._invalidate)
 _LOADS_KEPT = "_loads_kept"
+#: the attribute in which a world keeps the sleep and warm starts of an engine it dropped
+_MEMORY_KEPT = "_memory_kept"
 
 
 class GameLoop:
@@ -222,6 +225,14 @@ class GameLoop:
             self, _LOADS_KEPT, None
         )
         setattr(self, _LOADS_KEPT, None)
+        return kept
+
+    def hand_over_memory(self: _Running) -> Remembered | None:
+        """The sleep and warm starts of the rigid engine this world dropped to build it again,
+        once: for the new engine (:func:`carom.engines.stepped.assemble.checked_start`,
+        :func:`carom.engines.stepped.memory.carried`); None when there are none."""
+        kept: Remembered | None = getattr(self, _MEMORY_KEPT, None)
+        setattr(self, _MEMORY_KEPT, None)
         return kept
 
     def body(self: _Running, index: int) -> Body:
@@ -677,13 +688,24 @@ def _rigid(world: _Running, why: str = "") -> SteppedEngine:
     return engine
 
 
+def hand_down(world: Any, engine: Engine) -> None:
+    """Keep on ``world`` what the engine it builds in place of the running ``engine`` takes
+    over: the loads given for the next step and a rigid engine's sleep and warm starts."""
+    setattr(world, _LOADS_KEPT, getattr(engine, "loads_now", lambda: None)())
+    setattr(world, _MEMORY_KEPT, getattr(engine, "remembered", lambda: None)())
+
+
 def kept_overlap(engine: Engine) -> float:
-    """The deepest overlap [m] a running rigid engine has now (0 for another engine): the
-    engine built in its place (bodies added, kinds or settings changed between steps) takes
-    overlaps up to it, which the solver made and will resolve, and refuses deeper ones, which
-    only what changed can have made."""
+    """The deepest overlap [m] a running rigid engine has now between any of its bodies,
+    asleep or awake (0 for another engine): the engine built in its place (bodies added,
+    kinds or settings changed between steps) takes overlaps up to it, which the solver made
+    and will resolve, and refuses deeper ones, which only what changed can have made. (A
+    stack that settled deeper than the linear slop and fell asleep is taken when a change
+    wakes it.)"""
     deepest = getattr(engine, "deepest_overlap", None)
-    return float(deepest()[2]) if deepest is not None and engine.time > 0.0 else 0.0
+    if deepest is None or engine.time <= 0.0:
+        return 0.0
+    return float(deepest(asleep=True)[2])
 
 
 def rigid_if_built(world: Any) -> SteppedEngine | None:

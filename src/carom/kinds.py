@@ -8,7 +8,8 @@ from ``density`` or ``mass``, else the mass it had when it was last dynamic, els
 The mechanical energy the switched bodies gain or lose (a dynamic body's kinetic and
 gravitational energy enters or leaves the count) is booked as work done, so the ledger closes.
 The engine is built again with the new kinds, as when bodies are added between steps (the
-state and the forces given for the next step are kept; warm starts and sleep are not). The
+state, the forces given for the next step, the warm starts and the sleep of the bodies left
+alone are kept: :func:`carom.engines.stepped.memory.carried`). The
 event-driven engine switches its spheres between dynamic and static the same way (it has no
 kinematic bodies): a sphere made static stops at the clock, one made dynamic flies from there.
 
@@ -158,8 +159,9 @@ class Kinds:
             table.restore_kinds(undo[1])
             # the engine as it was, never told
             self.__dict__.update(
-                _engine=engine, _counters_before=undo[2], _time=undo[3], _loads_kept=None
-            )
+                _engine=engine, _counters_before=undo[2], _time=undo[3], _loads_kept=None,
+                _memory_kept=None,
+            )  # fmt: skip
             raise
         built.book_work(built.energy_of(rows) - before)
 

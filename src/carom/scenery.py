@@ -170,7 +170,8 @@ class Scenery:
     def set_material(self, index: int, material: Material) -> None:
         """Replace material ``index`` (as :meth:`add_material` returned it) by ``material``:
         every body and plane of that material takes it from the next step (a built engine is
-        built again then, the state kept; warm starts and sleep are not).
+        built again then, the state and warm starts kept; the sleeping bodies wake when the
+        change reaches a pair of the materials in the world).
 
         Raises
         ------
@@ -188,7 +189,8 @@ class Scenery:
 
     def set_gravity(self, gravity: ArrayLike) -> None:
         """Change gravity (d,) [m/s^2] from the next step on (a built engine is built again
-        then, the state kept; warm starts and sleep are not): Box2D's ``b2World_SetGravity``.
+        then, the state and warm starts kept; a new gravity wakes the sleeping bodies, which
+        Box2D's ``b2World_SetGravity`` leaves asleep).
 
         Raises
         ------

@@ -35,7 +35,7 @@ from carom.collision_log import LOG_LIMIT, CollisionLog
 from carom.engines import registry
 from carom.engines.base import Counters, Engine, FrameArrays, describe_partner
 from carom.errors import CaromError
-from carom.gameloop import GameLoop, kept_overlap
+from carom.gameloop import GameLoop, hand_down, kept_overlap
 from carom.joints import Joints
 from carom.kinds import Kinds
 from carom.limits import check_body_count
@@ -282,7 +282,7 @@ class World(Scenery, GameLoop, Queries, Joints, Sensing, Kinds):
             self._time = self._engine.time
             self.bodies.set_state(*self._engine.sample())
             self._counters_before = self.counters()
-            self._loads_kept = getattr(self._engine, "loads_now", lambda: None)()  # (rebuilt)
+            hand_down(self, self._engine)  # (its loads, sleep and warm starts: rebuilt)
             self.overlap_kept = kept_overlap(self._engine)
         self._engine = None
 

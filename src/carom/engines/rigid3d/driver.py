@@ -107,6 +107,7 @@ class RigidEngine3D(SteppedEngine):
     IMPACTS = impacts
     SPIN = "w"
     TURN = "q"
+    LAW_TABLES = ("e_table", "mu_table", "rolling_table")
 
     model: Model3D
     state: State3D
@@ -399,6 +400,22 @@ class RigidEngine3D(SteppedEngine):
         self._made = (s.manifold_keys, s.manifold_ints, s.manifold_floats)
         self.state = s = s._replace(manifold_keys=keys, manifold_ints=ints, manifold_floats=floats)
         s.manifold_count[0] = self._made_count
+
+    def _keyed(self) -> tuple[NDArray[Any], ...]:
+        s = self.state
+        used = int(s.manifold_count[0])
+        return (s.manifold_keys[:used], s.manifold_ints[:used], s.manifold_floats[:used])
+
+    def _take_keyed(self, keys: NDArray[np.int64], tables: tuple[NDArray[Any], ...]) -> None:
+        # the manifolds another engine of this world kept, for this one's next step
+        ints, floats = tables
+        rows = max(len(keys), self._ci.shape[0])
+        kept = empty_manifolds(rows)
+        kept["manifold_keys"][: len(keys)] = keys
+        kept["manifold_ints"][: len(keys)] = ints
+        kept["manifold_floats"][: len(keys)] = floats
+        kept["manifold_count"][0] = len(keys)
+        self.state = self.state._replace(**kept)
 
     def _fastest(self) -> FloatArray:
         m, s = self.model, self.state

@@ -436,11 +436,14 @@ def build_model(
 def new_state(
     model: Model3D, x: FloatArray, v: FloatArray, q: FloatArray, w: FloatArray
 ) -> State3D:
-    """The State at the start, no manifold kept; quaternions are
-    normalised."""
+    """The State at the start, no manifold kept; quaternions are normalised, but for those
+    of unit length to round-off (within 4 ulp), taken bit for bit: a running engine's, handed
+    to the engine a world builds in its place, which then goes on with the same bits."""
     n = model.kind.shape[0]
     q = np.array(q, float).reshape(n, 4)
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    norm = np.linalg.norm(q, axis=1, keepdims=True)
+    off = np.abs(norm - 1.0) > 4.0 * np.finfo(float).eps
+    q = np.where(off, q / norm, q)
     return State3D(
         x=np.array(x, float).reshape(n, 3),
         v=np.array(v, float).reshape(n, 3),

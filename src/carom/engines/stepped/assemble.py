@@ -20,6 +20,7 @@ from carom.engines.base import (
     WorldView,
     describe_partner,
 )
+from carom.engines.stepped.memory import Remembered
 from carom.engines.stepped.settings import RigidSettings
 from carom.errors import CaromError
 from carom.materials import CombineRule, Material, combine, pair_table
@@ -164,6 +165,8 @@ class _Stepped(Protocol):
 
     def take_loads(self, kept: tuple[NDArray[np.float64], NDArray[np.float64]]) -> None: ...
 
+    def take_memory(self, kept: Remembered) -> None: ...
+
 
 Built = TypeVar("Built", bound=_Stepped)
 
@@ -192,6 +195,10 @@ def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
     kept = hand_over() if hand_over is not None else None
     if kept is not None:
         engine.take_loads(kept)
+    remembered = getattr(world, "hand_over_memory", None)
+    memory = remembered() if remembered is not None else None
+    if memory is not None:
+        engine.take_memory(memory)
     alive = getattr(world, "alive", None)
     if alive is not None and not np.all(alive):
         engine.retire(np.flatnonzero(~np.asarray(alive)))

@@ -50,7 +50,16 @@ from carom.engines.stepped.joints import (
     links,
 )
 from carom.engines.stepped.loads import Loaded, Loads
-from carom.engines.stepped.memory import StepMemory, new_memory
+from carom.engines.stepped.memory import (
+    Laws,
+    Remembered,
+    StepMemory,
+    carried,
+    new_memory,
+    rekeyed,
+    remembered,
+    renumbering,
+)
 from carom.engines.stepped.rows import I_BODY_A, I_BODY_B, I_COUNT, point_layout
 from carom.engines.stepped.sensors import Sensors
 from carom.engines.stepped.settings import RigidSettings
@@ -130,6 +139,8 @@ class SteppedEngine:
     #: the state's fields of the bodies' turn and spin
     TURN: str
     SPIN: str
+    #: the model's contact tables over the materials, which sleep depends on
+    LAW_TABLES: tuple[str, ...] = ("e_table", "mu_table")
     #: a touching pair whose every point separates faster than this fraction of the
     #: restitution threshold has just bounced: it flies apart on the exact path (free flight
     #: keeps its energy and angular momentum exactly), not through the solver, whose soft
@@ -666,11 +677,20 @@ class SteppedEngine:
         if asleep.size:
             self._energy_lost += self._stop(asleep)
 
-    def deepest_overlap(self) -> tuple[int, int, float]:
-        """The two bodies that overlap most now, with at least one of them dynamic, and
-        the depth [m] (positive; ``(-1, -1, 0.0)`` when nothing overlaps)."""
+    def deepest_overlap(self, asleep: bool = False) -> tuple[int, int, float]:
+        """The two bodies that overlap most now, with at least one of them dynamic and
+        awake (``asleep``: or asleep), and the depth [m] (positive; ``(-1, -1, 0.0)`` when
+        nothing overlaps)."""
         rows = self.ROWS
-        nc = self._contacts()
+        if asleep:  # (every dynamic body looked at as if awake, then as it was)
+            awake = self.memory.awake.copy()
+            self.memory.awake[self._dynamic] = True
+            try:
+                nc = self._contacts()
+            finally:
+                self.memory.awake[:] = awake
+        else:
+            nc = self._contacts()
         ci, cf = self._ci[:nc], self._cf[:nc]
         a, b = ci[:, I_BODY_A], ci[:, I_BODY_B]
         points = rows.MAX_POINTS
@@ -803,6 +823,42 @@ class SteppedEngine:
         if rows.size:
             self._loads.add_forces(rows, force[rows], None)
             self._loads.add_torques(rows, torque[rows])
+
+    def remembered(self) -> Remembered:
+        """What this engine hands the engine a world builds in its place (bodies added,
+        kinds switched, gravity or materials set): its sleep and warm starts, and what they
+        are of (:func:`.memory.carried`)."""
+        m = self.model
+        return remembered(
+            self.memory, self.partners, m.body_pieces, m.kind.astype(np.int64), m.material,
+            self.sample(), self._laws(), self._keyed(),
+        )  # fmt: skip
+
+    def take_memory(self, kept: Remembered) -> None:
+        """Start from the sleep and warm starts another engine of this world had
+        (:meth:`remembered`), as far as they hold for this one (:func:`.memory.carried`)."""
+        m = self.model
+        where = renumbering(kept, self.partners, m.body_pieces)
+        self.memory = carried(
+            kept, where, m.kind.astype(np.int64), m.material, self.sample(), self._laws(),
+            self.memory,
+        )  # fmt: skip
+        if kept.keyed:
+            rows, keys = rekeyed(where, kept.keyed[0])
+            self._take_keyed(keys, tuple(table[rows] for table in kept.keyed[1:]))
+
+    def _keyed(self) -> tuple[NDArray[Any], ...]:
+        """The dimension's own rows kept from step to step keyed by piece pairs (the used
+        ones): the keys, then each table's rows; none by default."""
+        return ()
+
+    def _take_keyed(self, keys: NDArray[np.int64], tables: tuple[NDArray[Any], ...]) -> None:
+        """Take the rows :meth:`_keyed` gave, renumbered (``keys`` sorted)."""
+
+    def _laws(self) -> Laws:
+        """Gravity, the settings and the contact tables (:attr:`LAW_TABLES`)."""
+        m = self.model
+        return Laws(m.gravity, self.settings, tuple(getattr(m, t) for t in self.LAW_TABLES))
 
     def retire(self, ids: NDArray[np.int64]) -> None:
         """Take bodies ``ids`` (k,) out of the world for good, their indices kept: they stop
