@@ -173,3 +173,20 @@ def test_a_body_switched_to_kinematic_wakes_its_island() -> None:
         world.step()
     # half a second: the boxes above ride up with it (1 m/s over 0.5 s), awake
     assert world.body(n - 1).position[1] > 5.5 + 0.4
+
+
+def test_a_refused_rebuild_leaves_the_handover_for_the_next() -> None:
+    # a box put deep into the sleeping stack is refused; once it is taken out again, the
+    # engine built then still takes the running one's sleep: the stack has not moved
+    world = stack_2d()
+    world.run(until=3.0)
+    n = world.n_bodies
+    before = motion(world, n)
+    box = world.add_body(Box(1.0, 1.0), [20.2, 3.5])
+    with pytest.raises(carom.CaromError, match="overlap"):
+        world.step()
+    world.remove_body(box)
+    world.step()
+    assert not any(awake(world, range(1, n)))
+    for a, b in zip(motion(world, n), before, strict=True):
+        np.testing.assert_array_equal(a, b)

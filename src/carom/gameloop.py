@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from carom.bodies import Bodies
 from carom.engines.base import Engine
 from carom.engines.edmd.driver import EdmdEngine
+from carom.engines.registry import EngineEntry
 from carom.engines.stepped.driver import SteppedEngine
 from carom.engines.stepped.events import EventArrays
 from carom.engines.stepped.filters import bits64, default_filters, whole_number
@@ -64,6 +65,9 @@ class _Running(Protocol):
 
     @property
     def bodies(self) -> Bodies: ...
+
+    @property
+    def engine_entry(self) -> EngineEntry: ...
 
     def build(self) -> Engine: ...
 
@@ -382,7 +386,9 @@ class GameLoop:
         and its index is refused from then on (:attr:`alive` says which bodies are in). The
         kinetic energy it had leaves the ledger as work done on it. Its place in the arrays
         (positions, frames) stays, frozen. In the event-driven engine it stops at the clock,
-        and every sphere flies through its place from then on.
+        and every sphere flies through its place from then on. A body whose addition the
+        rigid engine refused (added deep in another) can be taken out this way before the
+        next step: the engine built then takes the running one's sleep and warm starts.
 
         Raises
         ------
@@ -390,6 +396,12 @@ class GameLoop:
             An index out of range or already removed. Nothing has changed then.
         """
         i = _index(self, index)
+        if self.engine is None and self.engine_entry.stepped:
+            # a rigid engine not built (or refused: this body was added deep in another):
+            # the next one built takes the filters and the mask, and retires the body
+            _filters_of(self)[i] = 0
+            _alive_of(self)[i] = False
+            return
         built = self.build()
         if isinstance(built, EdmdEngine):
             built.retire(np.array([i]))

@@ -191,14 +191,6 @@ def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
     share_joints = getattr(world, "share_joints", None)  # (a World's, issue 43)
     if share_joints is not None:
         share_joints(engine)
-    hand_over = getattr(world, "hand_over_loads", None)  # (a World's, issue 43)
-    kept = hand_over() if hand_over is not None else None
-    if kept is not None:
-        engine.take_loads(kept)
-    remembered = getattr(world, "hand_over_memory", None)
-    memory = remembered() if remembered is not None else None
-    if memory is not None:
-        engine.take_memory(memory)
     alive = getattr(world, "alive", None)
     if alive is not None and not np.all(alive):
         engine.retire(np.flatnonzero(~np.asarray(alive)))
@@ -219,4 +211,14 @@ def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
             f"{names[0]} and {names[1]} overlap by {depth:.3g} m at the start (more than "
             f"{most}): move them apart"
         )
+    # what the running engine left, taken once the engine is taken (refused, the world keeps
+    # it for the next try)
+    hand_over = getattr(world, "hand_over_loads", None)  # (a World's, issue 43)
+    loads = hand_over() if hand_over is not None else None
+    if loads is not None:
+        engine.take_loads(loads)
+    remembered = getattr(world, "hand_over_memory", None)
+    memory = remembered() if remembered is not None else None
+    if memory is not None:
+        engine.take_memory(memory)
     return engine
