@@ -225,18 +225,14 @@ class GameLoop:
         """The forces and torques given for the next step to an engine this world dropped to
         build it again (bodies added, kinds switched), once: for the new engine
         (:func:`carom.engines.stepped.assemble.checked_start`); None when there are none."""
-        kept: tuple[NDArray[np.float64], NDArray[np.float64]] | None = getattr(
-            self, _LOADS_KEPT, None
-        )
-        setattr(self, _LOADS_KEPT, None)
+        kept: tuple[NDArray[np.float64], NDArray[np.float64]] | None = _once(self, _LOADS_KEPT)
         return kept
 
     def hand_over_memory(self: _Running) -> Remembered | None:
         """The sleep and warm starts of the rigid engine this world dropped to build it again,
         once: for the new engine (:func:`carom.engines.stepped.assemble.checked_start`,
         :func:`carom.engines.stepped.memory.carried`); None when there are none."""
-        kept: Remembered | None = getattr(self, _MEMORY_KEPT, None)
-        setattr(self, _MEMORY_KEPT, None)
+        kept: Remembered | None = _once(self, _MEMORY_KEPT)
         return kept
 
     def body(self: _Running, index: int) -> Body:
@@ -698,6 +694,13 @@ def _rigid(world: _Running, why: str = "") -> SteppedEngine:
     if not isinstance(engine, SteppedEngine):
         raise CaromError(why or _NOT_YET)
     return engine
+
+
+def _once(world: Any, attribute: str) -> Any:
+    """What ``world`` keeps in ``attribute`` (None if nothing), which it keeps no longer."""
+    kept = getattr(world, attribute, None)
+    setattr(world, attribute, None)
+    return kept
 
 
 def hand_down(world: Any, engine: Engine) -> None:

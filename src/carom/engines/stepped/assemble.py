@@ -213,12 +213,12 @@ def checked_start(engine: Built, partners: Partners, world: WorldView) -> Built:
         )
     # what the running engine left, taken once the engine is taken (refused, the world keeps
     # it for the next try)
-    hand_over = getattr(world, "hand_over_loads", None)  # (a World's, issue 43)
-    loads = hand_over() if hand_over is not None else None
-    if loads is not None:
-        engine.take_loads(loads)
-    remembered = getattr(world, "hand_over_memory", None)
-    memory = remembered() if remembered is not None else None
-    if memory is not None:
-        engine.take_memory(memory)
+    for given, take in (
+        ("hand_over_loads", engine.take_loads),  # (a World's, issue 43)
+        ("hand_over_memory", engine.take_memory),
+    ):
+        hand_over = getattr(world, given, None)
+        left = hand_over() if hand_over is not None else None
+        if left is not None:
+            take(left)
     return engine

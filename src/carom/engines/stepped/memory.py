@@ -280,7 +280,8 @@ def carried(
     if _same_laws(kept, to_new, material, laws):
         bodies = np.flatnonzero(same[: kept.motion[0].shape[0]])  # the caller's, kept
         rows = to_new[bodies]
-        bodies, rows = bodies[rows < motion[0].shape[0]], rows[rows < motion[0].shape[0]]
+        callers = rows < motion[0].shape[0]
+        bodies, rows = bodies[callers], rows[callers]
         still = (kept.kind[bodies] == KIND_DYNAMIC) & (kind[rows] == KIND_DYNAMIC)
         for before, now in zip(kept.motion, motion, strict=True):
             width = int(np.prod(before.shape[1:]))
